@@ -1,0 +1,366 @@
+"""The planar beam as a finite-element problem: mixed (u, v, theta [, multipliers]) space,
+supports, loads and the residual of the total potential, all forms compiled once.
+
+Locking: the energy and the constraint terms are integrated with p Gauss points per element
+(uniformly reduced integration: exact for the bending term, which is polynomial of degree 2p - 2
+in x on a straight element, and locking-free for the membrane and shear terms); loads use a full
+rule. Multipliers (axial force for `inextensible`, shear force for `unshearable`) live in
+discontinuous Lagrange of degree p - 1, which enforces the constraints at the Gauss points.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+from fe_beam import compat
+from fe_beam.laws import (
+    CONSTRAINTS,
+    LAWS,
+    Stiffness,
+    axis_tangent,
+    constrained_strains,
+    section_resultants,
+    strain_energy,
+    strains,
+    strains_from_gradient,
+)
+from fe_beam.materials import Material
+from fe_beam.mpi import global_sum
+from fe_beam.sections import Section
+
+__all__ = [
+    "BeamModel",
+    "BeamProblem",
+    "Discretisation",
+    "Loads",
+    "ModelOptions",
+    "Supports",
+]
+
+COMPONENTS = ("u", "v", "theta")
+SUPPORT_KINDS = {
+    "clamped": ("u", "v", "theta"),
+    "pinned": ("u", "v"),
+    "roller": ("v",),
+    "free": (),
+}
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """Constitutive law, kinematic constraint and (Reissner law only) shear correction k."""
+
+    law: str = "nonstandard"
+    constraint: str = "none"
+    shear_correction: float = 1.0
+
+    def __post_init__(self):
+        if self.law not in LAWS:
+            raise ValueError(f"model.law must be one of {', '.join(LAWS)}; got {self.law!r}")
+        if self.constraint not in CONSTRAINTS:
+            raise ValueError(
+                f"model.constraint must be one of {', '.join(CONSTRAINTS)}; got {self.constraint!r}"
+            )
+        if not (isinstance(self.shear_correction, (int, float)) and 0 < self.shear_correction <= 2):
+            raise ValueError(
+                f"model.shear_correction must be a number in (0, 2], got {self.shear_correction!r}"
+            )
+
+
+@dataclass(frozen=True)
+class Discretisation:
+    """Number of elements and the polynomial degree (1 or 2) of u, v, theta."""
+
+    elements: int = 50
+    degree: int = 2
+
+    def __post_init__(self):
+        if not isinstance(self.elements, int) or isinstance(self.elements, bool) or self.elements < 1:
+            raise ValueError(f"mesh.elements must be an integer >= 1, got {self.elements!r}")
+        if self.degree not in (1, 2):
+            raise ValueError(f"mesh.degree must be 1 or 2, got {self.degree!r}")
+
+
+def support_components(spec, key: str) -> tuple[str, ...]:
+    """Fixed components of a support: a kind name or an explicit list such as ["u", "theta"]."""
+    if isinstance(spec, str):
+        if spec not in SUPPORT_KINDS:
+            raise ValueError(
+                f"supports.{key} must be one of {', '.join(SUPPORT_KINDS)} or a list of "
+                f"components from {list(COMPONENTS)}; got {spec!r}"
+            )
+        return SUPPORT_KINDS[spec]
+    if isinstance(spec, (list, tuple)) and all(isinstance(c, str) for c in spec):
+        unknown = [c for c in spec if c not in COMPONENTS]
+        if unknown or len(set(spec)) != len(spec):
+            raise ValueError(
+                f"supports.{key}: components must be distinct names from {list(COMPONENTS)}; "
+                f"got {list(spec)}"
+            )
+        return tuple(spec)
+    raise ValueError(f"supports.{key} must be a support name or a list of components, got {spec!r}")
+
+
+@dataclass(frozen=True)
+class Supports:
+    """End conditions at x = 0 and x = L, with optional prescribed values of fixed components.
+
+    Prescribed values (e.g. ``prescribed_xL = {"theta": 3.14}``) are scaled by the load factor.
+    """
+
+    x0: str | tuple = "clamped"
+    xL: str | tuple = "free"
+    prescribed_x0: dict = field(default_factory=dict)
+    prescribed_xL: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for end in ("x0", "xL"):
+            fixed = support_components(getattr(self, end), end)
+            for name, value in getattr(self, f"prescribed_{end}").items():
+                if name not in fixed:
+                    raise ValueError(
+                        f"loads.prescribed_{end}.{name}: only fixed components can be prescribed "
+                        f"(supports.{end} fixes {list(fixed) or 'nothing'})"
+                    )
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    raise ValueError(f"loads.prescribed_{end}.{name} must be a number, got {value!r}")
+
+    def fixed(self, end: str) -> tuple[str, ...]:
+        return support_components(getattr(self, end), end)
+
+
+def _pair(name: str, value) -> tuple[float, float]:
+    ok = (
+        isinstance(value, (list, tuple))
+        and len(value) == 2
+        and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
+    )
+    if not ok or not all(np.isfinite(value)):
+        raise ValueError(f"loads.{name} must be a pair of numbers [x, y], got {value!r}")
+    return float(value[0]), float(value[1])
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Loads at load factor 1 (all scaled by the load factor during stepping).
+
+    ``tip_force`` is dead (global components) unless ``follower``, in which case its components
+    are taken in the tip section's frame (a1 = (cos theta, sin theta), d = (-sin theta, cos theta)),
+    equal to the global ones in the undeformed state. ``distributed`` is a dead force per unit
+    reference length; ``gravity`` an acceleration (force rho A g per unit length).
+    """
+
+    tip_force: tuple = (0.0, 0.0)
+    tip_moment: float = 0.0
+    follower: bool = False
+    distributed: tuple = (0.0, 0.0)
+    gravity: tuple = (0.0, 0.0)
+
+    def __post_init__(self):
+        for name in ("tip_force", "distributed", "gravity"):
+            object.__setattr__(self, name, _pair(name, getattr(self, name)))
+        if isinstance(self.tip_moment, bool) or not isinstance(self.tip_moment, (int, float)):
+            raise ValueError(f"loads.tip_moment must be a number, got {self.tip_moment!r}")
+        if not isinstance(self.follower, bool):
+            raise ValueError(f"loads.follower must be true or false, got {self.follower!r}")
+
+
+@dataclass(frozen=True)
+class BeamModel:
+    """Everything that defines a planar beam problem."""
+
+    length: float
+    section: Section
+    material: Material
+    options: ModelOptions = field(default_factory=ModelOptions)
+    mesh: Discretisation = field(default_factory=Discretisation)
+    supports: Supports = field(default_factory=Supports)
+    loads: Loads = field(default_factory=Loads)
+
+    def __post_init__(self):
+        ok = isinstance(self.length, (int, float)) and not isinstance(self.length, bool)
+        if not ok or not np.isfinite(self.length) or self.length <= 0:
+            raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
+        if self.material.rho == 0 and any(self.loads.gravity):
+            raise ValueError("loads.gravity needs material.rho > 0")
+
+    def stiffness_at(self, s: float = 0.0) -> dict:
+        """Section stiffnesses (floats) at s = x / L."""
+        p = self.section.properties(s)
+        E, G = self.material.E, self.material.shear_modulus
+        return {"EA": E * p.A, "GA": G * p.A, "EI": E * p.I, "EI3": E * p.I3, "EI4": E * p.I4}
+
+
+class BeamProblem:
+    """Finite-element set-up of a `BeamModel`: space, unknown, Dirichlet conditions, forms.
+
+    The load factor and all material/section numbers are fem.Constant: load steps and parameter
+    changes never recompile forms.
+    """
+
+    def __init__(self, model: BeamModel, comm: MPI.Comm = MPI.COMM_WORLD, extra_energy=None):
+        self.model = model
+        self.mesh = compat.create_interval(comm, model.mesh.elements, model.length)
+        self.comm = comm
+        degree = model.mesh.degree
+        cell = self.mesh.ufl_cell()
+        self.multipliers = constrained_strains(model.options.constraint)
+        elements = [ufl.FiniteElement("Lagrange", cell, degree)] * 3
+        elements += [ufl.FiniteElement("DG", cell, degree - 1)] * len(self.multipliers)
+        self.space = compat.function_space(self.mesh, ufl.MixedElement(elements))
+        self.w = fem.Function(self.space, name="state")
+        self.load_factor = fem.Constant(self.mesh, 0.0)
+        self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
+        self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
+        self._make_constants()
+        self._mark_ends()
+        self.bcs, self._prescribed = self._dirichlet_conditions()
+        self.extra_energy = extra_energy
+        self.residual = self._residual()
+
+    # --- set-up pipeline -------------------------------------------------------------------
+    def _make_constants(self) -> None:
+        m, sec = self.model, self.model.section
+        const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
+        self.E = const(m.material.E)
+        self.G = const(m.material.shear_modulus)
+        self.rho = const(m.material.rho)
+        self.k_shear = const(m.options.shear_correction)
+        dims = {n: const(v) for n, v in sec.dims.items()}
+        dims_tip = {n: const(v) for n, v in sec.dims_tip.items()}
+        x = ufl.SpatialCoordinate(self.mesh)[0]
+        self.section_props = sec.properties(x / m.length, dims, dims_tip)
+        p = self.section_props
+        self.stiffness = Stiffness(
+            EA=self.E * p.A, GA=self.G * p.A, EI=self.E * p.I, EI3=self.E * p.I3,
+            EI4=self.E * p.I4, shear_correction=self.k_shear,
+        )
+        self.tip_force = fem.Constant(self.mesh, np.array(m.loads.tip_force, dtype=float))
+        self.tip_moment = const(m.loads.tip_moment)
+        self.distributed = fem.Constant(self.mesh, np.array(m.loads.distributed, dtype=float))
+        self.gravity = fem.Constant(self.mesh, np.array(m.loads.gravity, dtype=float))
+
+    def _mark_ends(self) -> None:
+        length = self.model.length
+        self.end_markers = {
+            "x0": lambda x: np.isclose(x[0], 0.0),
+            "xL": lambda x: np.isclose(x[0], length),
+        }
+        tip = compat.locate_entities_boundary(self.mesh, 0, self.end_markers["xL"])
+        tags = compat.meshtags(self.mesh, 0, tip, np.full(len(tip), 2))
+        self.ds_tip = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)(2)
+
+    def _dirichlet_conditions(self):
+        bcs, prescribed = [], []
+        for end in ("x0", "xL"):
+            values = getattr(self.model.supports, f"prescribed_{end}")
+            for name in self.model.supports.fixed(end):
+                index = COMPONENTS.index(name)
+                sub, _ = compat.sub_space_collapsed(self.space, index)
+                dofs = compat.locate_dofs_geometrical(
+                    (self.space.sub(index), sub), self.end_markers[end]
+                )
+                value = fem.Function(sub)
+                bcs.append(fem.dirichletbc(value, dofs, self.space.sub(index)))
+                if values.get(name, 0.0) != 0.0:
+                    prescribed.append((value, float(values[name])))
+        return bcs, prescribed
+
+    # --- physics -----------------------------------------------------------------------------
+    def fields(self):
+        """(u, v, theta, multiplier dict) of the current state (UFL)."""
+        parts = ufl.split(self.w)
+        return parts[0], parts[1], parts[2], dict(zip(self.multipliers, parts[3:], strict=True))
+
+    def potential(self):
+        """Total potential of the conservative terms: int W + constraints - dead-load work."""
+        u, v, theta, multipliers = self.fields()
+        s = strains(u, v, theta)
+        energy = strain_energy(self.model.options.law, s, self.stiffness)
+        constraint = sum(
+            (value * getattr(s, name) for name, value in multipliers.items()), ufl.zero()
+        )
+        lam = self.load_factor
+        body = self.distributed + self.rho * self.section_props.A * self.gravity
+        work = lam * ufl.dot(body, ufl.as_vector([u, v])) * self.dx_loads
+        work += lam * self.tip_moment * theta * self.ds_tip
+        if not self.model.loads.follower:
+            work += lam * ufl.dot(self.tip_force, ufl.as_vector([u, v])) * self.ds_tip
+        total = (energy + constraint) * self.dx_energy - work
+        if self.extra_energy is not None:
+            total += self.extra_energy(self)
+        return total
+
+    def _residual(self):
+        test = ufl.TestFunction(self.space)
+        residual = ufl.derivative(self.potential(), self.w, test)
+        if self.model.loads.follower:
+            u_t, v_t, theta = ufl.split(test)[0], ufl.split(test)[1], self.fields()[2]
+            a1 = ufl.as_vector([ufl.cos(theta), ufl.sin(theta)])
+            d = ufl.as_vector([-ufl.sin(theta), ufl.cos(theta)])
+            force = self.tip_force[0] * a1 + self.tip_force[1] * d
+            residual -= self.load_factor * ufl.dot(force, ufl.as_vector([u_t, v_t])) * self.ds_tip
+        return residual
+
+    def set_load_factor(self, value: float) -> None:
+        self.load_factor.value = value
+        for function, target in self._prescribed:
+            function.x.array[:] = value * target
+
+    # --- quantities of interest ----------------------------------------------------------------
+    def component_dofs(self, name: str, end: str | None = None) -> np.ndarray:
+        """Owned local dofs (in w) of a component, optionally only those at an end."""
+        index = COMPONENTS.index(name)
+        sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
+        parent_dofs = np.asarray(parent_dofs)
+        if end is not None:
+            collapsed = compat.locate_dofs_geometrical(sub, self.end_markers[end])
+            parent_dofs = parent_dofs[collapsed]
+        owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
+        return parent_dofs[parent_dofs < owned]
+
+    def end_values(self, end: str = "xL") -> dict:
+        """{u, v, theta} at an end (MPI-safe: each value is owned by exactly one rank)."""
+        if not hasattr(self, "_end_dofs"):
+            self._end_dofs = {}
+        if end not in self._end_dofs:
+            self._end_dofs[end] = {n: self.component_dofs(n, end) for n in COMPONENTS}
+        values = compat.local_array(self.w)
+        return {
+            name: global_sum(self.comm, values[dofs].sum())
+            for name, dofs in self._end_dofs[end].items()
+        }
+
+    def output_expressions(self) -> dict:
+        """UFL expressions of the strains and section resultants for output (not for solving)."""
+        u, v, theta, multipliers = self.fields()
+        tangent = ufl.variable(axis_tangent(u, v))
+        kappa = ufl.variable(theta.dx(0))
+        s = strains_from_gradient(tangent, theta, kappa)
+        energy = strain_energy(self.model.options.law, s, self.stiffness)
+        energy += sum((value * getattr(s, n) for n, value in multipliers.items()), ufl.zero())
+        normal, shear, moment, axial = section_resultants(energy, tangent, kappa)
+        plain = strains(u, v, theta)
+        return {
+            "eps": plain.eps,
+            "gamma": ufl.atan_2(plain.g, plain.one_plus_e),
+            "kappa": plain.kappa,
+            "N": normal,
+            "T": shear,
+            "M": moment,
+            "axial_force": axial,
+        }
+
+    def strain_energy_form(self) -> fem.Form:
+        u, v, theta, _ = self.fields()
+        law = self.model.options.law
+        return fem.form(strain_energy(law, strains(u, v, theta), self.stiffness) * self.dx_energy)
+
+    def rotation_dofs(self) -> np.ndarray:
+        return self.component_dofs("theta")
+

@@ -1,0 +1,98 @@
+"""Every dolfinx-version-specific call of fe_beam lives here (written against dolfinx 0.5.2).
+
+A move to a newer dolfinx (0.6+: ``functionspace``, ``x.array``, ``dolfinx.io.gmshio`` renames,
+``petsc.assemble_*`` moves) should touch this file only.
+"""
+
+from __future__ import annotations
+
+import dolfinx
+import dolfinx.fem.petsc as fem_petsc
+import numpy as np
+import ufl
+from dolfinx import fem, mesh
+from mpi4py import MPI
+from petsc4py import PETSc
+
+__all__ = [
+    "DOLFINX_VERSION",
+    "XDMFFile",
+    "apply_lifting",
+    "assemble_matrix",
+    "assemble_vector",
+    "create_interval",
+    "create_matrix",
+    "create_vector",
+    "function_space",
+    "gmsh_model_to_mesh",
+    "local_array",
+    "locate_dofs_geometrical",
+    "locate_entities_boundary",
+    "meshtags",
+    "set_bc",
+    "sub_space_collapsed",
+    "vector_of",
+]
+
+DOLFINX_VERSION = dolfinx.__version__
+XDMFFile = dolfinx.io.XDMFFile
+
+assemble_vector = fem_petsc.assemble_vector
+assemble_matrix = fem_petsc.assemble_matrix
+apply_lifting = fem_petsc.apply_lifting
+set_bc = fem_petsc.set_bc
+create_matrix = fem_petsc.create_matrix
+create_vector = fem_petsc.create_vector
+
+
+def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:
+    """Uniform interval mesh of [0, length] (geometric dimension 1)."""
+    return mesh.create_interval(comm, n_cells, [0.0, length])
+
+
+def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:
+    """Function space from a UFL element (FiniteElement, VectorElement or MixedElement)."""
+    return fem.FunctionSpace(msh, element)
+
+
+def sub_space_collapsed(space: fem.FunctionSpace, index: int):
+    """(collapsed sub-space, map from its dofs to the parent's dofs)."""
+    return space.sub(index).collapse()
+
+
+def vector_of(function: fem.Function) -> PETSc.Vec:
+    """The PETSc vector holding a Function's dofs (owned + ghosts)."""
+    return function.vector
+
+
+def local_array(function: fem.Function) -> np.ndarray:
+    """Writable numpy view of a Function's local dofs (owned + ghosts)."""
+    return function.x.array
+
+
+def locate_dofs_geometrical(spaces, marker):
+    return fem.locate_dofs_geometrical(spaces, marker)
+
+
+def locate_entities_boundary(msh: mesh.Mesh, dim: int, marker):
+    return mesh.locate_entities_boundary(msh, dim, marker)
+
+
+def meshtags(msh: mesh.Mesh, dim: int, entities: np.ndarray, values: np.ndarray):
+    order = np.argsort(entities)
+    return mesh.meshtags(msh, dim, entities[order].astype(np.int32), values[order].astype(np.int32))
+
+
+def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
+    """(mesh, cell tags, facet tags) from an in-memory gmsh model."""
+    from dolfinx.io import gmshio
+
+    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace) -> fem.Expression:
+    """A compiled expression that can be interpolated into ``space``."""
+    points = space.element.interpolation_points
+    if callable(points):  # later dolfinx versions turned it into a method
+        points = points()
+    return fem.Expression(expr, points)

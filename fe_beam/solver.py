@@ -1,0 +1,392 @@
+"""Nonlinear solves with PETSc SNES, and load stepping with cut-back.
+
+`NonlinearProblem` holds compiled forms and assembles residual and Jacobian (plus optional non-UFL
+contributions such as a 3D tendon cable); `SNESSolver` drives PETSc SNES with a unique options
+prefix; `run_load_stepping` ramps a load factor from 0 to 1 with automatic cut-back on divergence,
+step growth on easy steps and a branch check. Nothing here writes files.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+
+from fe_beam import compat
+from fe_beam.progress import ProgressBar
+
+__all__ = [
+    "LoadStepping",
+    "LoadSteppingFailed",
+    "NonlinearProblem",
+    "SNESSolver",
+    "SolveFailed",
+    "SolverSettings",
+    "StepResult",
+    "run_load_stepping",
+]
+
+LINEAR_SOLVERS = ("mumps", "lu", "gamg", "gmres-ilu")
+LINE_SEARCHES = ("bt", "basic", "l2", "cp")
+
+
+class SolveFailed(RuntimeError):
+    """SNES did not converge (the iterate is left as SNES left it)."""
+
+
+class LoadSteppingFailed(RuntimeError):
+    """Load stepping gave up; the state of ``last_load_factor`` has been restored."""
+
+    def __init__(self, message: str, last_load_factor: float, results: list[StepResult]):
+        super().__init__(message)
+        self.last_load_factor = last_load_factor
+        self.results = results
+
+
+@dataclass
+class SolverSettings:
+    """Newton (SNES) and linear-solver settings; ``petsc_options`` are merged over the defaults."""
+
+    rtol: float = 1e-9
+    atol: float = 1e-12
+    stol: float = 1e-11
+    max_it: int = 25
+    # Plain Newton: ||F||-based line searches reject good steps of saddle-point (multiplier)
+    # problems; globalisation comes from load-step cut-back instead.
+    line_search: str = "basic"
+    linear_solver: str = "mumps"
+    petsc_options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for name in ("rtol", "atol", "stol"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not (0 <= value < 1):
+                raise ValueError(f"solver.{name} must be a number in [0, 1), got {value!r}")
+        if not isinstance(self.max_it, int) or self.max_it < 1:
+            raise ValueError(f"solver.max_it must be an integer >= 1, got {self.max_it!r}")
+        if self.line_search not in LINE_SEARCHES:
+            raise ValueError(
+                f"solver.line_search must be one of {', '.join(LINE_SEARCHES)}; "
+                f"got {self.line_search!r}"
+            )
+        if self.linear_solver not in LINEAR_SOLVERS:
+            raise ValueError(
+                f"solver.linear_solver must be one of {', '.join(LINEAR_SOLVERS)}; "
+                f"got {self.linear_solver!r}"
+            )
+        if not isinstance(self.petsc_options, dict):
+            raise ValueError("solver.petsc_options must be a table of PETSc option = value")
+
+    def options(self) -> dict:
+        """PETSc options (without prefix): defaults first, the user's options over them."""
+        opts = {
+            "snes_type": "newtonls",
+            "snes_linesearch_type": self.line_search,
+            "snes_rtol": self.rtol,
+            "snes_atol": self.atol,
+            "snes_stol": self.stol,
+            "snes_max_it": self.max_it,
+            "snes_divergence_tolerance": 1e12,
+        }
+        if self.linear_solver in ("mumps", "lu"):
+            opts |= {"ksp_type": "preonly", "pc_type": "lu"}
+            if self.linear_solver == "mumps":
+                opts["pc_factor_mat_solver_type"] = "mumps"
+        elif self.linear_solver == "gamg":
+            opts |= {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 1000}
+        else:
+            opts |= {"ksp_type": "gmres", "pc_type": "ilu", "ksp_rtol": 1e-12}
+        opts |= {str(k): v for k, v in self.petsc_options.items()}
+        return opts
+
+
+class Contribution(Protocol):
+    """A non-UFL term added to residual and Jacobian (global indices, ADD_VALUES)."""
+
+    def add_to_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None: ...
+
+    def add_to_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None: ...
+
+
+class NonlinearProblem:
+    """Residual F(w; dw) = 0 with Dirichlet conditions, forms compiled once.
+
+    Parameters
+    ----------
+    residual : UFL form linear in the test function.
+    w : the unknown Function (updated in place by the solver).
+    bcs : Dirichlet conditions on w's space.
+    jacobian : UFL bilinear form; the Gateaux derivative of ``residual`` when None.
+    contributions : non-UFL terms (see `Contribution`).
+    """
+
+    def __init__(
+        self,
+        residual: ufl.Form,
+        w: fem.Function,
+        bcs: Sequence[fem.DirichletBCMetaClass] = (),
+        jacobian: ufl.Form | None = None,
+        contributions: Sequence[Contribution] = (),
+    ):
+        if jacobian is None:
+            jacobian = ufl.derivative(residual, w, ufl.TrialFunction(w.function_space))
+        self.w = w
+        self.bcs = list(bcs)
+        self.contributions = list(contributions)
+        self.residual_form = fem.form(residual)
+        self.jacobian_form = fem.form(jacobian)
+        self.b = compat.create_vector(self.residual_form)
+        self.A = compat.create_matrix(self.jacobian_form)
+        self._bc_rows = self._owned_bc_rows()
+
+    def _owned_bc_rows(self) -> np.ndarray:
+        start = self.b.getOwnershipRange()[0]
+        rows = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in self.bcs]
+        local = np.unique(np.concatenate(rows)) if rows else np.empty(0, dtype=np.int32)
+        return (local + start).astype(PETSc.IntType)
+
+    def _set_state(self, x: PETSc.Vec) -> None:
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        x.copy(compat.vector_of(self.w))
+        compat.vector_of(self.w).ghostUpdate(
+            addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
+        )
+
+    def residual(self, snes, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        self._set_state(x)
+        with b.localForm() as b_local:
+            b_local.set(0.0)
+        compat.assemble_vector(b, self.residual_form)
+        compat.apply_lifting(b, [self.jacobian_form], bcs=[self.bcs], x0=[x], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.contributions:
+            for term in self.contributions:
+                term.add_to_residual(x, b)
+            b.assemble()
+        compat.set_bc(b, self.bcs, x, -1.0)
+
+    def jacobian(self, snes, x: PETSc.Vec, A: PETSc.Mat, P: PETSc.Mat) -> None:
+        A.zeroEntries()
+        compat.assemble_matrix(A, self.jacobian_form, bcs=self.bcs)
+        if self.contributions:
+            A.assemble(PETSc.Mat.AssemblyType.FLUSH)
+            for term in self.contributions:
+                term.add_to_jacobian(x, A)
+            A.assemble()
+            # The contributions know nothing of Dirichlet rows: restore identity rows/columns.
+            A.zeroRowsColumns(self._bc_rows, diag=1.0)
+        A.assemble()
+
+
+class SNESSolver:
+    """PETSc SNES on a `NonlinearProblem`, configured through one options prefix."""
+
+    _instances = 0
+
+    def __init__(
+        self,
+        problem: NonlinearProblem,
+        settings: SolverSettings | None = None,
+        prefix: str | None = None,
+        near_nullspace: PETSc.NullSpace | None = None,
+    ):
+        self.problem = problem
+        self.settings = settings or SolverSettings()
+        if prefix is None:
+            SNESSolver._instances += 1
+            prefix = f"fe_beam_{SNESSolver._instances}_"
+        if not prefix.endswith("_"):
+            raise ValueError(f"PETSc options prefix must end with '_', got {prefix!r}")
+        self.prefix = prefix
+        comm = problem.w.function_space.mesh.comm
+        self.snes = PETSc.SNES().create(comm)
+        self.snes.setOptionsPrefix(prefix)
+        options = PETSc.Options()
+        for key, value in self.settings.options().items():
+            options[prefix + key] = value
+        self.snes.setFunction(problem.residual, problem.b)
+        self.snes.setJacobian(problem.jacobian, problem.A)
+        if near_nullspace is not None:
+            problem.A.setNearNullSpace(near_nullspace)
+        self.snes.setFromOptions()
+        self.snes.getKSP().setFromOptions()
+        self._x = problem.b.duplicate()
+        self.linear_iterations = 0
+
+    def solve(self) -> int:
+        """Solve from the current state of ``w``; returns Newton iterations or raises SolveFailed."""
+        w_vec = compat.vector_of(self.problem.w)
+        w_vec.copy(self._x)
+        self.snes.solve(None, self._x)
+        reason = self.snes.getConvergedReason()
+        self.linear_iterations = self.snes.getLinearSolveIterations()
+        if reason <= 0:
+            raise SolveFailed(f"SNES diverged ({_reason_name(reason)})")
+        self._x.copy(w_vec)
+        w_vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return self.snes.getIterationNumber()
+
+    def destroy(self) -> None:
+        self.snes.destroy()
+        self._x.destroy()
+
+
+def _reason_name(reason: int) -> str:
+    names = {
+        value: name
+        for name, value in vars(PETSc.SNES.ConvergedReason).items()
+        if isinstance(value, int)
+    }
+    return f"{names.get(reason, 'UNKNOWN')} = {reason}"
+
+
+@dataclass
+class LoadStepping:
+    """Load-factor ramp 0 -> 1: ``steps`` equal increments to start with, adapted on the way.
+
+    A step that diverges, or whose solution is rejected by the branch check, is retried with
+    the increment multiplied by ``cut_factor``; after ``easy_iterations`` or fewer Newton
+    iterations the increment grows by ``grow_factor`` (never beyond ``max_increment``).
+    """
+
+    steps: int = 10
+    min_increment: float = 1e-5
+    max_increment: float | None = None
+    cut_factor: float = 0.5
+    grow_factor: float = 1.5
+    easy_iterations: int = 4
+    adaptive: bool = True
+
+    def __post_init__(self):
+        if not isinstance(self.steps, int) or self.steps < 1:
+            raise ValueError(f"loads.steps must be an integer >= 1, got {self.steps!r}")
+        if not (0 < self.min_increment <= 1.0 / self.steps):
+            raise ValueError(
+                f"min_increment must be in (0, 1/steps], got {self.min_increment!r}"
+            )
+        if not (0 < self.cut_factor < 1):
+            raise ValueError(f"cut_factor must be in (0, 1), got {self.cut_factor!r}")
+        if self.grow_factor < 1:
+            raise ValueError(f"grow_factor must be >= 1, got {self.grow_factor!r}")
+        if self.max_increment is None:
+            self.max_increment = 1.0 / self.steps
+        if not (0 < self.max_increment <= 1):
+            raise ValueError(f"max_increment must be in (0, 1], got {self.max_increment!r}")
+
+
+@dataclass
+class StepResult:
+    """One converged load step."""
+
+    index: int
+    load_factor: float
+    iterations: int
+    linear_iterations: int
+    wall_time_s: float
+
+
+def run_load_stepping(
+    solver: SNESSolver,
+    set_load_factor: Callable[[float], None],
+    stepping: LoadStepping | None = None,
+    on_converged: Callable[[StepResult], None] | None = None,
+    reject_step: Callable[[np.ndarray, np.ndarray], str | None] | None = None,
+    progress: bool = True,
+    label: str = "load",
+) -> list[StepResult]:
+    """Ramp the load factor from 0 to 1, solving at each step.
+
+    The first guess of each step is the secant extrapolation of the last two converged states.
+    ``reject_step(previous, current)`` (local dof arrays) may veto a converged step, e.g. one that
+    jumped to another equilibrium branch; it is then cut back like a diverged step.
+    Raises `LoadSteppingFailed` (with the last converged state restored in ``w``) when the
+    increment falls below ``stepping.min_increment``.
+    """
+    stepping = stepping or LoadStepping()
+    w = solver.problem.w
+    state = compat.local_array(w)
+    comm = w.function_space.mesh.comm
+    results: list[StepResult] = []
+    lam, increment = 0.0, 1.0 / stepping.steps
+    previous = state.copy()
+    before_previous, previous_increment = None, None
+    bar = ProgressBar(comm, total=1.0, label=label, enabled=progress)
+    try:
+        while lam < 1.0 - 1e-12:
+            increment = min(increment, 1.0 - lam)
+            target = lam + increment
+            if before_previous is not None:
+                state[:] = previous + (increment / previous_increment) * (previous - before_previous)
+            set_load_factor(target)
+            started = time.perf_counter()
+            failure = None
+            try:
+                iterations = solver.solve()
+            except SolveFailed as error:
+                failure = str(error)
+            if failure is None and reject_step is not None:
+                failure = _agreed(comm, reject_step(previous, state))
+            if failure is not None:
+                state[:] = previous
+                set_load_factor(lam)
+                if not stepping.adaptive or increment * stepping.cut_factor < stepping.min_increment:
+                    raise LoadSteppingFailed(
+                        f"load stepping stopped at load factor {target:.6g} ({failure}); "
+                        f"last converged load factor {lam:.6g}",
+                        lam,
+                        results,
+                    )
+                increment *= stepping.cut_factor
+                bar.note(f"cut back to increment {increment:.3g} ({failure})")
+                continue
+            before_previous, previous_increment = previous, increment
+            previous = state.copy()
+            lam = target
+            step = StepResult(
+                len(results) + 1, lam, iterations, solver.linear_iterations,
+                time.perf_counter() - started,
+            )
+            results.append(step)
+            if on_converged is not None:
+                on_converged(step)
+            bar.update(lam, f"{label} factor {lam:.4f}, {iterations} Newton its")
+            if stepping.adaptive and iterations <= stepping.easy_iterations:
+                increment = min(increment * stepping.grow_factor, stepping.max_increment)
+    finally:
+        bar.close()
+    return results
+
+
+def _agreed(comm, reason: str | None) -> str | None:
+    """All ranks reject a step if any one does (reject_step may look at local data only)."""
+    reasons = comm.allgather(reason)
+    rejected = [r for r in reasons if r]
+    return rejected[0] if rejected else None
+
+
+def rotation_jump_check(rotation_dofs: np.ndarray, max_jump: float):
+    """A ``reject_step`` that vetoes steps whose rotation changed by more than ``max_jump`` rad.
+
+    The equilibrium path of a slender beam is followed step by step; a converged step whose
+    rotations jump by far more than the load increment warrants has usually landed on another
+    (e.g. looped) branch.
+    """
+    if not (max_jump > 0 and math.isfinite(max_jump)):
+        raise ValueError(f"max rotation jump must be > 0, got {max_jump!r}")
+
+    def check(previous: np.ndarray, current: np.ndarray) -> str | None:
+        if rotation_dofs.size == 0:
+            return None
+        jump = float(np.max(np.abs(current[rotation_dofs] - previous[rotation_dofs])))
+        if jump > max_jump:
+            return f"rotation jumped by {jump:.3g} rad > {max_jump:.3g} in one step"
+        return None
+
+    return check
