@@ -96,3 +96,38 @@ def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace)
     if callable(points):  # later dolfinx versions turned it into a method
         points = points()
     return fem.Expression(expr, points)
+
+
+# --- solid ---
+
+
+def bounding_box_tree(msh: mesh.Mesh, dim: int):
+    """Bounding-box tree of the local entities of dimension ``dim``."""
+    from dolfinx import geometry
+
+    return geometry.BoundingBoxTree(msh, dim)
+
+
+def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray) -> np.ndarray:
+    """For each point (n, 3), the first local cell containing it, or -1."""
+    from dolfinx import geometry
+
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    candidates = geometry.compute_collisions(tree, points)
+    colliding = geometry.compute_colliding_cells(msh, candidates, points)
+    cells = np.full(len(points), -1, dtype=np.int32)
+    for i in range(len(points)):
+        links = colliding.links(i)
+        if len(links) > 0:
+            cells[i] = links[0]
+    return cells
+
+
+def expression(expr: ufl.core.expr.Expr, reference_points: np.ndarray) -> fem.Expression:
+    """A compiled expression evaluated at fixed points of the reference cell."""
+    return fem.Expression(expr, np.asarray(reference_points, dtype=np.float64))
+
+
+def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndarray) -> np.ndarray:
+    """Values (n_cells, n_points * value_size) of a compiled expression in local ``cells``."""
+    return compiled.eval(np.asarray(cells, dtype=np.int32))

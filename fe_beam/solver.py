@@ -55,7 +55,9 @@ class SolverSettings:
     """Newton (SNES) and linear-solver settings; ``petsc_options`` are merged over the defaults."""
 
     rtol: float = 1e-9
-    atol: float = 1e-12
+    # Residuals carry the problem's units (N, N m): any fixed absolute tolerance is wrong for
+    # someone (a 1e-15 N load on a hair-thin beam). Convergence is relative (rtol, stol).
+    atol: float = 1e-300
     stol: float = 1e-11
     max_it: int = 25
     # Plain Newton: ||F||-based line searches reject good steps of saddle-point (multiplier)

@@ -1,0 +1,139 @@
+"""Static analysis driver: problem + solver + load stepping + recorders, for the CLI and demos."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mpi4py import MPI
+
+from fe_beam.beam import BeamProblem
+from fe_beam.config import StaticConfig
+from fe_beam.outputs import (
+    BeamXDMFWriter,
+    atomic_write_json,
+    plot_deformed_shapes,
+    plot_load_displacement,
+    write_csv,
+)
+from fe_beam.solver import (
+    LoadSteppingFailed,
+    NonlinearProblem,
+    SNESSolver,
+    StepResult,
+    rotation_jump_check,
+    run_load_stepping,
+)
+
+__all__ = ["StaticResult", "solve_static"]
+
+
+@dataclass
+class StaticResult:
+    steps: list[dict] = field(default_factory=list)
+    shapes: list[tuple[str, dict]] = field(default_factory=list)
+    dofs: int = 0
+    wall_time_s: float = 0.0
+    status: str = "running"
+    message: str = ""
+
+    def summary(self, extra: dict | None = None) -> dict:
+        data = {
+            "status": self.status,
+            "message": self.message,
+            "steps": self.steps,
+            "dofs": self.dofs,
+            "wall_time_s": self.wall_time_s,
+        }
+        return data | (extra or {})
+
+
+def _step_record(problem: BeamProblem, step: StepResult) -> dict:
+    return {
+        "load_factor": step.load_factor,
+        "tip": problem.end_values("xL"),
+        "newton_iterations": step.iterations,
+    }
+
+
+def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WORLD,
+                 progress: bool = True, extra_summary: dict | None = None) -> StaticResult:
+    """Run the static load stepping of a configuration; writes results under ``out`` if given.
+
+    summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
+    On failure the last converged state is written and the result has status "failed".
+    """
+    started = time.perf_counter()
+    problem = BeamProblem(config.model, comm)
+    solver = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
+                        config.solver, prefix="fe_beam_static_")
+    result = StaticResult(dofs=problem.space.dofmap.index_map.size_global
+                          * problem.space.dofmap.index_map_bs)
+    root = comm.rank == 0
+    writing = out is not None
+    if writing and root:
+        out.mkdir(parents=True, exist_ok=True)
+    xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
+    writer = BeamXDMFWriter(problem, xdmf_path)
+    extra = {"model": _model_summary(config)} | (extra_summary or {})
+
+    def record(step: StepResult) -> None:
+        result.steps.append(_step_record(problem, step))
+        result.wall_time_s = time.perf_counter() - started
+        writer.write(step.load_factor)
+        shape = writer.vertex_values()
+        if root:
+            result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
+        if writing and root:
+            _write_tables(out, result, extra)
+
+    try:
+        run_load_stepping(
+            solver, problem.set_load_factor, config.stepping, on_converged=record,
+            reject_step=rotation_jump_check(problem.rotation_dofs(), config.max_rotation_jump),
+            progress=progress,
+        )
+        result.status = "converged"
+    except LoadSteppingFailed as failure:
+        result.status, result.message = "failed", str(failure)
+    finally:
+        writer.close()
+        solver.destroy()
+    result.wall_time_s = time.perf_counter() - started
+    if writing and root:
+        _write_tables(out, result, extra)
+        if config.output.plots and result.steps:
+            _write_plots(out, result, config)
+    return result
+
+
+def _model_summary(config: StaticConfig) -> dict:
+    m = config.model
+    return {
+        "length": m.length, "law": m.options.law, "constraint": m.options.constraint,
+        "elements": m.mesh.elements, "degree": m.mesh.degree,
+        "section": {"shape": m.section.shape, **m.section.dims,
+                    **{f"{k}_tip": v for k, v in m.section.dims_tip.items()}},
+    }
+
+
+def _write_tables(out: Path, result: StaticResult, extra: dict) -> None:
+    atomic_write_json(out / "summary.json", result.summary(extra))
+    rows = [[s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"],
+             s["newton_iterations"]] for s in result.steps]
+    write_csv(out / "load_displacement.csv",
+              ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"], rows)
+
+
+def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
+    every = max(1, len(result.shapes) // 10)
+    shapes = result.shapes[every - 1::every]
+    if result.shapes[-1] is not shapes[-1]:
+        shapes.append(result.shapes[-1])
+    m = config.model
+    title = f"{m.options.law} law, constraint {m.options.constraint}"
+    plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length)
+    factors = [s["load_factor"] for s in result.steps]
+    tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
+    plot_load_displacement(factors, tips, out / "load_displacement.png", title)
