@@ -196,6 +196,27 @@ class BeamModel:
         return {"EA": E * p.A, "GA": G * p.A, "EI": E * p.I, "EI3": E * p.I3, "EI4": E * p.I4}
 
 
+def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
+    """Uniform mesh of [0, L] in which every breakpoint is a vertex (the nearest uniform vertex
+    moves onto it when closer than a quarter element, otherwise a vertex is inserted)."""
+    interior = sorted({float(x) for x in breakpoints if 0 < x < length})
+    if not interior:
+        return compat.create_interval(comm, elements, length)
+    vertices = np.linspace(0.0, length, elements + 1)
+    spacing = length / elements
+    placed: set[float] = set()
+    for x in interior:
+        nearest = int(np.argmin(np.abs(vertices - x)))
+        movable = 0 < nearest < len(vertices) - 1 and vertices[nearest] not in placed
+        if abs(vertices[nearest] - x) < spacing / 4 and movable:
+            vertices[nearest] = x
+            placed.add(x)
+        else:
+            vertices = np.sort(np.append(vertices, x))
+            placed.add(x)
+    return compat.create_interval_from_vertices(comm, vertices)
+
+
 class BeamProblem:
     """Finite-element set-up of a `BeamModel`: space, unknown, Dirichlet conditions, forms.
 
@@ -203,9 +224,13 @@ class BeamProblem:
     changes never recompile forms.
     """
 
-    def __init__(self, model: BeamModel, comm: MPI.Comm = MPI.COMM_WORLD, extra_energy=None):
+    def __init__(self, model: BeamModel, comm: MPI.Comm = MPI.COMM_WORLD,
+                 breakpoints: tuple[float, ...] = (), extra_energy=None):
+        """``breakpoints``: interior x that must be mesh vertices (tendon entries, anchors,
+        kinks of tendon paths); ``extra_energy(problem)`` returns a UFL form added to the
+        potential (e.g. tendons)."""
         self.model = model
-        self.mesh = compat.create_interval(comm, model.mesh.elements, model.length)
+        self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
         degree = model.mesh.degree
         cell = self.mesh.ufl_cell()

@@ -19,6 +19,7 @@ EXIT_FAILED = 3
 
 COMMANDS = {
     "static": "large-deflection statics of a planar beam (load stepping, SNES)",
+    "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
 }
 
 
@@ -75,7 +76,30 @@ def run_static(args, config: dict, comm) -> int:
     return 0
 
 
-RUNNERS = {"static": run_static}
+def run_finger(args, config: dict, comm) -> int:
+    from fe_beam.finger import parse_finger, run_finger
+
+    parsed, target = parse_finger(config)
+    result, inverse = run_finger(parsed, args.out, comm, progress=not args.quiet,
+                                 target_angle=target)
+    for step in result.steps[-1:]:
+        tip = step["tip"]
+        tensions = ", ".join(f"{t:.6g}" for t in step["tensions"])
+        pulls = ", ".join(f"{p:.6g}" for p in step["pull_ins"])
+        _say(comm, f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
+                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+    if inverse:
+        _say(comm, f"inverse: tension {inverse['tension']:.8g} N gives tip angle "
+                   f"{inverse['target_tip_angle']:g} rad ({inverse['wall_time_s']:.2f} s)")
+    _say(comm, f"{len(result.steps)} load steps, {result.dofs} dofs, "
+               f"{result.wall_time_s:.2f} s; results in {args.out}")
+    if result.status != "converged":
+        _say(comm, f"fe-beam: {result.message}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS = {"static": run_static, "finger": run_finger}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -87,6 +111,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.out is None:
         args.out = Path("results") / Path(args.config).stem
     try:
+        if args.out.exists() and not args.out.is_dir():
+            raise ConfigError(f"--out {args.out} exists and is not a folder")
         config = apply_overrides(load_config(args.config), args.set)
         return RUNNERS[args.command](args, config, comm)
     except ConfigError as error:

@@ -21,6 +21,7 @@ __all__ = [
     "assemble_matrix",
     "assemble_vector",
     "create_interval",
+    "create_interval_from_vertices",
     "create_matrix",
     "create_vector",
     "function_space",
@@ -48,6 +49,17 @@ create_vector = fem_petsc.create_vector
 def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:
     """Uniform interval mesh of [0, length] (geometric dimension 1)."""
     return mesh.create_interval(comm, n_cells, [0.0, length])
+
+
+def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.Mesh:
+    """Interval mesh with the given increasing vertex coordinates (built on rank 0, distributed)."""
+    if comm.rank == 0:
+        points = np.asarray(vertices, dtype=np.float64).reshape(-1, 1)
+        cells = np.column_stack([np.arange(len(points) - 1), np.arange(1, len(points))])
+    else:
+        points, cells = np.empty((0, 1)), np.empty((0, 2))
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", "interval", 1, dim=1))
+    return mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
 
 
 def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:

@@ -100,7 +100,7 @@ def load_config(path: str | Path) -> dict:
     try:
         with path.open("rb") as stream:
             return tomllib.load(stream)
-    except tomllib.TOMLDecodeError as error:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise ConfigError(f"{path}: not valid TOML ({error})") from None
 
 
@@ -192,6 +192,7 @@ class StaticConfig:
     stepping: LoadStepping = field(default_factory=LoadStepping)
     max_rotation_jump: float = 1.0
     output: OutputOptions = field(default_factory=OutputOptions)
+    tendons: tuple = ()
     raw: dict = field(default_factory=dict)
 
 

@@ -7,11 +7,15 @@ interrupted run always leaves readable results of the last converged step.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
+import shutil
+import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -113,14 +117,39 @@ class BeamXDMFWriter:
                 self._file.write_function(function, time)
 
     def vertex_values(self) -> dict | None:
-        """Current nodal u, v, theta and x (rank 0), for plots."""
+        """Current nodal u, v, theta and x, plus element-midpoint profiles under "cells"
+        (x, eps, gamma, kappa, N, T, M, axial_force), gathered on rank 0 (None elsewhere)."""
         self.update()
-        return gather_line(self.problem, {k: self.functions[k] for k in ("u", "v", "theta")})
+        nodal = gather_line(self.problem, {k: self.functions[k] for k in ("u", "v", "theta")})
+        cellwise = gather_line(self.problem, {k: f for k, f in self.functions.items()
+                                              if k not in ("u", "v", "theta", "displacement")})
+        if nodal is not None:
+            nodal["cells"] = cellwise
+        return nodal
 
     def close(self) -> None:
         if self._file is not None:
             self._file.close()
             self._file = None
+
+
+@contextlib.contextmanager
+def virtual_display():
+    """A DISPLAY for VTK/pyvista: the current one, or a private Xvfb for the duration."""
+    if os.environ.get("DISPLAY") or shutil.which("Xvfb") is None:
+        yield
+        return
+    number = 90 + os.getpid() % 400
+    server = subprocess.Popen(["Xvfb", f":{number}", "-screen", "0", "1280x1024x24", "-nolisten",
+                               "tcp"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.environ["DISPLAY"] = f":{number}"
+    try:
+        time.sleep(0.5)
+        yield
+    finally:
+        del os.environ["DISPLAY"]
+        server.terminate()
+        server.wait(timeout=10)
 
 
 def _pyplot():

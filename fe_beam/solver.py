@@ -323,7 +323,8 @@ def run_load_stepping(
     try:
         while lam < 1.0 - 1e-12:
             increment = min(increment, 1.0 - lam)
-            target = lam + increment
+            # Summed increments drift (0.1 * 10 != 1.0): the last step lands exactly on 1.
+            target = 1.0 if lam + increment >= 1.0 - 1e-12 else lam + increment
             if before_previous is not None:
                 state[:] = previous + (increment / previous_increment) * (previous - before_previous)
             set_load_factor(target)

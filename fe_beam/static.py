@@ -17,6 +17,7 @@ from fe_beam.outputs import (
     plot_load_displacement,
     write_csv,
 )
+from fe_beam.tendons import PullInSolver, TendonSet
 from fe_beam.solver import (
     LoadSteppingFailed,
     NonlinearProblem,
@@ -58,16 +59,32 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
 
 
 def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WORLD,
-                 progress: bool = True, extra_summary: dict | None = None) -> StaticResult:
+                 progress: bool = True, extra_summary: dict | None = None,
+                 on_step=None) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
+
+    Tendons of ``config.tendons`` add their potential; steps then also record ``tensions`` and
+    ``pull_ins``. ``on_step(problem, record)`` is called after each converged step (on all ranks),
+    e.g. to sample profiles along the beam.
 
     summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
     On failure the last converged state is written and the result has status "failed".
     """
     started = time.perf_counter()
-    problem = BeamProblem(config.model, comm)
-    solver = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
-                        config.solver, prefix="fe_beam_static_")
+    tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
+    problem = BeamProblem(config.model, comm,
+                          breakpoints=tendons.breakpoints if tendons else (),
+                          extra_energy=tendons.energy if tendons else None)
+    snes = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
+                      config.solver, prefix="fe_beam_static_")
+    solver = PullInSolver(snes, tendons) if tendons else snes
+
+    def set_load_factor(value: float) -> None:
+        problem.set_load_factor(value)
+        if tendons:
+            tendons.set_tension_controlled(value)
+            solver.set_load_factor(value)
+
     result = StaticResult(dofs=problem.space.dofmap.index_map.size_global
                           * problem.space.dofmap.index_map_bs)
     root = comm.rank == 0
@@ -79,7 +96,13 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
     extra = {"model": _model_summary(config)} | (extra_summary or {})
 
     def record(step: StepResult) -> None:
-        result.steps.append(_step_record(problem, step))
+        entry = _step_record(problem, step)
+        if tendons:
+            entry |= {"tensions": tendons.tension_values().tolist(),
+                      "pull_ins": tendons.pull_ins().tolist()}
+        result.steps.append(entry)
+        if on_step is not None:
+            on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
         writer.write(step.load_factor)
         shape = writer.vertex_values()
@@ -90,7 +113,7 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
 
     try:
         run_load_stepping(
-            solver, problem.set_load_factor, config.stepping, on_converged=record,
+            solver, set_load_factor, config.stepping, on_converged=record,
             reject_step=rotation_jump_check(problem.rotation_dofs(), config.max_rotation_jump),
             progress=progress,
         )
@@ -99,7 +122,7 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
         result.status, result.message = "failed", str(failure)
     finally:
         writer.close()
-        solver.destroy()
+        snes.destroy()
     result.wall_time_s = time.perf_counter() - started
     if writing and root:
         _write_tables(out, result, extra)

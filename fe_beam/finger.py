@@ -1,0 +1,264 @@
+"""Tendon-driven tapered soft finger (the finger chapter, MODEL.md section 2).
+
+The finger is a `BeamModel` plus `[[tendons]]`; every table the user leaves out defaults to the
+chapter's finger: L = 0.1 m, B = 0.02 m, H from 0.02 to 0.01 m, one tendon from 8 mm offset at
+the base to 4 mm at the tip, silicone with E = 0.6 MPa (nu = 0.45 assumed: the rod model needs
+nu < 0.5; it only enters the shear stiffness).
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam.config import (
+    NUMBER,
+    ConfigError,
+    Key,
+    StaticConfig,
+    _wrap,
+    parse_static,
+    table,
+)
+from fe_beam.outputs import _pyplot, atomic_write_json, virtual_display, write_csv
+from fe_beam.static import StaticResult, solve_static
+from fe_beam.tendons import Tendon, tension_for_target
+
+__all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
+
+DEFAULT_FINGER = {
+    "beam": {"length": 0.1},
+    "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
+    "material": {"E": 0.6e6, "nu": 0.45, "rho": 1070.0},
+    "mesh": {"elements": 40, "degree": 2},
+    "loads": {"steps": 20},
+    "tendons": [{"name": "flexor", "offset_base": 0.008, "offset_tip": 0.004, "tension": 2.0}],
+}
+
+TENDON_KEYS = {
+    "name": Key((str,), None, "label"),
+    "offset_base": Key(NUMBER, None, "offset at x = 0 [m] (+ on the +y side)"),
+    "offset_tip": Key(NUMBER, None, "offset at x = L [m]"),
+    "path": Key((list,), None, "[[x, offset], ...] in metres, piecewise linear"),
+    "paths": Key((list,), None, "several branches with one tension: [[[x, offset], ...], ...]"),
+    "entry": Key(NUMBER, 0.0, "x where the tendon enters [m]"),
+    "anchor": Key(NUMBER, None, "x where it is anchored [m] (default L)"),
+    "tension": Key(NUMBER, None, "tension at load factor 1 [N]"),
+    "pull_in": Key(NUMBER, None, "pull-in at load factor 1 [m] (tension becomes unknown)"),
+    "steps": Key((int,), None, "number of load steps (the largest over tendons and [loads])"),
+}
+INVERSE_KEYS = {"tip_angle": Key(NUMBER, None, "target tip rotation [rad]")}
+
+
+def with_defaults(config: dict) -> dict:
+    """The user's tables over the chapter's finger (whole tables: a given [section] replaces
+    the default one rather than mixing keys of two shapes)."""
+    merged = copy.deepcopy(DEFAULT_FINGER)
+    for name, value in config.items():
+        if name == "loads" and isinstance(value, dict):
+            merged["loads"] = {**merged["loads"], **value}
+        else:
+            merged[name] = copy.deepcopy(value)
+    return merged
+
+
+def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | None]:
+    if not isinstance(given, dict):
+        raise ConfigError(f"[[tendons]] #{index + 1} must be a table")
+    values = table({"tendon": given}, "tendon", TENDON_KEYS)
+    name = values["name"] or f"tendon{index + 1}"
+    where = f"[[tendons]] {name!r}"
+    linear = values["offset_base"] is not None or values["offset_tip"] is not None
+    choices = [linear, values["path"] is not None, values["paths"] is not None]
+    if sum(choices) != 1:
+        raise ConfigError(f"{where}: give exactly one of offset_base/offset_tip, path or paths")
+    if linear:
+        if values["offset_base"] is None or values["offset_tip"] is None:
+            raise ConfigError(f"{where}: offset_base and offset_tip go together")
+        paths = (((0.0, values["offset_base"]), (length, values["offset_tip"])),)
+    else:
+        paths = (values["path"],) if values["path"] is not None else tuple(values["paths"])
+    tendon = _wrap(Tendon, paths=paths, entry=values["entry"], anchor=values["anchor"],
+                   tension=values["tension"], pull_in=values["pull_in"], name=name)
+    _wrap(tendon.validate_for, length)
+    return tendon, values["steps"]
+
+
+def parse_finger(config: dict) -> tuple[StaticConfig, float | None]:
+    """(static config with tendons, inverse target tip angle or None)."""
+    config = with_defaults(config)
+    tendons_given = config.pop("tendons")
+    inverse = table(config, "inverse", INVERSE_KEYS) if "inverse" in config else {}
+    config.pop("inverse", None)
+    if not isinstance(tendons_given, list) or not tendons_given:
+        raise ConfigError("[[tendons]] must list at least one tendon")
+    static = parse_static(config)
+    parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
+    steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
+    if steps < 1:
+        raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")
+    stepping = replace(static.stepping, steps=steps, max_increment=1.0 / steps,
+                       min_increment=min(static.stepping.min_increment, 1.0 / steps))
+    target = inverse.get("tip_angle")
+    if target is not None:
+        if any(t.controlled_by_pull_in for t, _ in parsed) or len(parsed) != 1:
+            raise ConfigError("[inverse] tip_angle needs exactly one tension-controlled tendon")
+    return replace(static, tendons=tuple(t for t, _ in parsed), stepping=stepping), target
+
+
+def tension_for_tip_angle(config: StaticConfig, target: float, comm=MPI.COMM_WORLD,
+                          bracket: tuple[float, float] | None = None) -> float:
+    """Tension of the (single, tension-controlled) tendon that turns the tip by ``target``."""
+    tendon = config.tendons[0]
+
+    def tip_angle(tension: float) -> float:
+        trial = replace(config, tendons=(replace(tendon, tension=tension),))
+        result = solve_static(trial, None, comm, progress=False)
+        if result.status != "converged":
+            raise ConfigError(f"[inverse] no equilibrium at tension {tension:g} N")
+        return result.steps[-1]["tip"]["theta"]
+
+    if bracket is None:
+        high = max(tendon.tension, 1e-6)
+        while tip_angle(high) < target:
+            high *= 2
+            if high > 1e6 * max(tendon.tension, 1.0):
+                raise ConfigError(f"[inverse] tip_angle {target:g} rad is not reachable")
+        bracket = (0.0, high)
+    return tension_for_target(tip_angle, target, bracket)
+
+
+def run_finger(config: StaticConfig, out: Path | None, comm=MPI.COMM_WORLD, progress=True,
+               target_angle: float | None = None) -> tuple[StaticResult, dict]:
+    extra = {"tendons": [{"name": t.name, "paths": t.paths, "entry": t.entry, "anchor": t.anchor,
+                          "tension": t.tension, "pull_in": t.pull_in} for t in config.tendons]}
+    result = solve_static(config, out, comm, progress=progress, extra_summary=extra)
+    inverse = {}
+    if target_angle is not None and result.status == "converged":
+        started = time.perf_counter()
+        tension = tension_for_tip_angle(config, target_angle, comm)
+        inverse = {"target_tip_angle": target_angle, "tension": tension,
+                   "wall_time_s": time.perf_counter() - started}
+    if out is not None and comm.rank == 0 and result.steps:
+        if inverse:
+            atomic_write_json(out / "summary.json", result.summary(extra | {"inverse": inverse}))
+        write_sweep(out, result)
+        if config.output.plots:
+            plot_finger(out, result, config)
+    return result, inverse
+
+
+def write_sweep(out: Path, result: StaticResult) -> None:
+    header, rows = ["load_factor"], []
+    count = len(result.steps[0]["tensions"])
+    header += [f"tension_{i}" for i in range(count)] + [f"pull_in_{i}" for i in range(count)]
+    header += ["tip_u", "tip_v", "tip_theta"]
+    for step in result.steps:
+        rows.append([step["load_factor"], *step["tensions"], *step["pull_ins"],
+                     step["tip"]["u"], step["tip"]["v"], step["tip"]["theta"]])
+    write_csv(out / "tension_sweep.csv", header, rows)
+
+
+def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
+    """The chapter's Figures 3.8 (profiles along s) and 3.9 (backbone), and tension curves."""
+    plt = _pyplot()
+    final = result.shapes[-1][1]
+    cells = final["cells"]
+    figure, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
+    zero = np.zeros_like(cells["x"])
+    panels = [("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
+              ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
+              ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
+              ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)")]
+    for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
+        axis.plot(cells["x"], values, lw=1.8)
+        axis.set_title(title, fontsize=9)
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    for axis in axes[1]:
+        axis.set_xlabel("s [m]")
+    tension = result.steps[-1]["tensions"]
+    figure.suptitle(f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
+                    " N (cf. chapter Fig. 3.8)")
+    figure.tight_layout()
+    figure.savefig(out / "fig3_8_profiles.png", dpi=130)
+    plt.close(figure)
+
+    figure, axis = plt.subplots(figsize=(6, 5))
+    every = max(1, len(result.shapes) // 8)
+    for (_, shape), step in list(zip(result.shapes, result.steps, strict=True))[every - 1::every]:
+        axis.plot(shape["x"] + shape["u"], shape["v"],
+                  label=f"tension {step['tensions'][0]:.3g} N")
+    axis.set_aspect("equal")
+    axis.set_xlabel("x [m]")
+    axis.set_ylabel("y [m]")
+    axis.set_title("Backbone in the XY plane (cf. chapter Fig. 3.9a)")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7)
+    figure.tight_layout()
+    figure.savefig(out / "fig3_9_backbone.png", dpi=130)
+    plt.close(figure)
+
+    tensions = [s["tensions"][0] for s in result.steps]
+    figure, (left, right) = plt.subplots(1, 2, figsize=(9, 3.6))
+    left.plot(tensions, [s["tip"]["theta"] for s in result.steps], "o-", ms=3)
+    left.set_xlabel("tension [N]")
+    left.set_ylabel("tip angle [rad]")
+    right.plot(tensions, [s["tip"]["u"] for s in result.steps], "o-", ms=3, label="tip u")
+    right.plot(tensions, [s["tip"]["v"] for s in result.steps], "s-", ms=3, label="tip v")
+    right.set_xlabel("tension [N]")
+    right.set_ylabel("tip displacement [m]")
+    right.legend()
+    for axis in (left, right):
+        axis.grid(alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(out / "tension_tip.png", dpi=130)
+    plt.close(figure)
+    render_3d(out / "finger_3d.png", final, config)
+
+
+def render_3d(path: Path, shape: dict, config: StaticConfig) -> bool:
+    """pyvista tube rendering of the deformed finger with its tendon (Fig. 3.9b); skipped
+    (returns False) when pyvista or a virtual screen is not available."""
+    try:
+        import pyvista
+    except ImportError:
+        return False
+    try:
+        with virtual_display():
+            _render_tube(pyvista, path, shape, config)
+        return True
+    except Exception:  # a picture must never fail an analysis
+        return False
+
+
+def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None:
+    x = shape["x"] + shape["u"]
+    y = shape["v"]
+    theta = shape["theta"]
+    section = config.model.section
+    s = shape["x"] / config.model.length
+    height = np.array([section.properties(si).h for si in s])
+    backbone = np.column_stack([x, y, np.zeros_like(x)])
+    plotter = pyvista.Plotter(off_screen=True, window_size=(900, 600))
+    body = pyvista.Spline(backbone, len(x) * 3).tube(radius=float(np.mean(height)) / 2)
+    plotter.add_mesh(body, color="lightsteelblue", opacity=0.45)
+    for tendon in config.tendons:
+        for branch in tendon.paths:
+            xs, ds = np.array([p[0] for p in branch]), np.array([p[1] for p in branch])
+            delta = np.interp(shape["x"], xs, ds)
+            inside = (shape["x"] >= tendon.entry - 1e-12) & (shape["x"] <= tendon.anchor + 1e-12)
+            points = np.column_stack([x - delta * np.sin(theta), y + delta * np.cos(theta),
+                                      np.zeros_like(x)])[inside]
+            plotter.add_mesh(pyvista.Spline(points, len(points) * 3).tube(
+                radius=float(np.mean(height)) / 25), color="crimson")
+    plotter.view_xy()
+    plotter.add_axes()
+    plotter.screenshot(str(path))
+    plotter.close()
+

@@ -1,0 +1,285 @@
+"""Frictionless tendons (MODEL.md section 2): potential tau * l with l = int |r_c'| dx.
+
+The tendon path in the body frame is r_c = r + delta(x) d(theta), d = (-sin theta, cos theta),
+between an entry x_a and an anchor x_b; positive delta lies on the +d side, so pulling a tendon
+with positive offset bends the beam counterclockwise (toward +y). Differentiating tau * l gives
+the anchor point load and the distributed centripetal load of a curved path automatically
+(Camarillo 2008; Rucker & Webster 2011). A tendon may have several branches with one tension
+(the chapter's loop: left and right branches joined across the tip); l is then their sum.
+
+Tension control: tau = load factor * tension. Displacement control: the pull-in
+l_0 - l = load factor * pull_in is prescribed and tau is an unknown found by Newton's method on
+the tendon lengths with the exact sensitivity dl_i/dtau_j = -g_i^T K^{-1} g_j (g_i = dl_i/dw,
+K the tangent of the beam at equilibrium).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from petsc4py import PETSc
+
+from fe_beam import compat
+from fe_beam.mpi import assemble_scalar
+from fe_beam.solver import SNESSolver, SolveFailed
+
+__all__ = ["PullInSolver", "Tendon", "TendonSet", "looped_tendon", "tendon_length_density"]
+
+Path = tuple[tuple[float, float], ...]
+
+
+def _path(points, name: str) -> Path:
+    try:
+        path = tuple((float(x), float(delta)) for x, delta in points)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a list of [x, offset] pairs, got {points!r}") from None
+    xs = [x for x, _ in path]
+    if len(path) < 2 or any(b <= a for a, b in zip(xs, xs[1:])):
+        raise ValueError(f"{name} needs at least two points with increasing x, got {points!r}")
+    if not all(math.isfinite(v) for point in path for v in point):
+        raise ValueError(f"{name} must contain finite numbers, got {points!r}")
+    return path
+
+
+@dataclass(frozen=True)
+class Tendon:
+    """One tendon: offset paths (one per branch, each [(x, delta), ...] in metres, piecewise
+    linear), entry and anchor x, and either a tension [N] or a pull-in [m] at load factor 1."""
+
+    paths: tuple[Path, ...]
+    entry: float = 0.0
+    anchor: float | None = None
+    tension: float | None = None
+    pull_in: float | None = None
+    name: str = "tendon"
+
+    def __post_init__(self):
+        paths = tuple(_path(p, f"tendon {self.name!r} path") for p in self.paths)
+        if not paths:
+            raise ValueError(f"tendon {self.name!r} needs a path")
+        object.__setattr__(self, "paths", paths)
+        if (self.tension is None) == (self.pull_in is None):
+            raise ValueError(f"tendon {self.name!r}: give exactly one of tension [N] or pull_in [m]")
+        for key in ("tension", "pull_in"):
+            value = getattr(self, key)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                      or not math.isfinite(value) or value < 0):
+                raise ValueError(f"tendon {self.name!r}: {key} must be a number >= 0, got {value!r}")
+        anchor = self.anchor if self.anchor is not None else max(p[-1][0] for p in paths)
+        if not (0 <= self.entry < anchor):
+            raise ValueError(
+                f"tendon {self.name!r}: need 0 <= entry < anchor, got entry {self.entry!r}, "
+                f"anchor {anchor!r}"
+            )
+        for path in paths:
+            if path[0][0] > self.entry or path[-1][0] < anchor:
+                raise ValueError(
+                    f"tendon {self.name!r}: its path spans x = {path[0][0]:g} .. {path[-1][0]:g} "
+                    f"but must cover entry {self.entry:g} .. anchor {anchor:g}"
+                )
+        object.__setattr__(self, "anchor", float(anchor))
+
+    @classmethod
+    def linear(cls, offset_base: float, offset_tip: float, length: float, **kwargs) -> Tendon:
+        """Offset varying linearly from x = 0 to x = L."""
+        return cls(paths=(((0.0, offset_base), (length, offset_tip)),), **kwargs)
+
+    @property
+    def controlled_by_pull_in(self) -> bool:
+        return self.pull_in is not None
+
+    def validate_for(self, length: float) -> None:
+        if self.anchor > length * (1 + 1e-12):
+            raise ValueError(
+                f"tendon {self.name!r}: anchor {self.anchor:g} lies beyond the beam (L = {length:g})"
+            )
+
+
+def looped_tendon(a_left: float, b_left: float, a_right: float, b_right: float, length: float,
+                  **kwargs) -> Tendon:
+    """The chapter's loop (eq. 3.2): left and right branches with base offsets b and anchor
+    offsets a, joined across the tip (the crossing lies in the rigid tip section), one tension.
+
+    Eq. 3.2 is printed as d(s) = (a - b) s / L - b, which gives d(0) = -b and d(L) = a - 2b,
+    contradicting its own definition (b at the base, a at the anchorage); we use
+    delta(x) = b + (a - b) x / L.
+    """
+    return Tendon(paths=(((0.0, b_left), (length, a_left)), ((0.0, b_right), (length, a_right))),
+                  **kwargs)
+
+
+def tendon_length_density(w_parts, delta, delta_prime):
+    """|r_c'| with r_c' = r' + delta' d + delta d', d' = -theta' (cos theta, sin theta)."""
+    u, v, theta = w_parts
+    cos_t, sin_t = ufl.cos(theta), ufl.sin(theta)
+    kappa = theta.dx(0)
+    tangent_x = 1 + u.dx(0) - delta_prime * sin_t - delta * kappa * cos_t
+    tangent_y = v.dx(0) + delta_prime * cos_t - delta * kappa * sin_t
+    return ufl.sqrt(tangent_x**2 + tangent_y**2)
+
+
+class TendonSet:
+    """The tendons of one problem: tension constants, length forms and the energy hook."""
+
+    def __init__(self, tendons: Sequence[Tendon], length: float):
+        for tendon in tendons:
+            tendon.validate_for(length)
+        self.tendons = tuple(tendons)
+        self.length = length
+        self.tensions: list[fem.Constant] = []
+        self.length_forms: list[fem.Form] = []
+        self.length_ufl: list[ufl.Form] = []
+        self.gradient_forms: list[fem.Form] = []
+        self.rest_lengths = np.zeros(len(self.tendons))
+        self._problem = None
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        points = set()
+        for tendon in self.tendons:
+            points |= {tendon.entry, tendon.anchor}
+            points |= {x for path in tendon.paths for x, _ in path}
+        return tuple(sorted(points))
+
+    def energy(self, problem):
+        """sum_i tau_i l_i as a UFL form on ``problem`` (BeamProblem's extra_energy hook)."""
+        if self._problem is problem:
+            return self._energy
+        self._problem = problem
+        mesh = problem.mesh
+        cell = mesh.ufl_cell()
+        offsets = compat.function_space(mesh, ufl.FiniteElement("Lagrange", cell, 1))
+        indicator_space = compat.function_space(mesh, ufl.FiniteElement("DG", cell, 0))
+        u, v, theta, _ = problem.fields()
+        test = ufl.TestFunction(problem.space)
+        total = ufl.zero()
+        # The tendon length uses the strain energy's Gauss rule: where constraints hold (at those
+        # points) it sees exactly the constrained kinematics, e.g. |r_c'| = 1 - delta kappa.
+        dx = problem.dx_energy
+        for tendon in self.tendons:
+            inside = fem.Function(indicator_space)
+            inside.interpolate(lambda x, t=tendon: ((x[0] > t.entry) & (x[0] < t.anchor)) * 1.0)
+            density = ufl.zero()
+            for path in tendon.paths:
+                delta = fem.Function(offsets)
+                xs, ds = np.array([p[0] for p in path]), np.array([p[1] for p in path])
+                delta.interpolate(lambda x, xs=xs, ds=ds: np.interp(x[0], xs, ds))
+                density += tendon_length_density((u, v, theta), delta, delta.dx(0))
+            tension = fem.Constant(mesh, 0.0)
+            length = inside * density * dx
+            self.tensions.append(tension)
+            self.length_ufl.append(length)
+            self.length_forms.append(fem.form(length))
+            self.gradient_forms.append(fem.form(ufl.derivative(length, problem.w, test)))
+            total += tension * length
+        self.rest_lengths = self.lengths()
+        self._energy = total
+        return total
+
+    def lengths(self) -> np.ndarray:
+        return np.array([assemble_scalar(form) for form in self.length_forms])
+
+    def pull_ins(self) -> np.ndarray:
+        return self.rest_lengths - self.lengths()
+
+    def tension_values(self) -> np.ndarray:
+        return np.array([float(t.value) for t in self.tensions])
+
+    def set_tension_controlled(self, load_factor: float) -> None:
+        for tendon, constant in zip(self.tendons, self.tensions, strict=True):
+            if not tendon.controlled_by_pull_in:
+                constant.value = load_factor * tendon.tension
+
+    def gradient(self, index: int, bcs) -> PETSc.Vec:
+        """g_i = dl_i/dw with Dirichlet rows zeroed."""
+        vector = compat.create_vector(self.gradient_forms[index])
+        with vector.localForm() as local:
+            local.set(0.0)
+        compat.assemble_vector(vector, self.gradient_forms[index])
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        compat.set_bc(vector, bcs, scale=0.0)
+        return vector
+
+
+class PullInSolver:
+    """SNES for the beam inside a Newton iteration on the unknown tensions of pull-in
+    controlled tendons; same interface as `SNESSolver` so load stepping drives it unchanged."""
+
+    def __init__(self, solver: SNESSolver, tendons: TendonSet, tolerance: float = 1e-10,
+                 max_it: int = 20):
+        self.solver = solver
+        self.problem = solver.problem
+        self.tendons = tendons
+        self.controlled = [i for i, t in enumerate(tendons.tendons) if t.controlled_by_pull_in]
+        self.tolerance = tolerance * tendons.length
+        self.max_it = max_it
+        self.load_factor = 0.0
+        self.linear_iterations = 0
+
+    def set_load_factor(self, value: float) -> None:
+        self.load_factor = value
+
+    def targets(self) -> np.ndarray:
+        pulls = np.array([self.tendons.tendons[i].pull_in for i in self.controlled])
+        return self.tendons.rest_lengths[self.controlled] - self.load_factor * pulls
+
+    def solve(self) -> int:
+        if not self.controlled:
+            return self.solver.solve()
+        start = self.tendons.tension_values()
+        try:
+            return self._solve_tensions()
+        except SolveFailed:
+            for constant, value in zip(self.tendons.tensions, start, strict=True):
+                constant.value = value
+            raise
+
+    def _solve_tensions(self) -> int:
+        iterations = 0
+        for _ in range(self.max_it):
+            iterations += self.solver.solve()
+            mismatch = self.tendons.lengths()[self.controlled] - self.targets()
+            if np.max(np.abs(mismatch)) < self.tolerance:
+                self.linear_iterations = self.solver.linear_iterations
+                return iterations
+            sensitivity = self._sensitivity()
+            step = np.linalg.solve(sensitivity, mismatch)
+            for i, change in zip(self.controlled, step, strict=True):
+                self.tendons.tensions[i].value = float(self.tendons.tensions[i].value) - change
+        raise SolveFailed(f"pull-in control: tendon lengths did not converge in {self.max_it} "
+                          "tension updates")
+
+    def _sensitivity(self) -> np.ndarray:
+        """S_ij = dl_i/dtau_j = -g_i . K^{-1} g_j at the current equilibrium."""
+        problem, snes = self.problem, self.solver.snes
+        x = compat.vector_of(problem.w).copy()
+        problem.jacobian(snes, x, problem.A, problem.A)
+        ksp = PETSc.KSP().create(problem.A.getComm())
+        ksp.setOperators(problem.A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        gradients = [self.tendons.gradient(i, problem.bcs) for i in self.controlled]
+        response = gradients[0].duplicate()
+        size = len(self.controlled)
+        sensitivity = np.zeros((size, size))
+        for j, g_j in enumerate(gradients):
+            ksp.solve(g_j, response)
+            for i, g_i in enumerate(gradients):
+                sensitivity[i, j] = -g_i.dot(response)
+        ksp.destroy()
+        return sensitivity
+
+
+def tension_for_target(solve_with_tension: Callable[[float], float], target: float,
+                       bracket: tuple[float, float]) -> float:
+    """Tension at which ``solve_with_tension(tau)`` (e.g. tip angle) equals ``target`` (brentq)."""
+    from scipy.optimize import brentq
+
+    low, high = bracket
+    return brentq(lambda tau: solve_with_tension(tau) - target, low, high, xtol=1e-12, rtol=1e-12)
