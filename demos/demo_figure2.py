@@ -18,14 +18,13 @@ import argparse
 import os
 from pathlib import Path
 
-import numpy as np
 from mpi4py import MPI
 
 from fe_beam import (
     BeamModel,
     Discretisation,
-    LoadStepping,
     Loads,
+    LoadStepping,
     Material,
     ModelOptions,
     Section,
@@ -64,40 +63,59 @@ CASES = {
 def main(out: Path) -> dict:
     quiet_jit_logging()
     comm = MPI.COMM_WORLD
-    results = {name: solve_static(config, out / name, comm, progress=True)
-               for name, (_, config) in CASES.items()}
+    results = {
+        name: solve_static(config, out / name, comm, progress=True)
+        for name, (_, config) in CASES.items()
+    }
     if comm.rank != 0:
         return results
-    print(f"\n{'k':>5} | {'elastica -u/L':>13} {'-v/L':>9} {'-theta':>9} | "
-          f"{'(a) err u':>10} {'err v':>10} {'err theta':>10} | "
-          f"{'(b) err u':>10} {'err v':>10} {'err theta':>10}")
+    print(
+        f"\n{'k':>5} | {'elastica -u/L':>13} {'-v/L':>9} {'-theta':>9} | "
+        f"{'(a) err u':>10} {'err v':>10} {'err theta':>10} | "
+        f"{'(b) err u':>10} {'err v':>10} {'err theta':>10}"
+    )
     rows = []
-    for step_a, step_b in zip(results["a_inextensible"].steps,
-                              results["b_extensible"].steps, strict=False):
+    for step_a, step_b in zip(
+        results["a_inextensible"].steps, results["b_extensible"].steps, strict=False
+    ):
         k = K_MAX * step_a["load_factor"]
         exact = elastica_tip_load(k)
         errors = []
         for step in (step_a, step_b):
             tip = step["tip"]
-            errors += [-tip["u"] / LENGTH - exact.shortening,
-                       -tip["v"] / LENGTH - exact.deflection,
-                       -tip["theta"] - exact.rotation]
+            errors += [
+                -tip["u"] / LENGTH - exact.shortening,
+                -tip["v"] / LENGTH - exact.deflection,
+                -tip["theta"] - exact.rotation,
+            ]
         rows.append((k, errors))
-        print(f"{k:5.2f} | {exact.shortening:13.6f} {exact.deflection:9.6f} {exact.rotation:9.6f}"
-              " | " + " ".join(f"{e:10.2e}" for e in errors[:3])
-              + " | " + " ".join(f"{e:10.2e}" for e in errors[3:]))
-    for name, (title, config) in CASES.items():
+        print(
+            f"{k:5.2f} | {exact.shortening:13.6f} {exact.deflection:9.6f} {exact.rotation:9.6f}"
+            " | "
+            + " ".join(f"{e:10.2e}" for e in errors[:3])
+            + " | "
+            + " ".join(f"{e:10.2e}" for e in errors[3:])
+        )
+    for name, (title, _) in CASES.items():
         shapes = results[name].shapes
-        marks = [(f"elastica tip (Mattiasson), k = 1..{K_MAX:g}",
-                  LENGTH * (1 - elastica_tip_load(K_MAX * s["load_factor"]).shortening),
-                  -LENGTH * elastica_tip_load(K_MAX * s["load_factor"]).deflection)
-                 for s in results[name].steps]
-        labelled = [(f"k = {K_MAX * s['load_factor']:.3g}", shape)
-                    for s, (_, shape) in zip(results[name].steps, shapes, strict=True)]
+        marks = [
+            (
+                f"elastica tip (Mattiasson), k = 1..{K_MAX:g}",
+                LENGTH * (1 - elastica_tip_load(K_MAX * s["load_factor"]).shortening),
+                -LENGTH * elastica_tip_load(K_MAX * s["load_factor"]).deflection,
+            )
+            for s in results[name].steps
+        ]
+        labelled = [
+            (f"k = {K_MAX * s['load_factor']:.3g}", shape)
+            for s, (_, shape) in zip(results[name].steps, shapes, strict=True)
+        ]
         plot_deformed_shapes(labelled, out / f"figure2_{name}.png", title, LENGTH, marks)
     worst_a = max(abs(e) for _, errors in rows for e in errors[:3])
-    print(f"\n(a) largest tip error vs the elastica: {worst_a:.2e} L "
-          "(expected O((h/L)^2) = 1e-4 from the I4 term)")
+    print(
+        f"\n(a) largest tip error vs the elastica: {worst_a:.2e} L "
+        "(expected O((h/L)^2) = 1e-4 from the I4 term)"
+    )
     print(f"shapes, XDMF (open {out}/*/beam.xdmf in ParaView) and summaries in {out}/")
     return results
 

@@ -80,7 +80,11 @@ class Discretisation:
     degree: int = 2
 
     def __post_init__(self):
-        if not isinstance(self.elements, int) or isinstance(self.elements, bool) or self.elements < 1:
+        if (
+            not isinstance(self.elements, int)
+            or isinstance(self.elements, bool)
+            or self.elements < 1
+        ):
             raise ValueError(f"mesh.elements must be an integer >= 1, got {self.elements!r}")
         if self.degree not in (1, 2):
             raise ValueError(f"mesh.degree must be 1 or 2, got {self.degree!r}")
@@ -128,7 +132,9 @@ class Supports:
                         f"(supports.{end} fixes {list(fixed) or 'nothing'})"
                     )
                 if isinstance(value, bool) or not isinstance(value, (int, float)):
-                    raise ValueError(f"loads.prescribed_{end}.{name} must be a number, got {value!r}")
+                    raise ValueError(
+                        f"loads.prescribed_{end}.{name} must be a number, got {value!r}"
+                    )
 
     def fixed(self, end: str) -> tuple[str, ...]:
         return support_components(getattr(self, end), end)
@@ -224,8 +230,13 @@ class BeamProblem:
     changes never recompile forms.
     """
 
-    def __init__(self, model: BeamModel, comm: MPI.Comm = MPI.COMM_WORLD,
-                 breakpoints: tuple[float, ...] = (), extra_energy=None):
+    def __init__(
+        self,
+        model: BeamModel,
+        comm: MPI.Comm = MPI.COMM_WORLD,
+        breakpoints: tuple[float, ...] = (),
+        extra_energy=None,
+    ):
         """``breakpoints``: interior x that must be mesh vertices (tendon entries, anchors,
         kinks of tendon paths); ``extra_energy(problem)`` returns a UFL form added to the
         potential (e.g. tendons)."""
@@ -262,8 +273,12 @@ class BeamProblem:
         self.section_props = sec.properties(x / m.length, dims, dims_tip)
         p = self.section_props
         self.stiffness = Stiffness(
-            EA=self.E * p.A, GA=self.G * p.A, EI=self.E * p.I, EI3=self.E * p.I3,
-            EI4=self.E * p.I4, shear_correction=self.k_shear,
+            EA=self.E * p.A,
+            GA=self.G * p.A,
+            EI=self.E * p.I,
+            EI3=self.E * p.I3,
+            EI4=self.E * p.I4,
+            shear_correction=self.k_shear,
         )
         self.tip_force = fem.Constant(self.mesh, np.array(m.loads.tip_force, dtype=float))
         self.tip_moment = const(m.loads.tip_moment)
@@ -388,4 +403,3 @@ class BeamProblem:
 
     def rotation_dofs(self) -> np.ndarray:
         return self.component_dofs("theta")
-

@@ -32,10 +32,16 @@ def _parser() -> argparse.ArgumentParser:
     for name, help_text in COMMANDS.items():
         command = sub.add_parser(name, help=help_text, description=help_text)
         command.add_argument("config", help="TOML configuration file")
-        command.add_argument("--out", type=Path, default=None,
-                             help="output folder (default: results/<config name>)")
-        command.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
-                             help="override a config value, e.g. --set section.h=0.01")
+        command.add_argument(
+            "--out", type=Path, default=None, help="output folder (default: results/<config name>)"
+        )
+        command.add_argument(
+            "--set",
+            action="append",
+            default=[],
+            metavar="TABLE.KEY=VALUE",
+            help="override a config value, e.g. --set section.h=0.01",
+        )
         command.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
@@ -66,10 +72,16 @@ def run_static(args, config: dict, comm) -> int:
     result = solve_static(parsed, args.out, comm, progress=not args.quiet)
     for step in result.steps[-1:]:
         tip = step["tip"]
-        _say(comm, f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
-    _say(comm, f"{len(result.steps)} load steps, {result.dofs} dofs, "
-               f"{result.wall_time_s:.2f} s; results in {args.out}")
+        _say(
+            comm,
+            f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
+            f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad",
+        )
+    _say(
+        comm,
+        f"{len(result.steps)} load steps, {result.dofs} dofs, "
+        f"{result.wall_time_s:.2f} s; results in {args.out}",
+    )
     if result.status != "converged":
         _say(comm, f"fe-beam: {result.message}", sys.stderr)
         return EXIT_FAILED
@@ -80,19 +92,29 @@ def run_finger(args, config: dict, comm) -> int:
     from fe_beam.finger import parse_finger, run_finger
 
     parsed, target = parse_finger(config)
-    result, inverse = run_finger(parsed, args.out, comm, progress=not args.quiet,
-                                 target_angle=target)
+    result, inverse = run_finger(
+        parsed, args.out, comm, progress=not args.quiet, target_angle=target
+    )
     for step in result.steps[-1:]:
         tip = step["tip"]
         tensions = ", ".join(f"{t:.6g}" for t in step["tensions"])
         pulls = ", ".join(f"{p:.6g}" for p in step["pull_ins"])
-        _say(comm, f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+        _say(
+            comm,
+            f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
+            f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad",
+        )
     if inverse:
-        _say(comm, f"inverse: tension {inverse['tension']:.8g} N gives tip angle "
-                   f"{inverse['target_tip_angle']:g} rad ({inverse['wall_time_s']:.2f} s)")
-    _say(comm, f"{len(result.steps)} load steps, {result.dofs} dofs, "
-               f"{result.wall_time_s:.2f} s; results in {args.out}")
+        _say(
+            comm,
+            f"inverse: tension {inverse['tension']:.8g} N gives tip angle "
+            f"{inverse['target_tip_angle']:g} rad ({inverse['wall_time_s']:.2f} s)",
+        )
+    _say(
+        comm,
+        f"{len(result.steps)} load steps, {result.dofs} dofs, "
+        f"{result.wall_time_s:.2f} s; results in {args.out}",
+    )
     if result.status != "converged":
         _say(comm, f"fe-beam: {result.message}", sys.stderr)
         return EXIT_FAILED

@@ -17,8 +17,14 @@ from fe_beam.materials import Material
 from fe_beam.sections import SHAPES, Section
 from fe_beam.solver import LoadStepping, SolverSettings
 
-__all__ = ["ConfigError", "OutputOptions", "StaticConfig", "apply_overrides", "load_config",
-           "parse_static"]
+__all__ = [
+    "ConfigError",
+    "OutputOptions",
+    "StaticConfig",
+    "apply_overrides",
+    "load_config",
+    "parse_static",
+]
 
 
 class ConfigError(ValueError):
@@ -49,8 +55,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
     "model": {
         "law": Key((str,), "nonstandard", "nonstandard | reissner"),
-        "constraint": Key((str,), "none", "none | inextensible | unshearable | "
-                          "inextensible-unshearable"),
+        "constraint": Key(
+            (str,), "none", "none | inextensible | unshearable | inextensible-unshearable"
+        ),
         "shear_correction": Key(NUMBER, 1.0, "k of the Reissner law"),
     },
     "mesh": {
@@ -89,8 +96,17 @@ SCHEMA: dict[str, dict[str, Key]] = {
     },
 }
 # Tables owned by other commands (validated by them).
-OTHER_TABLES = ("time", "initial", "damping", "modes", "tendons", "solid", "finger", "compare",
-                "refine")
+OTHER_TABLES = (
+    "time",
+    "initial",
+    "damping",
+    "modes",
+    "tendons",
+    "solid",
+    "finger",
+    "compare",
+    "refine",
+)
 
 
 def load_config(path: str | Path) -> dict:
@@ -131,8 +147,14 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
 
 
 def _type_name(types: tuple) -> str:
-    names = {int: "an integer", float: "a number", str: "a string", bool: "true/false",
-             list: "a list", dict: "a table"}
+    names = {
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        bool: "true/false",
+        list: "a list",
+        dict: "a table",
+    }
     if set(types) == {int, float}:
         return "a number"
     return " or ".join(names[t] for t in types)
@@ -149,8 +171,9 @@ def _checked(table: str, key: str, value, spec: Key):
     return value
 
 
-def table(config: dict, name: str, schema: dict[str, Key] | None = None,
-          open_keys=lambda key: False) -> dict:
+def table(
+    config: dict, name: str, schema: dict[str, Key] | None = None, open_keys=lambda key: False
+) -> dict:
     """A validated table with defaults filled in (unknown keys and wrong types are errors)."""
     schema = SCHEMA[name] if schema is None else schema
     given = config.get(name, {})
@@ -158,9 +181,7 @@ def table(config: dict, name: str, schema: dict[str, Key] | None = None,
         raise ConfigError(f"[{name}] must be a table")
     unknown = [k for k in given if k not in schema and not open_keys(k)]
     if unknown:
-        raise ConfigError(
-            f"[{name}] unknown key {unknown[0]!r}; allowed: {', '.join(schema)}"
-        )
+        raise ConfigError(f"[{name}] unknown key {unknown[0]!r}; allowed: {', '.join(schema)}")
     values = {}
     for key, spec in schema.items():
         if key in given:
@@ -237,12 +258,18 @@ def parse_model(config: dict) -> BeamModel:
         options=_wrap(ModelOptions, **model),
         mesh=_wrap(Discretisation, **mesh),
         supports=_wrap(
-            Supports, x0=_support(supports["x0"]), xL=_support(supports["xL"]),
-            prescribed_x0=loads["prescribed_x0"], prescribed_xL=loads["prescribed_xL"],
+            Supports,
+            x0=_support(supports["x0"]),
+            xL=_support(supports["xL"]),
+            prescribed_x0=loads["prescribed_x0"],
+            prescribed_xL=loads["prescribed_xL"],
         ),
         loads=_wrap(
-            Loads, tip_force=loads["tip_force"], tip_moment=loads["tip_moment"],
-            follower=loads["follower"], distributed=loads["distributed"],
+            Loads,
+            tip_force=loads["tip_force"],
+            tip_moment=loads["tip_moment"],
+            follower=loads["follower"],
+            distributed=loads["distributed"],
             gravity=loads["gravity"],
         ),
     )
@@ -256,7 +283,9 @@ def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
     solver = table(config, "solver")
     steps = table(config, "loads")["steps"]
     stepping = _wrap(
-        LoadStepping, steps=steps, adaptive=solver.pop("adaptive"),
+        LoadStepping,
+        steps=steps,
+        adaptive=solver.pop("adaptive"),
         min_increment=min(solver.pop("min_increment"), 1.0 / max(steps, 1)),
     )
     jump = solver.pop("max_rotation_jump")

@@ -83,8 +83,15 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
         paths = (((0.0, values["offset_base"]), (length, values["offset_tip"])),)
     else:
         paths = (values["path"],) if values["path"] is not None else tuple(values["paths"])
-    tendon = _wrap(Tendon, paths=paths, entry=values["entry"], anchor=values["anchor"],
-                   tension=values["tension"], pull_in=values["pull_in"], name=name)
+    tendon = _wrap(
+        Tendon,
+        paths=paths,
+        entry=values["entry"],
+        anchor=values["anchor"],
+        tension=values["tension"],
+        pull_in=values["pull_in"],
+        name=name,
+    )
     _wrap(tendon.validate_for, length)
     return tendon, values["steps"]
 
@@ -102,8 +109,12 @@ def parse_finger(config: dict) -> tuple[StaticConfig, float | None]:
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")
-    stepping = replace(static.stepping, steps=steps, max_increment=1.0 / steps,
-                       min_increment=min(static.stepping.min_increment, 1.0 / steps))
+    stepping = replace(
+        static.stepping,
+        steps=steps,
+        max_increment=1.0 / steps,
+        min_increment=min(static.stepping.min_increment, 1.0 / steps),
+    )
     target = inverse.get("tip_angle")
     if target is not None:
         if any(t.controlled_by_pull_in for t, _ in parsed) or len(parsed) != 1:
@@ -111,8 +122,12 @@ def parse_finger(config: dict) -> tuple[StaticConfig, float | None]:
     return replace(static, tendons=tuple(t for t, _ in parsed), stepping=stepping), target
 
 
-def tension_for_tip_angle(config: StaticConfig, target: float, comm=MPI.COMM_WORLD,
-                          bracket: tuple[float, float] | None = None) -> float:
+def tension_for_tip_angle(
+    config: StaticConfig,
+    target: float,
+    comm=MPI.COMM_WORLD,
+    bracket: tuple[float, float] | None = None,
+) -> float:
     """Tension of the (single, tension-controlled) tendon that turns the tip by ``target``."""
     tendon = config.tendons[0]
 
@@ -133,17 +148,36 @@ def tension_for_tip_angle(config: StaticConfig, target: float, comm=MPI.COMM_WOR
     return tension_for_target(tip_angle, target, bracket)
 
 
-def run_finger(config: StaticConfig, out: Path | None, comm=MPI.COMM_WORLD, progress=True,
-               target_angle: float | None = None) -> tuple[StaticResult, dict]:
-    extra = {"tendons": [{"name": t.name, "paths": t.paths, "entry": t.entry, "anchor": t.anchor,
-                          "tension": t.tension, "pull_in": t.pull_in} for t in config.tendons]}
+def run_finger(
+    config: StaticConfig,
+    out: Path | None,
+    comm=MPI.COMM_WORLD,
+    progress=True,
+    target_angle: float | None = None,
+) -> tuple[StaticResult, dict]:
+    extra = {
+        "tendons": [
+            {
+                "name": t.name,
+                "paths": t.paths,
+                "entry": t.entry,
+                "anchor": t.anchor,
+                "tension": t.tension,
+                "pull_in": t.pull_in,
+            }
+            for t in config.tendons
+        ]
+    }
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra)
     inverse = {}
     if target_angle is not None and result.status == "converged":
         started = time.perf_counter()
         tension = tension_for_tip_angle(config, target_angle, comm)
-        inverse = {"target_tip_angle": target_angle, "tension": tension,
-                   "wall_time_s": time.perf_counter() - started}
+        inverse = {
+            "target_tip_angle": target_angle,
+            "tension": tension,
+            "wall_time_s": time.perf_counter() - started,
+        }
     if out is not None and comm.rank == 0 and result.steps:
         if inverse:
             atomic_write_json(out / "summary.json", result.summary(extra | {"inverse": inverse}))
@@ -159,8 +193,16 @@ def write_sweep(out: Path, result: StaticResult) -> None:
     header += [f"tension_{i}" for i in range(count)] + [f"pull_in_{i}" for i in range(count)]
     header += ["tip_u", "tip_v", "tip_theta"]
     for step in result.steps:
-        rows.append([step["load_factor"], *step["tensions"], *step["pull_ins"],
-                     step["tip"]["u"], step["tip"]["v"], step["tip"]["theta"]])
+        rows.append(
+            [
+                step["load_factor"],
+                *step["tensions"],
+                *step["pull_ins"],
+                step["tip"]["u"],
+                step["tip"]["v"],
+                step["tip"]["theta"],
+            ]
+        )
     write_csv(out / "tension_sweep.csv", header, rows)
 
 
@@ -171,10 +213,12 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     cells = final["cells"]
     figure, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
     zero = np.zeros_like(cells["x"])
-    panels = [("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
-              ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
-              ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
-              ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)")]
+    panels = [
+        ("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
+        ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
+        ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
+        ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)"),
+    ]
     for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
         axis.plot(cells["x"], values, lw=1.8)
         axis.set_title(title, fontsize=9)
@@ -183,17 +227,18 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     for axis in axes[1]:
         axis.set_xlabel("s [m]")
     tension = result.steps[-1]["tensions"]
-    figure.suptitle(f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
-                    " N (cf. chapter Fig. 3.8)")
+    figure.suptitle(
+        f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
+        " N (cf. chapter Fig. 3.8)"
+    )
     figure.tight_layout()
     figure.savefig(out / "fig3_8_profiles.png", dpi=130)
     plt.close(figure)
 
     figure, axis = plt.subplots(figsize=(6, 5))
     every = max(1, len(result.shapes) // 8)
-    for (_, shape), step in list(zip(result.shapes, result.steps, strict=True))[every - 1::every]:
-        axis.plot(shape["x"] + shape["u"], shape["v"],
-                  label=f"tension {step['tensions'][0]:.3g} N")
+    for (_, shape), step in list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]:
+        axis.plot(shape["x"] + shape["u"], shape["v"], label=f"tension {step['tensions'][0]:.3g} N")
     axis.set_aspect("equal")
     axis.set_xlabel("x [m]")
     axis.set_ylabel("y [m]")
@@ -253,12 +298,14 @@ def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None
             xs, ds = np.array([p[0] for p in branch]), np.array([p[1] for p in branch])
             delta = np.interp(shape["x"], xs, ds)
             inside = (shape["x"] >= tendon.entry - 1e-12) & (shape["x"] <= tendon.anchor + 1e-12)
-            points = np.column_stack([x - delta * np.sin(theta), y + delta * np.cos(theta),
-                                      np.zeros_like(x)])[inside]
-            plotter.add_mesh(pyvista.Spline(points, len(points) * 3).tube(
-                radius=float(np.mean(height)) / 25), color="crimson")
+            points = np.column_stack(
+                [x - delta * np.sin(theta), y + delta * np.cos(theta), np.zeros_like(x)]
+            )[inside]
+            plotter.add_mesh(
+                pyvista.Spline(points, len(points) * 3).tube(radius=float(np.mean(height)) / 25),
+                color="crimson",
+            )
     plotter.view_xy()
     plotter.add_axes()
     plotter.screenshot(str(path))
     plotter.close()
-

@@ -38,7 +38,10 @@ CONSTRAINTS = ("none", "inextensible", "unshearable", "inextensible-unshearable"
 
 @dataclass(frozen=True)
 class Strains:
-    """Generalised strains at a point; ``one_plus_e`` = lambda cos(gamma), ``g`` = lambda sin(gamma)."""
+    """Generalised strains at a point.
+
+    ``one_plus_e`` = lambda cos(gamma), ``g`` = lambda sin(gamma), ``eps``, ``kappa``.
+    """
 
     one_plus_e: Any
     g: Any
@@ -108,7 +111,7 @@ def strain_energy(law: str, s: Strains, k: Stiffness):
 
 
 def constrained_strains(constraint: str) -> tuple[str, ...]:
-    """Which strain measures a constraint sets to zero: 'eps' (lambda = 1) and/or 'g' (gamma = 0)."""
+    """Strain measures a constraint sets to zero: 'eps' (lambda = 1), 'g' (gamma = 0)."""
     return {
         "none": (),
         "inextensible": ("eps",),

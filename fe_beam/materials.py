@@ -30,7 +30,9 @@ class Material:
         if _number("E", self.E) <= 0:
             raise ValueError(f"material.E must be > 0, got {self.E!r}")
         if (self.nu is None) == (self.G is None):
-            raise ValueError("material: give exactly one of nu (Poisson's ratio) or G (shear modulus)")
+            raise ValueError(
+                "material: give exactly one of nu (Poisson's ratio) or G (shear modulus)"
+            )
         if self.nu is not None and not (-1 < _number("nu", self.nu) < 0.5):
             raise ValueError(f"material.nu must be in (-1, 0.5), got {self.nu!r}")
         if self.G is not None and _number("G", self.G) <= 0:

@@ -24,8 +24,15 @@ from dolfinx import fem
 
 from fe_beam import compat
 
-__all__ = ["BeamXDMFWriter", "atomic_write_json", "atomic_write_text", "gather_line",
-           "plot_deformed_shapes", "plot_load_displacement", "write_csv"]
+__all__ = [
+    "BeamXDMFWriter",
+    "atomic_write_json",
+    "atomic_write_text",
+    "gather_line",
+    "plot_deformed_shapes",
+    "plot_load_displacement",
+    "write_csv",
+]
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:
@@ -92,8 +99,12 @@ class BeamXDMFWriter:
         vector = compat.function_space(mesh, ufl.VectorElement("Lagrange", cell, 1, dim=2))
         cellwise = compat.function_space(mesh, ufl.FiniteElement("DG", cell, 0))
         u, v, theta, _ = problem.fields()
-        plan = [("u", u, scalar), ("v", v, scalar), ("theta", theta, scalar),
-                ("displacement", ufl.as_vector([u, v]), vector)]
+        plan = [
+            ("u", u, scalar),
+            ("v", v, scalar),
+            ("theta", theta, scalar),
+            ("displacement", ufl.as_vector([u, v]), vector),
+        ]
         plan += [(name, expr, cellwise) for name, expr in problem.output_expressions().items()]
         self.functions = {}
         self._expressions = []
@@ -121,8 +132,14 @@ class BeamXDMFWriter:
         (x, eps, gamma, kappa, N, T, M, axial_force), gathered on rank 0 (None elsewhere)."""
         self.update()
         nodal = gather_line(self.problem, {k: self.functions[k] for k in ("u", "v", "theta")})
-        cellwise = gather_line(self.problem, {k: f for k, f in self.functions.items()
-                                              if k not in ("u", "v", "theta", "displacement")})
+        cellwise = gather_line(
+            self.problem,
+            {
+                k: f
+                for k, f in self.functions.items()
+                if k not in ("u", "v", "theta", "displacement")
+            },
+        )
         if nodal is not None:
             nodal["cells"] = cellwise
         return nodal
@@ -140,8 +157,11 @@ def virtual_display():
         yield
         return
     number = 90 + os.getpid() % 400
-    server = subprocess.Popen(["Xvfb", f":{number}", "-screen", "0", "1280x1024x24", "-nolisten",
-                               "tcp"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    server = subprocess.Popen(
+        ["Xvfb", f":{number}", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     os.environ["DISPLAY"] = f":{number}"
     try:
         time.sleep(0.5)
@@ -161,8 +181,13 @@ def _pyplot():
     return plt
 
 
-def plot_deformed_shapes(shapes: list[tuple[str, dict]], path: str | Path, title: str,
-                         length: float, reference: list[tuple[str, float, float]] = ()) -> None:
+def plot_deformed_shapes(
+    shapes: list[tuple[str, dict]],
+    path: str | Path,
+    title: str,
+    length: float,
+    reference: list[tuple[str, float, float]] = (),
+) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points."""
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(7, 5))

@@ -19,7 +19,11 @@ class ProgressBar:
         except ImportError:  # the bar is a nicety, never a reason to fail
             return
         self._bar = tqdm(
-            total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
+            total=total,
+            desc=label,
+            unit=unit,
+            file=sys.stderr,
+            leave=False,
             bar_format=(
                 "{desc}: {percentage:3.0f}%|{bar}| {n:.4g}/{total:.4g} "
                 "[{elapsed}<{remaining}] {postfix}"

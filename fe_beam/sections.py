@@ -100,7 +100,8 @@ class Section:
             if name not in required and name not in optional:
                 allowed = ", ".join(list(required) + list(optional))
                 raise ValueError(
-                    f"section.{name} is not a dimension of shape {self.shape!r} (allowed: {allowed})"
+                    f"section.{name} is not a dimension of shape {self.shape!r} "
+                    f"(allowed: {allowed})"
                 )
         for where, values in (("", self.dims), ("_tip", self.dims_tip)):
             for name, value in values.items():

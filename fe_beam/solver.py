@@ -223,7 +223,7 @@ class SNESSolver:
         self.linear_iterations = 0
 
     def solve(self) -> int:
-        """Solve from the current state of ``w``; returns Newton iterations or raises SolveFailed."""
+        """Solve from the current state of ``w``: Newton iterations, or raises SolveFailed."""
         w_vec = compat.vector_of(self.problem.w)
         w_vec.copy(self._x)
         self.snes.solve(None, self._x)
@@ -270,9 +270,7 @@ class LoadStepping:
         if not isinstance(self.steps, int) or self.steps < 1:
             raise ValueError(f"loads.steps must be an integer >= 1, got {self.steps!r}")
         if not (0 < self.min_increment <= 1.0 / self.steps):
-            raise ValueError(
-                f"min_increment must be in (0, 1/steps], got {self.min_increment!r}"
-            )
+            raise ValueError(f"min_increment must be in (0, 1/steps], got {self.min_increment!r}")
         if not (0 < self.cut_factor < 1):
             raise ValueError(f"cut_factor must be in (0, 1), got {self.cut_factor!r}")
         if self.grow_factor < 1:
@@ -326,7 +324,9 @@ def run_load_stepping(
             # Summed increments drift (0.1 * 10 != 1.0): the last step lands exactly on 1.
             target = 1.0 if lam + increment >= 1.0 - 1e-12 else lam + increment
             if before_previous is not None:
-                state[:] = previous + (increment / previous_increment) * (previous - before_previous)
+                state[:] = previous + (increment / previous_increment) * (
+                    previous - before_previous
+                )
             set_load_factor(target)
             started = time.perf_counter()
             failure = None
@@ -339,7 +339,10 @@ def run_load_stepping(
             if failure is not None:
                 state[:] = previous
                 set_load_factor(lam)
-                if not stepping.adaptive or increment * stepping.cut_factor < stepping.min_increment:
+                if (
+                    not stepping.adaptive
+                    or increment * stepping.cut_factor < stepping.min_increment
+                ):
                     raise LoadSteppingFailed(
                         f"load stepping stopped at load factor {target:.6g} ({failure}); "
                         f"last converged load factor {lam:.6g}",
@@ -353,7 +356,10 @@ def run_load_stepping(
             previous = state.copy()
             lam = target
             step = StepResult(
-                len(results) + 1, lam, iterations, solver.linear_iterations,
+                len(results) + 1,
+                lam,
+                iterations,
+                solver.linear_iterations,
                 time.perf_counter() - started,
             )
             results.append(step)

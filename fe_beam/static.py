@@ -17,7 +17,6 @@ from fe_beam.outputs import (
     plot_load_displacement,
     write_csv,
 )
-from fe_beam.tendons import PullInSolver, TendonSet
 from fe_beam.solver import (
     LoadSteppingFailed,
     NonlinearProblem,
@@ -26,6 +25,7 @@ from fe_beam.solver import (
     rotation_jump_check,
     run_load_stepping,
 )
+from fe_beam.tendons import PullInSolver, TendonSet
 
 __all__ = ["StaticResult", "solve_static"]
 
@@ -58,9 +58,14 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
     }
 
 
-def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WORLD,
-                 progress: bool = True, extra_summary: dict | None = None,
-                 on_step=None) -> StaticResult:
+def solve_static(
+    config: StaticConfig,
+    out: Path | None = None,
+    comm=MPI.COMM_WORLD,
+    progress: bool = True,
+    extra_summary: dict | None = None,
+    on_step=None,
+) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
     Tendons of ``config.tendons`` add their potential; steps then also record ``tensions`` and
@@ -72,11 +77,17 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
     """
     started = time.perf_counter()
     tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
-    problem = BeamProblem(config.model, comm,
-                          breakpoints=tendons.breakpoints if tendons else (),
-                          extra_energy=tendons.energy if tendons else None)
-    snes = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
-                      config.solver, prefix="fe_beam_static_")
+    problem = BeamProblem(
+        config.model,
+        comm,
+        breakpoints=tendons.breakpoints if tendons else (),
+        extra_energy=tendons.energy if tendons else None,
+    )
+    snes = SNESSolver(
+        NonlinearProblem(problem.residual, problem.w, problem.bcs),
+        config.solver,
+        prefix="fe_beam_static_",
+    )
     solver = PullInSolver(snes, tendons) if tendons else snes
 
     def set_load_factor(value: float) -> None:
@@ -85,8 +96,9 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
             tendons.set_tension_controlled(value)
             solver.set_load_factor(value)
 
-    result = StaticResult(dofs=problem.space.dofmap.index_map.size_global
-                          * problem.space.dofmap.index_map_bs)
+    result = StaticResult(
+        dofs=problem.space.dofmap.index_map.size_global * problem.space.dofmap.index_map_bs
+    )
     root = comm.rank == 0
     writing = out is not None
     if writing and root:
@@ -98,8 +110,10 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
         if tendons:
-            entry |= {"tensions": tendons.tension_values().tolist(),
-                      "pull_ins": tendons.pull_ins().tolist()}
+            entry |= {
+                "tensions": tendons.tension_values().tolist(),
+                "pull_ins": tendons.pull_ins().tolist(),
+            }
         result.steps.append(entry)
         if on_step is not None:
             on_step(problem, entry)
@@ -113,7 +127,10 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
 
     try:
         run_load_stepping(
-            solver, set_load_factor, config.stepping, on_converged=record,
+            solver,
+            set_load_factor,
+            config.stepping,
+            on_converged=record,
             reject_step=rotation_jump_check(problem.rotation_dofs(), config.max_rotation_jump),
             progress=progress,
         )
@@ -134,24 +151,35 @@ def solve_static(config: StaticConfig, out: Path | None = None, comm=MPI.COMM_WO
 def _model_summary(config: StaticConfig) -> dict:
     m = config.model
     return {
-        "length": m.length, "law": m.options.law, "constraint": m.options.constraint,
-        "elements": m.mesh.elements, "degree": m.mesh.degree,
-        "section": {"shape": m.section.shape, **m.section.dims,
-                    **{f"{k}_tip": v for k, v in m.section.dims_tip.items()}},
+        "length": m.length,
+        "law": m.options.law,
+        "constraint": m.options.constraint,
+        "elements": m.mesh.elements,
+        "degree": m.mesh.degree,
+        "section": {
+            "shape": m.section.shape,
+            **m.section.dims,
+            **{f"{k}_tip": v for k, v in m.section.dims_tip.items()},
+        },
     }
 
 
 def _write_tables(out: Path, result: StaticResult, extra: dict) -> None:
     atomic_write_json(out / "summary.json", result.summary(extra))
-    rows = [[s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"],
-             s["newton_iterations"]] for s in result.steps]
-    write_csv(out / "load_displacement.csv",
-              ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"], rows)
+    rows = [
+        [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"], s["newton_iterations"]]
+        for s in result.steps
+    ]
+    write_csv(
+        out / "load_displacement.csv",
+        ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"],
+        rows,
+    )
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     every = max(1, len(result.shapes) // 10)
-    shapes = result.shapes[every - 1::every]
+    shapes = result.shapes[every - 1 :: every]
     if result.shapes[-1] is not shapes[-1]:
         shapes.append(result.shapes[-1])
     m = config.model

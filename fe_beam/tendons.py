@@ -64,12 +64,20 @@ class Tendon:
             raise ValueError(f"tendon {self.name!r} needs a path")
         object.__setattr__(self, "paths", paths)
         if (self.tension is None) == (self.pull_in is None):
-            raise ValueError(f"tendon {self.name!r}: give exactly one of tension [N] or pull_in [m]")
+            raise ValueError(
+                f"tendon {self.name!r}: give exactly one of tension [N] or pull_in [m]"
+            )
         for key in ("tension", "pull_in"):
             value = getattr(self, key)
-            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                      or not math.isfinite(value) or value < 0):
-                raise ValueError(f"tendon {self.name!r}: {key} must be a number >= 0, got {value!r}")
+            if value is not None and (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+                or value < 0
+            ):
+                raise ValueError(
+                    f"tendon {self.name!r}: {key} must be a number >= 0, got {value!r}"
+                )
         anchor = self.anchor if self.anchor is not None else max(p[-1][0] for p in paths)
         if not (0 <= self.entry < anchor):
             raise ValueError(
@@ -96,12 +104,14 @@ class Tendon:
     def validate_for(self, length: float) -> None:
         if self.anchor > length * (1 + 1e-12):
             raise ValueError(
-                f"tendon {self.name!r}: anchor {self.anchor:g} lies beyond the beam (L = {length:g})"
+                f"tendon {self.name!r}: anchor {self.anchor:g} lies beyond the beam "
+                f"(L = {length:g})"
             )
 
 
-def looped_tendon(a_left: float, b_left: float, a_right: float, b_right: float, length: float,
-                  **kwargs) -> Tendon:
+def looped_tendon(
+    a_left: float, b_left: float, a_right: float, b_right: float, length: float, **kwargs
+) -> Tendon:
     """The chapter's loop (eq. 3.2): left and right branches with base offsets b and anchor
     offsets a, joined across the tip (the crossing lies in the rigid tip section), one tension.
 
@@ -109,8 +119,9 @@ def looped_tendon(a_left: float, b_left: float, a_right: float, b_right: float, 
     contradicting its own definition (b at the base, a at the anchorage); we use
     delta(x) = b + (a - b) x / L.
     """
-    return Tendon(paths=(((0.0, b_left), (length, a_left)), ((0.0, b_right), (length, a_right))),
-                  **kwargs)
+    return Tendon(
+        paths=(((0.0, b_left), (length, a_left)), ((0.0, b_right), (length, a_right))), **kwargs
+    )
 
 
 def tendon_length_density(w_parts, delta, delta_prime):
@@ -210,8 +221,9 @@ class PullInSolver:
     """SNES for the beam inside a Newton iteration on the unknown tensions of pull-in
     controlled tendons; same interface as `SNESSolver` so load stepping drives it unchanged."""
 
-    def __init__(self, solver: SNESSolver, tendons: TendonSet, tolerance: float = 1e-10,
-                 max_it: int = 20):
+    def __init__(
+        self, solver: SNESSolver, tendons: TendonSet, tolerance: float = 1e-10, max_it: int = 20
+    ):
         self.solver = solver
         self.problem = solver.problem
         self.tendons = tendons
@@ -251,8 +263,9 @@ class PullInSolver:
             step = np.linalg.solve(sensitivity, mismatch)
             for i, change in zip(self.controlled, step, strict=True):
                 self.tendons.tensions[i].value = float(self.tendons.tensions[i].value) - change
-        raise SolveFailed(f"pull-in control: tendon lengths did not converge in {self.max_it} "
-                          "tension updates")
+        raise SolveFailed(
+            f"pull-in control: tendon lengths did not converge in {self.max_it} tension updates"
+        )
 
     def _sensitivity(self) -> np.ndarray:
         """S_ij = dl_i/dtau_j = -g_i . K^{-1} g_j at the current equilibrium."""
@@ -276,8 +289,9 @@ class PullInSolver:
         return sensitivity
 
 
-def tension_for_target(solve_with_tension: Callable[[float], float], target: float,
-                       bracket: tuple[float, float]) -> float:
+def tension_for_target(
+    solve_with_tension: Callable[[float], float], target: float, bracket: tuple[float, float]
+) -> float:
     """Tension at which ``solve_with_tension(tau)`` (e.g. tip angle) equals ``target`` (brentq)."""
     from scipy.optimize import brentq
 

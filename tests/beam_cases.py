@@ -5,8 +5,8 @@ from mpi4py import MPI
 from fe_beam import (
     BeamModel,
     Discretisation,
-    LoadStepping,
     Loads,
+    LoadStepping,
     Material,
     ModelOptions,
     Section,
@@ -28,10 +28,24 @@ def bending_stiffness(h: float) -> float:
     return E * h**4 / 12
 
 
-def cantilever(law="reissner", constraint="inextensible-unshearable", elements=20, degree=2,
-               h=0.01, length=1.0, **loads) -> BeamModel:
-    return BeamModel(length, square(h), Material(E, nu=NU), ModelOptions(law, constraint),
-                     Discretisation(elements, degree), Supports("clamped", "free"), Loads(**loads))
+def cantilever(
+    law="reissner",
+    constraint="inextensible-unshearable",
+    elements=20,
+    degree=2,
+    h=0.01,
+    length=1.0,
+    **loads,
+) -> BeamModel:
+    return BeamModel(
+        length,
+        square(h),
+        Material(E, nu=NU),
+        ModelOptions(law, constraint),
+        Discretisation(elements, degree),
+        Supports("clamped", "free"),
+        Loads(**loads),
+    )
 
 
 def solve(model: BeamModel, steps=10, comm=MPI.COMM_WORLD, **settings):

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from beam_cases import E, NU, bending_stiffness, cantilever, solve, tip
+from beam_cases import NU, E, bending_stiffness, cantilever, tip
 from mpi4py import MPI
 
 from fe_beam import BeamModel, Discretisation, Loads, Material, ModelOptions, Section, Supports
@@ -35,8 +35,11 @@ def test_nonstandard_law_tends_to_elastica_as_beam_gets_thin():
     exact = elastica_tip_load(5.0)
     differences = []
     for h in (0.1, 0.05, 0.025):
-        end = tip(cantilever("nonstandard", h=h, elements=16,
-                             tip_force=(0.0, -5.0 * bending_stiffness(h))))
+        end = tip(
+            cantilever(
+                "nonstandard", h=h, elements=16, tip_force=(0.0, -5.0 * bending_stiffness(h))
+            )
+        )
         differences.append(abs(-end["v"] - exact.deflection))
     assert differences[0] > 5e-4  # the law is not the elastica at h/L = 0.1 ...
     slenderness = [1 / 0.1, 1 / 0.05, 1 / 0.025]
@@ -54,8 +57,13 @@ def test_tip_moment_rolls_beam_into_full_circle():
 def test_nonstandard_circle_approaches_closed_circle_as_h_shrinks():
     gaps = []
     for h in (0.02, 0.01):
-        model = cantilever("nonstandard", "inextensible", h=h, elements=40,
-                           tip_moment=2 * math.pi * bending_stiffness(h))
+        model = cantilever(
+            "nonstandard",
+            "inextensible",
+            h=h,
+            elements=40,
+            tip_moment=2 * math.pi * bending_stiffness(h),
+        )
         end = tip(model, steps=10)
         gaps.append(math.hypot(1.0 + end["u"], end["v"]))
     assert gaps[1] < gaps[0] / 3
@@ -82,8 +90,13 @@ def test_convergence_order_of_tip_error(degree, order):
     """Tip error of the elastica (k = 2) vs the elliptic-integral solution, under refinement."""
     exact = elastica_tip_load(2.0)
     sizes = [4, 8, 16] if degree == 2 else [8, 16, 32]
-    errors = [abs(-tip(cantilever(elements=n, degree=degree, tip_force=(0.0, -2 * EI)))["v"]
-                  - exact.deflection) for n in sizes]
+    errors = [
+        abs(
+            -tip(cantilever(elements=n, degree=degree, tip_force=(0.0, -2 * EI)))["v"]
+            - exact.deflection
+        )
+        for n in sizes
+    ]
     rates = observed_orders(sizes, errors)
     assert rates == pytest.approx([order] * len(rates), abs=0.25)
 
@@ -113,8 +126,13 @@ def test_tapered_custom_and_shape_sections_agree():
     """A tapered rectangle and the equivalent custom section give the same tip."""
     b, h0, h1 = 0.02, 0.02, 0.01
     loads = Loads(tip_force=(0.0, 0.05))
-    common = dict(material=Material(6e5, nu=0.45), options=ModelOptions("reissner"),
-                  mesh=Discretisation(30, 2), supports=Supports(), loads=loads)
+    common = dict(
+        material=Material(6e5, nu=0.45),
+        options=ModelOptions("reissner"),
+        mesh=Discretisation(30, 2),
+        supports=Supports(),
+        loads=loads,
+    )
     rectangle = BeamModel(0.1, Section("rectangle", {"b": b, "h": h0}, {"h": h1}), **common)
     end = tip(rectangle)
     # Uniform section with the tip's height bends more than the tapered one, base height less.
@@ -126,9 +144,14 @@ def test_tapered_custom_and_shape_sections_agree():
 def test_prescribed_end_rotation():
     """Clamped-clamped beam whose end x = L is turned by pi/2: exact for the elastica is a
     pure-bending arc when u, v at x = L are free in the axial direction only via a roller."""
-    model = BeamModel(1.0, Section("rectangle", {"b": H, "h": H}), Material(E, nu=NU),
-                      ModelOptions("reissner", "inextensible-unshearable"), Discretisation(20, 2),
-                      Supports("clamped", ("theta",), prescribed_xL={"theta": math.pi / 2}))
+    model = BeamModel(
+        1.0,
+        Section("rectangle", {"b": H, "h": H}),
+        Material(E, nu=NU),
+        ModelOptions("reissner", "inextensible-unshearable"),
+        Discretisation(20, 2),
+        Supports("clamped", ("theta",), prescribed_xL={"theta": math.pi / 2}),
+    )
     end = tip(model)
     assert end["theta"] == pytest.approx(math.pi / 2, abs=1e-12)
     radius = 1.0 / (math.pi / 2)
@@ -139,8 +162,9 @@ def test_prescribed_end_rotation():
 @pytest.mark.mpi
 def test_parallel_equals_serial():
     """The same problem on all ranks together and on each rank alone agrees to 1e-10."""
-    model = cantilever("nonstandard", "none", elements=24, tip_force=(0.0, -4 * EI),
-                       tip_moment=0.5 * EI)
+    model = cantilever(
+        "nonstandard", "none", elements=24, tip_force=(0.0, -4 * EI), tip_moment=0.5 * EI
+    )
     together = tip(model, comm=MPI.COMM_WORLD)
     alone = tip(model, comm=MPI.COMM_SELF)
     for key in ("u", "v", "theta"):

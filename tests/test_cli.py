@@ -102,8 +102,9 @@ def test_xdmf_and_plots_are_written(cantilever_run):
 
 def test_set_override_changes_the_result(cantilever_run, tmp_path):
     _, base = cantilever_run
-    code, err, out = run_in_process(tmp_path, CANTILEVER, "--set", "section.h=0.02",
-                                    "--set", "output.plots=false")
+    code, err, out = run_in_process(
+        tmp_path, CANTILEVER, "--set", "section.h=0.02", "--set", "output.plots=false"
+    )
     assert code == 0, err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["model"]["section"]["h"] == 0.02
@@ -121,11 +122,16 @@ def test_set_override_changes_the_result(cantilever_run, tmp_path):
 H, L = 0.01, 0.1
 LIMIT = 2 / (3 * math.sqrt(0.9))  # max of k (1 - 0.3 k^2), k = h kappa: M_max = LIMIT * EI / h
 M0 = 1.5 * LIMIT * EI / H
-OVERLOAD = edited({
-    "beam.length": L,
-    "loads.tip_force": [0.0, 0.0], "loads.tip_moment": M0, "loads.steps": 10,
-    "solver.min_increment": 1e-3, "solver.max_rotation_jump": 50.0,
-})
+OVERLOAD = edited(
+    {
+        "beam.length": L,
+        "loads.tip_force": [0.0, 0.0],
+        "loads.tip_moment": M0,
+        "loads.steps": 10,
+        "solver.min_increment": 1e-3,
+        "solver.max_rotation_jump": 50.0,
+    }
+)
 
 
 @pytest.fixture(scope="module")
@@ -168,8 +174,10 @@ def test_overload_recorded_steps_are_pure_bending_equilibria(overload_run):
 
 
 # --- command-line mistakes -----------------------------------------------------------------------
-@pytest.mark.parametrize("assignment", ["section.h", "h=0.02", "section=0.02", "section..h=1",
-                                        ".h=1", "=1", "beam.length.x=1"])
+@pytest.mark.parametrize(
+    "assignment",
+    ["section.h", "h=0.02", "section=0.02", "section..h=1", ".h=1", "=1", "beam.length.x=1"],
+)
 def test_malformed_set_exits_2(tmp_path, capsys, assignment):
     code, err, out, path = run_cli(tmp_path, BASE, "--set", assignment, capsys=capsys)
     message = usage_error(code, err, path)
@@ -184,8 +192,9 @@ def test_missing_config_file_exits_2(tmp_path, capsys):
     assert "nowhere.toml" in message and "does not exist" in message
 
 
-@pytest.mark.parametrize("text", ["[beam\nlength = 1.0\n", "[beam]\nlength = \n",
-                                  "[beam]\nlength = 1.0\nlength = 2.0\n"])
+@pytest.mark.parametrize(
+    "text", ["[beam\nlength = 1.0\n", "[beam]\nlength = \n", "[beam]\nlength = 1.0\nlength = 2.0\n"]
+)
 def test_invalid_toml_exits_2(tmp_path, capsys, text):
     code, err, _, path = run_cli(tmp_path, text, capsys=capsys)
     assert "not valid TOML" in usage_error(code, err, path)
@@ -218,7 +227,9 @@ def test_real_process_exits_2_without_traceback(tmp_path):
     path.write_text(dump_toml(edited({"material.E": -1.0})))
     process = subprocess.run(
         [str(VENV_BIN / "fe-beam"), "static", str(path), "--out", str(tmp_path / "out")],
-        capture_output=True, text=True, timeout=120,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert process.returncode == 2, process.stderr
     assert "Traceback" not in process.stderr

@@ -83,7 +83,7 @@ def usage_error(code, err, path) -> str:
     assert err.endswith("\n") and err.count("\n") == 1, f"not one line: {err!r}"
     prefix = f"fe-beam static: error in {path}: "
     assert err.startswith(prefix), err
-    return err[len(prefix):].strip()
+    return err[len(prefix) :].strip()
 
 
 def names_key(message: str, table: str, key: str) -> bool:
@@ -144,10 +144,13 @@ CASES = {
     "tip_force string entry": ({"loads.tip_force": [0.0, "-1"]}, ("loads", "tip_force")),
     "tip_force bool entry": ({"loads.tip_force": [0.0, True]}, ("loads", "tip_force")),
     "prescribed on free component": (
-        {"loads.prescribed_xL": {"theta": 1.0}}, ("loads", "prescribed_xL.theta")),
+        {"loads.prescribed_xL": {"theta": 1.0}},
+        ("loads", "prescribed_xL.theta"),
+    ),
     "prescribed on unfixed component": (
         {"supports.x0": "pinned", "loads.prescribed_x0": {"theta": 1.0}},
-        ("loads", "prescribed_x0.theta")),
+        ("loads", "prescribed_x0.theta"),
+    ),
     "gravity without density": ({"loads.gravity": [0.0, -9.81]}, ("loads", "gravity")),
 }
 
@@ -165,8 +168,10 @@ def test_unknown_table_is_named(tmp_path, capsys):
     assert "[materials]" in usage_error(code, err, path)
 
 
-@pytest.mark.parametrize("table, typo", [("material", "EE"), ("beam", "lenght"),
-                                         ("solver", "max_iter"), ("output", "png")])
+@pytest.mark.parametrize(
+    "table, typo",
+    [("material", "EE"), ("beam", "lenght"), ("solver", "max_iter"), ("output", "png")],
+)
 def test_typo_key_is_named_with_its_table(tmp_path, capsys, table, typo):
     code, err, _, path = run_cli(tmp_path, edited({f"{table}.{typo}": 1}), capsys=capsys)
     message = usage_error(code, err, path)
@@ -179,13 +184,16 @@ def test_both_nu_and_g_is_explained(tmp_path, capsys):
     assert re.search(r"material.*\bnu\b.*\bG\b", message), message
 
 
-@pytest.mark.parametrize("assignment, key", [
-    ("material.E=-1", ("material", "E")),
-    ("mesh.degree=3", ("mesh", "degree")),
-    ("model.law=kirchhoff", ("model", "law")),   # bare word -> string
-    ("mesh.elements=8.5", ("mesh", "elements")),
-    ("beam.length=true", ("beam", "length")),
-])
+@pytest.mark.parametrize(
+    "assignment, key",
+    [
+        ("material.E=-1", ("material", "E")),
+        ("mesh.degree=3", ("mesh", "degree")),
+        ("model.law=kirchhoff", ("model", "law")),  # bare word -> string
+        ("mesh.elements=8.5", ("mesh", "elements")),
+        ("beam.length=true", ("beam", "length")),
+    ],
+)
 def test_bad_value_through_set_is_reported_like_a_file_value(tmp_path, capsys, assignment, key):
     code, err, _, path = run_cli(tmp_path, BASE, "--set", assignment, capsys=capsys)
     assert names_key(usage_error(code, err, path), *key)
@@ -194,9 +202,17 @@ def test_bad_value_through_set_is_reported_like_a_file_value(tmp_path, capsys, a
 def test_apply_overrides_parses_toml_values_and_bare_words():
     from fe_beam.config import apply_overrides
 
-    config = apply_overrides(BASE, ["section.h=0.02", "model.law=reissner", "mesh.elements=4",
-                                    "loads.tip_force=[1, -2.5]", "output.xdmf=false",
-                                    "solver.petsc_options.snes_monitor=\"\""])
+    config = apply_overrides(
+        BASE,
+        [
+            "section.h=0.02",
+            "model.law=reissner",
+            "mesh.elements=4",
+            "loads.tip_force=[1, -2.5]",
+            "output.xdmf=false",
+            'solver.petsc_options.snes_monitor=""',
+        ],
+    )
     assert config["section"]["h"] == 0.02
     assert config["model"]["law"] == "reissner"
     assert config["mesh"]["elements"] == 4 and isinstance(config["mesh"]["elements"], int)

@@ -28,6 +28,10 @@ def test_figure2_demo(tmp_path):
     # (b) stretches and shears: visibly away from the elastica at k = 10
     assert -extensible.steps[-1]["tip"]["v"] > elastica_tip_load(10).deflection + 5e-3
     if MPI.COMM_WORLD.rank == 0:
-        for name in ("figure2_a_inextensible.png", "figure2_b_extensible.png",
-                     "a_inextensible/beam.xdmf", "b_extensible/summary.json"):
+        for name in (
+            "figure2_a_inextensible.png",
+            "figure2_b_extensible.png",
+            "a_inextensible/beam.xdmf",
+            "b_extensible/summary.json",
+        ):
             assert (tmp_path / name).stat().st_size > 0

@@ -43,8 +43,11 @@ def test_energy_derivatives_equal_paper_laws(unit_mesh, state):
     eps, gamma, kappa = (ufl.variable(constant(v)) for v in state)
     energy = nonstandard_energy(strains_from_angles(eps, gamma, kappa), STIFFNESS)
     lam = np.sqrt(2 * eps_value + 1)
-    derivatives = [ufl.diff(energy, eps) / lam, ufl.diff(energy, gamma) / lam,
-                   ufl.diff(energy, kappa)]
+    derivatives = [
+        ufl.diff(energy, eps) / lam,
+        ufl.diff(energy, gamma) / lam,
+        ufl.diff(energy, kappa),
+    ]
     formulas = resultants_from_formulas(eps, gamma, kappa, STIFFNESS)
     for name, derivative, formula in zip("NTM", derivatives, formulas, strict=True):
         got, expected = evaluate(unit_mesh, derivative), evaluate(unit_mesh, formula)
@@ -61,8 +64,11 @@ def test_section_force_decomposes_as_model_says(unit_mesh, state):
     theta_value = 0.7
     lam = np.sqrt(2 * eps_value + 1)
     phi = theta_value + gamma_value
-    tangent = ufl.variable(ufl.as_vector([fem.Constant(unit_mesh, lam * np.cos(phi)),
-                                          fem.Constant(unit_mesh, lam * np.sin(phi))]))
+    tangent = ufl.variable(
+        ufl.as_vector(
+            [fem.Constant(unit_mesh, lam * np.cos(phi)), fem.Constant(unit_mesh, lam * np.sin(phi))]
+        )
+    )
     kappa = ufl.variable(fem.Constant(unit_mesh, kappa_value))
     theta = fem.Constant(unit_mesh, theta_value)
     energy = nonstandard_energy(strains_from_gradient(tangent, theta, kappa), STIFFNESS)

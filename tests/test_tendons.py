@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import ufl
-from beam_cases import E, NU, square
+from beam_cases import NU, E, square
 from dolfinx import fem
 from mpi4py import MPI
 
@@ -21,8 +21,13 @@ EI = E * H**4 / 12
 
 
 def uniform_rod(law="reissner", constraint="inextensible-unshearable", elements=10, degree=2):
-    return BeamModel(LENGTH, square(H), Material(E, nu=NU), ModelOptions(law, constraint),
-                     Discretisation(elements, degree))
+    return BeamModel(
+        LENGTH,
+        square(H),
+        Material(E, nu=NU),
+        ModelOptions(law, constraint),
+        Discretisation(elements, degree),
+    )
 
 
 def run(model, tendons, steps=5, comm=MPI.COMM_WORLD):
@@ -38,8 +43,9 @@ def test_constant_offset_gives_uniform_curvature(degree, law):
     """Inextensible-unshearable, uniform section: EI kappa = tau delta at every tension (the
     non-standard law: EI kappa + E I4 kappa^3 / 2 = tau delta, MODEL.md section 6)."""
     delta, tension = 0.003, 20.0
-    result = run(uniform_rod(law, degree=degree), [Tendon.linear(delta, delta, LENGTH,
-                                                                 tension=tension)])
+    result = run(
+        uniform_rod(law, degree=degree), [Tendon.linear(delta, delta, LENGTH, tension=tension)]
+    )
     ei4 = E * H * H**5 / 80 if law == "nonstandard" else 0.0
     for step in result.steps:
         moment = step["tensions"][0] * delta
@@ -55,16 +61,23 @@ def test_constant_offset_gives_uniform_curvature(degree, law):
 def chapter_reference():
     """The chapter's finger by the independent shooting solver, with our definitions
     (curvature per reference length, extensible, unshearable)."""
-    return {tau: solve_finger(default_finger(tension=tau, curvature="reference"))
-            for tau in (0.5, 2.0, 5.0)}
+    return {
+        tau: solve_finger(default_finger(tension=tau, curvature="reference"))
+        for tau in (0.5, 2.0, 5.0)
+    }
 
 
 def finger_config(elements=10, degree=2, **tendon):
     tendon = {"offset_base": 0.008, "offset_tip": 0.004, "tension": 5.0} | tendon
     tendon = {key: value for key, value in tendon.items() if value is not None}
-    config, _ = parse_finger({"model": {"law": "reissner", "constraint": "unshearable"},
-                              "mesh": {"elements": elements, "degree": degree},
-                              "loads": {"steps": 10}, "tendons": [tendon]})
+    config, _ = parse_finger(
+        {
+            "model": {"law": "reissner", "constraint": "unshearable"},
+            "mesh": {"elements": elements, "degree": degree},
+            "loads": {"steps": 10},
+            "tendons": [tendon],
+        }
+    )
     return config
 
 
@@ -73,8 +86,13 @@ def tip_errors(result, reference):
     for step in result.steps:
         for tension, solution in reference.items():
             if abs(step["tensions"][0] - tension) < 1e-9:
-                errors.append(max(abs(step["tip"]["u"] - solution.tip_u),
-                                  abs(step["tip"]["v"] - solution.tip_v)) / LENGTH)
+                errors.append(
+                    max(
+                        abs(step["tip"]["u"] - solution.tip_u),
+                        abs(step["tip"]["v"] - solution.tip_v),
+                    )
+                    / LENGTH
+                )
     assert len(errors) == len(reference)
     return errors
 
@@ -86,8 +104,14 @@ def test_chapter_finger_matches_shooting_reference(chapter_reference):
 
 @pytest.mark.parametrize("degree, order", [(1, 2), (2, 4)])
 def test_tip_converges_with_theoretical_order(chapter_reference, degree, order):
-    errors = [max(tip_errors(solve_static(finger_config(n, degree), None, progress=False),
-                             chapter_reference)) for n in (5, 10, 20)]
+    errors = [
+        max(
+            tip_errors(
+                solve_static(finger_config(n, degree), None, progress=False), chapter_reference
+            )
+        )
+        for n in (5, 10, 20)
+    ]
     rates = -np.diff(np.log(errors)) / np.log(2)
     assert rates == pytest.approx([order, order], abs=0.2)
 
@@ -122,8 +146,9 @@ def test_tendon_entry_inside_the_finger_leaves_base_segment_straight():
 def test_tendon_gradient_and_hessian_match_finite_differences():
     """g = d(l)/dw and its derivative, against central differences of the length."""
     model = uniform_rod("nonstandard", "none", elements=6)
-    tendons = TendonSet([Tendon(paths=(((0.0, 0.004), (0.05, 0.001), (LENGTH, 0.003)),),
-                                tension=1.0)], LENGTH)
+    tendons = TendonSet(
+        [Tendon(paths=(((0.0, 0.004), (0.05, 0.001), (LENGTH, 0.003)),), tension=1.0)], LENGTH
+    )
     problem = BeamProblem(model, MPI.COMM_SELF, tendons.breakpoints, tendons.energy)
     rng = np.random.default_rng(3)
     state = problem.w.x.array
@@ -147,8 +172,11 @@ def test_tendon_gradient_and_hessian_match_finite_differences():
     numeric = (length_at(base + step * direction) - length_at(base - step * direction)) / (2 * step)
     assert gradient @ direction == pytest.approx(numeric, rel=1e-7)
     numeric_h = (gradient_at(base + step * direction) - gradient_at(base - step * direction)) / (
-        2 * step)
-    assert np.allclose(hessian @ direction, numeric_h, rtol=1e-6, atol=1e-8 * np.abs(numeric_h).max())
+        2 * step
+    )
+    assert np.allclose(
+        hessian @ direction, numeric_h, rtol=1e-6, atol=1e-8 * np.abs(numeric_h).max()
+    )
 
 
 def test_finger_cli_defaults_to_the_chapter_finger(tmp_path):
@@ -166,15 +194,20 @@ def test_finger_cli_defaults_to_the_chapter_finger(tmp_path):
         assert last["tip"]["theta"] > 0.3
 
 
-@pytest.mark.parametrize("tendon, words", [
-    ({"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "pull_in": 0.001},
-     "exactly one of tension"),
-    ({"offset_base": 0.008, "tension": 1.0}, "offset_base and offset_tip"),
-    ({"offset_base": 0.008, "offset_tip": 0.004, "tension": -1.0}, "tension must be"),
-    ({"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "anchor": 0.2}, "anchor 0.2"),
-    ({"path": [[0.0, 0.01], [0.0, 0.02]], "tension": 1.0}, "increasing x"),
-    ({"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "colour": "red"}, "colour"),
-])
+@pytest.mark.parametrize(
+    "tendon, words",
+    [
+        (
+            {"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "pull_in": 0.001},
+            "exactly one of tension",
+        ),
+        ({"offset_base": 0.008, "tension": 1.0}, "offset_base and offset_tip"),
+        ({"offset_base": 0.008, "offset_tip": 0.004, "tension": -1.0}, "tension must be"),
+        ({"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "anchor": 0.2}, "anchor 0.2"),
+        ({"path": [[0.0, 0.01], [0.0, 0.02]], "tension": 1.0}, "increasing x"),
+        ({"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0, "colour": "red"}, "colour"),
+    ],
+)
 def test_finger_cli_rejects_bad_tendons(tmp_path, capsys, tendon, words):
     from fe_beam.cli import main
 
@@ -192,7 +225,8 @@ def test_inverse_tension_reaches_target_angle():
     tension = tension_for_tip_angle(config, 0.25, bracket=(0.0, 5.0))
     config = replace(config, tendons=(replace(config.tendons[0], tension=tension),))
     assert solve_static(config, None, progress=False).steps[-1]["tip"]["theta"] == pytest.approx(
-        0.25, abs=1e-9)
+        0.25, abs=1e-9
+    )
 
 
 @pytest.mark.mpi

@@ -352,9 +352,7 @@ def _local_gradient(Wz: np.ndarray, st: dict[str, np.ndarray]) -> np.ndarray:
     """
     a, b, c, s, E1, g = st["a"], st["b"], st["c"], st["s"], st["E1"], st["g"]
     We, WE1, Wg, Wk = Wz
-    return np.array(
-        [We * a + WE1 * c - Wg * s, We * b + WE1 * s + Wg * c, WE1 * g - Wg * E1, Wk]
-    )
+    return np.array([We * a + WE1 * c - Wg * s, We * b + WE1 * s + Wg * c, WE1 * g - Wg * E1, Wk])
 
 
 def internal_force(params: FDBeamParameters, q: np.ndarray) -> np.ndarray:

@@ -383,7 +383,10 @@ def rest_lengths(finger: TaperedFinger) -> np.ndarray:
         for k in _active(finger, mid):
             prof = finger.tendons[k].profile(L)
             val, _ = scipy.integrate.quad(
-                lambda x, p=prof, m=mid: math.sqrt(1.0 + p(x, m)[1] ** 2), a, b, epsabs=0,
+                lambda x, p=prof, m=mid: math.sqrt(1.0 + p(x, m)[1] ** 2),
+                a,
+                b,
+                epsabs=0,
                 epsrel=1e-13,
             )
             out[k] += val
@@ -446,8 +449,8 @@ def _shooting_rhs(finger: TaperedFinger, profiles, active, mid: float):
             kappa_p = m_p / ej - m * dej / ej**2
             theta_pp = kappa_p if reference else q_p * kappa + stretch * kappa_p
             new = [
-                theta_p + (alpha * delta_pp - beta * (q_p - delta_p * theta_p - delta * theta_pp))
-                / w**2
+                theta_p
+                + (alpha * delta_pp - beta * (q_p - delta_p * theta_p - delta * theta_pp)) / w**2
                 for delta, delta_p, delta_pp, alpha, beta, w in geo
             ]
             return np.array(new), f_t, f_d, m_p
@@ -528,8 +531,13 @@ def _integrate(finger, profiles, segments, base, rtol, dense=False):
             y = _jump(finger, profiles, a, y, mids[i - 1], mids[i])
         active = _active(finger, mids[i])
         sol = scipy.integrate.solve_ivp(
-            _shooting_rhs(finger, profiles, active, mids[i]), (a, b), y, method="DOP853",
-            rtol=rtol, atol=atol, dense_output=dense,
+            _shooting_rhs(finger, profiles, active, mids[i]),
+            (a, b),
+            y,
+            method="DOP853",
+            rtol=rtol,
+            atol=atol,
+            dense_output=dense,
         )
         if not sol.success:
             raise RuntimeError(f"solve_ivp failed on [{a:.6g}, {b:.6g}]: {sol.message}")
@@ -637,9 +645,7 @@ def _cut_local(finger: TaperedFinger, x: float, terms, guess=None) -> tuple[floa
 
 
 def _cut_terms(finger, profiles, active, mid, x):
-    return [
-        (finger.tendons[k].tension,) + profiles[k](x, mid)[:2] for k in active
-    ]
+    return [(finger.tendons[k].tension,) + profiles[k](x, mid)[:2] for k in active]
 
 
 def _solve_cut(finger, rtol):
@@ -784,12 +790,24 @@ def _sample(finger, profiles, segments, sols, method, n_points) -> FingerSolutio
     n0, t0 = out["N"][0], out["T"][0]
     base_force = np.array([n0 * c0 - t0 * s0, n0 * s0 + t0 * c0])
     return FingerSolution(
-        x=x, position=pos, theta=out["th"], curvature_b_reference=out["tp"],
-        curvature_b_deformed=out["tp"] / (1.0 + out["q"]), curvature_n=zeros,
-        torsion=zeros.copy(), axial_strain=out["q"], axial_force=out["N"],
-        shear_force=out["T"], moment=out["m"], tendon_paths=tuple(paths),
-        tendon_lengths=lengths, rest_lengths=rest_lengths(finger), base_force=base_force,
-        base_moment=float(out["m"][0]), method=method, length=L,
+        x=x,
+        position=pos,
+        theta=out["th"],
+        curvature_b_reference=out["tp"],
+        curvature_b_deformed=out["tp"] / (1.0 + out["q"]),
+        curvature_n=zeros,
+        torsion=zeros.copy(),
+        axial_strain=out["q"],
+        axial_force=out["N"],
+        shear_force=out["T"],
+        moment=out["m"],
+        tendon_paths=tuple(paths),
+        tendon_lengths=lengths,
+        rest_lengths=rest_lengths(finger),
+        base_force=base_force,
+        base_moment=float(out["m"][0]),
+        method=method,
+        length=L,
     )
 
 
@@ -895,7 +913,13 @@ def tension_for_tip_angle(
     """Tension of ``tendons`` (indices, default all) giving ``theta(L) = target_theta``."""
     finger = default_finger() if finger is None else finger
     return _tension_for(
-        lambda s: s.tip_theta, target_theta, finger, tendons, bracket, method, xtol,
+        lambda s: s.tip_theta,
+        target_theta,
+        finger,
+        tendons,
+        bracket,
+        method,
+        xtol,
         "target_theta",
     )
 
@@ -914,6 +938,12 @@ def tension_for_pull_in(
     finger = default_finger() if finger is None else finger
     idx = list(range(len(finger.tendons))) if tendons is None else list(tendons)
     return _tension_for(
-        lambda s: float(np.sum(s.pull_in[idx])), target, finger, tendons, bracket, method, xtol,
+        lambda s: float(np.sum(s.pull_in[idx])),
+        target,
+        finger,
+        tendons,
+        bracket,
+        method,
+        xtol,
         "target",
     )

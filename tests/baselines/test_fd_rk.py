@@ -162,8 +162,16 @@ def test_static_distributed_load_small_deflection_matches_beam_theory():
 def test_linear_frequencies_cantilever_match_euler_bernoulli():
     beta_l = np.array(_load_json("cantilever_frequencies.json")["euler_bernoulli_betaL"][:3])
     EI, rhoA, L = 2.0, 0.5, 1.3
-    p = fd_rk.FDBeamParameters(L=L, n_intervals=100, EA=1e7 * EI / L**2, GA=1e7 * EI / L**2,
-                               EI=EI, rhoA=rhoA, rhoI=1e-9 * rhoA * L**2, law="reissner")
+    p = fd_rk.FDBeamParameters(
+        L=L,
+        n_intervals=100,
+        EA=1e7 * EI / L**2,
+        GA=1e7 * EI / L**2,
+        EI=EI,
+        rhoA=rhoA,
+        rhoI=1e-9 * rhoA * L**2,
+        law="reissner",
+    )
     f = fd_rk.linear_frequencies(p, 3)
     f_eb = beta_l**2 * math.sqrt(EI / (rhoA * L**4)) / (2 * math.pi)
     rel = f / f_eb - 1
@@ -174,8 +182,17 @@ def test_linear_frequencies_cantilever_match_euler_bernoulli():
 
 def test_linear_frequencies_pinned_roller_match_simply_supported():
     EI, rhoA, L = 1.0, 1.0, 1.0
-    p = fd_rk.FDBeamParameters(L=L, n_intervals=100, EA=1e7, GA=1e7, EI=EI, rhoA=rhoA,
-                               rhoI=1e-9, law="reissner", supports="pinned-roller")
+    p = fd_rk.FDBeamParameters(
+        L=L,
+        n_intervals=100,
+        EA=1e7,
+        GA=1e7,
+        EI=EI,
+        rhoA=rhoA,
+        rhoI=1e-9,
+        law="reissner",
+        supports="pinned-roller",
+    )
     f = fd_rk.linear_frequencies(p, 3)
     f_exact = (np.arange(1, 4) * math.pi) ** 2 * math.sqrt(EI / (rhoA * L**4)) / (2 * math.pi)
     rel = f / f_exact - 1

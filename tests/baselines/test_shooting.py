@@ -112,14 +112,23 @@ def _first_variations(finger, sol, eps=1e-4):
             zeta = np.zeros_like(x)
         scale_tp = eps * np.abs(sol.curvature_b_reference).max()
         scale_q = eps * max(np.abs(sol.axial_strain).max(), 1e-6)
-        plus = _energy(finger, x, sol.curvature_b_reference + scale_tp * deta,
-                       sol.axial_strain + scale_q * zeta)
-        minus = _energy(finger, x, sol.curvature_b_reference - scale_tp * deta,
-                        sol.axial_strain - scale_q * zeta)
+        plus = _energy(
+            finger,
+            x,
+            sol.curvature_b_reference + scale_tp * deta,
+            sol.axial_strain + scale_q * zeta,
+        )
+        minus = _energy(
+            finger,
+            x,
+            sol.curvature_b_reference - scale_tp * deta,
+            sol.axial_strain - scale_q * zeta,
+        )
         d_pi = (plus - minus) / 2.0
         norm = scipy.integrate.simpson(
             np.abs(ej * sol.curvature_b_reference * scale_tp * deta)
-            + np.abs(ea * sol.axial_strain * scale_q * zeta), x=x
+            + np.abs(ea * sol.axial_strain * scale_q * zeta),
+            x=x,
         )
         out.append(abs(d_pi) / norm)
     return np.array(out)
@@ -284,16 +293,26 @@ def test_tension_for_pull_in_reproduces_forward():
         (lambda: TaperedFinger(tendons=(1,)), "tendons"),
         (lambda: Tendon(tension=-1.0, offset_base=0.0, offset_tip=0.0), "tension"),
         (lambda: Tendon(tension=1.0), "offset"),
-        (lambda: Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0, points=((0, 0), (1, 0))),
-         "offset"),
+        (
+            lambda: Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0, points=((0, 0), (1, 0))),
+            "offset",
+        ),
         (lambda: Tendon(tension=1.0, points=((0, 0), (0, 1))), "points"),
         (lambda: Tendon(tension=1.0, offset_fn=(math.sin,)), "offset_fn"),
-        (lambda: Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0, entry=0.05, anchor=0.04),
-         "anchor"),
-        (lambda: TaperedFinger(tendons=(Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0,
-                                               anchor=0.2),)), "anchor"),
-        (lambda: TaperedFinger(tendons=(Tendon(tension=1.0, points=((0.0, 0.0), (0.05, 0.0))),)),
-         "points"),
+        (
+            lambda: Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0, entry=0.05, anchor=0.04),
+            "anchor",
+        ),
+        (
+            lambda: TaperedFinger(
+                tendons=(Tendon(tension=1.0, offset_base=0.0, offset_tip=0.0, anchor=0.2),)
+            ),
+            "anchor",
+        ),
+        (
+            lambda: TaperedFinger(tendons=(Tendon(tension=1.0, points=((0.0, 0.0), (0.05, 0.0))),)),
+            "points",
+        ),
         (lambda: solve_finger(default_finger(), method="fd"), "method"),
         (lambda: solve_finger(default_finger(), n_points=1), "n_points"),
         (lambda: solve_finger(default_finger(), rtol=0.1), "rtol"),
