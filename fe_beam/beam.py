@@ -238,8 +238,8 @@ class BeamProblem:
         extra_energy=None,
     ):
         """``breakpoints``: interior x that must be mesh vertices (tendon entries, anchors,
-        kinks of tendon paths); ``extra_energy(problem)`` returns a UFL form added to the
-        potential (e.g. tendons)."""
+        kinks of tendon paths); ``extra_energy(problem, (u, v, theta))`` returns a UFL form
+        added to the stored energy (e.g. tendons)."""
         self.model = model
         self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
@@ -317,34 +317,57 @@ class BeamProblem:
         parts = ufl.split(self.w)
         return parts[0], parts[1], parts[2], dict(zip(self.multipliers, parts[3:], strict=True))
 
-    def potential(self):
-        """Total potential of the conservative terms: int W + constraints - dead-load work."""
-        u, v, theta, multipliers = self.fields()
-        s = strains(u, v, theta)
-        energy = strain_energy(self.model.options.law, s, self.stiffness)
-        constraint = sum(
-            (value * getattr(s, name) for name, value in multipliers.items()), ufl.zero()
-        )
+    def stored_energy(self, parts):
+        """int W dx (+ extra energy such as tendons) of the state ``parts`` = (u, v, theta)."""
+        u, v, theta = parts
+        law = self.model.options.law
+        total = strain_energy(law, strains(u, v, theta), self.stiffness) * self.dx_energy
+        if self.extra_energy is not None:
+            total += self.extra_energy(self, parts)
+        return total
+
+    def dead_load_work(self, parts):
+        """Work of the dead loads at the current load factor on the state ``parts``."""
+        u, v, theta = parts
         lam = self.load_factor
         body = self.distributed + self.rho * self.section_props.A * self.gravity
         work = lam * ufl.dot(body, ufl.as_vector([u, v])) * self.dx_loads
         work += lam * self.tip_moment * theta * self.ds_tip
         if not self.model.loads.follower:
             work += lam * ufl.dot(self.tip_force, ufl.as_vector([u, v])) * self.ds_tip
-        total = (energy + constraint) * self.dx_energy - work
-        if self.extra_energy is not None:
-            total += self.extra_energy(self)
-        return total
+        return work
+
+    def constraint_term(self, parts, multipliers):
+        """int sum_c multiplier_c * strain_c dx (zero without constraints)."""
+        if not multipliers:
+            return 0  # UFL forms absorb an integer zero; a Zero integrand would have no domain
+        s = strains(*parts)
+        return sum(value * getattr(s, n) for n, value in multipliers.items()) * self.dx_energy
+
+    def follower_virtual_work(self, parts, test):
+        """Virtual work of a follower tip force (not derivable from a potential)."""
+        theta = parts[2]
+        u_t, v_t = ufl.split(test)[0], ufl.split(test)[1]
+        a1 = ufl.as_vector([ufl.cos(theta), ufl.sin(theta)])
+        d = ufl.as_vector([-ufl.sin(theta), ufl.cos(theta)])
+        force = self.tip_force[0] * a1 + self.tip_force[1] * d
+        return self.load_factor * ufl.dot(force, ufl.as_vector([u_t, v_t])) * self.ds_tip
+
+    def potential(self):
+        """Total potential of the conservative terms: int W + constraints - dead-load work."""
+        u, v, theta, multipliers = self.fields()
+        parts = (u, v, theta)
+        return (
+            self.stored_energy(parts)
+            + self.constraint_term(parts, multipliers)
+            - self.dead_load_work(parts)
+        )
 
     def _residual(self):
         test = ufl.TestFunction(self.space)
         residual = ufl.derivative(self.potential(), self.w, test)
         if self.model.loads.follower:
-            u_t, v_t, theta = ufl.split(test)[0], ufl.split(test)[1], self.fields()[2]
-            a1 = ufl.as_vector([ufl.cos(theta), ufl.sin(theta)])
-            d = ufl.as_vector([-ufl.sin(theta), ufl.cos(theta)])
-            force = self.tip_force[0] * a1 + self.tip_force[1] * d
-            residual -= self.load_factor * ufl.dot(force, ufl.as_vector([u_t, v_t])) * self.ds_tip
+            residual -= self.follower_virtual_work(self.fields()[:3], test)
         return residual
 
     def set_load_factor(self, value: float) -> None:

@@ -157,40 +157,48 @@ class TendonSet:
             points |= {x for path in tendon.paths for x, _ in path}
         return tuple(sorted(points))
 
-    def energy(self, problem):
-        """sum_i tau_i l_i as a UFL form on ``problem`` (BeamProblem's extra_energy hook)."""
-        if self._problem is problem:
-            return self._energy
+    def energy(self, problem, parts):
+        """sum_i tau_i l_i of the state ``parts`` (BeamProblem's extra_energy hook)."""
+        if self._problem is not problem:
+            self._attach(problem)
+        return sum(tension * self._length(parts, i) for i, tension in enumerate(self.tensions))
+
+    def _length(self, parts, index: int):
+        inside, deltas = self._geometry[index]
+        density = sum(
+            (tendon_length_density(parts, delta, delta.dx(0)) for delta in deltas), ufl.zero()
+        )
+        # The tendon length uses the strain energy's Gauss rule: where constraints hold (at those
+        # points) it sees exactly the constrained kinematics, e.g. |r_c'| = 1 - delta kappa.
+        return inside * density * self._problem.dx_energy
+
+    def _attach(self, problem) -> None:
+        """Offsets, indicators, tension constants and length forms on the problem's mesh."""
         self._problem = problem
         mesh = problem.mesh
         cell = mesh.ufl_cell()
         offsets = compat.function_space(mesh, ufl.FiniteElement("Lagrange", cell, 1))
         indicator_space = compat.function_space(mesh, ufl.FiniteElement("DG", cell, 0))
-        u, v, theta, _ = problem.fields()
-        test = ufl.TestFunction(problem.space)
-        total = ufl.zero()
-        # The tendon length uses the strain energy's Gauss rule: where constraints hold (at those
-        # points) it sees exactly the constrained kinematics, e.g. |r_c'| = 1 - delta kappa.
-        dx = problem.dx_energy
+        self._geometry = []
         for tendon in self.tendons:
             inside = fem.Function(indicator_space)
             inside.interpolate(lambda x, t=tendon: ((x[0] > t.entry) & (x[0] < t.anchor)) * 1.0)
-            density = ufl.zero()
+            deltas = []
             for path in tendon.paths:
                 delta = fem.Function(offsets)
                 xs, ds = np.array([p[0] for p in path]), np.array([p[1] for p in path])
                 delta.interpolate(lambda x, xs=xs, ds=ds: np.interp(x[0], xs, ds))
-                density += tendon_length_density((u, v, theta), delta, delta.dx(0))
-            tension = fem.Constant(mesh, 0.0)
-            length = inside * density * dx
-            self.tensions.append(tension)
+                deltas.append(delta)
+            self._geometry.append((inside, deltas))
+            self.tensions.append(fem.Constant(mesh, 0.0))
+        u, v, theta, _ = problem.fields()
+        test = ufl.TestFunction(problem.space)
+        for index in range(len(self.tendons)):
+            length = self._length((u, v, theta), index)
             self.length_ufl.append(length)
             self.length_forms.append(fem.form(length))
             self.gradient_forms.append(fem.form(ufl.derivative(length, problem.w, test)))
-            total += tension * length
         self.rest_lengths = self.lengths()
-        self._energy = total
-        return total
 
     def lengths(self) -> np.ndarray:
         return np.array([assemble_scalar(form) for form in self.length_forms])
