@@ -371,7 +371,12 @@ class BeamProblem:
         return residual
 
     def set_load_factor(self, value: float) -> None:
+        """Scale every load and every prescribed end value by ``value``."""
         self.load_factor.value = value
+        self.set_prescribed_factor(value)
+
+    def set_prescribed_factor(self, value: float) -> None:
+        """Scale the prescribed end values only (dynamics drives them by their own function)."""
         for function, target in self._prescribed:
             function.x.array[:] = value * target
 

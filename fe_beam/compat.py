@@ -102,6 +102,13 @@ def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
     return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
 
 
+def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
+    """Solve the linear variational problem a(x, v) = L(v) into ``target`` (direct, MUMPS)."""
+    options = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+    problem = fem_petsc.LinearProblem(a, L, bcs=bcs, u=target, petsc_options=options)
+    return problem.solve()
+
+
 def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace) -> fem.Expression:
     """A compiled expression that can be interpolated into ``space``."""
     points = space.element.interpolation_points

@@ -1,0 +1,119 @@
+"""Time functions f(t) for loads and motions: safe formulas in ``t`` and piecewise-linear tables.
+
+Formulas are parsed into a Python AST and evaluated by a small interpreter that knows numbers,
+``t``, ``pi``, ``e``, + - * / ** %, comparisons and a fixed set of functions; no name lookup, no
+attribute access and no calls outside that set, so a config file cannot run code.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+import operator
+from collections.abc import Callable
+
+import numpy as np
+
+__all__ = ["TimeFunctionError", "parse_formula", "table_function", "time_function"]
+
+
+class TimeFunctionError(ValueError):
+    """A formula or table that cannot be used (message says why)."""
+
+
+FUNCTIONS: dict[str, Callable] = {
+    "sin": math.sin, "cos": math.cos, "tan": math.tan, "exp": math.exp, "log": math.log,
+    "sqrt": math.sqrt, "abs": abs, "min": min, "max": max, "tanh": math.tanh,
+    "asin": math.asin, "acos": math.acos, "atan": math.atan, "sinh": math.sinh,
+    "cosh": math.cosh, "floor": math.floor, "ceil": math.ceil,
+    "step": lambda x: 1.0 if x >= 0 else 0.0,
+}
+CONSTANTS = {"pi": math.pi, "e": math.e}
+BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+          ast.Div: operator.truediv, ast.Pow: operator.pow, ast.Mod: operator.mod}
+UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge}
+
+
+def _compile(node: ast.AST, text: str) -> Callable[[float], float]:
+    if isinstance(node, ast.Expression):
+        return _compile(node.body, text)
+    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(
+        node.value, bool
+    ):
+        value = float(node.value)
+        return lambda t: value
+    if isinstance(node, ast.Name):
+        if node.id == "t":
+            return lambda t: t
+        if node.id in CONSTANTS:
+            value = CONSTANTS[node.id]
+            return lambda t: value
+        raise TimeFunctionError(
+            f"unknown name {node.id!r} in {text!r} (use t, pi, e and {', '.join(FUNCTIONS)})"
+        )
+    if isinstance(node, ast.BinOp) and type(node.op) in BINARY:
+        op, left, right = BINARY[type(node.op)], _compile(node.left, text), _compile(node.right, text)
+        return lambda t: op(left(t), right(t))
+    if isinstance(node, ast.UnaryOp) and type(node.op) in UNARY:
+        op, operand = UNARY[type(node.op)], _compile(node.operand, text)
+        return lambda t: op(operand(t))
+    if isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in COMPARE:
+        op = COMPARE[type(node.ops[0])]
+        left, right = _compile(node.left, text), _compile(node.comparators[0], text)
+        return lambda t: 1.0 if op(left(t), right(t)) else 0.0
+    if isinstance(node, ast.IfExp):
+        test, body, other = (_compile(n, text) for n in (node.test, node.body, node.orelse))
+        return lambda t: body(t) if test(t) else other(t)
+    if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+            and node.func.id in FUNCTIONS and not node.keywords):
+        function = FUNCTIONS[node.func.id]
+        arguments = [_compile(a, text) for a in node.args]
+        return lambda t: function(*(a(t) for a in arguments))
+    raise TimeFunctionError(f"{text!r}: {ast.dump(node)[:40]}... is not allowed in a time formula")
+
+
+def parse_formula(text: str) -> Callable[[float], float]:
+    """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``."""
+    if not isinstance(text, str) or not text.strip():
+        raise TimeFunctionError(f"a time formula must be a non-empty string, got {text!r}")
+    try:
+        tree = ast.parse(text.replace("^", "**"), mode="eval")
+    except SyntaxError as error:
+        raise TimeFunctionError(f"{text!r} is not a formula ({error.msg})") from None
+    function = _compile(tree, text)
+
+    def evaluate(t: float) -> float:
+        try:
+            value = float(function(float(t)))
+        except (ArithmeticError, ValueError, TypeError) as error:
+            raise TimeFunctionError(f"{text!r} cannot be evaluated at t = {t:g}: {error}") from None
+        if not math.isfinite(value):
+            raise TimeFunctionError(f"{text!r} is not finite at t = {t:g}")
+        return value
+
+    evaluate(0.0)  # fail early on formulas that cannot even start
+    return evaluate
+
+
+def table_function(table) -> Callable[[float], float]:
+    """Piecewise-linear f(t) through [[t0, f0], [t1, f1], ...], constant beyond the ends."""
+    try:
+        points = np.array(table, dtype=float)
+    except (TypeError, ValueError):
+        raise TimeFunctionError(f"time_table must be a list of [t, f] pairs, got {table!r}") from None
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2:
+        raise TimeFunctionError("time_table needs at least two [t, f] pairs")
+    if np.any(np.diff(points[:, 0]) <= 0) or not np.all(np.isfinite(points)):
+        raise TimeFunctionError("time_table times must be finite and strictly increasing")
+    times, values = points[:, 0].copy(), points[:, 1].copy()
+    return lambda t: float(np.interp(t, times, values))
+
+
+def time_function(formula: str | None = None, table=None) -> Callable[[float], float]:
+    """From a formula or a table (not both); f(t) = 1 when neither is given."""
+    if formula is not None and table is not None:
+        raise TimeFunctionError("give time_function or time_table, not both")
+    if table is not None:
+        return table_function(table)
+    return parse_formula(formula if formula is not None else "1")
