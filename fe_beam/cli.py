@@ -20,6 +20,8 @@ EXIT_FAILED = 3
 COMMANDS = {
     "static": "large-deflection statics of a planar beam (load stepping, SNES)",
     "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
+    "dynamic": "nonlinear dynamics (generalised-alpha, or the paper's FD + Runge-Kutta)",
+    "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
 }
 
 
@@ -121,7 +123,40 @@ def run_finger(args, config: dict, comm) -> int:
     return 0
 
 
-RUNNERS = {"static": run_static, "finger": run_finger}
+def run_dynamic(args, config: dict, comm) -> int:
+    from fe_beam.transient import parse_dynamic, run_dynamic
+
+    parsed = parse_dynamic(config)
+    result = run_dynamic(parsed, args.out, comm, progress=not args.quiet)
+    if result.history:
+        last = result.history[-1]
+        tip = last["tip"]
+        _say(comm, f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, "
+                   f"theta = {tip['theta']:.6g} rad")
+    _say(comm, f"{result.info.get('steps', len(result.history))} time steps, {result.dofs} dofs, "
+               f"{result.info.get('wall_time_s', 0.0):.2f} s; results in {args.out}")
+    if result.status != "completed":
+        _say(comm, f"fe-beam: {result.message}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+def run_modes(args, config: dict, comm) -> int:
+    from fe_beam.transient import parse_modes, run_modes
+
+    static, modes = parse_modes(config)
+    summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
+    for index, (frequency, share) in enumerate(
+        zip(summary["frequencies_hz"], summary["transverse_fraction"], strict=True), start=1
+    ):
+        kind = "bending" if share > 0.5 else "axial"
+        _say(comm, f"mode {index}: {frequency:.6g} Hz ({kind})")
+    _say(comm, f"results in {args.out}")
+    return 0
+
+
+RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
+           "modes": run_modes}
 
 
 def main(argv: list[str] | None = None) -> int:

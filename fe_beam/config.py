@@ -77,6 +77,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
         "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
         "steps": Key((int,), 10, "initial number of load steps"),
+        "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
+        "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),
+        "motion_function": Key((str,), None, "dynamic: scale of prescribed end values"),
     },
     "solver": {
         "rtol": Key(NUMBER, 1e-9, "relative residual tolerance"),
@@ -93,6 +96,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
     "output": {
         "xdmf": Key((bool,), True, "write XDMF for ParaView"),
         "plots": Key((bool,), True, "write PNG plots"),
+        "gif": Key((bool,), False, "dynamic: animated GIF of the deformed beam"),
     },
 }
 # Tables owned by other commands (validated by them).
@@ -204,6 +208,7 @@ def check_tables(config: dict, known: tuple[str, ...]) -> None:
 class OutputOptions:
     xdmf: bool = True
     plots: bool = True
+    gif: bool = False
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from numbers import Integral
 
 import numpy as np
 import ufl
@@ -65,7 +66,7 @@ class TimeSettings:
     tol: float = 1e-4
     min_dt: float | None = None
     max_dt: float | None = None
-    output_every: int = 1
+    output_every: int | None = None
     scheme: str = "generalized-alpha"
 
     def __post_init__(self):
@@ -79,14 +80,24 @@ class TimeSettings:
             raise ValueError(f"time.rho_inf must be in [0, 1], got {self.rho_inf!r}")
         if not (isinstance(self.tol, (int, float)) and self.tol > 0):
             raise ValueError(f"time.tol must be > 0, got {self.tol!r}")
-        if not isinstance(self.output_every, int) or self.output_every < 1:
-            raise ValueError(f"time.output_every must be an integer >= 1, got {self.output_every!r}")
+        every = self.output_every
+        if every is not None and (isinstance(every, bool) or not isinstance(every, Integral)
+                                  or every < 1):
+            raise ValueError(f"time.output_every must be an integer >= 1, got {every!r}")
         if self.scheme not in SCHEMES:
-            raise ValueError(f"time.scheme must be one of {', '.join(SCHEMES)}; got {self.scheme!r}")
+            allowed = ", ".join(SCHEMES)
+            raise ValueError(f"time.scheme must be one of {allowed}; got {self.scheme!r}")
         for name in ("min_dt", "max_dt"):
             value = getattr(self, name)
             if value is not None and not (isinstance(value, (int, float)) and value > 0):
                 raise ValueError(f"time.{name} must be > 0, got {value!r}")
+
+    @property
+    def output_interval(self) -> int:
+        """Steps between outputs: as given, else about 200 outputs over the run."""
+        if self.output_every is not None:
+            return int(self.output_every)
+        return max(1, math.ceil(self.t_end / self.dt / 200))
 
     @property
     def smallest_step(self) -> float:
@@ -94,7 +105,9 @@ class TimeSettings:
 
     @property
     def largest_step(self) -> float:
-        return self.max_dt if self.max_dt is not None else (self.dt * 10 if self.adaptive else self.dt)
+        if self.max_dt is not None:
+            return self.max_dt
+        return self.dt * 10 if self.adaptive else self.dt
 
 
 @dataclass(frozen=True)
@@ -177,7 +190,8 @@ class GeneralizedAlpha:
         if problem.model.loads.follower:
             self.residual -= problem.follower_virtual_work(q_mid, test)
         self.solver = SNESSolver(NonlinearProblem(self.residual, problem.w, problem.bcs),
-                                 solver_settings or SolverSettings(), prefix="fe_beam_dynamic_")
+                                 solver_settings or SolverSettings(), prefix="fe_beam_dynamic_",
+                                 state_scale=problem.model.length)
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
@@ -201,8 +215,8 @@ class GeneralizedAlpha:
             rates = strain_rates(state, velocity)
             variations = strain_rates(state, t[:3])
             moduli = (k.EA, k.GA, k.EI)
-            work += self.eta * sum(m * r * d for m, r, d in zip(moduli, rates, variations,
-                                                                 strict=True)) * self.problem.dx_energy
+            terms = zip(moduli, rates, variations, strict=True)
+            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
         return work
 
     def _constraints(self, test):
@@ -211,17 +225,12 @@ class GeneralizedAlpha:
         term = p.constraint_term((u, v, theta), multipliers)
         return ufl.derivative(term, p.w, test) if multipliers else 0
 
-    def dissipation_power(self, state, velocity):
-        power = self.c * (velocity[0] ** 2 + velocity[1] ** 2) * self.dx_mass
-        if self.damping.kelvin_voigt > 0:
-            k = self.problem.stiffness
-            rates = strain_rates(state, velocity)
-            power += self.eta * (k.EA * rates[0] ** 2 + k.GA * rates[1] ** 2
-                                 + k.EI * rates[2] ** 2) * self.problem.dx_energy
-        return power
-
     def _energy_forms(self) -> None:
         p = self.problem
+        # The damping work of a step is exactly what the scheme applies: the force at the
+        # alpha-weighted state and velocity times the displacement increment.
+        self._step_state, self._step_velocity, self._step_increment = (
+            fem.Function(p.space) for _ in range(3))
         q, v = ufl.split(self.q_old)[:3], ufl.split(self.v_old)[:3]
         rho_area, rho_inertia = p.rho * p.section_props.A, p.rho * p.section_props.I
         x = ufl.SpatialCoordinate(p.mesh)[0]
@@ -231,14 +240,16 @@ class GeneralizedAlpha:
                                        + rho_inertia * v[2] ** 2) * dx),
             "strain": fem.form(p.stored_energy(q)),
             "load_potential": fem.form(p.dead_load_work(q)),
-            "power": fem.form(self.dissipation_power(q, v)),
+            "damping_work": fem.form(self.dissipation(
+                ufl.split(self._step_state)[:3], ufl.split(self._step_velocity)[:3],
+                self._step_increment)),
             "momentum_x": fem.form(rho_area * v[0] * dx),
             "momentum_y": fem.form(rho_area * v[1] * dx),
             "angular_momentum": fem.form((rho_area * ((x + q[0]) * v[1] - q[1] * v[0])
                                           + rho_inertia * v[2]) * dx),
         }
 
-    # --- state -------------------------------------------------------------------------------------
+    # --- state --------------------------------------------------------------------------------
     def initialise(self, velocity: Callable | None = None) -> None:
         """Start from the current ``problem.w`` (e.g. a static solution) at t = 0, with initial
         velocities ``velocity(x) -> (u_t, v_t, theta_t)`` arrays, and the consistent initial
@@ -258,7 +269,6 @@ class GeneralizedAlpha:
         self._work = 0.0
         self._dissipated = 0.0
         self._load_energy = self._unit_load_energy()
-        self._power = assemble_scalar(self.forms["power"])
         self.energy0 = self.energies()
 
     def _initial_acceleration(self) -> None:
@@ -305,7 +315,7 @@ class GeneralizedAlpha:
         self._set_time_values(t_new, t_old)
         w = compat.local_array(self.problem.w)
         q, v, a = (compat.local_array(f) for f in (self.q_old, self.v_old, self.a_old))
-        w[:] = q + dt * v + 0.5 * dt**2 * a  # explicit predictor
+        w[:] = q  # same-displacement predictor: robust when accelerations jump (releases)
         iterations = self.solver.solve()
         beta, gamma = self.params["beta"], self.params["gamma"]
         a_new = (w - q - dt * v) / (beta * dt**2) - (1 - 2 * beta) / (2 * beta) * a
@@ -327,18 +337,20 @@ class GeneralizedAlpha:
 
     def accept(self) -> None:
         w, v_new, a_new, t_old, t_new = self._candidate
-        power_before = self._power
-        load_before = self.load_function(t_old)
+        alpha_f = self.params["alpha_f"]
+        q_old, v_old = compat.local_array(self.q_old), compat.local_array(self.v_old)
+        compat.local_array(self._step_state)[:] = (1 - alpha_f) * w + alpha_f * q_old
+        compat.local_array(self._step_velocity)[:] = (1 - alpha_f) * v_new + alpha_f * v_old
+        compat.local_array(self._step_increment)[:] = w - q_old
+        self._dissipated += assemble_scalar(self.forms["damping_work"])
+        load_mid = ((1 - alpha_f) * self.load_function(t_new)
+                    + alpha_f * self.load_function(t_old))
         compat.local_array(self.q_old)[:] = w
         compat.local_array(self.v_old)[:] = v_new
         compat.local_array(self.a_old)[:] = a_new
-        dt = t_new - t_old
         load_energy = self._unit_load_energy()
-        self._work += 0.5 * (load_before + self.load_function(t_new)) * (
-            load_energy - self._load_energy)
+        self._work += load_mid * (load_energy - self._load_energy)
         self._load_energy = load_energy
-        self._power = assemble_scalar(self.forms["power"])
-        self._dissipated += 0.5 * dt * (power_before + self._power)
         self.time = t_new
 
     def reject(self) -> None:
@@ -372,7 +384,7 @@ class GeneralizedAlpha:
             self._motion = np.concatenate(dofs)
         return self._motion
 
-    # --- driver ------------------------------------------------------------------------------------
+    # --- driver -------------------------------------------------------------------------------
     def run(self, on_output: Callable[[float, int], None] | None = None,
             progress: bool = True) -> dict:
         """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
@@ -415,7 +427,7 @@ class GeneralizedAlpha:
                 steps += 1
                 newton += iterations
                 bar.update(self.time, f"t = {self.time:.4g} s, dt = {trial:.3g} s")
-                if on_output is not None and (steps % s.output_every == 0
+                if on_output is not None and (steps % s.output_interval == 0
                                               or self.time >= s.t_end * (1 - 1e-12)):
                     on_output(self.time, steps)
         finally:

@@ -198,8 +198,10 @@ class SNESSolver:
         settings: SolverSettings | None = None,
         prefix: str | None = None,
         near_nullspace: PETSc.NullSpace | None = None,
+        state_scale: float = 0.0,
     ):
         self.problem = problem
+        self.state_scale = float(state_scale)
         self.settings = settings or SolverSettings()
         if prefix is None:
             SNESSolver._instances += 1
@@ -219,8 +221,33 @@ class SNESSolver:
             problem.A.setNearNullSpace(near_nullspace)
         self.snes.setFromOptions()
         self.snes.getKSP().setFromOptions()
+        self._initial_fnorm = 0.0
+        self.snes.setConvergenceTest(self._converged)
         self._x = problem.b.duplicate()
         self.linear_iterations = 0
+
+    def _converged(self, snes, iteration, norms):
+        """PETSc's default test, except that the step test ||dx|| < stol max(||x||, scale)
+        measures the step against the problem's size (e.g. the beam length), not only against
+        the state: a state near zero (tiny vibration, zero load) has a residual at round-off
+        level that rtol can never reduce, and a relative step test that is never met either."""
+        xnorm, step_norm, fnorm = norms
+        rtol, atol, stol, max_it = snes.getTolerances()
+        reason = PETSc.SNES.ConvergedReason
+        if not math.isfinite(fnorm):
+            return reason.DIVERGED_FNORM_NAN
+        if iteration == 0:
+            self._initial_fnorm = fnorm
+            return reason.CONVERGED_FNORM_ABS if fnorm <= atol else reason.ITERATING
+        if fnorm <= atol:
+            return reason.CONVERGED_FNORM_ABS
+        if fnorm <= rtol * self._initial_fnorm:
+            return reason.CONVERGED_FNORM_RELATIVE
+        if step_norm <= stol * max(xnorm, self.state_scale):
+            return reason.CONVERGED_SNORM_RELATIVE
+        if iteration >= max_it:
+            return reason.DIVERGED_MAX_IT
+        return reason.ITERATING
 
     def solve(self) -> int:
         """Solve from the current state of ``w``: Newton iterations, or raises SolveFailed."""

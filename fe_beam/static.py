@@ -87,6 +87,7 @@ def solve_static(
         NonlinearProblem(problem.residual, problem.w, problem.bcs),
         config.solver,
         prefix="fe_beam_static_",
+        state_scale=config.model.length,
     )
     solver = PullInSolver(snes, tendons) if tendons else snes
 

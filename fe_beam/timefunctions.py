@@ -35,61 +35,77 @@ UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
 COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge}
 
 
-def _compile(node: ast.AST, text: str) -> Callable[[float], float]:
+def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float], float]:
     if isinstance(node, ast.Expression):
-        return _compile(node.body, text)
+        return _compile(node.body, text, variable)
     if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(
         node.value, bool
     ):
         value = float(node.value)
         return lambda t: value
     if isinstance(node, ast.Name):
-        if node.id == "t":
+        if node.id == variable:
             return lambda t: t
         if node.id in CONSTANTS:
             value = CONSTANTS[node.id]
             return lambda t: value
         raise TimeFunctionError(
-            f"unknown name {node.id!r} in {text!r} (use t, pi, e and {', '.join(FUNCTIONS)})"
+            f"unknown name {node.id!r} in {text!r} (use {variable}, pi, e and "
+            f"{', '.join(FUNCTIONS)})"
         )
     if isinstance(node, ast.BinOp) and type(node.op) in BINARY:
-        op, left, right = BINARY[type(node.op)], _compile(node.left, text), _compile(node.right, text)
+        op = BINARY[type(node.op)]
+        left = _compile(node.left, text, variable)
+        right = _compile(node.right, text, variable)
         return lambda t: op(left(t), right(t))
     if isinstance(node, ast.UnaryOp) and type(node.op) in UNARY:
-        op, operand = UNARY[type(node.op)], _compile(node.operand, text)
+        op, operand = UNARY[type(node.op)], _compile(node.operand, text, variable)
         return lambda t: op(operand(t))
     if isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in COMPARE:
         op = COMPARE[type(node.ops[0])]
-        left, right = _compile(node.left, text), _compile(node.comparators[0], text)
+        left = _compile(node.left, text, variable)
+        right = _compile(node.comparators[0], text, variable)
         return lambda t: 1.0 if op(left(t), right(t)) else 0.0
     if isinstance(node, ast.IfExp):
-        test, body, other = (_compile(n, text) for n in (node.test, node.body, node.orelse))
+        test, body, other = (
+            _compile(n, text, variable) for n in (node.test, node.body, node.orelse)
+        )
         return lambda t: body(t) if test(t) else other(t)
     if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
             and node.func.id in FUNCTIONS and not node.keywords):
         function = FUNCTIONS[node.func.id]
-        arguments = [_compile(a, text) for a in node.args]
+        arguments = [_compile(a, text, variable) for a in node.args]
         return lambda t: function(*(a(t) for a in arguments))
-    raise TimeFunctionError(f"{text!r}: {ast.dump(node)[:40]}... is not allowed in a time formula")
+    if isinstance(node, ast.Call):
+        name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
+        raise TimeFunctionError(
+            f"{text!r}: function {name!r} is not allowed (allowed, positional arguments only: "
+            f"{', '.join(FUNCTIONS)})")
+    raise TimeFunctionError(
+        f"{text!r}: {ast.unparse(node)!r} is not allowed in a formula (use numbers, {variable}, "
+        f"pi, e, + - * / ** ^ %, comparisons, 'a if cond else b' and {', '.join(FUNCTIONS)})")
 
 
-def parse_formula(text: str) -> Callable[[float], float]:
-    """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``."""
+def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
+    """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``
+    (``variable`` names the argument, e.g. "x" for initial velocity profiles)."""
     if not isinstance(text, str) or not text.strip():
         raise TimeFunctionError(f"a time formula must be a non-empty string, got {text!r}")
     try:
         tree = ast.parse(text.replace("^", "**"), mode="eval")
     except SyntaxError as error:
         raise TimeFunctionError(f"{text!r} is not a formula ({error.msg})") from None
-    function = _compile(tree, text)
+    function = _compile(tree, text, variable)
 
     def evaluate(t: float) -> float:
         try:
             value = float(function(float(t)))
         except (ArithmeticError, ValueError, TypeError) as error:
-            raise TimeFunctionError(f"{text!r} cannot be evaluated at t = {t:g}: {error}") from None
+            raise TimeFunctionError(
+                f"{text!r} cannot be evaluated at {variable} = {t:g}: {error}"
+            ) from None
         if not math.isfinite(value):
-            raise TimeFunctionError(f"{text!r} is not finite at t = {t:g}")
+            raise TimeFunctionError(f"{text!r} is not finite at {variable} = {t:g}")
         return value
 
     evaluate(0.0)  # fail early on formulas that cannot even start
@@ -101,7 +117,8 @@ def table_function(table) -> Callable[[float], float]:
     try:
         points = np.array(table, dtype=float)
     except (TypeError, ValueError):
-        raise TimeFunctionError(f"time_table must be a list of [t, f] pairs, got {table!r}") from None
+        message = f"time_table must be a list of [t, f] pairs, got {table!r}"
+        raise TimeFunctionError(message) from None
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2:
         raise TimeFunctionError("time_table needs at least two [t, f] pairs")
     if np.any(np.diff(points[:, 0]) <= 0) or not np.all(np.isfinite(points)):

@@ -1,0 +1,54 @@
+"""XDMF output of the solid finger's displacement (called by the CLI, never by the solve loop).
+
+XDMF stores one field per mesh node, so the displacement is interpolated into the Lagrange
+space of the mesh geometry: P1 for linear tetrahedra (``MeshSizes.order = 1``), P2 for quadratic
+ones. Use it once (`write_xdmf`) or per load step (`DisplacementXDMF` as ``on_converged`` hook).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import ufl
+from dolfinx import fem
+
+from fe_beam import compat
+
+__all__ = ["DisplacementXDMF", "write_xdmf"]
+
+
+class DisplacementXDMF:
+    """An XDMF time series of the displacement of a `SolidFingerProblem` (collective)."""
+
+    def __init__(self, problem, path: str | Path):
+        self.problem = problem
+        msh = problem.mesh
+        degree = msh.ufl_domain().ufl_coordinate_element().degree()
+        space = compat.function_space(msh, ufl.VectorElement("Lagrange", msh.ufl_cell(), degree))
+        self.output = fem.Function(space, name="displacement")
+        self.path = Path(path)
+        self._file = compat.XDMFFile(msh.comm, str(self.path), "w")
+        self._file.write_mesh(msh)
+
+    def write(self, t: float | None = None) -> None:
+        """Write the current displacement at time ``t`` (default: the current load factor)."""
+        self.output.interpolate(self.problem.displacement())
+        self._file.write_function(self.output, self.problem.load_factor if t is None else t)
+
+    def __call__(self, step=None) -> None:
+        self.write(None if step is None else step.load_factor)
+
+    def close(self) -> None:
+        self._file.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def write_xdmf(problem, path: str | Path) -> None:
+    """Write the current displacement of ``problem`` to ``path`` (.xdmf + .h5)."""
+    with DisplacementXDMF(problem, path) as out:
+        out.write()

@@ -1,0 +1,565 @@
+"""The 3D hyperelastic finger: set-up, load-stepped solve and post-processing.
+
+Total potential (load factor lambda in [0, 1]):
+
+    Pi(u) = int_Omega W(F) dX + sum_i tau_i l_i(u) - lambda int_tip t0 . u dA,   F = I + grad u,
+
+with the clamp u = 0 on x = 0, the dead tip traction t0 = tip_force / |tip face| and cable
+energies tau_i l_i (`fe_beam.solid.cable`): tau_i = lambda T_i under tension control, or the
+unknown multiplier of l_i^0 - l_i = lambda * pull_in_i under pull-in control. The mixed u-p
+formulation (Taylor-Hood P2-P1) replaces U(J) by p (J - 1) - p^2 / (2 kappa).
+
+Post-processing (all collective, MPI-reduced, identical on every rank):
+
+- tip displacement: area average of u over the tip face, (1/A) int_tip u dA;
+- tip rotation: the best-fit (Kabsch) rotation R of the tip face, from the SVD of
+  H = int_tip (X - Xc) (x - xc)^T dA = U S V^T, R = V diag(1, 1, det(V U^T)) U^T; the in-plane
+  angle is atan2(R_yx, R_xx). The area-averaged deformed normal (Nanson, int_tip J F^-T N dA,
+  normalised) is reported alongside;
+- backbone: deformed area centroids of the cross-sections X = x_i, by Gauss-Legendre quadrature
+  (n x n points) of X + u(X) over each reference section;
+- largest principal stretch: max over cells of sqrt(max eig C) at the P2 nodes of each cell.
+
+Nothing here writes files (see `fe_beam.solid.export`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from fe_beam import compat
+from fe_beam.mpi import assemble_scalar, global_max, global_sum
+from fe_beam.solid.cable import TendonCable
+from fe_beam.solid.geometry import CLAMP_TAG, TIP_TAG, FingerMesh
+from fe_beam.solid.materials import HyperelasticLaw
+from fe_beam.solver import (
+    LoadStepping,
+    NonlinearProblem,
+    SNESSolver,
+    SolveFailed,
+    SolverSettings,
+    run_load_stepping,
+)
+
+__all__ = [
+    "FORMULATIONS",
+    "Discretization",
+    "SolidFingerProblem",
+    "TendonLoad",
+    "evaluate_at_points",
+    "rigid_body_modes",
+]
+
+FORMULATIONS = ("displacement", "mixed")
+
+
+@dataclass(frozen=True)
+class TendonLoad:
+    """Tension control (``tension`` T: tau = lambda T) or pull-in control (``pull_in`` d:
+    l^0 - l = lambda d, the tension is then an unknown). Give one of them."""
+
+    tension: float = 0.0
+    pull_in: float | None = None
+
+    def __post_init__(self):
+        t = self.tension
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not (0 <= t < math.inf):
+            raise ValueError(f"tendon.tension must be a finite number >= 0, got {t!r}")
+        if self.pull_in is not None:
+            d = self.pull_in
+            if isinstance(d, bool) or not isinstance(d, (int, float)) or not (0 <= d < math.inf):
+                raise ValueError(f"tendon.pull_in must be a finite number >= 0, got {d!r}")
+            if t != 0:
+                raise ValueError(
+                    f"tendon: give tension or pull_in, not both (tension={t!r}, pull_in={d!r})"
+                )
+
+    @property
+    def controlled_by_pull_in(self) -> bool:
+        return self.pull_in is not None
+
+
+@dataclass(frozen=True)
+class Discretization:
+    """``formulation``: "displacement" (P``degree`` Lagrange) or "mixed" (Taylor-Hood P2-P1).
+
+    ``quadrature_degree`` defaults to 2 * degree.
+    """
+
+    formulation: str = "displacement"
+    degree: int = 2
+    quadrature_degree: int | None = None
+
+    def __post_init__(self):
+        if self.formulation not in FORMULATIONS:
+            raise ValueError(
+                f"discretization.formulation must be one of {', '.join(FORMULATIONS)}, "
+                f"got {self.formulation!r}"
+            )
+        if self.degree not in (1, 2, 3):
+            raise ValueError(f"discretization.degree must be 1, 2 or 3, got {self.degree!r}")
+        if self.formulation == "mixed" and self.degree != 2:
+            raise ValueError(
+                f"discretization.degree must be 2 for the mixed (P2-P1) formulation, "
+                f"got {self.degree!r}"
+            )
+        q = self.quadrature_degree
+        if q is None:
+            object.__setattr__(self, "quadrature_degree", 2 * self.degree)
+        elif isinstance(q, bool) or not isinstance(q, int) or q < 1:
+            raise ValueError(f"discretization.quadrature_degree must be an integer >= 1, got {q!r}")
+
+
+class SolidFingerProblem:
+    """Clamped hyperelastic finger with tendons and a dead tip force.
+
+    Parameters
+    ----------
+    finger : the meshed finger (`fe_beam.solid.geometry.create_finger_mesh`).
+    material : a law from `fe_beam.solid.materials`.
+    tendons : one `TendonLoad` per tendon of ``finger.geometry`` (default: all slack).
+    tip_force : total dead force (N) on the tip face, spread as a uniform traction.
+    discretization, solver : see `Discretization`, `fe_beam.solver.SolverSettings`.
+    """
+
+    def __init__(
+        self,
+        finger: FingerMesh,
+        material: HyperelasticLaw,
+        tendons: Sequence[TendonLoad] = (),
+        tip_force: Sequence[float] = (0.0, 0.0, 0.0),
+        discretization: Discretization | None = None,
+        solver: SolverSettings | None = None,
+        prefix: str = "fe_beam_solid_",
+    ):
+        self.finger = finger
+        self.mesh = finger.mesh
+        self.comm: MPI.Comm = self.mesh.comm
+        self.material = material
+        self.discretization = discretization or Discretization()
+        self.settings = solver or SolverSettings(linear_solver="mumps")
+        self.tendon_loads = self._check_tendons(tendons)
+        tip_force = np.asarray(tip_force, dtype=float)
+        if tip_force.shape != (3,) or not np.all(np.isfinite(tip_force)):
+            raise ValueError(f"tip_force must be 3 finite numbers (N), got {tip_force!r}")
+        self.tip_force = tip_force
+        mixed = self.discretization.formulation == "mixed"
+        if mixed and not material.supports_mixed:
+            raise ValueError(f"material {material.name!r} does not support the mixed formulation")
+        if not mixed and math.isinf(material.kappa):
+            raise ValueError("material.kappa = inf needs discretization.formulation = 'mixed'")
+        if mixed and self.settings.linear_solver == "gamg":
+            raise ValueError("solver.linear_solver = 'gamg' is for the displacement formulation")
+        self.load_factor = 0.0
+
+        self._spaces()
+        self._measures()
+        self._forms()
+        self._boundary_conditions()
+        self._cables()
+        self._nonlinear_solver(prefix)
+        self._postprocessing_forms()
+
+    # --- set-up pipeline --------------------------------------------------------------------
+
+    def _check_tendons(self, tendons) -> list[TendonLoad]:
+        n = len(self.finger.geometry.tendons)
+        tendons = list(tendons) if tendons else [TendonLoad() for _ in range(n)]
+        if len(tendons) != n:
+            raise ValueError(f"tendons: need one TendonLoad per tendon ({n}), got {len(tendons)}")
+        for i, t in enumerate(tendons):
+            if not isinstance(t, TendonLoad):
+                raise ValueError(f"tendons[{i}] must be a TendonLoad, got {t!r}")
+        return tendons
+
+    def _spaces(self) -> None:
+        cell = self.mesh.ufl_cell()
+        d = self.discretization
+        vector = ufl.VectorElement("Lagrange", cell, d.degree)
+        if d.formulation == "mixed":
+            pressure = ufl.FiniteElement("Lagrange", cell, 1)
+            self.W = compat.function_space(self.mesh, ufl.MixedElement([vector, pressure]))
+            self.V = self.W.sub(0)
+            self.w = fem.Function(self.W, name="state")
+            self.u, self.p = ufl.split(self.w)
+        else:
+            self.W = compat.function_space(self.mesh, vector)
+            self.V = self.W
+            self.w = fem.Function(self.W, name="displacement")
+            self.u, self.p = self.w, None
+
+    def _measures(self) -> None:
+        q = self.discretization.quadrature_degree
+        self.dx = ufl.Measure("dx", domain=self.mesh, metadata={"quadrature_degree": q})
+        self.ds = ufl.Measure(
+            "ds", domain=self.mesh, subdomain_data=self.finger.facet_tags,
+            metadata={"quadrature_degree": q},
+        )
+        one = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+        self.tip_area = assemble_scalar(fem.form(one * self.ds(TIP_TAG)))
+        if not self.tip_area > 0:
+            raise RuntimeError("the tip face (facet tag TIP_TAG) is empty")
+        X = ufl.SpatialCoordinate(self.mesh)
+        self.tip_centroid = np.array(
+            [assemble_scalar(fem.form(X[i] * self.ds(TIP_TAG))) for i in range(3)]
+        ) / self.tip_area
+
+    def _forms(self) -> None:
+        msh, law = self.mesh, self.material
+        self.coefficients = {
+            k: fem.Constant(msh, PETSc.ScalarType(v))
+            for k, v in law.coefficients().items() if k != "kappa"
+        }
+        F = ufl.Identity(3) + ufl.grad(self.u)
+        if self.p is None:
+            self.coefficients["kappa"] = fem.Constant(msh, PETSc.ScalarType(law.kappa))
+            energy_density = law.strain_energy(F, self.coefficients)
+        else:  # p = kappa (J - 1) at equilibrium: the mean stress, positive in tension
+            compliance = 0.0 if math.isinf(law.kappa) else 1.0 / law.kappa
+            self.coefficients["compliance"] = fem.Constant(msh, PETSc.ScalarType(compliance))
+            J = ufl.det(F)
+            energy_density = (
+                law.isochoric_energy(F, self.coefficients)
+                + self.p * (J - 1) - 0.5 * self.coefficients["compliance"] * self.p**2
+            )
+        self.traction = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
+        external = ufl.dot(self.traction, self.u) * self.ds(TIP_TAG)
+        self.potential = energy_density * self.dx - external
+        self.residual = ufl.derivative(self.potential, self.w, ufl.TestFunction(self.W))
+
+    def _boundary_conditions(self) -> None:
+        fdim = self.mesh.topology.dim - 1
+        facets = self.finger.facet_tags.find(CLAMP_TAG)
+        if self.p is None:
+            dofs = fem.locate_dofs_topological(self.W, fdim, facets)
+            zero = np.zeros(3, dtype=PETSc.ScalarType)
+            self.bcs = [fem.dirichletbc(zero, dofs, self.W)]
+        else:
+            V0, _ = compat.sub_space_collapsed(self.W, 0)
+            zero = fem.Function(V0)
+            dofs = fem.locate_dofs_topological((self.W.sub(0), V0), fdim, facets)
+            self.bcs = [fem.dirichletbc(zero, dofs, self.W.sub(0))]
+        if global_sum(self.comm, len(facets)) == 0:
+            raise RuntimeError("the clamp face (facet tag CLAMP_TAG) is empty")
+
+    def _cables(self) -> None:
+        self.cables = [
+            TendonCable(self.V, chain, 0.0, name=tendon.name)
+            for chain, tendon in zip(
+                self.finger.tendon_chains, self.finger.geometry.tendons, strict=True
+            )
+        ]
+
+    def _nonlinear_solver(self, prefix: str) -> None:
+        self.problem = NonlinearProblem(self.residual, self.w, self.bcs, contributions=self.cables)
+        nullspace = None
+        if self.p is None and self.settings.linear_solver == "gamg":
+            nullspace = rigid_body_modes(self.W)
+        self.snes_solver = SNESSolver(self.problem, self.settings, prefix, near_nullspace=nullspace,
+                                      state_scale=self.finger.geometry.length)
+        controlled = [i for i, t in enumerate(self.tendon_loads) if t.controlled_by_pull_in]
+        if controlled:
+            self.solver = _PullInSolver(
+                self.snes_solver, [self.cables[i] for i in controlled], self._unloaded
+            )
+        else:
+            self.solver = self.snes_solver
+
+    def _postprocessing_forms(self) -> None:
+        ds_tip = self.ds(TIP_TAG)
+        u, X = self.u, ufl.SpatialCoordinate(self.mesh)
+        Xc = fem.Constant(self.mesh, self.tip_centroid.astype(PETSc.ScalarType))
+        self._tip_u = [fem.form(u[i] * ds_tip) for i in range(3)]
+        self._tip_cov = [
+            [fem.form((X[i] - Xc[i]) * (X[j] + u[j]) * ds_tip) for j in range(3)]
+            for i in range(3)
+        ]
+        N = ufl.FacetNormal(self.mesh)
+        F = ufl.Identity(3) + ufl.grad(u)
+        nanson = ufl.det(F) * ufl.inv(F).T * N
+        self._tip_normal = [fem.form(nanson[i] * ds_tip) for i in range(3)]
+        nodes = np.array(
+            [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.5, 0, 0], [0, 0.5, 0],
+             [0, 0, 0.5], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]], dtype=float
+        )
+        self._F_nodes = compat.expression(F, nodes)
+
+    def _unloaded(self) -> bool:
+        """True when every load is zero (the equilibrium is then u = 0, p = 0)."""
+        return not np.any(self.traction.value) and all(c.tension == 0 for c in self.cables)
+
+    # --- loading and solving ----------------------------------------------------------------
+
+    def set_load_factor(self, lam: float) -> None:
+        """Traction lambda t0, tensions lambda T_i, pull-in targets lambda d_i."""
+        self.load_factor = float(lam)
+        self.traction.value[:] = lam * self.tip_force / self.tip_area
+        for cable, load in zip(self.cables, self.tendon_loads, strict=True):
+            if load.controlled_by_pull_in:
+                cable.target_pull_in = lam * load.pull_in
+            else:
+                cable.tension = lam * load.tension
+
+    def solve(
+        self,
+        stepping: LoadStepping | None = None,
+        progress: bool = False,
+        record_steps: bool = True,
+    ) -> dict:
+        """Ramp the load factor 0 -> 1 (`fe_beam.solver.run_load_stepping`) from the current
+        state; returns ``{"steps": [...], **self.summary()}`` (plain Python data).
+
+        Raises `fe_beam.solver.LoadSteppingFailed` when the ramp stalls.
+        """
+        steps = []
+
+        def on_converged(step):
+            if not record_steps:
+                return
+            rot = self.tip_rotation()
+            steps.append(
+                {
+                    "load_factor": step.load_factor,
+                    "iterations": step.iterations,
+                    "linear_iterations": step.linear_iterations,
+                    "tensions": self.tensions(),
+                    "tip_displacement": self.tip_displacement().tolist(),
+                    "tip_rotation": rot["angle"],
+                }
+            )
+
+        run_load_stepping(
+            self.solver, self.set_load_factor, stepping or LoadStepping(steps=5),
+            on_converged=on_converged, progress=progress, label="solid",
+        )
+        return {"steps": steps, **self.summary()}
+
+    # --- post-processing --------------------------------------------------------------------
+
+    def displacement(self) -> fem.Function:
+        """The displacement as a Function of its own (collapsed) space."""
+        if self.p is None:
+            return self.w
+        return self.w.sub(0).collapse()
+
+    def tensions(self) -> list[float]:
+        return [float(c.tension) for c in self.cables]
+
+    def tendon_lengths(self) -> list[float]:
+        x = compat.vector_of(self.w)
+        return [c.length(x) for c in self.cables]
+
+    def tip_displacement(self) -> np.ndarray:
+        """(1/A_tip) int_tip u dA."""
+        return np.array([assemble_scalar(f) for f in self._tip_u]) / self.tip_area
+
+    def tip_rotation(self) -> dict:
+        """Best-fit rotation of the tip face (Kabsch) and its area-averaged deformed normal.
+
+        Returns {"angle": atan2(R_yx, R_xx), "matrix": R (3x3 list), "normal": n (list),
+        "normal_angle": atan2(n_y, n_x)}.
+        """
+        H = np.array([[assemble_scalar(f) for f in row] for row in self._tip_cov])
+        U, _, Vt = np.linalg.svd(H)
+        d = np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0
+        R = Vt.T @ np.diag([1.0, 1.0, d]) @ U.T
+        n = np.array([assemble_scalar(f) for f in self._tip_normal])
+        n /= np.linalg.norm(n)
+        return {
+            "angle": float(math.atan2(R[1, 0], R[0, 0])),
+            "matrix": R.tolist(),
+            "normal": n.tolist(),
+            "normal_angle": float(math.atan2(n[1], n[0])),
+        }
+
+    def backbone(self, xs: Sequence[float] | None = None, n_gauss: int = 4) -> dict:
+        """Deformed area centroids of the reference sections X = xs (default 21 stations).
+
+        Returns {"x": xs, "centroid": (n, 3) list, "displacement": (n, 3) list}.
+        """
+        geometry = self.finger.geometry
+        L, r = geometry.length, geometry.tip_radius
+        xs = np.linspace(0.0, L - r, 21) if xs is None else np.asarray(xs, dtype=float)
+        if np.any(xs < 0) or np.any(xs > L - r + 1e-12 * L):
+            raise ValueError(f"backbone stations must lie in [0, L - tip_radius], got {xs!r}")
+        g, wg = np.polynomial.legendre.leggauss(n_gauss)
+        points, weights = [], []
+        for x in xs:
+            h = float(geometry.height(x))
+            yy, zz = np.meshgrid(0.5 * h * g, 0.5 * geometry.width * g, indexing="ij")
+            points.append(np.column_stack([np.full(yy.size, x), yy.ravel(), zz.ravel()]))
+            weights.append(np.outer(wg, wg).ravel())
+        points = np.concatenate(points)
+        values = evaluate_at_points(self.displacement(), points)
+        m = n_gauss * n_gauss
+        w = np.concatenate(weights).reshape(len(xs), m, 1) / 4.0
+        u_mean = (w * values.reshape(len(xs), m, 3)).sum(axis=1)
+        X_mean = (w * points.reshape(len(xs), m, 3)).sum(axis=1)
+        return {
+            "x": xs.tolist(),
+            "centroid": (X_mean + u_mean).tolist(),
+            "displacement": u_mean.tolist(),
+        }
+
+    def max_principal_stretch(self) -> float:
+        """max over cells and P2 nodes of sqrt(largest eigenvalue of C = F^T F)."""
+        tdim = self.mesh.topology.dim
+        cells = np.arange(self.mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+        local = 0.0
+        if len(cells):
+            F = compat.evaluate_expression(self._F_nodes, self.mesh, cells).reshape(-1, 3, 3)
+            C = np.einsum("nki,nkj->nij", F, F)
+            local = float(np.sqrt(np.linalg.eigvalsh(C)[:, -1].max()))
+        return global_max(self.comm, local)
+
+    def summary(self) -> dict:
+        """Plain-data results of the current state."""
+        rotation = self.tip_rotation()
+        return {
+            "load_factor": self.load_factor,
+            "tip_displacement": self.tip_displacement().tolist(),
+            "tip_rotation": rotation["angle"],
+            "tip_rotation_matrix": rotation["matrix"],
+            "tip_normal": rotation["normal"],
+            "tensions": self.tensions(),
+            "tendon_lengths": self.tendon_lengths(),
+            "tendon_reference_lengths": [c.reference_length for c in self.cables],
+            "backbone": self.backbone(),
+            "max_principal_stretch": self.max_principal_stretch(),
+        }
+
+
+class _PullInSolver:
+    """Tension of pull-in-controlled cables as outer unknowns: Newton on
+
+        r_i(tau) = (l_i^0 - l_i(u(tau))) - target_i = 0,   dr_i/dtau_j = g_i . K^-1 g_j,
+
+    with g_i = dl_i/du (Dirichlet rows zeroed) and K the Jacobian at the converged u(tau).
+    When nothing is loaded (the first step) the state is set to the known equilibrium u = 0
+    instead of asking SNES to reduce a round-off residual.
+    """
+
+    def __init__(self, inner: SNESSolver, cables: list[TendonCable], unloaded,
+                 rtol: float = 1e-10, max_it: int = 30):
+        self.inner = inner
+        self.unloaded = unloaded
+        self.problem = inner.problem
+        self.cables = cables
+        self.rtol, self.max_it = rtol, max_it
+        self.linear_iterations = 0
+        for c in cables:
+            c.target_pull_in = 0.0
+        start = self.problem.b.getOwnershipRange()[0]
+        rows = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in self.problem.bcs]
+        local = np.unique(np.concatenate(rows)) if rows else np.empty(0, dtype=np.int32)
+        self._bc_rows = (local + start).astype(PETSc.IntType)
+
+    def _gradient_vectors(self, x: PETSc.Vec) -> list[PETSc.Vec]:
+        vectors = []
+        bc_rows = self._bc_rows
+        for c in self.cables:
+            g = x.duplicate()
+            g.set(0.0)
+            saved, c.tension = c.tension, 1.0
+            c.add_to_residual(x, g)
+            c.tension = saved
+            g.assemble()
+            g.setValues(bc_rows, np.zeros(len(bc_rows)), addv=PETSc.InsertMode.INSERT_VALUES)
+            g.assemble()
+            vectors.append(g)
+        return vectors
+
+    def solve(self) -> int:
+        tau0 = [c.tension for c in self.cables]
+        total = 0
+        try:
+            for _ in range(self.max_it):
+                x = compat.vector_of(self.problem.w)
+                if self.unloaded():
+                    x.set(0.0)
+                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                else:
+                    total += self.inner.solve()
+                r = np.array([c.reference_length - c.length(x) - c.target_pull_in
+                              for c in self.cables])
+                scale = max(c.reference_length for c in self.cables)
+                if np.all(np.abs(r) <= self.rtol * scale):
+                    return total
+                A = self.problem.A
+                self.problem.jacobian(None, x, A, A)
+                ksp = self.inner.snes.getKSP()
+                ksp.setOperators(A)
+                g = self._gradient_vectors(x)
+                z = [v.duplicate() for v in g]
+                for gi, zi in zip(g, z, strict=True):
+                    ksp.solve(gi, zi)
+                S = np.array([[gi.dot(zj) for zj in z] for gi in g])
+                step = np.linalg.solve(S, r)
+                for c, dt in zip(self.cables, step, strict=True):
+                    c.tension = max(c.tension - dt, 0.0)
+                for v in g + z:
+                    v.destroy()
+        except (SolveFailed, np.linalg.LinAlgError) as error:
+            for c, t in zip(self.cables, tau0, strict=True):
+                c.tension = t
+            raise SolveFailed(f"pull-in control: {error}") from error
+        for c, t in zip(self.cables, tau0, strict=True):
+            c.tension = t
+        raise SolveFailed(f"pull-in control: no convergence in {self.max_it} tension updates")
+
+
+def evaluate_at_points(function: fem.Function, points: np.ndarray) -> np.ndarray:
+    """Values (n, value_size) of ``function`` at ``points`` (n, 3), identical on every rank.
+
+    Each point is evaluated by the lowest rank that holds a cell containing it; raises
+    ValueError when a point lies outside the mesh.
+    """
+    msh = function.function_space.mesh
+    comm = msh.comm
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    tree = compat.bounding_box_tree(msh, msh.topology.dim)
+    cells = compat.first_colliding_cells(msh, tree, points)
+    found = cells >= 0
+    owner = np.empty(len(points), dtype=np.int64)
+    comm.Allreduce(np.where(found, comm.rank, comm.size).astype(np.int64), owner, op=MPI.MIN)
+    if np.any(owner == comm.size):
+        bad = points[owner == comm.size][0]
+        raise ValueError(f"point {bad.tolist()} is outside the mesh")
+    mine = owner == comm.rank
+    size = int(np.prod(function.ufl_shape)) if function.ufl_shape else 1
+    values = np.zeros((len(points), size))
+    if np.any(mine):
+        values[mine] = function.eval(points[mine], cells[mine]).reshape(-1, size)
+    return global_sum(comm, values)
+
+
+def rigid_body_modes(space) -> PETSc.NullSpace:
+    """Near-nullspace of 3D elasticity (3 translations, 3 rotations), orthonormalised (GAMG)."""
+    coords = space.tabulate_dof_coordinates()
+    n_owned = space.dofmap.index_map.size_local
+    x = coords[:n_owned]
+    modes = []
+    for k in range(6):
+        f = fem.Function(space)
+        a = compat.local_array(f).reshape(-1, 3)
+        a[:] = 0.0
+        if k < 3:
+            a[:n_owned, k] = 1.0
+        else:
+            i, j = [(0, 1), (1, 2), (2, 0)][k - 3]
+            a[:n_owned, i] = -x[:, j]
+            a[:n_owned, j] = x[:, i]
+        modes.append(compat.vector_of(f).copy())
+    for i, v in enumerate(modes):
+        for u in modes[:i]:
+            v.axpy(-v.dot(u), u)
+        v.normalize()
+    return PETSc.NullSpace().create(vectors=modes, comm=space.mesh.comm)

@@ -1,0 +1,381 @@
+"""Drivers of ``fe-beam dynamic`` and ``fe-beam modes``: config tables, runs and outputs.
+
+Extra tables over the statics config:
+
+    [time]    t_end, dt, rho_inf, adaptive, tol, min_dt, max_dt, output_every,
+              scheme = "generalized-alpha" | "fd-rk45" | "fd-dop853"
+    [initial] from_static (solve the static problem under [loads] first), velocity =
+              ["u_t(x)", "v_t(x)", "theta_t(x)"] formulas in x, angular_velocity (rigid spin)
+    [loads]   time_function = "formula in t" or time_table = [[t, f], ...] (scales every load),
+              motion_function = "formula in t" (scales prescribed end values; default: same)
+    [damping] c, kelvin_voigt
+    [modes]   count, prestress (linearise about the static state under [loads])
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import compat
+from fe_beam.beam import BeamProblem
+from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
+from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
+from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, write_csv
+from fe_beam.solver import (
+    LoadSteppingFailed,
+    NonlinearProblem,
+    SNESSolver,
+    rotation_jump_check,
+    run_load_stepping,
+)
+from fe_beam.timefunctions import TimeFunctionError, parse_formula, time_function
+
+__all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
+
+TIME_KEYS = {
+    "t_end": Key(NUMBER, None, "end time [s]"),
+    "dt": Key(NUMBER, None, "time step [s] (initial step if adaptive)"),
+    "rho_inf": Key(NUMBER, 0.9, "spectral radius at infinity in [0, 1]"),
+    "adaptive": Key((bool,), False, "local error control"),
+    "tol": Key(NUMBER, 1e-4, "local error tolerance, relative to L"),
+    "min_dt": Key(NUMBER, None, "smallest step [s]"),
+    "max_dt": Key(NUMBER, None, "largest step [s]"),
+    "output_every": Key((int,), None, "write every n-th step (default: ~200 outputs)"),
+    "scheme": Key((str,), "generalized-alpha", "generalized-alpha | fd-rk45 | fd-dop853"),
+}
+INITIAL_KEYS = {
+    "from_static": Key((bool,), False, "start from the static solution under [loads]"),
+    "velocity": Key((list,), None, "[u_t, v_t, theta_t] as numbers or formulas in x"),
+    "angular_velocity": Key(NUMBER, None, "rigid spin about x = 0 [rad/s]"),
+}
+DAMPING_KEYS = {
+    "c": Key(NUMBER, 0.0, "viscous damping per unit length [N s/m^2]"),
+    "kelvin_voigt": Key(NUMBER, 0.0, "Kelvin-Voigt retardation time [s]"),
+}
+MODES_KEYS = {
+    "count": Key((int,), 6, "number of modes"),
+    "prestress": Key((bool,), False, "linearise about the static state under [loads]"),
+}
+TIME_LOAD_KEYS = ("time_function", "time_table", "motion_function")
+
+
+@dataclass(frozen=True)
+class DynamicConfig:
+    static: StaticConfig
+    time: TimeSettings
+    damping: Damping = field(default_factory=Damping)
+    from_static: bool = False
+    velocity: tuple | None = None
+    load_function: object = None
+    motion_function: object = None
+
+
+def _split_time_loads(config: dict) -> tuple[dict, dict]:
+    """Separate the time-function keys of [loads] (the statics schema does not know them)."""
+    config = dict(config)
+    loads = dict(config.get("loads", {}))
+    timing = {key: loads.pop(key) for key in TIME_LOAD_KEYS if key in loads}
+    config["loads"] = loads
+    return config, timing
+
+
+def _functions(timing: dict):
+    try:
+        formula = timing.get("time_function")
+        if formula is not None and not isinstance(formula, str):
+            raise TimeFunctionError(f"time_function must be a string formula in t, got {formula!r}")
+        load = time_function(formula, timing.get("time_table"))
+        motion = timing.get("motion_function")
+        return load, (parse_formula(motion) if motion is not None else load)
+    except TimeFunctionError as error:
+        raise ConfigError(f"[loads] {error}") from None
+
+
+def _velocity(initial: dict):
+    spin = initial["angular_velocity"]
+    given = initial["velocity"]
+    if spin is not None and given is not None:
+        raise ConfigError("[initial] give velocity or angular_velocity, not both")
+    if spin is not None:
+        return lambda x: (0.0 * x[0], spin * x[0], spin + 0.0 * x[0])
+    if given is None:
+        return None
+    if len(given) != 3:
+        raise ConfigError(f"[initial] velocity must list [u_t, v_t, theta_t], got {given!r}")
+    parts = []
+    for value in given:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            parts.append(lambda x, c=float(value): c + 0.0 * x)
+        elif isinstance(value, str):
+            try:
+                function = parse_formula(value, variable="x")
+            except TimeFunctionError as error:
+                raise ConfigError(f"[initial] velocity: {error}") from None
+            parts.append(np.vectorize(function, otypes=[float]))
+        else:
+            raise ConfigError(
+                f"[initial] velocity entries must be numbers or formulas, got {value!r}")
+    return lambda x: tuple(part(x[0]) for part in parts)
+
+
+def parse_dynamic(config: dict) -> DynamicConfig:
+    config, timing = _split_time_loads(config)
+    time_table = table(config, "time", TIME_KEYS)
+    for key in ("t_end", "dt"):
+        if time_table[key] is None:
+            raise ConfigError(f"[time] {key} is required ({TIME_KEYS[key].doc})")
+    initial = table(config, "initial", INITIAL_KEYS)
+    damping = _wrap(Damping, **table(config, "damping", DAMPING_KEYS))
+    settings = _wrap(TimeSettings, **time_table)
+    static = parse_static(config)
+    if static.model.material.rho <= 0:
+        raise ConfigError("[material] rho must be > 0 for dynamics")
+    load, motion = _functions(timing)
+    return DynamicConfig(static, settings, damping, initial["from_static"], _velocity(initial),
+                         load, motion)
+
+
+def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
+    config, _ = _split_time_loads(config)
+    modes = table(config, "modes", MODES_KEYS)
+    if modes["count"] < 1:
+        raise ConfigError(f"[modes] count must be >= 1, got {modes['count']}")
+    static = parse_static(config)
+    if static.model.material.rho <= 0:
+        raise ConfigError("[material] rho must be > 0 for a modal analysis")
+    return static, modes
+
+
+def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool) -> None:
+    solver = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
+                        static.solver, prefix="fe_beam_prestate_",
+                        state_scale=problem.model.length)
+    try:
+        run_load_stepping(solver, problem.set_load_factor, static.stepping,
+                          reject_step=rotation_jump_check(problem.rotation_dofs(),
+                                                          static.max_rotation_jump),
+                          progress=progress, label="static pre-state")
+    except LoadSteppingFailed as failure:
+        raise DynamicsFailed(f"static pre-state: {failure}", 0.0) from None
+    finally:
+        solver.destroy()
+
+
+@dataclass
+class DynamicResult:
+    history: list[dict]
+    info: dict
+    status: str = "completed"
+    message: str = ""
+    dofs: int = 0
+
+
+def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
+                progress: bool = True) -> DynamicResult:
+    if config.time.scheme != "generalized-alpha":
+        return _run_finite_differences(config, out, comm)
+    started = time.perf_counter()
+    problem = BeamProblem(config.static.model, comm)
+    if config.from_static:
+        _static_prestate(problem, config.static, progress)
+    integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
+                                  config.motion_function, config.static.solver)
+    integrator.initialise(config.velocity)
+    root, writing = comm.rank == 0, out is not None
+    if writing and root:
+        out.mkdir(parents=True, exist_ok=True)
+    xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
+    writer = BeamXDMFWriter(problem, xdmf)
+    result = DynamicResult([], {}, dofs=problem.space.dofmap.index_map.size_global
+                           * problem.space.dofmap.index_map_bs)
+    shapes = []
+
+    def record(t: float, step: int) -> None:
+        energies = integrator.energies()
+        result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
+                               "momenta": integrator.momenta()})
+        writer.write(t)
+        if config.static.output.plots:
+            shape = writer.vertex_values()
+            if root:
+                shapes.append((t, shape))
+        if writing and root:
+            _write_dynamic(out, result, config, time.perf_counter() - started)
+
+    try:
+        result.info = integrator.run(record, progress=progress)
+    except DynamicsFailed as failure:
+        result.status, result.message = "failed", str(failure)
+    finally:
+        writer.close()
+        integrator.solver.destroy()
+    result.info["wall_time_s"] = time.perf_counter() - started
+    if writing and root:
+        _write_dynamic(out, result, config, result.info["wall_time_s"])
+        if config.static.output.plots and result.history:
+            _plot_dynamic(out, result, shapes, config)
+    return result
+
+
+def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> DynamicResult:
+    """The paper's FD + Runge-Kutta scheme (fe_beam.baselines.fd_rk) on the same config."""
+    from fe_beam.baselines import fd_rk
+
+    model = config.static.model
+    if model.section.tapered or model.options.constraint != "none":
+        raise ConfigError("[time] scheme = fd-*: only uniform sections without constraints")
+    supports = {("clamped", "free"): "clamped-free", ("pinned", "roller"): "pinned-roller"}
+    key = (model.supports.x0, model.supports.xL)
+    if key not in supports or config.damping.kelvin_voigt or config.velocity is not None:
+        raise ConfigError("[time] scheme = fd-*: supports clamped/free or pinned/roller, "
+                          "viscous damping only, no initial velocity")
+    loads = model.loads
+    if loads.follower or any(loads.gravity):
+        raise ConfigError("[time] scheme = fd-*: no follower loads or gravity")
+    stiffness = model.stiffness_at(0.0)
+    props = model.section.properties(0.0)
+    k = model.options.shear_correction if model.options.law == "reissner" else 1.0
+    params = fd_rk.FDBeamParameters(
+        L=model.length, n_intervals=model.mesh.elements * model.mesh.degree,
+        EA=stiffness["EA"], GA=k * stiffness["GA"], EI=stiffness["EI"], EI3=stiffness["EI3"],
+        EI4=stiffness["EI4"], rhoA=model.material.rho * props.A,
+        rhoI=model.material.rho * props.I, c=config.damping.c, law=model.options.law,
+        supports=supports[key], Px=loads.tip_force[0], Py=loads.tip_force[1],
+        M=loads.tip_moment, qx=loads.distributed[0], qy=loads.distributed[1],
+        load_time=config.load_function)
+    q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps) if config.from_static \
+        else None
+    times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
+    method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
+    tolerance = min(config.time.tol, 1e-6)
+    solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
+                              rtol=tolerance, atol=tolerance * 1e-3 * model.length)
+    history = [{"t": float(t), "tip": {"u": float(u), "v": float(v), "theta": float(th)},
+                "energies": {"kinetic": float(kin), "strain": float(strain),
+                             "external_work": float(work), "dissipated": float(diss)}}
+               for t, u, v, th, kin, strain, work, diss in zip(
+                   solution.t, solution.tip_u, solution.tip_v, solution.tip_theta,
+                   solution.kinetic, solution.strain, solution.external_work,
+                   solution.dissipated, strict=True)]
+    result = DynamicResult(history, {"rhs_evaluations": solution.nfev,
+                                     "wall_time_s": solution.wall_time},
+                           "completed" if solution.success else "failed", solution.message,
+                           dofs=int(fd_rk.free_dofs(params).sum()))
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        _write_dynamic(out, result, config, solution.wall_time)
+        if config.static.output.plots:
+            _plot_dynamic(out, result, [], config)
+    return result
+
+
+def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
+    atomic_write_json(out / "summary.json", {
+        "status": result.status, "message": result.message, "history": result.history,
+        "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
+        "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
+    })
+    rows = [[h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
+             *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
+            for h in result.history]
+    write_csv(out / "history.csv", ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain",
+                                    "external_work", "dissipated"], rows)
+
+
+def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
+    plt = _pyplot()
+    t = np.array([h["t"] for h in result.history])
+    length = config.static.model.length
+    figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
+    left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
+              [h["tip"]["v"] for h in result.history], lw=1.2)
+    left.set_xlabel("tip x [m]")
+    left.set_ylabel("tip y [m]")
+    left.set_title("tip trajectory")
+    left.set_aspect("equal", adjustable="datalim")
+    for key in ("kinetic", "strain", "external_work", "dissipated"):
+        right.plot(t, [h["energies"][key] for h in result.history], label=key)
+    right.set_xlabel("t [s]")
+    right.set_ylabel("energy [J]")
+    right.set_title("energies")
+    right.legend(fontsize=8)
+    for axis in (left, right):
+        axis.grid(alpha=0.3)
+    figure.tight_layout()
+    figure.savefig(out / "dynamics.png", dpi=130)
+    plt.close(figure)
+    if shapes and config.static.output.gif:
+        _write_gif(out / "beam.gif", shapes, length)
+
+
+def _write_gif(path: Path, shapes, length: float) -> None:
+    """Animated deformed shapes (skipped when Pillow is not installed)."""
+    try:
+        from matplotlib.animation import FuncAnimation, PillowWriter
+    except ImportError:
+        return
+    plt = _pyplot()
+    frames = shapes[:: max(1, len(shapes) // 60)]
+    xs = np.concatenate([s["x"] + s["u"] for _, s in frames])
+    ys = np.concatenate([s["v"] for _, s in frames])
+    figure, axis = plt.subplots(figsize=(5, 4))
+    (line,) = axis.plot([], [], lw=2)
+    margin = 0.05 * length
+    axis.set_xlim(xs.min() - margin, xs.max() + margin)
+    axis.set_ylim(ys.min() - margin, ys.max() + margin)
+    axis.set_aspect("equal")
+    axis.grid(alpha=0.3)
+
+    def draw(index):
+        t, shape = frames[index]
+        line.set_data(shape["x"] + shape["u"], shape["v"])
+        axis.set_title(f"t = {t:.4g} s")
+        return (line,)
+
+    try:
+        FuncAnimation(figure, draw, frames=len(frames), blit=False).save(
+            str(path), writer=PillowWriter(fps=15))
+    except Exception:  # an animation must never fail an analysis
+        pass
+    plt.close(figure)
+
+
+def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM_WORLD,
+              progress: bool = True) -> dict:
+    from fe_beam.modes import natural_frequencies
+
+    started = time.perf_counter()
+    problem = BeamProblem(static.model, comm)
+    if modes["prestress"]:
+        try:
+            _static_prestate(problem, static, progress)
+        except DynamicsFailed as failure:
+            raise ConfigError(str(failure)) from None
+    else:
+        problem.set_load_factor(0.0)
+    result = natural_frequencies(problem, modes["count"])
+    summary = {"frequencies_hz": result.frequencies_hz,
+               "transverse_fraction": result.transverse_fraction,
+               "prestress": modes["prestress"], "dofs": problem.space.dofmap.index_map.size_global
+               * problem.space.dofmap.index_map_bs,
+               "wall_time_s": time.perf_counter() - started}
+    if out is not None:
+        if comm.rank == 0:
+            out.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        writer = BeamXDMFWriter(problem, out / "modes.xdmf" if static.output.xdmf else None)
+        state = compat.local_array(problem.w).copy()
+        for index, shape in enumerate(result.shapes, start=1):
+            compat.local_array(problem.w)[:] = compat.local_array(shape)
+            writer.write(float(index))
+        compat.local_array(problem.w)[:] = state
+        writer.close()
+        if comm.rank == 0:
+            atomic_write_json(out / "summary.json", summary)
+    return summary
+
