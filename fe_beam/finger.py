@@ -133,7 +133,7 @@ def tension_for_tip_angle(
 
     def tip_angle(tension: float) -> float:
         trial = replace(config, tendons=(replace(tendon, tension=tension),))
-        result = solve_static(trial, None, comm, progress=False)
+        result = solve_static(trial, None, comm, progress=False, record_shapes=False)
         if result.status != "converged":
             raise ConfigError(f"[inverse] no equilibrium at tension {tension:g} N")
         return result.steps[-1]["tip"]["theta"]

@@ -65,12 +65,15 @@ def solve_static(
     progress: bool = True,
     extra_summary: dict | None = None,
     on_step=None,
+    record_shapes: bool = True,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
     Tendons of ``config.tendons`` add their potential; steps then also record ``tensions`` and
     ``pull_ins``. ``on_step(problem, record)`` is called after each converged step (on all ranks),
-    e.g. to sample profiles along the beam.
+    e.g. to sample profiles along the beam. ``record_shapes=False`` skips the per-step deformed
+    shapes and profiles (``result.shapes``) when nothing is written: a solve-only run (inverse
+    problems, benchmarks) then costs the Newton iterations alone.
 
     summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
     On failure the last converged state is written and the result has status "failed".
@@ -105,7 +108,7 @@ def solve_static(
     if writing and root:
         out.mkdir(parents=True, exist_ok=True)
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
-    writer = BeamXDMFWriter(problem, xdmf_path)
+    writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     extra = {"model": _model_summary(config)} | (extra_summary or {})
 
     def record(step: StepResult) -> None:
@@ -119,10 +122,11 @@ def solve_static(
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
-        writer.write(step.load_factor)
-        shape = writer.vertex_values()
-        if root:
-            result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
+        if writer is not None:
+            writer.write(step.load_factor)
+            shape = writer.vertex_values()
+            if root:
+                result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
         if writing and root:
             _write_tables(out, result, extra)
 
@@ -139,12 +143,13 @@ def solve_static(
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     finally:
-        writer.close()
+        if writer is not None:
+            writer.close()
         snes.destroy()
     result.wall_time_s = time.perf_counter() - started
     if writing and root:
         _write_tables(out, result, extra)
-        if config.output.plots and result.steps:
+        if config.output.plots and result.shapes:
             _write_plots(out, result, config)
     return result
 
