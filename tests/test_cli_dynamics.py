@@ -3,6 +3,7 @@ mistakes in the [time], [damping], [initial], [modes] tables and in load formula
 
 import json
 import re
+from pathlib import Path
 
 import pytest
 from test_config import BASE, dump_toml
@@ -99,3 +100,14 @@ def test_missing_time_table_exit_2(tmp_path, capsys):
 def test_modes_count_mistakes_exit_2(tmp_path, capsys, count):
     code, err, _, _ = run(tmp_path, "modes", with_change("modes", "count", count), capsys)
     assert code == 2 and re.search(r"modes\]? ?\.?count", err) and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("example", ["release.toml", "spin_up.toml"])
+def test_examples_run(tmp_path, capsys, example):
+    path = Path(__file__).parents[1] / "examples" / example
+    out = tmp_path / "out"
+    code = main(["dynamic", str(path), "--out", str(out), "--quiet", "--set", "time.t_end=0.1",
+                 "--set", "output.xdmf=false", "--set", "output.plots=false"])
+    assert code == 0, capsys.readouterr().err
+    history = json.loads((out / "summary.json").read_text())["history"]
+    assert history[-1]["t"] == pytest.approx(0.1)
