@@ -95,7 +95,7 @@ def run_finger(args, config: dict, comm) -> int:
 
     parsed, target = parse_finger(config)
     result, inverse = run_finger(
-        parsed, args.out, comm, progress=not args.quiet, target_angle=target
+        parsed, args.out, comm, progress=not args.quiet, target=target
     )
     for step in result.steps[-1:]:
         tip = step["tip"]
@@ -109,8 +109,9 @@ def run_finger(args, config: dict, comm) -> int:
     if inverse:
         _say(
             comm,
-            f"inverse: tension {inverse['tension']:.8g} N gives tip angle "
-            f"{inverse['target_tip_angle']:g} rad ({inverse['wall_time_s']:.2f} s)",
+            f"inverse: tension {inverse['tension']:.8g} N, pull-in {inverse['pull_in']:.6g} m "
+            f"give {inverse['target']} = {inverse['target_value']:g} "
+            f"({inverse['evaluations']} solves, {inverse['wall_time_s']:.2f} s)",
         )
     _say(
         comm,
@@ -157,6 +158,8 @@ def run_modes(args, config: dict, comm) -> int:
 
 RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
            "modes": run_modes}
+
+
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import copy
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +52,25 @@ TENDON_KEYS = {
     "pull_in": Key(NUMBER, None, "pull-in at load factor 1 [m] (tension becomes unknown)"),
     "steps": Key((int,), None, "number of load steps (the largest over tendons and [loads])"),
 }
-INVERSE_KEYS = {"tip_angle": Key(NUMBER, None, "target tip rotation [rad]")}
+INVERSE_KEYS = {
+    "tip_angle": Key(NUMBER, None, "target tip rotation theta [rad]"),
+    "tip_u": Key(NUMBER, None, "target tip displacement u [m] (negative: the tip moves back)"),
+    "tip_v": Key(NUMBER, None, "target tip displacement v [m]"),
+}
+TIP_COMPONENT = {"tip_angle": "theta", "tip_u": "u", "tip_v": "v"}
+
+
+@dataclass(frozen=True)
+class InverseTarget:
+    """A target tip value (``key`` one of INVERSE_KEYS) reached by the single tendon's tension
+    (or pull-in, for a pull-in-controlled tendon)."""
+
+    key: str
+    value: float
+
+    @property
+    def component(self) -> str:
+        return TIP_COMPONENT[self.key]
 
 
 def with_defaults(config: dict) -> dict:
@@ -96,8 +114,8 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
     return tendon, values["steps"]
 
 
-def parse_finger(config: dict) -> tuple[StaticConfig, float | None]:
-    """(static config with tendons, inverse target tip angle or None)."""
+def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
+    """(static config with tendons, inverse target or None)."""
     config = with_defaults(config)
     tendons_given = config.pop("tendons")
     inverse = table(config, "inverse", INVERSE_KEYS) if "inverse" in config else {}
@@ -115,10 +133,17 @@ def parse_finger(config: dict) -> tuple[StaticConfig, float | None]:
         max_increment=1.0 / steps,
         min_increment=min(static.stepping.min_increment, 1.0 / steps),
     )
-    target = inverse.get("tip_angle")
-    if target is not None:
-        if any(t.controlled_by_pull_in for t, _ in parsed) or len(parsed) != 1:
-            raise ConfigError("[inverse] tip_angle needs exactly one tension-controlled tendon")
+    targets = {key: value for key, value in inverse.items() if value is not None}
+    target = None
+    if targets:
+        if len(targets) != 1:
+            raise ConfigError(
+                f"[inverse] give exactly one of {', '.join(INVERSE_KEYS)}; got {', '.join(targets)}"
+            )
+        ((key, value),) = targets.items()
+        if len(parsed) != 1:
+            raise ConfigError(f"[inverse] {key} needs exactly one tendon, got {len(parsed)}")
+        target = InverseTarget(key, float(value))
     return replace(static, tendons=tuple(t for t, _ in parsed), stepping=stepping), target
 
 
@@ -129,23 +154,76 @@ def tension_for_tip_angle(
     bracket: tuple[float, float] | None = None,
 ) -> float:
     """Tension of the (single, tension-controlled) tendon that turns the tip by ``target``."""
-    tendon = config.tendons[0]
+    return solve_inverse(config, InverseTarget("tip_angle", target), comm, bracket=bracket)[
+        "tension"]
 
-    def tip_angle(tension: float) -> float:
-        trial = replace(config, tendons=(replace(tendon, tension=tension),))
+
+def solve_inverse(
+    config: StaticConfig,
+    target: InverseTarget,
+    comm=MPI.COMM_WORLD,
+    sweep: list[dict] | None = None,
+    bracket: tuple[float, float] | None = None,
+) -> dict:
+    """Tension (or pull-in, if the single tendon is pull-in controlled) that puts the tip
+    component of ``target`` at its value: Brent's method on full static solves. The converged
+    steps of a sweep (``sweep``, e.g. the finger run itself) bracket the answer between two
+    neighbouring steps, which saves most of the solves; without them the bracket grows by
+    doubling from the tendon's own value."""
+    started = time.perf_counter()
+    tendon = config.tendons[0]
+    control = "pull_in" if tendon.controlled_by_pull_in else "tension"
+    unit = "m" if control == "pull_in" else "N"
+    evaluations = []
+
+    def solve(value: float) -> dict:
+        trial = replace(config, tendons=(replace(tendon, **{control: value}),))
         result = solve_static(trial, None, comm, progress=False, record_shapes=False)
         if result.status != "converged":
-            raise ConfigError(f"[inverse] no equilibrium at tension {tension:g} N")
-        return result.steps[-1]["tip"]["theta"]
+            raise ConfigError(f"[inverse] no equilibrium at {control} {value:g} {unit}")
+        evaluations.append(value)
+        return result.steps[-1]
+
+    def miss(value: float) -> float:
+        return solve(value)["tip"][target.component] - target.value
 
     if bracket is None:
-        high = max(tendon.tension, 1e-6)
-        while tip_angle(high) < target:
-            high *= 2
-            if high > 1e6 * max(tendon.tension, 1.0):
-                raise ConfigError(f"[inverse] tip_angle {target:g} rad is not reachable")
-        bracket = (0.0, high)
-    return tension_for_target(tip_angle, target, bracket)
+        bracket = _bracket_from_sweep(sweep or [], control, target)
+    if bracket is None:
+        low, high = 0.0, max(abs(getattr(tendon, control)), 1e-9)
+        while miss(high) * (0.0 - target.value) > 0:  # the tip starts at 0 at zero load
+            low, high = high, 2 * high
+            if high > 1e6 * max(abs(getattr(tendon, control)), 1.0):
+                raise ConfigError(
+                    f"[inverse] {target.key} = {target.value:g} is not reachable by the "
+                    f"tendon's {control}"
+                )
+        bracket = (low, high)
+    value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
+    final = solve(value)
+    answer = {
+        "target": target.key,
+        "target_value": target.value,
+        "control": control,
+        "tension": final["tensions"][0],
+        "pull_in": final["pull_ins"][0],
+        "tip": final["tip"],
+        "evaluations": len(evaluations),
+        "wall_time_s": time.perf_counter() - started,
+    }
+    if target.key == "tip_angle":
+        answer["target_tip_angle"] = target.value
+    return answer
+
+
+def _bracket_from_sweep(steps: list[dict], control: str, target: InverseTarget):
+    """Two neighbouring swept values of ``control`` whose tip values straddle the target."""
+    key = "tensions" if control == "tension" else "pull_ins"
+    points = [(0.0, 0.0)] + [(s[key][0], s["tip"][target.component]) for s in steps]
+    for (a, qa), (b, qb) in zip(points, points[1:]):
+        if (qa - target.value) * (qb - target.value) <= 0 and a != b:
+            return (a, b)
+    return None
 
 
 def run_finger(
@@ -153,7 +231,7 @@ def run_finger(
     out: Path | None,
     comm=MPI.COMM_WORLD,
     progress=True,
-    target_angle: float | None = None,
+    target: InverseTarget | float | None = None,
 ) -> tuple[StaticResult, dict]:
     extra = {
         "tendons": [
@@ -170,14 +248,10 @@ def run_finger(
     }
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra)
     inverse = {}
-    if target_angle is not None and result.status == "converged":
-        started = time.perf_counter()
-        tension = tension_for_tip_angle(config, target_angle, comm)
-        inverse = {
-            "target_tip_angle": target_angle,
-            "tension": tension,
-            "wall_time_s": time.perf_counter() - started,
-        }
+    if isinstance(target, (int, float)):
+        target = InverseTarget("tip_angle", float(target))
+    if target is not None and result.status == "converged":
+        inverse = solve_inverse(config, target, comm, sweep=result.steps)
     if out is not None and comm.rank == 0 and result.steps:
         if inverse:
             atomic_write_json(out / "summary.json", result.summary(extra | {"inverse": inverse}))

@@ -229,6 +229,51 @@ def test_inverse_tension_reaches_target_angle():
     )
 
 
+@pytest.mark.parametrize(("control", "key", "value"),
+                         [("tension", "tip_v", 0.015), ("pull_in", "tip_u", -0.002),
+                          ("pull_in", "tip_angle", 0.2)])
+def test_inverse_reaches_tip_targets_with_either_control(control, key, value):
+    """The inverse finds the tension or pull-in that puts the tip component on the target; the
+    sweep brackets it, and a fresh forward solve at the answer lands on the target to 1e-9."""
+    from fe_beam.finger import TIP_COMPONENT, InverseTarget, solve_inverse
+
+    tendon = {"tension": 5.0} if control == "tension" else {"tension": None, "pull_in": 0.005}
+    config = replace(finger_config(10, **tendon), stepping=LoadStepping(steps=5))
+    sweep = solve_static(config, None, progress=False).steps
+    answer = solve_inverse(config, InverseTarget(key, value), sweep=sweep)
+    assert answer["control"] == control
+    assert answer["evaluations"] <= 12
+    assert answer["tip"][TIP_COMPONENT[key]] == pytest.approx(value, abs=1e-9)
+    forward = replace(config, tendons=(replace(config.tendons[0], tension=answer["tension"],
+                                               pull_in=None),))
+    tip = solve_static(forward, None, progress=False).steps[-1]["tip"]
+    assert tip[TIP_COMPONENT[key]] == pytest.approx(value, abs=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("inverse", "tendons", "words"),
+    [
+        ({"tip_angle": 0.2, "tip_v": 0.01}, 1, "exactly one of tip_angle, tip_u, tip_v"),
+        ({"tip_angle": 0.2}, 2, "needs exactly one tendon"),
+        ({"tip_w": 0.2}, 1, "tip_w"),
+        ({"tip_angle": "big"}, 1, "tip_angle"),
+    ],
+)
+def test_inverse_config_mistakes(tmp_path, capsys, inverse, tendons, words):
+    from fe_beam.cli import main
+
+    lines = []
+    for index in range(tendons):
+        lines += ["[[tendons]]", f"offset_base = {0.008 - 0.016 * index}",
+                  f"offset_tip = {0.004 - 0.008 * index}", "tension = 1.0"]
+    lines += ["[inverse]"] + [f"{k} = {v!r}".replace("'", '"') for k, v in inverse.items()]
+    config = tmp_path / "bad.toml"
+    config.write_text("\n".join(lines) + "\n")
+    assert main(["finger", str(config), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err, err
+
+
 @pytest.mark.mpi
 def test_finger_parallel_equals_serial():
     config = finger_config(24, tension=4.0)
