@@ -241,6 +241,12 @@ class PullInSolver:
         self.load_factor = 0.0
         self.linear_iterations = 0
 
+    def residual_norm(self) -> float:
+        return self.solver.residual_norm()
+
+    def set_reference_residual(self, value: float | None) -> None:
+        self.solver.set_reference_residual(value)
+
     def set_load_factor(self, value: float) -> None:
         self.load_factor = value
 
