@@ -22,6 +22,9 @@ COMMANDS = {
     "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
     "dynamic": "nonlinear dynamics (generalised-alpha, or the paper's FD + Runge-Kutta)",
     "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
+    "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
+    "compare": "tension sweep: 3D solid vs the rod with the non-standard and Reissner laws",
+    "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
 }
 
 
@@ -45,6 +48,9 @@ def _parser() -> argparse.ArgumentParser:
             help="override a config value, e.g. --set section.h=0.01",
         )
         command.add_argument("--quiet", action="store_true", help="no progress bar")
+    from fe_beam.refine import add_refine_arguments
+
+    add_refine_arguments(sub.choices["refine"])
     return parser
 
 
@@ -160,6 +166,67 @@ RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
            "modes": run_modes}
 
 
+def run_refine(args, config: dict, comm) -> int:
+    from fe_beam.refine import run_refine_command
+
+    return run_refine_command(args, config, comm, say=lambda text, stream=sys.stdout: _say(
+        comm, text, stream))
+
+
+RUNNERS["refine"] = run_refine
+
+
+def run_solid_command(args, config: dict, comm) -> int:
+    from fe_beam.solid.driver import run_solid
+
+    summary = run_solid(config, args.out, comm, progress=not args.quiet)
+    for step in summary["steps"][-1:]:
+        tip = step["tip"]
+        _say(comm, f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
+                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
+                   f"stretch {step['max_principal_stretch']:.4g}")
+    rod = summary.get("rod") or {}
+    if rod.get("steps"):
+        tip = rod["steps"][-1]["tip"]
+        _say(comm, f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.4g}: "
+                   f"tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g}")
+    if "distance_to_solid" in rod:
+        _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
+                   f"{rod['distance_to_solid']['max_over_L']:.3g}")
+    _say(comm, f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
+               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+def run_compare_command(args, config: dict, comm) -> int:
+    from fe_beam.compare import run_compare
+
+    summary = run_compare(config, args.out, comm, progress=not args.quiet)
+    for row in summary["table"]:
+        where = f"tension {row['tension']:.4g} N" if "tension" in row else (
+            f"load factor {row['load_factor']:.4g}")
+        parts = [f"3D theta {row['solid']['tip']['theta']:.4g}"]
+        for law, rod in row["rod"].items():
+            if "distance_over_L" in rod:
+                parts.append(f"{law} theta {rod['tip']['theta']:.4g}, "
+                             f"d/L {rod['distance_over_L']:.3g}")
+            else:
+                parts.append(f"{law} {rod['status']}")
+        _say(comm, f"{where}: " + "; ".join(parts))
+    for entry in summary["departures"].values():
+        _say(comm, entry["statement"])
+    _say(comm, f"{summary['wall_time_s']:.2f} s; results in {args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS["solid"] = run_solid_command
+RUNNERS["compare"] = run_compare_command
 
 
 def main(argv: list[str] | None = None) -> int:

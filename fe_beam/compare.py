@@ -1,0 +1,376 @@
+"""``fe-beam compare``: the 3D solid against the 1D rod (non-standard and Reissner laws) over a
+load or tendon-tension sweep, on the same geometry and material.
+
+The configuration is the one of ``fe-beam solid`` (`fe_beam.solid.driver`) plus ``[compare]``
+(`COMPARE_KEYS`): the sweep is given as ``tensions`` (of the one tension-controlled tendon; the
+loads at load factor 1 are then those at the largest tension), ``load_factors`` in (0, 1], or
+``steps`` = n (load factors k / n). The rod's E and G are the small-strain limit of the 3D law.
+
+The 3D solid is ramped once through the sweep; the rod is solved from the unloaded state for each
+sweep point and law (`fe_beam.static.solve_static`). The departure of a rod from the solid is
+
+    d = max over x of |r_rod(x) - r_solid(x)| / L,
+
+the largest distance between the deformed centroids of the same reference section x (rod: the
+axis point r = (x + u, v); solid: the area centroid of the deformed section X = x) over the
+``[solid] backbone_points`` stations, relative to the length L. The summary states where along the
+sweep d first exceeds 1 % and 5 % (linear interpolation between sweep points, from d = 0 unloaded).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, table
+from fe_beam.outputs import _pyplot, atomic_write_json, write_csv
+from fe_beam.solid.driver import (
+    SolidConfig,
+    SolidRun,
+    backbone_distance,
+    parse_solid,
+    run_rod,
+)
+from fe_beam.solver import LoadSteppingFailed
+
+__all__ = ["COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
+
+RODS = ("nonstandard", "reissner")
+COMPARE_KEYS = {
+    "tensions": Key((list,), None, "increasing tensions [N] of the one tension-controlled tendon"),
+    "load_factors": Key((list,), None, "increasing load factors in (0, 1]"),
+    "steps": Key((int,), None, "n: the load factors k / n, k = 1 .. n (default 5)"),
+    "laws": Key((list,), list(RODS), "rod laws compared with the solid: nonstandard, reissner"),
+}
+THRESHOLDS = (0.01, 0.05)
+MEASURE = (
+    "max over the backbone stations x of |r_rod(x) - r_solid(x)| / L, r = deformed centroid of "
+    "the reference section x"
+)
+
+
+@dataclass(frozen=True)
+class CompareConfig:
+    """The solid configuration at load factor 1, the sweep's load factors and the rod laws."""
+
+    solid: SolidConfig
+    load_factors: tuple[float, ...]
+    laws: tuple[str, ...]
+    tension_axis: bool  # True when the sweep is over the tension of a single tendon
+
+
+def _increasing(key: str, values, upper: float | None = None) -> tuple[float, ...]:
+    ok = isinstance(values, list) and len(values) >= 1 and all(
+        isinstance(v, NUMBER) and not isinstance(v, bool) and math.isfinite(v) for v in values
+    )
+    if not ok:
+        raise ConfigError(f"[compare] {key} must be a non-empty list of numbers; got {values!r}")
+    values = [float(v) for v in values]
+    if values[0] <= 0 or any(b <= a for a, b in zip(values, values[1:])):
+        raise ConfigError(f"[compare] {key} must be > 0 and strictly increasing; got {values!r}")
+    if upper is not None and values[-1] > upper * (1 + 1e-12):
+        raise ConfigError(f"[compare] {key} must be <= {upper:g}; got {values!r}")
+    return tuple(values)
+
+
+def parse_compare(raw: dict) -> CompareConfig:
+    """Validate a ``fe-beam compare`` configuration (raises ConfigError naming the key)."""
+    if not isinstance(raw, dict):
+        raise ConfigError("the configuration must be a table")
+    compare = table(raw, "compare", COMPARE_KEYS)
+    given = [k for k in ("tensions", "load_factors", "steps") if compare[k] is not None]
+    if len(given) > 1:
+        raise ConfigError(f"[compare] give one of tensions, load_factors or steps; got "
+                          f"{' and '.join(given)}")
+    laws = compare["laws"]
+    if not laws or any(law not in RODS for law in laws) or len(set(laws)) != len(laws):
+        raise ConfigError(
+            f"[compare] laws must be a list of distinct names from {', '.join(RODS)}; got {laws!r}"
+        )
+    raw = copy.deepcopy(raw)
+    tension_axis = False
+    if compare["tensions"] is not None:
+        tensions = _increasing("tensions", compare["tensions"])
+        tendons = raw.get("tendons")
+        if not isinstance(tendons, list) or len(tendons) != 1 or not isinstance(tendons[0], dict):
+            raise ConfigError("[compare] tensions needs exactly one [[tendons]] entry")
+        if tendons[0].get("pull_in") is not None:
+            raise ConfigError("[compare] tensions needs a tension-controlled tendon "
+                              "(the [[tendons]] entry gives pull_in)")
+        tendons[0]["tension"] = tensions[-1]
+        factors = tuple(t / tensions[-1] for t in tensions)
+        tension_axis = True
+    elif compare["load_factors"] is not None:
+        factors = _increasing("load_factors", compare["load_factors"], upper=1.0)
+    else:
+        steps = 5 if compare["steps"] is None else compare["steps"]
+        if steps < 1:
+            raise ConfigError(f"[compare] steps must be an integer >= 1; got {steps!r}")
+        factors = tuple((k + 1) / steps for k in range(steps))
+    solid = parse_solid(raw)
+    if solid.rod is None:
+        raise ConfigError("[loads] tip_force must be planar ([Px, Py]) for fe-beam compare: "
+                          f"the rod is planar; got {list(solid.tip_force)!r}")
+    tension_axis = tension_axis or (
+        len(solid.rod.tendons) == 1 and not solid.rod.tendons[0].controlled_by_pull_in
+    )
+    return CompareConfig(solid, factors, tuple(laws), tension_axis)
+
+
+def rod_at(static: StaticConfig, law: str, factor: float) -> StaticConfig:
+    """The rod configuration with the given law and all loads scaled by ``factor``."""
+    model = static.model
+    loads = replace(model.loads, tip_force=tuple(factor * f for f in model.loads.tip_force))
+    model = replace(model, options=replace(model.options, law=law), loads=loads)
+    tendons = tuple(
+        replace(t, pull_in=factor * t.pull_in) if t.controlled_by_pull_in
+        else replace(t, tension=factor * t.tension)
+        for t in static.tendons
+    )
+    return replace(static, model=model, tendons=tendons)
+
+
+def crossing(factors, distances, threshold: float) -> dict | None:
+    """First load factor at which ``distances`` exceed ``threshold`` (linear interpolation
+    between sweep points, starting from 0 at load factor 0), with the first sweep point above."""
+    previous_f, previous_d = 0.0, 0.0
+    for f, d in zip(factors, distances, strict=True):
+        if d is None:
+            previous_f, previous_d = f, None
+            continue
+        if d > threshold:
+            if previous_d is None:
+                at = f
+            else:
+                at = previous_f + (threshold - previous_d) / (d - previous_d) * (f - previous_f)
+            return {"load_factor": at, "first_sweep_point_above": f}
+        previous_f, previous_d = f, d
+    return None
+
+
+def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """Run the sweep; write ``summary.json``, ``compare.csv`` and the plots into ``out`` (if not
+    None, by rank 0) after every sweep point; return the summary dict (``status`` "converged", or
+    "failed" when the solid stopped before the end of the sweep)."""
+    started = time.perf_counter()
+    config = parse_compare(raw)
+    solid = config.solid
+    out = None if out is None else Path(out)
+    root = comm.rank == 0
+    if out is not None and root:
+        out.mkdir(parents=True, exist_ok=True)
+    scale = _tension_scale(config)
+    summary = {
+        "status": "running",
+        "message": "",
+        "wall_time_s": 0.0,
+        "measure": MEASURE,
+        "thresholds": list(THRESHOLDS),
+        "laws": list(config.laws),
+        "sweep": {"load_factors": list(config.load_factors),
+                  "tensions": [scale * f for f in config.load_factors] if scale else None},
+        "table": [],
+        "departures": {},
+        "dofs": 0,
+        "rod_dofs": 0,
+        "model": solid.model_summary() | {
+            "rod": {"E": solid.rod.model.material.E, "G": solid.rod.model.material.shear_modulus,
+                    "constraint": solid.rod.model.options.constraint,
+                    "elements": solid.rod.model.mesh.elements,
+                    "degree": solid.rod.model.mesh.degree}},
+    }
+
+    def save() -> None:
+        summary["wall_time_s"] = time.perf_counter() - started
+        summary["departures"] = _departures(summary["table"], config, scale)
+        if out is not None and root:
+            _write_outputs(out, summary, config)
+
+    try:
+        run = SolidRun(solid, comm)
+    except RuntimeError as error:
+        summary |= {"status": "failed", "message": str(error)}
+        save()
+        if out is not None:
+            comm.barrier()
+        return summary
+    summary["dofs"] = run.dofs
+    try:
+        for factor in config.load_factors:
+            last = {}
+            try:
+                run.advance(factor, solid.stepping, last.update, progress=progress,
+                            label=f"solid to {factor:.3g}")
+            except LoadSteppingFailed as failure:
+                summary |= {"status": "failed", "message": str(failure)}
+                break
+            row = {"load_factor": factor}
+            row |= {k: last[k] for k in ("tension", "tensions") if k in last}
+            row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch")}
+            row["rod"] = {}
+            for law in config.laws:
+                rod = run_rod(rod_at(solid.rod, law, factor), solid.stations, comm)
+                summary["rod_dofs"] = rod["dofs"]
+                entry = {"status": rod["status"], "message": rod["message"]}
+                reached = rod["status"] == "converged" and rod["backbone"] is not None
+                if reached:
+                    distance = backbone_distance(rod["backbone"], last["backbone"])
+                    entry |= {
+                        "tip": rod["steps"][-1]["tip"],
+                        "backbone": rod["backbone"],
+                        "distance_over_L": distance["max"] / solid.length,
+                        "distance_x": distance["x"],
+                    }
+                row["rod"][law] = entry
+            summary["table"].append(row)
+            save()
+        else:
+            summary["status"] = "converged"
+    finally:
+        run.destroy()
+    save()
+    if out is not None:
+        comm.barrier()  # the files are complete on return, whichever rank looks
+    return summary
+
+
+def _tension_scale(config: CompareConfig) -> float | None:
+    """Tension at load factor 1 when the sweep is over one tendon's tension, else None."""
+    if not config.tension_axis:
+        return None
+    return float(config.solid.rod.tendons[0].tension)
+
+
+def _departures(rows: list[dict], config: CompareConfig, scale: float | None) -> dict:
+    result = {}
+    factors = [r["load_factor"] for r in rows]
+    for law in config.laws:
+        distances = [r["rod"][law].get("distance_over_L") for r in rows]
+        known = [d for d in distances if d is not None]
+        entry = {"max_distance_over_L": max(known) if known else None}
+        words = []
+        for threshold in THRESHOLDS:
+            found = crossing(factors, distances, threshold) if rows else None
+            if found is not None and scale is not None:
+                found |= {"tension": scale * found["load_factor"],
+                          "first_sweep_tension_above": scale * found["first_sweep_point_above"]}
+            key = f"above_{round(threshold * 100)}_percent"
+            entry[key] = found
+            words.append(_sentence(threshold, found, scale))
+        biggest = entry["max_distance_over_L"]
+        entry["statement"] = (
+            f"rod ({law}) vs 3D solid, d = max_x |r_rod - r_solid| / L: " + "; ".join(words)
+            + (f" (largest d in the sweep: {100 * biggest:.3g} %)" if biggest is not None else "")
+        )
+        result[law] = entry
+    return result
+
+
+def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
+    what = f"d > {100 * threshold:g} %"
+    if found is None:
+        return f"{what} nowhere in the sweep"
+    if scale is not None:
+        return (f"{what} from tension {found['tension']:.4g} N (interpolated; first sweep point "
+                f"above: {found['first_sweep_tension_above']:.4g} N)")
+    return (f"{what} from load factor {found['load_factor']:.4g} (interpolated; first sweep "
+            f"point above: {found['first_sweep_point_above']:.4g})")
+
+
+def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
+    atomic_write_json(out / "summary.json", summary)
+    rows = summary["table"]
+    count = len(rows[0].get("tensions", [])) if rows else 0
+    header = ["load_factor", *[f"tension_{i}" for i in range(count)],
+              "solid_tip_u", "solid_tip_v", "solid_tip_theta"]
+    for law in config.laws:
+        header += [f"{law}_tip_u", f"{law}_tip_v", f"{law}_tip_theta", f"{law}_distance_over_L"]
+    table_rows = []
+    for row in rows:
+        line = [row["load_factor"], *row.get("tensions", [])]
+        line += [row["solid"]["tip"][k] for k in ("u", "v", "theta")]
+        for law in config.laws:
+            rod = row["rod"][law]
+            tip = rod.get("tip") or {}
+            line += [tip.get(k, "") for k in ("u", "v", "theta")]
+            line.append(rod.get("distance_over_L", ""))
+        table_rows.append(line)
+    write_csv(out / "compare.csv", header, table_rows)
+    if rows and config.solid.output.plots:
+        _plot(out, summary, config)
+
+
+STYLES = {"solid": ("-", "3D solid"), "nonstandard": ("--", "rod, non-standard law"),
+          "reissner": (":", "rod, Reissner law")}
+COLOURS = {"solid": "tab:blue", "nonstandard": "tab:orange", "reissner": "tab:green"}
+
+
+def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
+    plt = _pyplot()
+    rows = summary["table"]
+    tensions = summary["sweep"]["tensions"]
+    label = "tension [N]" if tensions else "load factor"
+    axis_values = [r.get("tension", r["load_factor"]) if tensions else r["load_factor"]
+                   for r in rows]
+    length = config.solid.length
+
+    figure, axis = plt.subplots(figsize=(9, 5))
+    colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
+    axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
+    for row, value, colour in zip(rows, axis_values, colours, strict=True):
+        models = [("solid", row["solid"].get("backbone"))]
+        models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
+        for name, backbone in models:
+            if backbone is None:
+                continue
+            style, text = STYLES[name]
+            axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
+                      lw=1.6, label=f"{text}, {label.split(' ')[0]} {value:.3g}")
+    axis.set_xlabel("x + u [m]")
+    axis.set_ylabel("y + v [m]")
+    axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    figure.tight_layout()
+    figure.savefig(out / "backbones.png", dpi=130)
+    plt.close(figure)
+
+    figure, axes = plt.subplots(1, 4, figsize=(15, 3.6))
+    names = [("solid", None)] + [(law, law) for law in config.laws]
+    for axis, key, unit in zip(axes[:3], ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+        for name, law in names:
+            style, text = STYLES[name]
+            points = [
+                (value, (row["solid"] if law is None else row["rod"][law]).get("tip"))
+                for row, value in zip(rows, axis_values, strict=True)
+            ]
+            xs = [p for p, tip in points if tip]
+            ys = [tip[key] for _, tip in points if tip]
+            axis.plot(xs, ys, style, marker="o", ms=3, color=COLOURS[name], label=text)
+        axis.set_xlabel(label)
+        axis.set_ylabel(f"tip {key} [{unit}]")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7)
+    axis = axes[3]
+    for law in config.laws:
+        style, text = STYLES[law]
+        pairs = [(v, r["rod"][law].get("distance_over_L")) for r, v in zip(rows, axis_values,
+                                                                             strict=True)]
+        axis.plot([v for v, d in pairs if d is not None],
+                  [100 * d for _, d in pairs if d is not None], style, marker="o", ms=3,
+                  color=COLOURS[law], label=text)
+    for threshold in THRESHOLDS:
+        axis.axhline(100 * threshold, color="0.6", lw=0.8)
+    axis.set_xlabel(label)
+    axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7)
+    figure.tight_layout()
+    figure.savefig(out / "tip_vs_tension.png", dpi=130)
+    plt.close(figure)
