@@ -67,9 +67,22 @@ def quiet_jit_logging() -> None:
         root.addFilter(_WarningsOnly())
 
 
-def _say(comm, text: str, stream=sys.stdout) -> None:
+def _say(comm, text: str, stream=None) -> None:
     if comm.rank == 0:
-        print(text, file=stream, flush=True)
+        print(text, file=stream or sys.stdout, flush=True)
+
+
+def _finish(comm, result, out) -> int:
+    """The closing line of a static-type run, and its exit code."""
+    _say(
+        comm,
+        f"{len(result.steps)} load steps, {result.dofs} dofs, "
+        f"{result.wall_time_s:.2f} s; results in {out}",
+    )
+    if result.status != "converged":
+        _say(comm, f"fe-beam: {result.message}", sys.stderr)
+        return EXIT_FAILED
+    return 0
 
 
 def run_static(args, config: dict, comm) -> int:
@@ -85,15 +98,7 @@ def run_static(args, config: dict, comm) -> int:
             f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
             f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad",
         )
-    _say(
-        comm,
-        f"{len(result.steps)} load steps, {result.dofs} dofs, "
-        f"{result.wall_time_s:.2f} s; results in {args.out}",
-    )
-    if result.status != "converged":
-        _say(comm, f"fe-beam: {result.message}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _finish(comm, result, args.out)
 
 
 def run_finger(args, config: dict, comm) -> int:
@@ -119,15 +124,7 @@ def run_finger(args, config: dict, comm) -> int:
             f"give {inverse['target']} = {inverse['target_value']:g} "
             f"({inverse['evaluations']} solves, {inverse['wall_time_s']:.2f} s)",
         )
-    _say(
-        comm,
-        f"{len(result.steps)} load steps, {result.dofs} dofs, "
-        f"{result.wall_time_s:.2f} s; results in {args.out}",
-    )
-    if result.status != "converged":
-        _say(comm, f"fe-beam: {result.message}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _finish(comm, result, args.out)
 
 
 def run_dynamic(args, config: dict, comm) -> int:
@@ -169,7 +166,7 @@ RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
 def run_refine(args, config: dict, comm) -> int:
     from fe_beam.refine import run_refine_command
 
-    return run_refine_command(args, config, comm, say=lambda text, stream=sys.stdout: _say(
+    return run_refine_command(args, config, comm, say=lambda text, stream=None: _say(
         comm, text, stream))
 
 
