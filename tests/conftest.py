@@ -1,11 +1,14 @@
 import json
 import logging
 import os
+import sys
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("FE_BEAM_PROGRESS", "0")
+# shared test helpers (tomlio, beam_cases, ...) importable from tests/ and its subfolders
+sys.path.insert(0, str(Path(__file__).parent))
 
 REFERENCE = Path(__file__).resolve().parents[1].parent / "shared" / "reference"
 

@@ -8,6 +8,7 @@ import math
 import re
 
 import pytest
+from tomlio import dump_toml, toml_value  # noqa: F401  (re-exported to the CLI tests)
 
 from fe_beam.cli import main
 
@@ -24,31 +25,6 @@ BASE = {
     "output": {"xdmf": True, "plots": False},
 }
 DROP = object()
-
-
-def toml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return "nan" if math.isnan(value) else repr(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(toml_value(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {toml_value(v)}" for k, v in value.items()) + "}"
-    raise TypeError(value)
-
-
-def dump_toml(config: dict) -> str:
-    lines = []
-    for table, values in config.items():
-        lines.append(f"[{table}]")
-        lines += [f"{key} = {toml_value(value)}" for key, value in values.items()]
-        lines.append("")
-    return "\n".join(lines)
 
 
 def edited(changes: dict) -> dict:
