@@ -20,6 +20,7 @@ from fe_beam.cli import quiet_jit_logging  # noqa: E402
 quiet_jit_logging()
 
 import numpy as np  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
 
 from fe_beam import (  # noqa: E402
     BeamModel,
@@ -103,6 +104,22 @@ def _cell(value) -> str:
     if isinstance(value, float):
         return f"{value:.3g}" if abs(value) >= 1e-3 or value == 0 else f"{value:.2e}"
     return str(value)
+
+
+def forget_petsc_options(prefixes: tuple[str, ...] = ("fe_beam_", "dolfinx_solve_")) -> int:
+    """Delete PETSc options left in the global database by earlier solvers; returns how many.
+
+    fe_beam's `SNESSolver` writes its options under a prefix and never removes them, so a later
+    solver with the same prefix inherits options it does not set itself (e.g. a "lu" solver after
+    a "mumps" one keeps pc_factor_mat_solver_type = mumps); `compat.solve_linear` (dolfinx's
+    LinearProblem) adds 3 options under a new prefix per call, and PETSc's database holds 512
+    options at most. Benchmarks that build many solvers in one process call this after each.
+    """
+    options = PETSc.Options()
+    names = [name for name in options.getAll() if name.startswith(prefixes)]
+    for name in names:
+        options.delValue(name)
+    return len(names)
 
 
 def machine() -> dict:

@@ -1,0 +1,332 @@
+"""3D finger benchmark (issue 5): Newton iteration cost vs DOFs (MUMPS and GAMG), a full tension
+sweep on a >= 100k-DOF mesh, and 1 vs 2 MPI ranks.
+
+The finger is the chapter's finger of `fe_beam.finger.DEFAULT_FINGER` in 3D (`fe_beam.solid`):
+L = 0.1 m, B = 0.02 m, H 0.02 -> 0.01 m, a straight tendon 8 -> 4 mm above the axis anchored
+on the tip face, Neo-Hookean with E = 0.6 MPa, nu = 0.45, P2 displacement formulation, uniform
+gmsh sizes (`MeshSizes(size)`), clamp at x = 0.
+
+a. Cost per Newton iteration vs DOFs: for each mesh size a problem is built (gmsh and FFCx are
+   not timed) and one load step to a tendon tension of 0.5 N is solved from the straight finger
+   (4-5 Newton iterations; the first iteration includes the solver set-up: MUMPS analysis,
+   GAMG hierarchy). Seconds per Newton iteration = solve time / Newton iterations; assembly =
+   one residual + one Jacobian assembly (timed separately, best of 3). Linear solvers:
+   ``mumps`` (fe_beam's default: LU), ``gamg`` (fe_beam's: CG + GAMG with the rigid-body
+   near-nullspace, ksp_rtol 1e-10) and ``gamg`` with GMRES instead of CG. Krylov iterations per
+   Newton iteration are reported (they must stay bounded under refinement). Exponents are
+   least-squares slopes of log(time) vs log(DOFs). MUMPS is skipped on meshes where its
+   predicted time per iteration exceeds ``--mumps-cap`` seconds, GMRES above 35k DOFs.
+b. Full tension sweep: 20 load steps to 2 N (0.1, 0.2, ... 2 N) on the largest mesh with GAMG
+   (CG): total time, Newton and Krylov iterations per step, tip rotation.
+c. 1 vs 2 ranks (run under ``mpirun -n 2 ... --ranks``): the load step of part a on the same
+   mesh, solved on rank 0 alone (COMM_SELF, rank 1 waiting without spinning) and on both ranks
+   (COMM_WORLD), in one run; speed-up = serial / parallel time.
+
+    python benchmarks/bench_solid.py [--quick]                  # a + b (~11 min; --quick ~1.5 min)
+    mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --ranks [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+from common import fit_exponent, table, write_results
+from mpi4py import MPI
+
+from fe_beam import compat
+from fe_beam.finger import DEFAULT_FINGER
+from fe_beam.solid import (
+    FingerGeometry,
+    MeshSizes,
+    NeoHookean,
+    SolidFingerProblem,
+    TendonLoad,
+    TendonPath,
+    create_finger_mesh,
+)
+from fe_beam.solver import LoadStepping, SolverSettings, run_load_stepping
+
+_d = DEFAULT_FINGER
+LENGTH = _d["beam"]["length"]
+GEOMETRY = FingerGeometry(
+    LENGTH, _d["section"]["b"], _d["section"]["h"], _d["section"]["h_tip"],
+    tendons=(TendonPath.from_offsets(LENGTH, _d["tendons"][0]["offset_base"],
+                                     _d["tendons"][0]["offset_tip"]),))
+MATERIAL = NeoHookean.from_young(_d["material"]["E"], _d["material"]["nu"])
+MAX_TENSION = _d["tendons"][0]["tension"]  # 2 N
+LEVELS = _d["loads"]["steps"]  # 20
+PROBE_TENSION = 0.5  # N, the single load step of parts a and c
+
+# mesh size [m] -> DOFs (P2): 0.007: 5.0k, 0.005: 9.3k, 0.004: 16k, 0.003: 31k, 0.0025: 49k,
+# 0.002: 88k, 0.0019: 100.1k, 0.0018: 117k
+SIZES = (0.007, 0.005, 0.004, 0.003, 0.0025, 0.0019)
+QUICK_SIZES = (0.007, 0.005, 0.004)
+SOLVERS = {
+    "mumps": SolverSettings(linear_solver="mumps"),
+    "gamg": SolverSettings(linear_solver="gamg"),
+    "gamg-gmres": SolverSettings(linear_solver="gamg", petsc_options={"ksp_type": "gmres"}),
+}
+GMRES_MAX_DOFS = 35_000  # GMRES + GAMG only on the smaller meshes (it costs as much as CG)
+
+
+def dofs_of(problem: SolidFingerProblem) -> int:
+    return problem.W.dofmap.index_map.size_global * problem.W.dofmap.index_map_bs
+
+
+def build(finger, solver: str, tension: float) -> SolidFingerProblem:
+    return SolidFingerProblem(finger, MATERIAL, tendons=[TendonLoad(tension=tension)],
+                              solver=SOLVERS[solver], prefix=f"bench_solid_{solver}_")
+
+
+def assembly_time(problem: SolidFingerProblem, repeats: int = 3) -> float:
+    """One residual + one Jacobian assembly at the current state (best of ``repeats``)."""
+    nl = problem.problem
+    x = compat.vector_of(nl.w).copy()
+    best = np.inf
+    for _ in range(repeats):
+        started = time.perf_counter()
+        nl.residual(None, x, nl.b)
+        nl.jacobian(None, x, nl.A, nl.A)
+        best = min(best, time.perf_counter() - started)
+    x.destroy()
+    return best
+
+
+def probe_step(finger, solver: str) -> dict:
+    """One load step to PROBE_TENSION from the straight finger: time per Newton iteration."""
+    problem = build(finger, solver, PROBE_TENSION)
+    problem.comm.barrier()
+    started = time.perf_counter()
+    steps = run_load_stepping(problem.solver, problem.set_load_factor, LoadStepping(steps=1),
+                              progress=False)
+    seconds = time.perf_counter() - started
+    newton = sum(s.iterations for s in steps)
+    krylov = sum(s.linear_iterations for s in steps)
+    result = {"solver": solver, "dofs": dofs_of(problem), "seconds": seconds,
+              "load_steps": len(steps), "newton_iterations": newton,
+              "krylov_iterations": krylov, "seconds_per_iteration": seconds / newton,
+              "krylov_per_newton": krylov / newton, "assembly_s": assembly_time(problem),
+              "tip_displacement": problem.tip_displacement().tolist(),
+              "tip_rotation": problem.tip_rotation()["angle"]}
+    problem.snes_solver.destroy()
+    return result
+
+
+def mesh(size: float, comm=MPI.COMM_WORLD):
+    started = time.perf_counter()
+    finger = create_finger_mesh(GEOMETRY, MeshSizes(size), comm)
+    return finger, time.perf_counter() - started
+
+
+# --- a. cost per Newton iteration -------------------------------------------------------------
+def newton_scaling(sizes, mumps_cap: float) -> dict:
+    runs = []
+    mumps = []  # (dofs, seconds per iteration) so far, to predict the next
+    for size in sizes:
+        finger, meshing = mesh(size)
+        dofs = None
+        for solver in ("gamg", "gamg-gmres", "mumps"):
+            entry = {"size": size, "meshing_s": meshing}
+            if solver == "gamg-gmres" and dofs > GMRES_MAX_DOFS:
+                runs.append(entry | {"solver": solver, "skipped": True})
+                continue
+            if solver == "mumps" and len(mumps) >= 2:
+                dofs_guess = dofs
+                slope = fit_exponent(*zip(*mumps[-2:], strict=True))
+                predicted = mumps[-1][1] * (dofs_guess / mumps[-1][0]) ** slope
+                if predicted > mumps_cap:
+                    print(f"  size {size:g}: MUMPS predicted {predicted:.0f} s per iteration "
+                          "> cap, skipped", flush=True)
+                    runs.append(entry | {"solver": solver, "skipped": True,
+                                         "predicted_seconds_per_iteration": predicted})
+                    continue
+            result = probe_step(finger, solver)
+            dofs = result["dofs"]
+            if solver == "mumps":
+                mumps.append((result["dofs"], result["seconds_per_iteration"]))
+            runs.append(entry | result)
+            print(f"  size {size:g} m, {result['dofs']} DOFs, {solver}: "
+                  f"{result['newton_iterations']} Newton its, {result['krylov_per_newton']:.1f} "
+                  f"Krylov its / Newton, {result['seconds_per_iteration']:.3g} s / it (assembly "
+                  f"{result['assembly_s']:.3g} s)", flush=True)
+    exponents = {}
+    for solver in SOLVERS:
+        done = [r for r in runs if r["solver"] == solver and not r.get("skipped")]
+        if len(done) >= 2:
+            dofs = [r["dofs"] for r in done]
+            exponents[solver] = {
+                "time": fit_exponent(dofs, [r["seconds_per_iteration"] for r in done]),
+                "time_from_15k": (fit_exponent(*zip(*[(r["dofs"], r["seconds_per_iteration"])
+                                                      for r in done if r["dofs"] >= 15000],
+                                                    strict=True))
+                                  if sum(r["dofs"] >= 15000 for r in done) >= 2 else None),
+                "assembly": fit_exponent(dofs, [r["assembly_s"] for r in done]),
+                "krylov_per_newton": fit_exponent(dofs, [max(r["krylov_per_newton"], 1e-9)
+                                                         for r in done]),
+            }
+    return {"runs": runs, "exponents": exponents}
+
+
+def print_scaling(scaling: dict) -> None:
+    by_size = {}
+    for r in scaling["runs"]:
+        by_size.setdefault(r["size"], {})[r["solver"]] = r
+    rows = []
+    for size, solvers in by_size.items():
+        dofs = next((r["dofs"] for r in solvers.values() if "dofs" in r), "-")
+        row = [f"{size:g}", dofs]
+        for solver in SOLVERS:
+            r = solvers.get(solver, {})
+            if r.get("skipped") or not r:
+                row += ["-", "-"] if solver == "mumps" else ["-", "-", "-"]
+                continue
+            row.append(r["seconds_per_iteration"])
+            if solver != "mumps":
+                row.append(f"{r['krylov_per_newton']:.1f}")
+            row.append(r["newton_iterations"] if solver == "mumps" else r["assembly_s"])
+        rows.append(row)
+    print(table(["size m", "DOFs", "MUMPS s/it", "Newton its", "GAMG-CG s/it", "Krylov/Newton",
+                 "assembly s", "GAMG-GMRES s/it", "Krylov/Newton", "assembly s"], rows))
+    for solver, e in scaling["exponents"].items():
+        text = f"exponent {solver}: time/it {e['time']:.2f}"
+        if e["time_from_15k"] is not None:
+            text += f" ({e['time_from_15k']:.2f} from 15k DOFs)"
+        print(text + f", assembly {e['assembly']:.2f}, Krylov its/Newton "
+              f"{e['krylov_per_newton']:.2f}")
+
+
+# --- b. full sweep ----------------------------------------------------------------------------
+def full_sweep(size: float, solver: str = "gamg") -> dict:
+    finger, meshing = mesh(size)
+    problem = build(finger, solver, MAX_TENSION)
+    records = []
+
+    def on_step(step):
+        records.append({"tension": problem.tensions()[0], "newton": step.iterations,
+                        "krylov": step.linear_iterations, "seconds": step.wall_time_s,
+                        "tip_rotation": problem.tip_rotation()["angle"]})
+
+    started = time.perf_counter()
+    run_load_stepping(problem.solver, problem.set_load_factor, LoadStepping(steps=LEVELS),
+                      on_converged=on_step, progress=False)
+    seconds = time.perf_counter() - started
+    newton = sum(r["newton"] for r in records)
+    krylov = sum(r["krylov"] for r in records)
+    result = {"size": size, "dofs": dofs_of(problem), "solver": solver, "meshing_s": meshing,
+              "seconds": seconds, "load_steps": len(records), "newton_iterations": newton,
+              "krylov_iterations": krylov, "steps": records,
+              "tip_displacement": problem.tip_displacement().tolist()}
+    problem.snes_solver.destroy()
+    return result
+
+
+def print_sweep(sweep: dict) -> None:
+    steps = sweep["steps"]
+    print(f"b. full sweep, {sweep['dofs']} DOFs, {sweep['solver']}: {sweep['load_steps']} steps "
+          f"to {steps[-1]['tension']:g} N in {sweep['seconds']:.1f} s "
+          f"(wall of the steps, no post-processing); {sweep['newton_iterations']} Newton its "
+          f"({sweep['newton_iterations'] / len(steps):.2f} per step), "
+          f"{sweep['krylov_iterations']} Krylov its "
+          f"({sweep['krylov_iterations'] / sweep['newton_iterations']:.1f} per Newton); tip "
+          f"rotation {steps[-1]['tip_rotation']:.4f} rad")
+    rows = [[f"{r['tension']:.2g}", r["newton"], r["krylov"], r["seconds"], r["tip_rotation"]]
+            for r in steps]
+    print(table(["tension N", "Newton its", "Krylov its", "s", "tip rotation rad"], rows))
+
+
+# --- c. ranks ---------------------------------------------------------------------------------
+def idle_barrier(comm) -> None:
+    """A barrier that sleeps instead of spinning (leaves the core to the working rank)."""
+    request = comm.Ibarrier()
+    while not request.Test():
+        time.sleep(0.01)
+
+
+def ranks(sizes_solvers) -> dict:
+    world = MPI.COMM_WORLD
+    results = []
+    for size, solver in sizes_solvers:
+        serial = None
+        if world.rank == 0:
+            finger, _ = mesh(size, MPI.COMM_SELF)
+            serial = probe_step(finger, solver)
+            del finger
+        idle_barrier(world)
+        serial = world.bcast(serial, root=0)
+        finger, _ = mesh(size, world)
+        parallel = probe_step(finger, solver)
+        difference = float(np.max(np.abs(np.subtract(serial["tip_displacement"],
+                                                     parallel["tip_displacement"])))
+                           / np.max(np.abs(parallel["tip_displacement"])))
+        entry = {"size": size, "solver": solver, "dofs": parallel["dofs"], "serial": serial,
+                 "parallel": parallel, "ranks": world.size,
+                 "speed_up": serial["seconds"] / parallel["seconds"],
+                 "speed_up_per_iteration": serial["seconds_per_iteration"]
+                 / parallel["seconds_per_iteration"], "tip_relative_difference": difference}
+        results.append(entry)
+        if world.rank == 0:
+            print(f"  {parallel['dofs']} DOFs, {solver}: 1 rank {serial['seconds']:.2f} s "
+                  f"({serial['newton_iterations']} Newton, {serial['krylov_iterations']} Krylov "
+                  f"its), {world.size} ranks {parallel['seconds']:.2f} s "
+                  f"({parallel['newton_iterations']} Newton, {parallel['krylov_iterations']} "
+                  f"Krylov its): speed-up {entry['speed_up']:.2f}, tip differs by "
+                  f"{difference:.1e} (relative)", flush=True)
+    return {"runs": results}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small meshes only (~1 min)")
+    parser.add_argument("--ranks", action="store_true",
+                        help="part c only: run under mpirun -n 2")
+    parser.add_argument("--sizes", type=float, nargs="+", help="mesh sizes of part a [m]")
+    parser.add_argument("--sweep-size", type=float, help="mesh size of part b [m]")
+    parser.add_argument("--mumps-cap", type=float, default=15.0,
+                        help="skip MUMPS where a Newton iteration is predicted to take longer")
+    args = parser.parse_args(argv)
+    world = MPI.COMM_WORLD
+    root = world.rank == 0
+    # JIT (FFCx forms are cached on disk), PETSc and gmsh warm-up on a tiny mesh
+    warm, _ = mesh(0.01, world)
+    for solver in SOLVERS:
+        probe_step(warm, solver)
+    if args.ranks:
+        if world.size < 2 and root:
+            print("warning: --ranks is meant for mpirun -n 2; the comparison is 1 vs 1 rank",
+                  file=sys.stderr)
+        cases = ([(0.004, "mumps"), (0.004, "gamg")] if args.quick else
+                 [(0.003, "mumps"), (0.003, "gamg"), (SIZES[-1], "gamg")])
+        if root:
+            print(f"c. 1 vs {world.size} ranks: one load step to {PROBE_TENSION:g} N")
+        result = ranks(cases)
+        if root:
+            rows = [[r["dofs"], r["solver"], r["serial"]["seconds"], r["parallel"]["seconds"],
+                     f"{r['speed_up']:.2f}", r["serial"]["krylov_per_newton"],
+                     r["parallel"]["krylov_per_newton"]] for r in result["runs"]]
+            print(table(["DOFs", "solver", "1 rank s", f"{world.size} ranks s", "speed-up",
+                         "Krylov/Newton 1", f"Krylov/Newton {world.size}"], rows))
+            path = write_results("solid_ranks" + ("_quick" if args.quick else ""), result)
+            print(f"results: {path}")
+        return 0
+
+    sizes = args.sizes or (QUICK_SIZES if args.quick else SIZES)
+    sweep_size = args.sweep_size or (QUICK_SIZES[-1] if args.quick else SIZES[-1])
+    print(f"a. cost per Newton iteration: one load step to {PROBE_TENSION:g} N "
+          f"(Neo-Hookean, E = {MATERIAL.young_modulus:g} Pa, P2, {world.size} rank(s))")
+    scaling = newton_scaling(sizes, args.mumps_cap)
+    if root:
+        print_scaling(scaling)
+    sweep = full_sweep(sweep_size)
+    if root:
+        print_sweep(sweep)
+        path = write_results("solid" + ("_quick" if args.quick else ""),
+                             {"ranks": world.size, "scaling": scaling, "sweep": sweep})
+        print(f"results: {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
