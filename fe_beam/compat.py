@@ -103,10 +103,28 @@ def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
 
 
 def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
-    """Solve the linear variational problem a(x, v) = L(v) into ``target`` (direct, MUMPS)."""
-    options = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
-    problem = fem_petsc.LinearProblem(a, L, bcs=bcs, u=target, petsc_options=options)
-    return problem.solve()
+    """Solve the linear variational problem a(x, v) = L(v) into ``target`` (direct, MUMPS).
+
+    Configured programmatically rather than through dolfinx's LinearProblem, whose options
+    stay in PETSc's global database (512 entries at most) long after the solve.
+    """
+    bilinear, linear = fem.form(a), fem.form(L)
+    matrix = fem_petsc.assemble_matrix(bilinear, bcs=bcs)
+    matrix.assemble()
+    rhs = fem_petsc.assemble_vector(linear)
+    fem_petsc.apply_lifting(rhs, [bilinear], bcs=[bcs])
+    rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    fem_petsc.set_bc(rhs, bcs)
+    ksp = PETSc.KSP().create(target.function_space.mesh.comm)
+    ksp.setOperators(matrix)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    ksp.solve(rhs, target.vector)
+    target.x.scatter_forward()
+    for petsc_object in (ksp, matrix, rhs):
+        petsc_object.destroy()
+    return target
 
 
 def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace) -> fem.Expression:

@@ -218,6 +218,7 @@ class SNESSolver:
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
         options = PETSc.Options()
+        self._option_keys = [prefix + key for key in self.settings.options()]
         for key, value in self.settings.options().items():
             options[prefix + key] = value
         self.snes.setFunction(problem.residual, problem.b)
@@ -299,8 +300,15 @@ class SNESSolver:
         return self.snes.getIterationNumber()
 
     def destroy(self) -> None:
+        """Free PETSc objects and remove this solver's options from PETSc's global database,
+        so a later solver with the same prefix starts from its own settings only and long
+        sessions do not run into PETSc's limit on the number of options."""
         self.snes.destroy()
         self._x.destroy()
+        options = PETSc.Options()
+        for key in self._option_keys:
+            options.delValue(key)
+        self._option_keys = []
 
 
 def _reason_name(reason: int) -> str:

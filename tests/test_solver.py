@@ -61,3 +61,47 @@ def test_tiny_state_converges_on_the_step_size():
     assert tip["v"] == pytest.approx(-1e-9 / 3, rel=1e-4)
     assert np.isfinite(tip["theta"])
     solver.destroy()
+
+
+def _tiny_cantilever_solver(linear_solver, prefix):
+    problem = BeamProblem(cantilever(constraint="none", elements=4, tip_force=(0.0, -0.1 * EI)),
+                          MPI.COMM_WORLD)
+    problem.set_load_factor(1.0)
+    return SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
+                      SolverSettings(linear_solver=linear_solver), prefix=prefix, state_scale=1.0)
+
+
+def test_a_destroyed_solver_leaves_no_options_behind():
+    """Options of one solver must not leak into the next one with the same prefix (LU after
+    MUMPS used to factorise with MUMPS), nor pile up towards PETSc's 512-option limit."""
+    from petsc4py import PETSc
+
+    count = len(PETSc.Options().getAll())
+    first = _tiny_cantilever_solver("mumps", "reused_prefix_")
+    first.solve()
+    assert first.snes.getKSP().getPC().getFactorSolverType() == "mumps"
+    first.destroy()
+    assert len(PETSc.Options().getAll()) == count
+    second = _tiny_cantilever_solver("lu", "reused_prefix_")
+    second.solve()
+    assert second.snes.getKSP().getPC().getFactorSolverType() == "petsc"
+    second.destroy()
+    assert len(PETSc.Options().getAll()) == count
+
+
+def test_linear_solve_leaves_no_options_behind():
+    import ufl
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    from fe_beam import compat
+
+    mesh = compat.create_interval(MPI.COMM_WORLD, 8, 1.0)
+    space = compat.function_space(mesh, ufl.FiniteElement("CG", mesh.ufl_cell(), 1))
+    target = fem.Function(space)
+    trial, test = ufl.TrialFunction(space), ufl.TestFunction(space)
+    count = len(PETSc.Options().getAll())
+    for _ in range(3):
+        compat.solve_linear(trial * test * ufl.dx, 2.0 * test * ufl.dx, [], target)
+    assert len(PETSc.Options().getAll()) == count
+    assert np.allclose(compat.local_array(target), 2.0, atol=1e-12)
