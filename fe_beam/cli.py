@@ -181,7 +181,8 @@ def run_solid_command(args, config: dict, comm) -> int:
         tip = step["tip"]
         _say(comm, f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
                    f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
-                   f"stretch {step['max_principal_stretch']:.4g}")
+                   f"stretch {step['max_principal_stretch']:.4g} "
+                   f"({step['max_principal_stretch_bulk']:.4g} away from the tendon ends)")
     rod = summary.get("rod") or {}
     if rod.get("steps"):
         tip = rod["steps"][-1]["tip"]

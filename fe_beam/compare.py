@@ -212,7 +212,8 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
                 break
             row = {"load_factor": factor}
             row |= {k: last[k] for k in ("tension", "tensions") if k in last}
-            row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch")}
+            row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch",
+                                                 "max_principal_stretch_bulk")}
             row["rod"] = {}
             for law in config.laws:
                 rod = run_rod(rod_at(solid.rod, law, factor), solid.stations, comm)

@@ -613,6 +613,7 @@ class SolidRun:
             "newton_iterations": int(newton_iterations),
             "linear_iterations": int(linear_iterations),
             "max_principal_stretch": self.problem.max_principal_stretch(),
+            "max_principal_stretch_bulk": self.problem.max_principal_stretch(bulk=True),
         }
 
     def destroy(self) -> None:
@@ -815,11 +816,12 @@ def _write_tables(out: Path, summary: dict) -> None:
     steps = summary["steps"]
     count = len(steps[0].get("tensions", [])) if steps else 0
     header = ["load_factor", *[f"tension_{i}" for i in range(count)], "tip_u", "tip_v",
-              "tip_theta", "newton_iterations", "linear_iterations", "max_principal_stretch"]
+              "tip_theta", "newton_iterations", "linear_iterations", "max_principal_stretch",
+              "max_principal_stretch_bulk"]
     rows = [
         [s["load_factor"], *s.get("tensions", []), s["tip"]["u"], s["tip"]["v"],
          s["tip"]["theta"], s["newton_iterations"], s["linear_iterations"],
-         s["max_principal_stretch"]]
+         s["max_principal_stretch"], s["max_principal_stretch_bulk"]]
         for s in steps
     ]
     write_csv(out / "load_displacement.csv", header, rows)

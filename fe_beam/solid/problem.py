@@ -18,7 +18,9 @@ Post-processing (all collective, MPI-reduced, identical on every rank):
   normalised) is reported alongside;
 - backbone: deformed area centroids of the cross-sections X = x_i, by Gauss-Legendre quadrature
   (n x n points) of X + u(X) over each reference section;
-- largest principal stretch: max over cells of sqrt(max eig C) at the P2 nodes of each cell.
+- largest principal stretch: max over cells of sqrt(max eig C) at the P2 nodes of each cell;
+  the "bulk" value leaves out the clamp edges and a ball of one section height around each
+  loaded tendon end, where the idealised model's strains are singular (`bulk_mask`).
 
 Nothing here writes files (see `fe_beam.solid.export`).
 """
@@ -291,6 +293,10 @@ class SolidFingerProblem:
              [0, 0, 0.5], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]], dtype=float
         )
         self._F_nodes = compat.expression(F, nodes)
+        cells = np.arange(self.mesh.topology.index_map(self.mesh.topology.dim).size_local,
+                          dtype=np.int32)
+        reference = compat.evaluate_expression(compat.expression(X, nodes), self.mesh, cells)
+        self._bulk_nodes = bulk_mask(reference, self.finger.tendon_chains, self.finger.geometry)
 
     def _unloaded(self) -> bool:
         """True when every load is zero (the equilibrium is then u = 0, p = 0)."""
@@ -409,15 +415,20 @@ class SolidFingerProblem:
             "displacement": u_mean.tolist(),
         }
 
-    def max_principal_stretch(self) -> float:
-        """max over cells and P2 nodes of sqrt(largest eigenvalue of C = F^T F)."""
+    def max_principal_stretch(self, bulk: bool = False) -> float:
+        """max over cells and P2 nodes of sqrt(largest eigenvalue of C = F^T F); with ``bulk``,
+        only over the nodes of the bulk (`bulk_mask`)."""
         tdim = self.mesh.topology.dim
         cells = np.arange(self.mesh.topology.index_map(tdim).size_local, dtype=np.int32)
-        local = 0.0
+        local = 1.0
         if len(cells):
             F = compat.evaluate_expression(self._F_nodes, self.mesh, cells).reshape(-1, 3, 3)
             C = np.einsum("nki,nkj->nij", F, F)
-            local = float(np.sqrt(np.linalg.eigvalsh(C)[:, -1].max()))
+            stretch = np.sqrt(np.linalg.eigvalsh(C)[:, -1])
+            if bulk:
+                stretch = stretch[self._bulk_nodes]
+            if stretch.size:
+                local = float(stretch.max())
         return global_max(self.comm, local)
 
     def summary(self) -> dict:
@@ -434,7 +445,27 @@ class SolidFingerProblem:
             "tendon_reference_lengths": [c.reference_length for c in self.cables],
             "backbone": self.backbone(),
             "max_principal_stretch": self.max_principal_stretch(),
+            "max_principal_stretch_bulk": self.max_principal_stretch(bulk=True),
         }
+
+
+def bulk_mask(points: np.ndarray, chains: Sequence[np.ndarray], geometry) -> np.ndarray:
+    """Boolean mask of the reference (n, 3) ``points`` of the bulk: farther than half the base
+    height H(0) / 2 from the clamped face, and outside a ball of radius H(x) around every
+    tendon end not on the clamp.
+
+    Both zones hold singular strains of the idealised model that grow without bound under mesh
+    refinement: the edges of the fully clamped face, and the cable's end force acting on one
+    vertex (a real finger spreads it with an anchor plate). The maximum over the rest, at a fixed
+    distance from them, converges.
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    inside = points[:, 0] >= 0.5 * float(geometry.height(0.0))
+    for chain in chains:
+        for end in (np.asarray(chain[0], float), np.asarray(chain[-1], float)):
+            if end[0] > 1e-12 * geometry.length:
+                inside &= np.linalg.norm(points - end, axis=1) >= float(geometry.height(end[0]))
+    return inside
 
 
 class _PullInSolver:

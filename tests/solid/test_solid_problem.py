@@ -76,7 +76,8 @@ def tendon_bar():
         return problem, problem.solve(LoadStepping(steps=1))
 
     problem, result = run(MPI.COMM_WORLD)
-    return {"kappa": kappa, "tau": tau, "run": run, "problem": problem, "result": result}
+    return {"kappa": kappa, "tau": tau, "run": run, "problem": problem, "result": result,
+            "geometry": geometry}
 
 
 def fitted_curvature(result, x_min=2.0, x_max=8.0):
@@ -98,6 +99,40 @@ def test_constant_offset_tendon_bends_toward_plus_y_with_beam_curvature(tendon_b
     assert result["tendon_lengths"][0] < result["tendon_reference_lengths"][0]
     assert result["tensions"] == [pytest.approx(tendon_bar["tau"])]
     assert result["max_principal_stretch"] > 1.0
+
+
+def test_bulk_mask_leaves_out_the_clamp_edges_and_the_loaded_tendon_ends():
+    from fe_beam.solid.problem import bulk_mask
+
+    geometry = FingerGeometry(L, B, H, height_tip=0.5)
+    chain = np.array([[0.0, 0.25, 0.0], [5.0, 0.2, 0.0], [L, 0.125, 0.0]])
+    points = np.array([
+        [0.4, 0.0, 0.0],  # within H(0)/2 of the clamp
+        [0.6, 0.25, 0.0],  # next to the tendon entry on the clamp: no ball there
+        [L - 0.45, 0.125, 0.0],  # inside the anchor ball, radius H(L) = 0.5
+        [L - 0.55, 0.125, 0.0],  # just outside it
+        [5.0, 0.2, 0.0],  # on an interior tendon vertex: its forces balance, kept
+    ])
+    assert bulk_mask(points, [chain], geometry).tolist() == [False, True, False, True, True]
+
+
+def test_bulk_stretch_converges_where_the_anchor_stretch_does_not(tendon_bar):
+    """The anchor is a point force on one vertex: the largest stretch next to it grows without
+    bound under refinement, the bulk maximum converges. Its strain is at least the beam-theory
+    lateral (Poisson) strain of the compressed fibres, nu (kappa H / 2 + tau / (E A))."""
+    coarse = tendon_bar["result"]
+    finger = create_finger_mesh(tendon_bar["geometry"], MeshSizes(0.25, tendon=0.125))
+    problem = SolidFingerProblem(finger, NeoHookean.from_young(E, 0.3),
+                                 tendons=[TendonLoad(tension=tendon_bar["tau"])])
+    fine = problem.solve(LoadStepping(steps=1))
+    strains = {key: [run[key] - 1 for run in (coarse, fine)]
+               for key in ("max_principal_stretch", "max_principal_stretch_bulk")}
+    print(f"max principal strain, coarse and fine: {strains}")
+    anywhere, bulk = strains["max_principal_stretch"], strains["max_principal_stretch_bulk"]
+    assert anywhere[1] > 2 * anywhere[0]
+    assert bulk[1] == pytest.approx(bulk[0], rel=0.02)
+    poisson = 0.3 * (tendon_bar["kappa"] * H / 2 + tendon_bar["tau"] / (E * B * H))
+    assert poisson <= bulk[1] < anywhere[1]
 
 
 @pytest.fixture(scope="module")
@@ -133,7 +168,8 @@ def test_serial_and_parallel_runs_agree(tendon_bar):
     assert np.count_nonzero(owners) > 1, "the tendon should cross the rank boundary"
     _, serial = tendon_bar["run"](MPI.COMM_SELF)
     parallel = tendon_bar["result"]
-    for key in ("tip_displacement", "tip_rotation", "tendon_lengths", "max_principal_stretch"):
+    for key in ("tip_displacement", "tip_rotation", "tendon_lengths", "max_principal_stretch",
+                "max_principal_stretch_bulk"):
         a, b = np.asarray(serial[key]), np.asarray(parallel[key])
         print(f"serial vs parallel {key}: max rel diff {np.abs(a - b).max() / np.abs(b).max():.2e}")
         assert np.allclose(a, b, rtol=1e-8, atol=1e-8 * np.abs(b).max()), key
