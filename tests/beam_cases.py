@@ -48,6 +48,17 @@ def cantilever(
     )
 
 
+RHO = 1000.0  # the dynamics tests' density (E, L = 1e7 Pa, 1 m as above)
+
+
+def dynamic_rod(h=0.01, law="reissner", supports=Supports(), elements=12, loads=Loads(), nu=NU,
+                G=None) -> BeamModel:
+    """Square-section rod with density, for the dynamics and modal tests."""
+    material = Material(E, G=G, rho=RHO) if G else Material(E, nu=nu, rho=RHO)
+    return BeamModel(1.0, square(h), material, ModelOptions(law), Discretisation(elements, 2),
+                     supports, loads)
+
+
 def solve(model: BeamModel, steps=10, comm=MPI.COMM_WORLD, **settings):
     config = StaticConfig(model, SolverSettings(**settings), LoadStepping(steps=steps))
     result = solve_static(config, out=None, comm=comm, progress=False)

@@ -5,29 +5,17 @@ import math
 
 import numpy as np
 import pytest
+from beam_cases import RHO, E
+from beam_cases import dynamic_rod as rod
 from mpi4py import MPI
 
-from fe_beam import (
-    BeamModel,
-    BeamProblem,
-    Discretisation,
-    Loads,
-    Material,
-    ModelOptions,
-    Section,
-    Supports,
-)
+from fe_beam import BeamProblem, Loads, Supports
 from fe_beam.config import StaticConfig
 from fe_beam.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
 from fe_beam.modes import natural_frequencies
 from fe_beam.transient import _static_prestate
 
-E, RHO, L = 1.0e7, 1000.0, 1.0
-
-
-def rod(h=0.01, law="reissner", supports=Supports(), elements=12, loads=Loads(), nu=0.3):
-    return BeamModel(L, Section("rectangle", {"b": h, "h": h}), Material(E, nu=nu, rho=RHO),
-                     ModelOptions(law), Discretisation(elements, 2), supports, loads)
+L = 1.0
 
 
 def cantilever_period(h):

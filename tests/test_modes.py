@@ -3,27 +3,17 @@
 import math
 
 import pytest
+from beam_cases import RHO, E, dynamic_rod
 
-from fe_beam import (
-    BeamModel,
-    BeamProblem,
-    Discretisation,
-    Loads,
-    Material,
-    ModelOptions,
-    Section,
-    Supports,
-)
+from fe_beam import BeamProblem, Loads, Supports
 from fe_beam.modes import natural_frequencies
 from fe_beam.transient import _static_prestate
 
-E, RHO, L = 1.0e7, 1000.0, 1.0
+L = 1.0
 
 
 def rod(h, supports=Supports(), law="reissner", G=None, elements=30, loads=Loads()):
-    material = Material(E, G=G, rho=RHO) if G else Material(E, nu=0.3, rho=RHO)
-    return BeamModel(L, Section("rectangle", {"b": h, "h": h}), material, ModelOptions(law),
-                     Discretisation(elements, 2), supports, loads)
+    return dynamic_rod(h, law, supports, elements, loads, G=G)
 
 
 @pytest.mark.parametrize("slenderness", [200, 20, 10])
