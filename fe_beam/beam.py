@@ -139,6 +139,28 @@ class Supports:
     def fixed(self, end: str) -> tuple[str, ...]:
         return support_components(getattr(self, end), end)
 
+    def rigid_motions(self) -> list[str]:
+        """The rigid-body motions these supports leave free (empty: none).
+
+        A small rigid motion is (u, v, theta) = (a, b + w x, w); each fixed component at
+        x = 0 or x = L (length 1 here: the rank does not depend on it) is one equation on
+        (a, b, w). A static solve needs all three removed: its stiffness is singular otherwise.
+        """
+        rows = {"u": lambda x: (1.0, 0.0, 0.0), "v": lambda x: (0.0, 1.0, x),
+                "theta": lambda x: (0.0, 0.0, 1.0)}
+        equations = [rows[c](x) for end, x in (("x0", 0.0), ("xL", 1.0))
+                     for c in self.fixed(end)]
+        matrix = np.array(equations, dtype=float).reshape(-1, 3)
+        if matrix.shape[0] and np.linalg.matrix_rank(matrix) == 3:
+            return []
+        free = []
+        if not matrix.shape[0] or not np.any(matrix[:, 0]):
+            free.append("translation along x (fix u at one end)")
+        if not matrix.shape[0] or np.linalg.matrix_rank(matrix[:, 1:]) < 2:
+            free.append("translation along y or rotation (fix v at both ends, or v and theta "
+                        "at one end)")
+        return free
+
 
 def _pair(name: str, value) -> tuple[float, float]:
     ok = (

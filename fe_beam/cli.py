@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -227,6 +228,26 @@ RUNNERS["solid"] = run_solid_command
 RUNNERS["compare"] = run_compare_command
 
 
+def _check_output_folder(out: Path, comm) -> None:
+    """A folder that cannot be made is a usage error, not a crash after the solve. Nothing is
+    created here: a config that turns out to be wrong leaves no empty folder behind."""
+    problem = None
+    if comm.rank == 0:
+        if out.exists() and not out.is_dir():
+            problem = f"--out {out} exists and is not a folder"
+        else:
+            ancestor = out.absolute()
+            while not ancestor.exists():
+                ancestor = ancestor.parent
+            if not ancestor.is_dir():
+                problem = f"--out {out}: {ancestor} is a file, not a folder"
+            elif not os.access(ancestor, os.W_OK | os.X_OK):
+                problem = f"--out {out}: no permission to write in {ancestor}"
+    problem = comm.bcast(problem, root=0)
+    if problem:
+        raise ConfigError(problem)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     quiet_jit_logging()
@@ -236,8 +257,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.out is None:
         args.out = Path("results") / Path(args.config).stem
     try:
-        if args.out.exists() and not args.out.is_dir():
-            raise ConfigError(f"--out {args.out} exists and is not a folder")
+        _check_output_folder(args.out, comm)
         config = apply_overrides(load_config(args.config), args.set)
         return RUNNERS[args.command](args, config, comm)
     except ConfigError as error:

@@ -299,9 +299,27 @@ def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
     return _wrap(SolverSettings, **solver), stepping, float(jump)
 
 
-def parse_static(config: dict) -> StaticConfig:
+def _spec(support) -> str:
+    """A support as the user wrote it in TOML."""
+    if isinstance(support, str):
+        return f'"{support}"'
+    return "[" + ", ".join(f'"{c}"' for c in support) + "]"
+
+
+def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConfig:
+    """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
+    beam free to move as a rigid body (free-free, flying) is meaningful."""
     check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
     model = parse_model(config)
+    free = model.supports.rigid_motions()
+    if free and not rigid_motion_allowed:
+        raise ConfigError(
+            f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "
+            "the beam "
+            f"free to move as a rigid body: {'; '.join(free)}. A static equilibrium needs "
+            "supports that prevent it (e.g. x0 = \"clamped\", or x0 = \"pinned\" and "
+            "xL = \"roller\")"
+        )
     settings, stepping, jump = parse_solver(config)
     output = OutputOptions(**table(config, "output"))
     return StaticConfig(model, settings, stepping, jump, output, raw=config)

@@ -85,6 +85,7 @@ class SolverSettings:
             )
         if not isinstance(self.petsc_options, dict):
             raise ValueError("solver.petsc_options must be a table of PETSc option = value")
+        check_petsc_options(self.petsc_options)
 
     def options(self) -> dict:
         """PETSc options (without prefix): defaults first, the user's options over them."""
@@ -107,6 +108,42 @@ class SolverSettings:
             opts |= {"ksp_type": "gmres", "pc_type": "ilu", "ksp_rtol": 1e-12}
         opts |= {str(k): v for k, v in self.petsc_options.items()}
         return opts
+
+
+_PETSC_ERRORS = {56: "not supported", 62: "invalid argument", 63: "out of range or not a "
+                 "number", 86: "unknown type"}
+
+
+def check_petsc_options(options: dict, where: str = "solver.petsc_options") -> None:
+    """Raise ValueError naming the first option PETSc rejects (an unknown solver type, a value
+    that is not a number, ...), by configuring a throw-away SNES on this process with it.
+    PETSc ignores unknown option names, so misspelt names cannot be detected here."""
+    for key, value in options.items():
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            raise ValueError(f"{where}.{key} must be a string or a number, got {value!r}")
+        if not isinstance(key, str) or key.startswith("-"):
+            raise ValueError(f"{where}: give option names without the leading '-', got {key!r}")
+    database = PETSc.Options()
+    prefix = "fe_beam_option_check_"
+    snes = PETSc.SNES().create(PETSc.COMM_SELF)
+    snes.setOptionsPrefix(prefix)
+    PETSc.Sys.pushErrorHandler("ignore")  # the ValueError below says it better than PETSc
+    try:
+        for key, value in options.items():
+            database[prefix + key] = value
+            try:
+                snes.setFromOptions()
+                snes.getKSP().setFromOptions()
+            except PETSc.Error as error:
+                reason = _PETSC_ERRORS.get(error.ierr, f"PETSc error code {error.ierr}")
+                raise ValueError(
+                    f"{where}.{key} = {value!r}: PETSc rejects it ({reason})"
+                ) from None
+            finally:
+                database.delValue(prefix + key)
+    finally:
+        PETSc.Sys.popErrorHandler()
+        snes.destroy()
 
 
 class Contribution(Protocol):
@@ -289,6 +326,8 @@ class SNESSolver:
         w_vec.copy(self._x)
         try:
             self.snes.solve(None, self._x)
+        except PETSc.Error as error:  # e.g. a factorisation that breaks down: a failed step
+            raise SolveFailed(f"PETSc error {error.ierr} in the Newton solve") from None
         finally:
             self._reference_fnorm = None
         reason = self.snes.getConvergedReason()

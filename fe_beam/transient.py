@@ -132,7 +132,7 @@ def parse_dynamic(config: dict) -> DynamicConfig:
     initial = table(config, "initial", INITIAL_KEYS)
     damping = _wrap(Damping, **table(config, "damping", DAMPING_KEYS))
     settings = _wrap(TimeSettings, **time_table)
-    static = parse_static(config)
+    static = parse_static(config, rigid_motion_allowed=not initial["from_static"])
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for dynamics")
     load, motion = _functions(timing)
@@ -145,7 +145,7 @@ def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
     modes = table(config, "modes", MODES_KEYS)
     if modes["count"] < 1:
         raise ConfigError(f"[modes] count must be >= 1, got {modes['count']}")
-    static = parse_static(config)
+    static = parse_static(config, rigid_motion_allowed=not modes["prestress"])
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for a modal analysis")
     return static, modes

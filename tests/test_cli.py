@@ -222,6 +222,15 @@ def test_out_is_an_existing_file_exits_2(tmp_path, capsys):
     assert "--out" in usage_error(code, capsys.readouterr().err, path)
 
 
+def test_out_below_a_file_exits_2_before_solving(tmp_path, capsys):
+    path = tmp_path / "c.toml"
+    path.write_text(dump_toml(edited({"loads.steps": 1, "output.plots": False})))
+    (tmp_path / "taken").write_text("not a folder")
+    code = main(["static", str(path), "--out", str(tmp_path / "taken" / "run"), "--quiet"])
+    message = usage_error(code, capsys.readouterr().err, path)
+    assert "--out" in message and "is a file" in message, message
+
+
 def test_real_process_exits_2_without_traceback(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text(dump_toml(edited({"material.E": -1.0})))

@@ -128,7 +128,40 @@ CASES = {
         ("loads", "prescribed_x0.theta"),
     ),
     "gravity without density": ({"loads.gravity": [0.0, -9.81]}, ("loads", "gravity")),
+    # a static solve of a mechanism: its stiffness is singular
+    "free-free": ({"supports.x0": "free"}, ("supports", "x0")),
+    "roller-roller": ({"supports.x0": "roller", "supports.xL": "roller"}, ("supports", "x0")),
+    "pinned-free": ({"supports.x0": "pinned"}, ("supports", "x0")),
+    # PETSc options: PETSc itself is asked
+    "unknown KSP type": ({"solver.petsc_options": {"ksp_type": "nonsense"}},
+                         ("solver", "petsc_options.ksp_type")),
+    "non-numeric PETSc value": ({"solver.petsc_options": {"snes_max_it": "many"}},
+                                ("solver", "petsc_options.snes_max_it")),
+    "PETSc option with dash": ({"solver.petsc_options": {"-ksp_type": "cg"}},
+                               ("solver", "petsc_options")),
 }
+
+
+@pytest.mark.parametrize("x0, xL, free", [
+    ("clamped", "free", []), ("pinned", "roller", []), (["theta"], "pinned", []),
+    ("free", "free", ["x", "y"]), ("roller", "roller", ["x"]), ("pinned", "free", ["y"]),
+    (["u"], ["v"], ["y"]), (["theta"], "roller", ["x"]),
+])
+def test_rigid_motions_left_free_by_the_supports(x0, xL, free):
+    from fe_beam import Supports
+
+    described = Supports(x0, xL).rigid_motions()
+    assert [text.split()[2] for text in described] == [f"{axis}" for axis in free]
+
+
+def test_supports_free_to_move_are_allowed_for_dynamics_and_modes():
+    from fe_beam.transient import parse_dynamic, parse_modes
+
+    flying = edited({"supports.x0": "free", "material.rho": 1000.0, "time.t_end": 1.0,
+                     "time.dt": 0.1})
+    assert parse_dynamic(flying).static.model.supports.x0 == "free"
+    flying = edited({"supports.x0": "free", "material.rho": 1000.0, "modes.count": 3})
+    assert parse_modes(flying)[0].model.supports.x0 == "free"
 
 
 @pytest.mark.parametrize("changes, key", list(CASES.values()), ids=list(CASES))

@@ -105,3 +105,15 @@ def test_linear_solve_leaves_no_options_behind():
         compat.solve_linear(trial * test * ufl.dx, 2.0 * test * ufl.dx, [], target)
     assert len(PETSc.Options().getAll()) == count
     assert np.allclose(compat.local_array(target), 2.0, atol=1e-12)
+
+
+def test_a_singular_system_is_a_failed_solve_not_a_crash():
+    """Free-free statics (the CLI refuses it; the API does not): PETSc's factorisation error
+    becomes a failed load step, and load stepping reports the last converged load factor."""
+    from fe_beam import Supports
+
+    model = replace(cantilever(tip_force=(0.0, -1e-3 * EI)), supports=Supports("free", "free"))
+    config = StaticConfig(model, SolverSettings(), LoadStepping(steps=2))
+    result = solve_static(config, None, progress=False, record_shapes=False)
+    assert result.status == "failed"
+    assert "PETSc error" in result.message and "last converged load factor 0" in result.message
