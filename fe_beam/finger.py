@@ -9,6 +9,7 @@ nu < 0.5; it only enters the shear stiffness).
 from __future__ import annotations
 
 import copy
+import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -26,7 +27,8 @@ from fe_beam.config import (
     table,
 )
 from fe_beam.outputs import _pyplot, atomic_write_json, virtual_display, write_csv
-from fe_beam.static import StaticResult, solve_static
+from fe_beam.solver import LoadSteppingFailed
+from fe_beam.static import StaticContinuation, StaticResult, solve_static
 from fe_beam.tendons import Tendon, tension_for_target
 
 __all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
@@ -175,14 +177,33 @@ def solve_inverse(
     control = "pull_in" if tendon.controlled_by_pull_in else "tension"
     unit = "m" if control == "pull_in" else "N"
     evaluations = []
+    # One problem for all trials: the tendon at a reference value, each trial a load factor
+    # reached by continuation from the previous equilibrium (a few Newton iterations instead of
+    # a full load ramp); from the unloaded state again only if that fails.
+    reference = abs(getattr(tendon, control)) or 1.0
+    run = StaticContinuation(
+        replace(config, tendons=(replace(tendon, **{control: reference}),)), comm
+    )
 
     def solve(value: float) -> dict:
-        trial = replace(config, tendons=(replace(tendon, **{control: value}),))
-        result = solve_static(trial, None, comm, progress=False, record_shapes=False)
-        if result.status != "converged":
-            raise ConfigError(f"[inverse] no equilibrium at {control} {value:g} {unit}")
+        target = value / reference
+        steps = max(1, math.ceil(config.stepping.steps * abs(target - run.load_factor)))
+        try:
+            run.advance(target, replace(config.stepping, steps=steps))
+        except LoadSteppingFailed:
+            run.restart()
+            try:
+                run.advance(target, config.stepping)
+            except LoadSteppingFailed:
+                raise ConfigError(
+                    f"[inverse] no equilibrium at {control} {value:g} {unit}"
+                ) from None
         evaluations.append(value)
-        return result.steps[-1]
+        return {
+            "tip": run.problem.end_values("xL"),
+            "tensions": run.tendons.tension_values().tolist(),
+            "pull_ins": run.tendons.pull_ins().tolist(),
+        }
 
     def miss(value: float) -> float:
         return solve(value)["tip"][target.component] - target.value
@@ -199,8 +220,11 @@ def solve_inverse(
                     f"tendon's {control}"
                 )
         bracket = (low, high)
-    value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
-    final = solve(value)
+    try:
+        value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
+        final = solve(value)
+    finally:
+        run.destroy()
     answer = {
         "target": target.key,
         "target_value": target.value,

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from mpi4py import MPI
 
+from fe_beam import compat
 from fe_beam.beam import BeamProblem
 from fe_beam.config import StaticConfig
 from fe_beam.outputs import (
@@ -27,7 +28,7 @@ from fe_beam.solver import (
 )
 from fe_beam.tendons import PullInSolver, TendonSet
 
-__all__ = ["StaticResult", "solve_static"]
+__all__ = ["StaticContinuation", "StaticResult", "solve_static"]
 
 
 @dataclass
@@ -58,6 +59,69 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
     }
 
 
+class StaticContinuation:
+    """A configuration's problem and solver, built once, whose load factor can be moved from
+    its current converged value to any other by load stepping (``advance``): continuation for
+    inverse problems and parameter sweeps, where each new equilibrium starts from the last."""
+
+    def __init__(self, config: StaticConfig, comm=MPI.COMM_WORLD):
+        self.config = config
+        self.tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
+        self.problem = BeamProblem(
+            config.model,
+            comm,
+            breakpoints=self.tendons.breakpoints if self.tendons else (),
+            extra_energy=self.tendons.energy if self.tendons else None,
+        )
+        self.snes = SNESSolver(
+            NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
+            config.solver,
+            prefix="fe_beam_static_",
+            state_scale=config.model.length,
+        )
+        self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
+        self.load_factor = 0.0
+
+    def _set_load_factor(self, value: float) -> None:
+        self.problem.set_load_factor(value)
+        if self.tendons:
+            self.tendons.set_tension_controlled(value)
+            self.solver.set_load_factor(value)
+
+    def advance(self, target: float, stepping, on_converged=None, progress: bool = False) -> None:
+        """Load-step from the current load factor to ``target``; ``on_converged(step)`` gets
+        the actual load factor. Raises `LoadSteppingFailed` with the last converged state kept
+        (and ``load_factor`` at its value)."""
+        start = float(self.load_factor)
+
+        def set_fraction(fraction: float) -> None:
+            self._set_load_factor(start + fraction * (target - start))
+
+        def converged(step: StepResult) -> None:
+            step = replace(step, load_factor=start + step.load_factor * (target - start))
+            self.load_factor = step.load_factor
+            if on_converged is not None:
+                on_converged(step)
+
+        run_load_stepping(
+            self.solver,
+            set_fraction,
+            stepping,
+            on_converged=converged,
+            reject_step=rotation_jump_check(self.problem.rotation_dofs(),
+                                            self.config.max_rotation_jump),
+            progress=progress,
+        )
+
+    def restart(self) -> None:
+        """Back to the unloaded reference state."""
+        compat.local_array(self.problem.w)[:] = 0.0
+        self.load_factor = 0.0
+
+    def destroy(self) -> None:
+        self.snes.destroy()
+
+
 def solve_static(
     config: StaticConfig,
     out: Path | None = None,
@@ -79,27 +143,8 @@ def solve_static(
     On failure the last converged state is written and the result has status "failed".
     """
     started = time.perf_counter()
-    tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
-    problem = BeamProblem(
-        config.model,
-        comm,
-        breakpoints=tendons.breakpoints if tendons else (),
-        extra_energy=tendons.energy if tendons else None,
-    )
-    snes = SNESSolver(
-        NonlinearProblem(problem.residual, problem.w, problem.bcs),
-        config.solver,
-        prefix="fe_beam_static_",
-        state_scale=config.model.length,
-    )
-    solver = PullInSolver(snes, tendons) if tendons else snes
-
-    def set_load_factor(value: float) -> None:
-        problem.set_load_factor(value)
-        if tendons:
-            tendons.set_tension_controlled(value)
-            solver.set_load_factor(value)
-
+    run = StaticContinuation(config, comm)
+    problem, tendons = run.problem, run.tendons
     result = StaticResult(
         dofs=problem.space.dofmap.index_map.size_global * problem.space.dofmap.index_map_bs
     )
@@ -131,21 +176,14 @@ def solve_static(
             _write_tables(out, result, extra)
 
     try:
-        run_load_stepping(
-            solver,
-            set_load_factor,
-            config.stepping,
-            on_converged=record,
-            reject_step=rotation_jump_check(problem.rotation_dofs(), config.max_rotation_jump),
-            progress=progress,
-        )
+        run.advance(1.0, config.stepping, on_converged=record, progress=progress)
         result.status = "converged"
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     finally:
         if writer is not None:
             writer.close()
-        snes.destroy()
+        run.destroy()
     result.wall_time_s = time.perf_counter() - started
     if writing and root:
         _write_tables(out, result, extra)
