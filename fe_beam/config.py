@@ -311,6 +311,13 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
     beam free to move as a rigid body (free-free, flying) is meaningful."""
     check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
     model = parse_model(config)
+    settings, stepping, jump = parse_solver(config)
+    if model.options.constraint != "none" and settings.linear_solver != "mumps":
+        raise ConfigError(
+            f"[solver] linear_solver = \"{settings.linear_solver}\" cannot solve the saddle-point "
+            f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
+            "zero diagonal); use linear_solver = \"mumps\" or constraint = \"none\""
+        )
     free = model.supports.rigid_motions()
     if free and not rigid_motion_allowed:
         raise ConfigError(
@@ -320,6 +327,5 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
             "supports that prevent it (e.g. x0 = \"clamped\", or x0 = \"pinned\" and "
             "xL = \"roller\")"
         )
-    settings, stepping, jump = parse_solver(config)
     output = OutputOptions(**table(config, "output"))
     return StaticConfig(model, settings, stepping, jump, output, raw=config)

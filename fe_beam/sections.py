@@ -98,7 +98,7 @@ class Section:
                 raise ValueError(f"section.{name} is required for shape = {self.shape!r}")
         for name in list(self.dims) + list(self.dims_tip):
             if name not in required and name not in optional:
-                allowed = ", ".join(list(required) + list(optional))
+                allowed = ", ".join(dict.fromkeys(list(required) + list(optional)))
                 raise ValueError(
                     f"section.{name} is not a dimension of shape {self.shape!r} "
                     f"(allowed: {allowed})"

@@ -132,6 +132,14 @@ CASES = {
     "free-free": ({"supports.x0": "free"}, ("supports", "x0")),
     "roller-roller": ({"supports.x0": "roller", "supports.xL": "roller"}, ("supports", "x0")),
     "pinned-free": ({"supports.x0": "pinned"}, ("supports", "x0")),
+    "iterative solver with multipliers": (
+        {"solver.linear_solver": "gamg", "model.constraint": "inextensible"},
+        ("solver", "linear_solver"),
+    ),
+    "PETSc LU with multipliers": (
+        {"solver.linear_solver": "lu", "model.constraint": "unshearable"},
+        ("solver", "linear_solver"),
+    ),
     # PETSc options: PETSc itself is asked
     "unknown KSP type": ({"solver.petsc_options": {"ksp_type": "nonsense"}},
                          ("solver", "petsc_options.ksp_type")),
