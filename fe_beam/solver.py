@@ -105,7 +105,11 @@ class SolverSettings:
         elif self.linear_solver == "gamg":
             opts |= {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 1000}
         else:
-            opts |= {"ksp_type": "gmres", "pc_type": "ilu", "ksp_rtol": 1e-12}
+            # block Jacobi: ILU on each rank's block (plain ILU in serial; PETSc's ILU
+            # would refuse a parallel matrix); ILU(0) breaks down on beam matrices, ILU(2) holds
+            opts |= {"ksp_type": "gmres", "pc_type": "bjacobi", "sub_pc_type": "ilu",
+                     "sub_pc_factor_levels": 2, "ksp_gmres_restart": 100, "ksp_max_it": 2000,
+                     "ksp_rtol": 1e-12}
         opts |= {str(k): v for k, v in self.petsc_options.items()}
         return opts
 
