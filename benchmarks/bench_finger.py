@@ -41,7 +41,6 @@ import sys
 import numpy as np
 from common import stats, table, timed, write_results
 
-import fe_beam.finger as finger_module
 from fe_beam.baselines import shooting
 from fe_beam.beam import BeamProblem
 from fe_beam.finger import (
@@ -53,7 +52,7 @@ from fe_beam.finger import (
     tension_for_tip_angle,
 )
 from fe_beam.solver import NonlinearProblem, SNESSolver, rotation_jump_check, run_load_stepping
-from fe_beam.static import solve_static
+from fe_beam.static import StaticContinuation, solve_static
 from fe_beam.tendons import PullInSolver, TendonSet
 
 TOL = 1e-4  # tip position / L
@@ -173,7 +172,7 @@ def cheapest_shooting(reference: np.ndarray) -> tuple[float, dict]:
 
 # --- inverse ----------------------------------------------------------------------------------
 class Counter:
-    """Counts calls of a module-level function (patched in place while active)."""
+    """Counts calls of a module-level function or a method (patched in place while active)."""
 
     def __init__(self, module, name):
         self.module, self.name, self.calls = module, name, 0
@@ -215,9 +214,10 @@ def inverse(elements: int, target: float, repeats: int, reference_tension: float
     goal = InverseTarget("tip_angle", target)
     shooting_base = shooting_finger(MAX_TENSION)
     methods = {
-        "fe_beam": (finger_module, "solve_static",
+        # fe_beam's trials are continuation moves of one problem (StaticContinuation.advance)
+        "fe_beam": (StaticContinuation, "advance",
                     lambda: tension_for_tip_angle(config, target)),
-        "fe_beam_bracketed_by_sweep": (finger_module, "solve_static",
+        "fe_beam_bracketed_by_sweep": (StaticContinuation, "advance",
                                        lambda: solve_inverse(config, goal, sweep=sweep)["tension"]),
         "shooting": (shooting, "solve_finger",
                      lambda: shooting.tension_for_tip_angle(target, shooting_base)),
