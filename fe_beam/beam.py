@@ -268,6 +268,8 @@ class BeamProblem:
         degree = model.mesh.degree
         cell = self.mesh.ufl_cell()
         self.multipliers = constrained_strains(model.options.constraint)
+        # multiplier rows have a zero diagonal: the linear systems need a pivoting solver
+        self.saddle_point = bool(self.multipliers)
         elements = [ufl.FiniteElement("Lagrange", cell, degree)] * 3
         elements += [ufl.FiniteElement("DG", cell, degree - 1)] * len(self.multipliers)
         self.space = compat.function_space(self.mesh, ufl.MixedElement(elements))

@@ -87,7 +87,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "stol": Key(NUMBER, 1e-11, "relative step tolerance"),
         "max_it": Key((int,), 25, "Newton iterations per step"),
         "line_search": Key((str,), "basic", "basic | bt | l2 | cp"),
-        "linear_solver": Key((str,), "mumps", "mumps | lu | gamg | gmres-ilu"),
+        "linear_solver": Key((str,), "auto", "auto | mumps | lu | gamg | gmres-ilu"),
         "petsc_options": Key((dict,), {}, "any PETSc option, without prefix"),
         "adaptive": Key((bool,), True, "cut back / grow load steps"),
         "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
@@ -312,11 +312,11 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
     check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
     model = parse_model(config)
     settings, stepping, jump = parse_solver(config)
-    if model.options.constraint != "none" and settings.linear_solver != "mumps":
+    if model.options.constraint != "none" and settings.linear_solver not in ("auto", "mumps"):
         raise ConfigError(
             f"[solver] linear_solver = \"{settings.linear_solver}\" cannot solve the saddle-point "
             f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
-            "zero diagonal); use linear_solver = \"mumps\" or constraint = \"none\""
+            "zero diagonal); use linear_solver = \"auto\" or \"mumps\", or constraint = \"none\""
         )
     free = model.supports.rigid_motions()
     if free and not rigid_motion_allowed:

@@ -190,7 +190,9 @@ class GeneralizedAlpha:
         if problem.model.loads.follower:
             self.residual -= problem.follower_virtual_work(q_mid, test)
         self.solver = SNESSolver(NonlinearProblem(self.residual, problem.w, problem.bcs),
-                                 solver_settings or SolverSettings(), prefix="fe_beam_dynamic_",
+                                 (solver_settings or SolverSettings()).for_problem(
+                                     problem.saddle_point, problem.comm),
+                                 prefix="fe_beam_dynamic_",
                                  state_scale=problem.model.length)
         self._energy_forms()
 

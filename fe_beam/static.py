@@ -75,7 +75,7 @@ class StaticContinuation:
         )
         self.snes = SNESSolver(
             NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
-            config.solver,
+            config.solver.for_problem(self.problem.saddle_point, comm),
             prefix="fe_beam_static_",
             state_scale=config.model.length,
         )

@@ -153,7 +153,8 @@ def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
 
 def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool) -> None:
     solver = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
-                        static.solver, prefix="fe_beam_prestate_",
+                        static.solver.for_problem(problem.saddle_point, problem.comm),
+                        prefix="fe_beam_prestate_",
                         state_scale=problem.model.length)
     try:
         run_load_stepping(solver, problem.set_load_factor, static.stepping,

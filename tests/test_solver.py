@@ -127,3 +127,31 @@ def test_other_linear_solvers_give_the_mumps_answer(linear_solver):
     other = solve(model, steps=4, linear_solver=linear_solver).steps[-1]["tip"]
     for key in ("u", "v", "theta"):
         assert other[key] == pytest.approx(reference[key], rel=1e-8, abs=1e-12)
+
+
+class _Comm:
+    def __init__(self, size):
+        self.size = size
+
+
+@pytest.mark.parametrize(("saddle_point", "ranks", "chosen"),
+                         [(False, 1, "lu"), (True, 1, "mumps"), (False, 2, "mumps")])
+def test_auto_linear_solver_takes_lu_only_where_it_is_safe(saddle_point, ranks, chosen):
+    settings = SolverSettings()
+    assert settings.linear_solver == "auto"
+    assert settings.for_problem(saddle_point, _Comm(ranks)).linear_solver == chosen
+    assert SolverSettings(linear_solver="mumps").for_problem(False, _Comm(1)).linear_solver == (
+        "mumps")
+
+
+@pytest.mark.parametrize(("constraint", "factor"), [("none", "petsc"),
+                                                     ("inextensible-unshearable", "mumps")])
+def test_static_runs_factorise_with_the_resolved_solver(constraint, factor):
+    from fe_beam.static import StaticContinuation
+
+    model = cantilever(constraint=constraint, elements=4, tip_force=(0.0, -EI))
+    run = StaticContinuation(StaticConfig(model, SolverSettings(), LoadStepping(steps=1)),
+                             MPI.COMM_SELF)
+    run.advance(1.0, LoadStepping(steps=1))
+    assert run.snes.snes.getKSP().getPC().getFactorSolverType() == factor
+    run.destroy()
