@@ -132,7 +132,8 @@ def _parse_value(text: str):
 
 
 def apply_overrides(config: dict, assignments: list[str]) -> dict:
-    """Apply ``table.key=value`` overrides (values in TOML syntax; bare words are strings)."""
+    """Apply ``table.key=value`` overrides (values in TOML syntax; bare words are strings).
+    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``."""
     config = copy.deepcopy(config)
     for assignment in assignments or []:
         if "=" not in assignment:
@@ -141,10 +142,21 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
         names = dotted.strip().split(".")
         if len(names) < 2 or not all(names):
             raise ConfigError(f"--set {assignment!r}: expected table.key=value")
-        target = config
-        for name in names[:-1]:
+        target, position = config, 0
+        while position < len(names) - 1:
+            name = names[position]
             target = target.setdefault(name, {})
-            if not isinstance(target, dict):
+            position += 1
+            if isinstance(target, list) and all(isinstance(item, dict) for item in target):
+                index = names[position]
+                if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
+                    raise ConfigError(
+                        f"--set {assignment!r}: {name} is an array of {len(target)} tables; "
+                        f"address one as {name}.<index 0..{len(target) - 1}>.key"
+                    )
+                target = target[int(index)]
+                position += 1
+            elif not isinstance(target, dict):
                 raise ConfigError(f"--set {assignment!r}: {name} is not a table")
         target[names[-1]] = _parse_value(text.strip())
     return config

@@ -116,6 +116,27 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
     return tendon, values["steps"]
 
 
+def check_tendon_inside(tendon: Tendon, section, length: float) -> None:
+    """ConfigError if the tendon's offset leaves the section anywhere between entry and anchor
+    (the offset is piecewise linear; the section's extent is sampled finely along x)."""
+    xs = np.linspace(tendon.entry, tendon.anchor, 201)
+    for path in tendon.paths:
+        points = np.array(path, dtype=float)
+        stations = np.union1d(xs, points[:, 0][(points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])])
+        offsets = np.interp(stations, points[:, 0], points[:, 1])
+        for x, offset in zip(stations, offsets, strict=True):
+            extent = section.y_extent(x / length)
+            if extent is None:
+                return
+            low, high = extent
+            margin = 1e-9 * (high - low)
+            if not low - margin <= offset <= high + margin:
+                raise ConfigError(
+                    f"[[tendons]] {tendon.name!r}: offset {offset:.6g} m at x = {x:.6g} m lies "
+                    f"outside the section (y from {low:.6g} to {high:.6g} m about its centroid)"
+                )
+
+
 def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     """(static config with tendons, inverse target or None)."""
     config = with_defaults(config)
@@ -126,6 +147,8 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
         raise ConfigError("[[tendons]] must list at least one tendon")
     static = parse_static(config)
     parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
+    for tendon, _ in parsed:
+        check_tendon_inside(tendon, static.model.section, static.model.length)
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")

@@ -142,6 +142,21 @@ class Section:
         function, names = SHAPES[self.shape]
         return SectionProperties(*function(*(at_s[n] for n in names)))
 
+    def y_extent(self, s: float) -> tuple[float, float] | None:
+        """(lowest, highest) y of the section at s = x / L, about its centroid; None for a
+        custom section, whose shape is not known."""
+        at_s = {n: v + (self.dims_tip.get(n, v) - v) * s for n, v in self.dims.items()}
+        if self.shape == "rectangle":
+            return -at_s["h"] / 2, at_s["h"] / 2
+        if self.shape in ("circle", "tube"):
+            return -at_s["d"] / 2, at_s["d"] / 2
+        if self.shape == "t-section":
+            b, h, tf, tw = (at_s[n] for n in ("b", "h", "tf", "tw"))
+            web, flange = tw * (h - tf), b * tf
+            centroid = (web * (h - tf) / 2 + flange * (h - tf / 2)) / (web + flange)
+            return -centroid, h - centroid
+        return None
+
     def height(self) -> float:
         """Largest section height along the beam (slenderness L/h uses it)."""
         heights = [self.properties(0.0).h, self.properties(1.0).h]

@@ -162,6 +162,18 @@ def test_rigid_motions_left_free_by_the_supports(x0, xL, free):
     assert [text.split()[2] for text in described] == [f"{axis}" for axis in free]
 
 
+def test_set_addresses_arrays_of_tables_by_index():
+    from fe_beam.config import ConfigError, apply_overrides
+
+    config = {"tendons": [{"tension": 1.0}, {"tension": 2.0}]}
+    changed = apply_overrides(config, ["tendons.1.tension=3.5", "tendons.0.name=flexor"])
+    assert changed["tendons"] == [{"tension": 1.0, "name": "flexor"}, {"tension": 3.5}]
+    assert config["tendons"][1]["tension"] == 2.0  # the input is not modified
+    for bad in ("tendons.2.tension=1", "tendons.tension=1", "tendons.0=1"):
+        with pytest.raises(ConfigError, match=r"array of 2 tables.*tendons\.<index 0\.\.1>"):
+            apply_overrides(config, [bad])
+
+
 def test_supports_free_to_move_are_allowed_for_dynamics_and_modes():
     from fe_beam.transient import parse_dynamic, parse_modes
 

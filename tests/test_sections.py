@@ -84,6 +84,31 @@ def test_properties_match_numerical_integration(shape):
         assert abs(p.I3) <= 1e-12 * expected["A"] * scale**3
 
 
+FIBRES = {  # lowest and highest fibre of the CASES geometries, in their own coordinates
+    "rectangle": lambda d: (0.11, 0.11 + d["h"]),
+    "circle": lambda d: (0.2 - d["d"] / 2, 0.2 + d["d"] / 2),
+    "tube": lambda d: (-0.1 - d["d"] / 2, -0.1 + d["d"] / 2),
+    "t-section": lambda d: (-0.37 * d["h"], 0.63 * d["h"]),
+}
+
+
+@pytest.mark.parametrize("shape", list(CASES))
+def test_y_extent_is_the_fibre_range_about_the_centroid(shape):
+    """Lowest and highest fibre about the centroid (the quadrature's centroid is exact)."""
+    dims, points = CASES[shape]
+    y, w = points(dims)
+    centroid = (w * y).sum() / w.sum()
+    bottom, top = FIBRES[shape](dims)
+    extent = Section(shape, dims).y_extent(0.0)
+    assert extent == pytest.approx((bottom - centroid, top - centroid), rel=1e-12, abs=1e-15)
+
+
+def test_y_extent_of_a_tapered_and_of_a_custom_section():
+    tapered = Section("rectangle", {"b": 0.02, "h": 0.02}, {"h": 0.01})
+    assert tapered.y_extent(0.5) == pytest.approx((-0.0075, 0.0075))
+    assert Section("custom", {"A": 1e-4, "I": 1e-9}).y_extent(0.0) is None
+
+
 @pytest.mark.parametrize("b, h", [(0.01, 0.01), (0.02, 0.005), (1.0, 3.0)])
 def test_rectangle_closed_form(b, h):
     p = Section("rectangle", {"b": b, "h": h}).properties()

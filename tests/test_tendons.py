@@ -274,6 +274,23 @@ def test_inverse_config_mistakes(tmp_path, capsys, inverse, tendons, words):
     assert words in err and "Traceback" not in err, err
 
 
+@pytest.mark.parametrize(("tendon", "where"), [
+    ({"offset_base": 0.011, "offset_tip": 0.004}, "x = 0 m"),  # base half-height 0.01
+    ({"offset_base": 0.0, "offset_tip": -0.0051}, "offset -0.00507"),  # tip: 0.005, first
+    # sampled station outside: x = 0.0995 m
+    ({"path": [[0.0, 0.0], [0.05, -0.0076], [0.1, 0.0]]}, "x = 0.05 m"),  # 0.0075 at x = L/2
+])
+def test_tendon_outside_the_section_is_refused(tmp_path, capsys, tendon, where):
+    from fe_beam.cli import main
+
+    lines = ["[[tendons]]", *[f"{k} = {v!r}" for k, v in tendon.items()], "tension = 1.0"]
+    config = tmp_path / "outside.toml"
+    config.write_text("\n".join(lines) + "\n")
+    assert main(["finger", str(config), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "outside the section" in err and where in err, err
+
+
 @pytest.mark.mpi
 def test_finger_parallel_equals_serial():
     config = finger_config(24, tension=4.0)
