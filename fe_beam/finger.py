@@ -231,19 +231,12 @@ def solve_inverse(
     def miss(value: float) -> float:
         return solve(value)["tip"][target.component] - target.value
 
-    if bracket is None:
-        bracket = _bracket_from_sweep(sweep or [], control, target)
-    if bracket is None:
-        low, high = 0.0, max(abs(getattr(tendon, control)), 1e-9)
-        while miss(high) * (0.0 - target.value) > 0:  # the tip starts at 0 at zero load
-            low, high = high, 2 * high
-            if high > 1e6 * max(abs(getattr(tendon, control)), 1.0):
-                raise ConfigError(
-                    f"[inverse] {target.key} = {target.value:g} is not reachable by the "
-                    f"tendon's {control}"
-                )
-        bracket = (low, high)
     try:
+        if bracket is None:
+            bracket = _bracket_from_sweep(sweep or [], control, target)
+        if bracket is None:
+            bracket = _bracket_by_doubling(solve, target, control, unit,
+                                           max(abs(getattr(tendon, control)), 1e-9))
         value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
         final = solve(value)
     finally:
@@ -261,6 +254,34 @@ def solve_inverse(
     if target.key == "tip_angle":
         answer["target_tip_angle"] = target.value
     return answer
+
+
+def _bracket_by_doubling(solve, target: InverseTarget, control: str, unit: str, start: float):
+    """(low, high) values of ``control`` whose tip values straddle the target, doubling from
+    ``start`` (the tip is 0 at zero load); a clear ConfigError when the target lies the other
+    way or beyond the last value with an equilibrium."""
+    low, high, reached = 0.0, start, 0.0
+    what = f"[inverse] {target.key} = {target.value:g}"
+    while True:
+        try:
+            now = solve(high)["tip"][target.component]
+        except ConfigError:
+            if low == 0.0:
+                raise
+            raise ConfigError(
+                f"{what} is not reached: the largest {control} with an equilibrium, {low:g} "
+                f"{unit}, gives {reached:.6g}; at {high:g} {unit} load stepping failed"
+            ) from None
+        if (now - target.value) * (0.0 - target.value) <= 0:
+            return low, high
+        if now * target.value < 0:
+            raise ConfigError(
+                f"{what} cannot be reached: the tendon moves the tip the other way "
+                f"({target.component} = {now:.6g} at {control} {high:g} {unit})"
+            )
+        low, high, reached = high, 2 * high, now
+        if high > 1e6 * max(start, 1.0):
+            raise ConfigError(f"{what} is not reachable by the tendon's {control}")
 
 
 def _bracket_from_sweep(steps: list[dict], control: str, target: InverseTarget):

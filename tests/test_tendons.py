@@ -257,6 +257,8 @@ def test_inverse_reaches_tip_targets_with_either_control(control, key, value):
         ({"tip_angle": 0.2}, 2, "needs exactly one tendon"),
         ({"tip_w": 0.2}, 1, "tip_w"),
         ({"tip_angle": "big"}, 1, "tip_angle"),
+        ({"tip_angle": -0.3}, 1, "cannot be reached: the tendon moves the tip the other way"),
+        ({"tip_angle": 10.0}, 1, "is not reached: the largest tension with an equilibrium"),
     ],
 )
 def test_inverse_config_mistakes(tmp_path, capsys, inverse, tendons, words):
