@@ -156,6 +156,10 @@ def run_modes(args, config: dict, comm) -> int:
     ):
         kind = "bending" if share > 0.5 else "axial"
         _say(comm, f"mode {index}: {frequency:.6g} Hz ({kind})")
+    found = len(summary["frequencies_hz"])
+    if found < modes["count"]:
+        _say(comm, f"fe-beam modes: note: [modes] count = {modes['count']} asked for more modes "
+                   f"than were found ({found}; the model has {summary['dofs']} dofs)", sys.stderr)
     _say(comm, f"results in {args.out}")
     return 0
 

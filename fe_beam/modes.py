@@ -77,9 +77,12 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     eps.solve()
     pairs = []
     vector = K.createVecRight()
+    fixed = np.unique(np.concatenate(
+        [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in problem.bcs] or [np.empty(0, int)]
+    )).astype(np.int64)
     for i in range(eps.getConverged()):
         value = eps.getEigenpair(i, vector).real
-        if value > 0 and math.isfinite(value):
+        if value > 0 and math.isfinite(value) and not _lives_on_fixed_dofs(vector, fixed):
             shape = fem.Function(problem.space, name=f"mode_{len(pairs) + 1}")
             vector.copy(compat.vector_of(shape))
             compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
@@ -98,6 +101,16 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
             array /= scale
     shares = [_transverse_share(problem, shape) for _, shape in pairs]
     return Modes([f for f, _ in pairs], [s for _, s in pairs], shares)
+
+
+def _lives_on_fixed_dofs(vector: PETSc.Vec, fixed: np.ndarray) -> bool:
+    """A spurious pair of the Dirichlet rows (K: identity, M: zero): a true mode vanishes on
+    the fixed dofs, this one is mostly there."""
+    array = vector.getArray(readonly=True)
+    on_fixed = float(np.sum(array[fixed] ** 2))
+    total = float(np.sum(array**2))
+    on_fixed, total = (vector.getComm().tompi4py().allreduce(x) for x in (on_fixed, total))
+    return on_fixed > 1e-6 * total
 
 
 def _transverse_share(problem: BeamProblem, shape: fem.Function) -> float:

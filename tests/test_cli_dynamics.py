@@ -65,6 +65,16 @@ def test_modes_run_writes_frequencies(tmp_path, capsys):
     assert frequencies[0] == pytest.approx(first, rel=1e-3)
 
 
+def test_modes_count_beyond_the_model_is_noted(tmp_path, capsys):
+    """6 P2 elements, clamped: 3 x 13 - 3 = 36 free dofs, so exactly 36 modes (the Dirichlet
+    rows' spurious pair, K = 1 against M = 0, is not one)."""
+    code, err, out, _ = run(tmp_path, "modes", with_change("modes", "count", 500), capsys)
+    assert code == 0, err
+    found = len(json.loads((out / "summary.json").read_text())["frequencies_hz"])
+    assert found == 36
+    assert f"count = 500 asked for more modes than were found ({found}" in err
+
+
 @pytest.mark.parametrize(
     ("table", "key", "value", "needle"),
     [
