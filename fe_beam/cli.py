@@ -182,6 +182,8 @@ def run_solid_command(args, config: dict, comm) -> int:
     from fe_beam.solid.driver import run_solid
 
     summary = run_solid(config, args.out, comm, progress=not args.quiet)
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam solid: note: {note}", sys.stderr)
     for step in summary["steps"][-1:]:
         tip = step["tip"]
         _say(comm, f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "

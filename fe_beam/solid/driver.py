@@ -116,6 +116,9 @@ UNSUPPORTED_LOADS = (
 SOLID_ONLY_TABLES = ("solid", "compare", "refine")
 
 
+NEARLY_INCOMPRESSIBLE_NU = 0.49  # above it, the displacement formulation gets a note
+
+
 @dataclass(frozen=True)
 class SolidConfig:
     """A validated ``fe-beam solid`` configuration.
@@ -142,6 +145,7 @@ class SolidConfig:
     rod: StaticConfig | None
     rod_note: str = ""
     raw: dict = field(default_factory=dict)
+    notes: tuple[str, ...] = ()
 
     @property
     def length(self) -> float:
@@ -466,6 +470,13 @@ def parse_solid(raw: dict) -> SolidConfig:
         replace, rod.solver, linear_solver=solid["solver"], petsc_options=solid["petsc_options"]
     )
     planar = tip_force[2] == 0
+    notes = []
+    if formulation == "displacement" and law.poisson_ratio > NEARLY_INCOMPRESSIBLE_NU:
+        notes.append(
+            f"[solid] formulation = \"displacement\" with nu = {law.poisson_ratio:.6g}: "
+            "displacement elements lock as nu -> 0.5 (too stiff, slow Newton); "
+            "formulation = \"mixed-up\" is made for this"
+        )
     return SolidConfig(
         geometry=geometry,
         sizes=sizes,
@@ -484,6 +495,7 @@ def parse_solid(raw: dict) -> SolidConfig:
         rod=rod if planar else None,
         rod_note="" if planar else "no rod comparison: the tip force has a z component",
         raw=copy.deepcopy(raw),
+        notes=tuple(notes),
     )
 
 
@@ -747,6 +759,7 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         "wall_time_s": 0.0,
         "model": config.model_summary(),
         "rod": None,
+        "notes": list(config.notes),
     }
 
     def save() -> None:

@@ -183,6 +183,13 @@ def test_default_laws_match_E_and_nu_at_small_strain():
     assert mr.c10 == pytest.approx(mr.c01) and 2 * (mr.c10 + mr.c01) == pytest.approx(0.6e6 / 2.9)
 
 
+@pytest.mark.parametrize(("nu", "formulation", "noted"), [
+    (0.45, "displacement", False), (0.495, "displacement", True), (0.495, "mixed-up", False)])
+def test_nearly_incompressible_displacement_formulation_is_noted(nu, formulation, noted):
+    config = parse_solid(edited(FINGER, {"material.nu": nu, "solid.formulation": formulation}))
+    assert any("mixed-up" in note and "lock" in note for note in config.notes) == noted
+
+
 def test_explicit_constants_and_presets_override():
     yeoh = parse_solid(edited(FINGER, {"solid.material": "yeoh", "solid.c20": 1e3})).material
     assert yeoh.c20 == 1e3 and yeoh.young_modulus == pytest.approx(0.6e6)
