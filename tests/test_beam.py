@@ -169,3 +169,89 @@ def test_parallel_equals_serial():
     alone = tip(model, comm=MPI.COMM_SELF)
     for key in ("u", "v", "theta"):
         assert together[key] == pytest.approx(alone[key], rel=1e-10, abs=1e-12)
+
+
+# --- other loads and sections --------------------------------------------------------------------
+GA = E / (2 * (1 + NU)) * H * H
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_distributed_load_matches_timoshenko(law):
+    """Small uniform load q on a cantilever: v(L) = q L^4 / (8 EI) + q L^2 / (2 GA)."""
+    q = 1e-5 * EI
+    model = cantilever(law, "none", elements=8, distributed=(0.0, q))
+    expected = q / (8 * EI) + q / (2 * GA)
+    end = tip(model, steps=1)
+    assert end["v"] == pytest.approx(expected, rel=2e-4)
+    assert end["theta"] == pytest.approx(q / (6 * EI), rel=2e-4)
+
+
+def test_gravity_is_the_distributed_weight_at_large_deflection():
+    """rho A g per unit length, deflected far from linear (q L^3 / EI = 8)."""
+    from dataclasses import replace
+
+    rho, g = 1000.0, -9.81
+    weight = rho * H * H * g
+    base = cantilever("nonstandard", "none", elements=16)
+    scale = 8 * EI / abs(weight)  # gravity scaled through the density: same weight
+    heavy = replace(base, material=Material(E, nu=NU, rho=rho * scale),
+                    loads=Loads(gravity=(0.0, g)))
+    loaded = replace(base, loads=Loads(distributed=(0.0, weight * scale)))
+    by_gravity, by_load = tip(heavy, steps=8), tip(loaded, steps=8)
+    assert by_gravity["v"] < -0.5  # large deflection
+    for key in ("u", "v", "theta"):
+        assert by_gravity[key] == pytest.approx(by_load[key], rel=1e-12, abs=1e-14)
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_simply_supported_uniform_load(law):
+    """Pinned-roller, small uniform load: end rotation q L^3 / (24 EI) (shear does not change
+    it); the roller end slides in by the second-order shortening only."""
+    from dataclasses import replace
+
+    q = -1e-5 * EI
+    model = replace(cantilever(law, "none", elements=8, distributed=(0.0, q)),
+                    supports=Supports("pinned", "roller"))
+    end = tip(model, steps=1)
+    assert end["theta"] == pytest.approx(-q / (24 * EI), rel=1e-4)
+    assert end["v"] == 0.0
+    assert abs(end["u"]) < 1e-6 * abs(q / (24 * EI))
+
+
+def test_t_section_in_pure_bending_has_the_uniform_state_of_the_nonstandard_law():
+    """Tip moment on a T-section (I3 != 0): N = 0 and T = 0 everywhere, so gamma = 0, and the
+    uniform (eps, kappa) solve N(eps, kappa) = 0, M(eps, kappa) = M0 with the MODEL.md laws
+    (the I3 and I4 terms couple stretching to bending). The tip is on the circle of radius
+    lambda / kappa: theta = kappa L, u = lambda sin(kappa L) / kappa - L, v = lambda (1 -
+    cos(kappa L)) / kappa."""
+    from dataclasses import replace
+
+    from scipy.optimize import fsolve
+
+    section = Section("t-section", {"b": 0.1, "h": 0.1, "tf": 0.02, "tw": 0.02})
+    p = section.properties(0.0)
+    moment = 2.0 * E * p.I  # kappa about 2 / m, kappa h ~ 0.2: I3, I4 terms matter
+    assert abs(p.I3) * 2.0 > 0.02 * p.I  # I3 kappa / I: a few per cent of coupling
+
+    def laws(unknowns):
+        eps, kappa = unknowns
+        stretch = math.sqrt(2 * eps + 1)
+        normal = (eps / stretch * E * p.A + 3 / (2 * stretch) * kappa**2 * E * p.I
+                  + kappa**3 * E * p.I3 / (2 * stretch**2))
+        bending = ((3 * eps + 1) * kappa * E * p.I + 1.5 * stretch * kappa**2 * E * p.I3
+                   + 0.5 * kappa**3 * E * p.I4)
+        return [normal, bending - moment]
+
+    eps, kappa = fsolve(laws, [0.0, moment / (E * p.I)], xtol=1e-13)
+    assert np.allclose(laws([eps, kappa]), 0.0, atol=1e-9 * moment)
+    stretch = math.sqrt(2 * eps + 1)
+    exact = (stretch * math.sin(kappa) / kappa - 1.0, stretch * (1 - math.cos(kappa)) / kappa)
+    errors = []
+    for elements in (10, 20):
+        model = replace(cantilever("nonstandard", "none", elements=elements, tip_moment=moment),
+                        section=section)
+        end = tip(model, steps=4)
+        assert end["theta"] == pytest.approx(kappa, rel=1e-9)  # theta is linear: exact in P2
+        errors.append(math.hypot(end["u"] - exact[0], end["v"] - exact[1]))
+    print(f"T-section circle: eps = {eps:.4e}, kappa = {kappa:.6f}, tip errors {errors}")
+    assert errors[1] < 1e-7 and errors[1] < errors[0] / 8  # the arc's P2 interpolation error
