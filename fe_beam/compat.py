@@ -28,6 +28,7 @@ __all__ = [
     "gmsh_model_to_mesh",
     "local_array",
     "locate_dofs_geometrical",
+    "owned_bc_dofs",
     "locate_entities_boundary",
     "meshtags",
     "set_bc",
@@ -100,6 +101,12 @@ def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
     from dolfinx.io import gmshio
 
     return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+def owned_bc_dofs(bcs) -> np.ndarray:
+    """Sorted local indices (block size expanded) of the owned dofs fixed by ``bcs``."""
+    rows = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
+    return np.unique(np.concatenate(rows)) if rows else np.empty(0, dtype=np.int32)
 
 
 def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:

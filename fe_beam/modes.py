@@ -77,9 +77,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     eps.solve()
     pairs = []
     vector = K.createVecRight()
-    fixed = np.unique(np.concatenate(
-        [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in problem.bcs] or [np.empty(0, int)]
-    )).astype(np.int64)
+    fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
     for i in range(eps.getConverged()):
         value = eps.getEigenpair(i, vector).real
         if value > 0 and math.isfinite(value) and not _lives_on_fixed_dofs(vector, fixed):

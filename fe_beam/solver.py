@@ -202,9 +202,7 @@ class NonlinearProblem:
 
     def _owned_bc_rows(self) -> np.ndarray:
         start = self.b.getOwnershipRange()[0]
-        rows = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in self.bcs]
-        local = np.unique(np.concatenate(rows)) if rows else np.empty(0, dtype=np.int32)
-        return (local + start).astype(PETSc.IntType)
+        return (compat.owned_bc_dofs(self.bcs) + start).astype(PETSc.IntType)
 
     def _set_state(self, x: PETSc.Vec) -> None:
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)

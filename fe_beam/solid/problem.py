@@ -489,9 +489,7 @@ class _PullInSolver:
         for c in cables:
             c.target_pull_in = 0.0
         start = self.problem.b.getOwnershipRange()[0]
-        rows = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in self.problem.bcs]
-        local = np.unique(np.concatenate(rows)) if rows else np.empty(0, dtype=np.int32)
-        self._bc_rows = (local + start).astype(PETSc.IntType)
+        self._bc_rows = (compat.owned_bc_dofs(self.problem.bcs) + start).astype(PETSc.IntType)
 
     def _gradient_vectors(self, x: PETSc.Vec) -> list[PETSc.Vec]:
         vectors = []
