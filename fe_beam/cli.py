@@ -75,6 +75,13 @@ def _say(comm, text: str, stream=None) -> None:
 
 def _finish(comm, result, out) -> int:
     """The closing line of a static-type run, and its exit code."""
+    stability = result.steps[-1].get("stability") if result.steps else None
+    if stability and not stability["stable"]:
+        _say(comm, "fe-beam: warning: the final equilibrium is unstable (the tangent stiffness "
+                   f"has {stability['energy_decreasing_directions']} direction(s) of decreasing "
+                   "energy): the beam would buckle or snap away from it. A small imperfection "
+                   "(e.g. a tiny transverse load) lets load stepping follow the stable branch",
+             sys.stderr)
     _say(
         comm,
         f"{len(result.steps)} load steps, {result.dofs} dofs, "

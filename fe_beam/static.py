@@ -6,6 +6,9 @@ import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+import scipy.linalg
+import scipy.sparse
 from mpi4py import MPI
 
 from fe_beam import compat
@@ -57,6 +60,10 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
         "tip": problem.end_values("xL"),
         "newton_iterations": step.iterations,
     }
+
+
+# the stability check is a dense eigenvalue problem: O(n^3), a few tenths of a second here
+STABILITY_MAX_DOFS = 1500
 
 
 class StaticContinuation:
@@ -112,6 +119,52 @@ class StaticContinuation:
                                             self.config.max_rotation_jump),
             progress=progress,
         )
+
+    def stability(self) -> dict | None:
+        """Is the current equilibrium stable? The inertia of the tangent stiffness (dense, so
+        only for serial problems up to STABILITY_MAX_DOFS dofs; None when not checked, or when
+        the loads are not conservative: follower forces, pull-in control).
+
+        With multipliers, the tangent stiffness is restricted to the directions that keep the
+        constraints. A negative eigenvalue is a direction in which the energy decreases: the
+        beam would buckle or snap away from this state.
+        """
+        problem, nonlinear = self.problem, self.snes.problem
+        pull_in = self.tendons is not None and any(
+            t.controlled_by_pull_in for t in self.tendons.tendons)
+        size = problem.space.dofmap.index_map.size_global * problem.space.dofmap.index_map_bs
+        if (problem.comm.size > 1 or size > STABILITY_MAX_DOFS or pull_in
+                or self.config.model.loads.follower):
+            return None
+        state = compat.vector_of(nonlinear.w).copy()
+        try:
+            nonlinear.jacobian(None, state, nonlinear.A, nonlinear.A)
+            rows, columns, values = nonlinear.A.getValuesCSR()
+        finally:
+            state.destroy()
+        tangent = scipy.sparse.csr_matrix((values, columns, rows), shape=(size, size)).toarray()
+        tangent = 0.5 * (tangent + tangent.T)
+        multiplier = np.zeros(size, dtype=bool)
+        for i in range(len(problem.multipliers)):
+            multiplier[np.asarray(compat.sub_space_collapsed(problem.space, 3 + i)[1])] = True
+        stiffness = tangent[~multiplier][:, ~multiplier]
+        # Jacobi scaling is a congruence (same inertia) that brings the axial and bending
+        # scales together: unscaled, a buckling direction sits below the round-off of the
+        # axial stiffness (EA / h ~ 1e10 against ~ 1)
+        scale = np.sqrt(np.abs(np.diag(stiffness)))
+        scale[scale == 0.0] = 1.0
+        stiffness /= scale[:, None] * scale[None, :]
+        if multiplier.any():
+            # the energy on the constraint-preserving directions (null space of the
+            # constraint rows): its negative eigenvalues are the unstable directions
+            constraints = tangent[multiplier][:, ~multiplier] / scale[None, :]
+            norms = np.linalg.norm(constraints, axis=1)
+            constraints = constraints[norms > 0] / norms[norms > 0, None]
+            basis = scipy.linalg.null_space(constraints)
+            stiffness = basis.T @ stiffness @ basis
+        eigenvalues = np.linalg.eigvalsh(stiffness)
+        unstable = int(np.sum(eigenvalues < -1e-9 * np.abs(eigenvalues).max()))
+        return {"stable": unstable == 0, "energy_decreasing_directions": unstable}
 
     def restart(self) -> None:
         """Back to the unloaded reference state."""
@@ -178,6 +231,9 @@ def solve_static(
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
         result.status = "converged"
+        stability = run.stability() if record_shapes else None
+        if stability is not None:
+            result.steps[-1]["stability"] = stability
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     finally:
