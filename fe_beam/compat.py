@@ -27,6 +27,7 @@ __all__ = [
     "function_space",
     "gmsh_model_to_mesh",
     "local_array",
+    "facet_vertex_coordinates",
     "locate_dofs_geometrical",
     "owned_bc_dofs",
     "locate_entities_boundary",
@@ -101,6 +102,18 @@ def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
     from dolfinx.io import gmshio
 
     return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+def facet_vertex_coordinates(msh: mesh.Mesh, facets: np.ndarray) -> np.ndarray:
+    """(k, 3, 3) coordinates of the three vertices of each local triangle facet."""
+    from dolfinx.cpp.mesh import entities_to_geometry
+
+    facets = np.asarray(facets, dtype=np.int32)
+    if len(facets) == 0:
+        return np.zeros((0, 3, 3))
+    cpp_mesh = getattr(msh, "_mesh", getattr(msh, "_cpp_object", msh))  # 0.5: _mesh
+    nodes = entities_to_geometry(cpp_mesh, msh.topology.dim - 1, facets, False)
+    return msh.geometry.x[nodes[:, :3]]
 
 
 def owned_bc_dofs(bcs) -> np.ndarray:

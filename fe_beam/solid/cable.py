@@ -84,9 +84,15 @@ class TendonCable:
     space : displacement space (vector Lagrange, or ``W.sub(0)`` of a mixed space).
     points : (n, 3) reference coordinates of the tendon's mesh vertices, entry to anchor.
     tension : tau (N); set ``cable.tension`` between load steps.
+    anchor_patch : optional ``(vertices (m, 3), weights (m,))``: the anchor is then not the
+        last vertex but the weighted average x_a = sum_j w_j x_j of these mesh vertices (an
+        anchor plate), with sum_j w_j = 1 and sum_j w_j X_j = the last point, so that the
+        tendon's end force has the same resultant and moment but is spread over the patch
+        instead of acting on one vertex (a singularity of the continuum).
     """
 
-    def __init__(self, space, points: np.ndarray, tension: float = 0.0, name: str = "tendon"):
+    def __init__(self, space, points: np.ndarray, tension: float = 0.0, name: str = "tendon",
+                 anchor_patch: tuple[np.ndarray, np.ndarray] | None = None):
         self.points = np.asarray(points, dtype=float).reshape(-1, 3)
         if len(self.points) < 2:
             raise ValueError(f"cable {name!r}: needs at least 2 points, got {len(self.points)}")
@@ -94,6 +100,19 @@ class TendonCable:
         self.name = name
         self.tension = float(tension)
         self.dofs = locate_vertex_dofs(space, self.points)
+        self.patch_points = self.patch_dofs = self.patch_weights = None
+        if anchor_patch is not None:
+            vertices, weights = (np.asarray(a, dtype=float) for a in anchor_patch)
+            self.patch_points = vertices.reshape(-1, 3)
+            self.patch_weights = weights.reshape(-1)
+            anchor = self.patch_weights @ self.patch_points
+            scale = np.ptp(self.points, axis=0).max()
+            if (len(self.patch_weights) != len(self.patch_points)
+                    or abs(self.patch_weights.sum() - 1) > 1e-10
+                    or np.abs(anchor - self.points[-1]).max() > 1e-9 * scale):
+                raise ValueError(f"cable {name!r}: the anchor patch's weights must sum to 1 "
+                                 "and average its vertices to the last point")
+            self.patch_dofs = locate_vertex_dofs(space, self.patch_points)
         self._reference_length = self.length_of(self.points)
 
     # --- geometry ---------------------------------------------------------------------------
@@ -107,17 +126,23 @@ class TendonCable:
     def reference_length(self) -> float:
         return self._reference_length
 
-    def displacements(self, x: PETSc.Vec) -> np.ndarray:
-        """(n, 3) vertex displacements gathered from the owners of the dofs in ``x``."""
+    def _gather(self, x: PETSc.Vec, dofs: np.ndarray) -> np.ndarray:
         start, end = x.getOwnershipRange()
-        owned = (self.dofs >= start) & (self.dofs < end)
-        values = np.zeros(self.dofs.shape)
-        array = x.getArray(readonly=True)
-        values[owned] = array[self.dofs[owned] - start]
+        owned = (dofs >= start) & (dofs < end)
+        values = np.zeros(dofs.shape)
+        values[owned] = x.getArray(readonly=True)[dofs[owned] - start]
         return global_sum(self.comm, values)
 
+    def displacements(self, x: PETSc.Vec) -> np.ndarray:
+        """(n, 3) vertex displacements gathered from the owners of the dofs in ``x``; with an
+        anchor patch, the last one is the patch's weighted average."""
+        values = self._gather(x, self.dofs)
+        if self.patch_dofs is not None:
+            values[-1] = self.patch_weights @ self._gather(x, self.patch_dofs)
+        return values
+
     def positions(self, x: PETSc.Vec) -> np.ndarray:
-        """Deformed vertex positions x_k = X_k + u_k."""
+        """Deformed positions x_k = X_k + u_k (the last one: the anchor)."""
         return self.points + self.displacements(x)
 
     def length(self, x: PETSc.Vec) -> float:
@@ -162,6 +187,9 @@ class TendonCable:
         g = self.tension * self.length_gradient(self.positions(x))
         start, end = b.getOwnershipRange()
         rows = self.dofs.ravel()
+        if self.patch_dofs is not None:  # the anchor's force, spread by the weights
+            rows = np.concatenate([self.dofs[:-1].ravel(), self.patch_dofs.ravel()])
+            g = np.concatenate([g[:-1], np.outer(self.patch_weights, g[-1])])
         mine = (rows >= start) & (rows < end)
         if np.any(mine):
             b.setValues(
@@ -175,11 +203,18 @@ class TendonCable:
         K = self.tension * self.segment_stiffness(self.positions(x))
         start, end = A.getOwnershipRange()
         for k in range(len(K)):
-            dofs = np.concatenate([self.dofs[k], self.dofs[k + 1]])
+            if k == len(K) - 1 and self.patch_dofs is not None:
+                # x_a = sum_j w_j x_j: the anchor's rows and columns spread by the weights
+                w = self.patch_weights
+                dofs = np.concatenate([self.dofs[k], self.patch_dofs.ravel()])
+                block = np.block([[K[k], -np.kron(w[None, :], K[k])],
+                                  [-np.kron(w[:, None], K[k]), np.kron(np.outer(w, w), K[k])]])
+            else:
+                dofs = np.concatenate([self.dofs[k], self.dofs[k + 1]])
+                block = np.block([[K[k], -K[k]], [-K[k], K[k]]])
             mine = (dofs >= start) & (dofs < end)
             if not np.any(mine):
                 continue
-            block = np.block([[K[k], -K[k]], [-K[k], K[k]]])
             A.setValues(
                 dofs[mine].astype(PETSc.IntType),
                 dofs.astype(PETSc.IntType),

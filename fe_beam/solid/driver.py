@@ -49,7 +49,13 @@ from fe_beam.outputs import _pyplot, atomic_write_json, atomic_write_text, write
 from fe_beam.solid.export import DisplacementXDMF
 from fe_beam.solid.geometry import FingerGeometry, MeshSizes, TendonPath, create_finger_mesh
 from fe_beam.solid.materials import LAWS, SILICONE_PRESETS, VOLUMETRIC_LAWS, HyperelasticLaw
-from fe_beam.solid.problem import Discretization, SolidFingerProblem, TendonLoad, evaluate_at_points
+from fe_beam.solid.problem import (
+    ANCHORS,
+    Discretization,
+    SolidFingerProblem,
+    TendonLoad,
+    evaluate_at_points,
+)
 from fe_beam.solver import LoadStepping, LoadSteppingFailed, SolverSettings, run_load_stepping
 
 __all__ = [
@@ -103,6 +109,8 @@ SOLID_KEYS: dict[str, Key] = {
     "solver": Key((str,), "mumps", "mumps | gamg (gamg: displacement formulation only)"),
     "petsc_options": Key((dict,), {}, "PETSc options of the 3D solve, without prefix"),
     "backbone_points": Key((int,), 21, "number of sections sampled along x for the backbone"),
+    "anchor": Key((str,), "face", "face | point: a tendon ending on the tip face pulls on the "
+                  "whole face as a plate (same force and moment), or on its last vertex"),
 }
 MATERIAL_KEYS = SCHEMA["material"] | {
     "E": Key(NUMBER, None, "Young's modulus [Pa] (not with a [solid] preset)")
@@ -146,6 +154,7 @@ class SolidConfig:
     rod_note: str = ""
     raw: dict = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    anchor: str = "face"
 
     @property
     def length(self) -> float:
@@ -168,6 +177,7 @@ class SolidConfig:
             "mesh": {"size": s.size, "tendon": s.tendon, "clamp": s.clamp,
                      "tendon_distance": s.tendon_distance, "clamp_distance": s.clamp_distance},
             "linear_solver": self.solver.linear_solver,
+            "anchor": self.anchor,
             "tip_force": list(self.tip_force),
             "tendons": [
                 {"name": name, "points": [list(p) for p in path.points],
@@ -427,6 +437,9 @@ def parse_solid(raw: dict) -> SolidConfig:
         if not law.supports_mixed:
             raise ConfigError("[solid] formulation = \"mixed-up\" needs an isochoric/volumetric "
                               "split: use material = neo-hookean, mooney-rivlin or yeoh, not svk")
+    if solid["anchor"] not in ANCHORS:
+        raise ConfigError(f"[solid] anchor must be one of {', '.join(ANCHORS)}; "
+                          f"got {solid['anchor']!r}")
     if solid["solver"] not in SOLVERS:
         raise ConfigError(f"[solid] solver must be one of {', '.join(SOLVERS)}; "
                           f"got {solid['solver']!r}")
@@ -496,6 +509,7 @@ def parse_solid(raw: dict) -> SolidConfig:
         rod_note="" if planar else "no rod comparison: the tip force has a z component",
         raw=copy.deepcopy(raw),
         notes=tuple(notes),
+        anchor=solid["anchor"],
     )
 
 
@@ -524,6 +538,7 @@ class SolidRun:
             discretization=config.discretization,
             solver=config.solver,
             prefix=f"fe_beam_solid{next(_RUNS)}_",
+            anchor=config.anchor,
         )
         self.load_factor = 0.0
         self._theta = 0.0

@@ -19,8 +19,9 @@ Post-processing (all collective, MPI-reduced, identical on every rank):
 - backbone: deformed area centroids of the cross-sections X = x_i, by Gauss-Legendre quadrature
   (n x n points) of X + u(X) over each reference section;
 - largest principal stretch: max over cells of sqrt(max eig C) at the P2 nodes of each cell;
-  the "bulk" value leaves out the clamp edges and a ball of one section height around each
-  loaded tendon end, where the idealised model's strains are singular (`bulk_mask`).
+  the "bulk" value leaves out the clamp edges and one section height around each loaded tendon
+  end (the tip face's slab for an end on it), where the idealised model's strains are
+  singular (`bulk_mask`).
 
 Nothing here writes files (see `fe_beam.solid.export`).
 """
@@ -61,6 +62,8 @@ __all__ = [
 ]
 
 FORMULATIONS = ("displacement", "mixed")
+# where a tendon ending on the tip face pulls: its last mesh vertex, or the whole face as a plate
+ANCHORS = ("point", "face")
 
 
 @dataclass(frozen=True)
@@ -141,7 +144,11 @@ class SolidFingerProblem:
         discretization: Discretization | None = None,
         solver: SolverSettings | None = None,
         prefix: str = "fe_beam_solid_",
+        anchor: str = "face",
     ):
+        if anchor not in ANCHORS:
+            raise ValueError(f"anchor must be one of {', '.join(ANCHORS)}, got {anchor!r}")
+        self.anchor = anchor
         self.finger = finger
         self.mesh = finger.mesh
         self.comm: MPI.Comm = self.mesh.comm
@@ -253,15 +260,37 @@ class SolidFingerProblem:
             raise RuntimeError("the clamp face (facet tag CLAMP_TAG) is empty")
 
     def _cables(self) -> None:
-        self.cables = [
-            TendonCable(self.V, chain, 0.0, name=tendon.name)
-            for chain, tendon in zip(
-                self.finger.tendon_chains, self.finger.geometry.tendons, strict=True
-            )
-        ]
+        length = self.finger.geometry.length
+        face = self._tip_face_vertices() if self.anchor == "face" else None
+        self.cables = []
+        for chain, tendon in zip(self.finger.tendon_chains, self.finger.geometry.tendons,
+                                 strict=True):
+            patch = None
+            if face is not None and abs(chain[-1][0] - length) <= 1e-9 * length:
+                patch = (face[0], plate_weights(face[0], face[1], chain[-1]))
+            self.cables.append(TendonCable(self.V, chain, 0.0, name=tendon.name,
+                                           anchor_patch=patch))
+
+    def _tip_face_vertices(self) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices (m, 3), lumped areas (m,)) of the whole tip face, on every rank."""
+        fdim = self.mesh.topology.dim - 1
+        facets = self.finger.facet_tags.find(TIP_TAG)
+        facets = facets[facets < self.mesh.topology.index_map(fdim).size_local]
+        triangles = compat.facet_vertex_coordinates(self.mesh, facets)
+        triangles = np.concatenate(self.comm.allgather(triangles))
+        areas = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
+                                              triangles[:, 2] - triangles[:, 0]), axis=1)
+        vertices, index = np.unique(triangles.reshape(-1, 3).round(12), axis=0,
+                                    return_inverse=True)
+        lumped = np.bincount(index.reshape(-1), weights=np.repeat(areas / 3, 3),
+                             minlength=len(vertices))
+        return vertices, lumped
 
     def _nonlinear_solver(self, prefix: str) -> None:
         self.problem = NonlinearProblem(self.residual, self.w, self.bcs, contributions=self.cables)
+        if any(c.patch_dofs is not None for c in self.cables):
+            # an anchor plate couples the whole tip face: entries outside the volume pattern
+            self.problem.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         nullspace = None
         if self.p is None and self.settings.linear_solver == "gamg":
             nullspace = rigid_body_modes(self.W)
@@ -449,22 +478,40 @@ class SolidFingerProblem:
         }
 
 
+def plate_weights(vertices: np.ndarray, lumped: np.ndarray, anchor: np.ndarray) -> np.ndarray:
+    """Weights w_j of the face vertices for an anchor plate at ``anchor``: closest (in the
+    lumped-area metric) to a uniform traction, with sum w_j = 1 and sum w_j (y_j, z_j) = the
+    anchor's (y, z), so that the spread force has the point force's resultant and moment. The
+    result is a linearly varying traction (Navier's distribution of an eccentric force)."""
+    base = lumped / lumped.sum()
+    moments = np.vstack([np.ones(len(vertices)), vertices[:, 1], vertices[:, 2]])
+    target = np.array([1.0, anchor[1], anchor[2]])
+    system = moments @ (base[:, None] * moments.T)
+    multipliers = np.linalg.solve(system, target - moments @ base)
+    return base * (1.0 + moments.T @ multipliers)
+
+
 def bulk_mask(points: np.ndarray, chains: Sequence[np.ndarray], geometry) -> np.ndarray:
     """Boolean mask of the reference (n, 3) ``points`` of the bulk: farther than half the base
-    height H(0) / 2 from the clamped face, and outside a ball of radius H(x) around every
-    tendon end not on the clamp.
+    height H(0) / 2 from the clamped face, and farther than the section height H(x) from every
+    tendon end not on the clamp (for an end on the tip face: from the whole tip face, where a
+    face anchor spreads the force).
 
-    Both zones hold singular strains of the idealised model that grow without bound under mesh
-    refinement: the edges of the fully clamped face, and the cable's end force acting on one
-    vertex (a real finger spreads it with an anchor plate). The maximum over the rest, at a fixed
-    distance from them, converges.
+    These zones hold singular strains of the idealised model that grow without bound under mesh
+    refinement: the edges of the fully clamped face, the cable's end force acting on one vertex
+    (point anchor), the edges of the loaded tip face (face anchor). The maximum over the rest,
+    at a fixed distance from them, converges.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
+    length = geometry.length
     inside = points[:, 0] >= 0.5 * float(geometry.height(0.0))
     for chain in chains:
         for end in (np.asarray(chain[0], float), np.asarray(chain[-1], float)):
-            if end[0] > 1e-12 * geometry.length:
-                inside &= np.linalg.norm(points - end, axis=1) >= float(geometry.height(end[0]))
+            radius = float(geometry.height(end[0]))
+            if end[0] >= length * (1 - 1e-12):
+                inside &= points[:, 0] <= length - radius
+            elif end[0] > 1e-12 * length:
+                inside &= np.linalg.norm(points - end, axis=1) >= radius
     return inside
 
 

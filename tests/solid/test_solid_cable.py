@@ -90,11 +90,28 @@ def test_chains_lie_on_mesh_edges(finger):
         assert len(chain) - 1 >= tendon.length / 0.35  # the tendon size field (0.3) acts
 
 
+def tip_face_plate(finger, anchor):
+    """All tip-face vertices (gathered from every rank) with anchor-plate weights."""
+    from fe_beam.solid.problem import plate_weights
+
+    x = finger.mesh.geometry.x
+    local = x[np.abs(x[:, 0] - L) < 1e-12]
+    vertices = np.unique(np.concatenate(finger.comm.allgather(local)).round(12), axis=0)
+    return vertices, plate_weights(vertices, np.ones(len(vertices)), anchor)
+
+
 @pytest.mark.mpi
+@pytest.mark.parametrize("anchor", ["point", "plate"])
 @pytest.mark.parametrize("kind", ["P1", "P2", "Taylor-Hood"])
-def test_residual_and_jacobian_match_finite_differences(finger, kind):
+def test_residual_and_jacobian_match_finite_differences(finger, kind, anchor):
     root, space = spaces(finger.mesh)[kind]
-    cable = TendonCable(space, finger.tendon_chains[1], tension=2.5)
+    if anchor == "plate":  # the straight tendon ends on the tip face
+        chain = finger.tendon_chains[0]
+        patch = tip_face_plate(finger, chain[-1])
+        assert len(patch[1]) > 4 and patch[1] @ patch[0] == pytest.approx(chain[-1])
+        cable = TendonCable(space, chain, tension=2.5, anchor_patch=patch)
+    else:
+        cable = TendonCable(space, finger.tendon_chains[1], tension=2.5)
     rng = np.random.default_rng(1 + finger.comm.rank)
     x = new_vector(root)
     x.setArray(rng.uniform(-0.05, 0.05, x.getLocalSize()))
