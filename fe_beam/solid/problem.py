@@ -491,21 +491,33 @@ def plate_weights(vertices: np.ndarray, lumped: np.ndarray, anchor: np.ndarray) 
     return base * (1.0 + moments.T @ multipliers)
 
 
+TENDON_TUBE = 0.1  # radius of the tube around a tendon left out of the bulk, / section height
+
+
 def bulk_mask(points: np.ndarray, chains: Sequence[np.ndarray], geometry) -> np.ndarray:
     """Boolean mask of the reference (n, 3) ``points`` of the bulk: farther than half the base
     height H(0) / 2 from the clamped face, and farther than the section height H(x) from every
     tendon end not on the clamp (for an end on the tip face: from the whole tip face, where a
     face anchor spreads the force).
 
+    Also left out: a tube of radius TENDON_TUBE H(x) around each tendon, which, once the
+    finger bends, presses on the solid as a line load (a 1/r strain singularity).
+
     These zones hold singular strains of the idealised model that grow without bound under mesh
     refinement: the edges of the fully clamped face, the cable's end force acting on one vertex
-    (point anchor), the edges of the loaded tip face (face anchor). The maximum over the rest,
-    at a fixed distance from them, converges.
+    (point anchor), the edges of the loaded tip face (face anchor), the cable's line load. The
+    maximum over the rest, at a fixed distance from them, converges.
     """
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     length = geometry.length
     inside = points[:, 0] >= 0.5 * float(geometry.height(0.0))
     for chain in chains:
+        chain = np.asarray(chain, dtype=float)
+        for a, b in zip(chain[:-1], chain[1:], strict=True):
+            segment = b - a
+            t = np.clip((points - a) @ segment / (segment @ segment), 0.0, 1.0)
+            distance = np.linalg.norm(points - (a + t[:, None] * segment), axis=1)
+            inside &= distance >= TENDON_TUBE * geometry.height(points[:, 0])
         for end in (np.asarray(chain[0], float), np.asarray(chain[-1], float)):
             radius = float(geometry.height(end[0]))
             if end[0] >= length * (1 - 1e-12):

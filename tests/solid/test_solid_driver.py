@@ -99,6 +99,7 @@ BAD = [
     ({"solid.mesh_size": 1e-5}, "[solid] mesh_size"),
     ({"solid.mesh_size": 0.5}, "[solid] mesh_size"),
     ({"solid.solver": "ilu"}, "[solid] solver"),
+    ({"solid.anchor": "knot"}, "[solid] anchor"),
     ({"solid.solver": "gamg", "solid.formulation": "mixed-up"}, "gamg"),
     ({"solid.material": "svk", "solid.formulation": "mixed-up"}, "svk"),
     ({"solid.preset": "unobtainium"}, "[solid] preset"),

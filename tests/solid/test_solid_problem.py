@@ -101,19 +101,21 @@ def test_constant_offset_tendon_bends_toward_plus_y_with_beam_curvature(tendon_b
     assert result["max_principal_stretch"] > 1.0
 
 
-def test_bulk_mask_leaves_out_the_clamp_edges_and_the_loaded_tendon_ends():
+def test_bulk_mask_leaves_out_the_clamp_edges_the_loaded_tendon_ends_and_the_tendon():
     from fe_beam.solid.problem import bulk_mask
 
-    geometry = FingerGeometry(L, B, H, height_tip=0.5)
+    geometry = FingerGeometry(L, B, H, height_tip=0.5)  # H(x) = 1 - 0.05 x
     chain = np.array([[0.0, 0.25, 0.0], [5.0, 0.2, 0.0], [L, 0.125, 0.0]])
     points = np.array([
-        [0.4, 0.0, 0.0],  # within H(0)/2 of the clamp
-        [0.6, 0.25, 0.0],  # next to the tendon entry on the clamp: no ball there
-        [L - 0.45, 0.125, 0.0],  # inside the anchor ball, radius H(L) = 0.5
-        [L - 0.55, 0.125, 0.0],  # just outside it
-        [5.0, 0.2, 0.0],  # on an interior tendon vertex: its forces balance, kept
+        [0.4, -0.3, 0.0],  # within H(0)/2 of the clamp
+        [0.6, -0.3, 0.0],  # near the tendon entry on the clamp: no zone there
+        [L - 0.45, -0.3, 0.0],  # within H(L) = 0.5 of the tip face the tendon ends on
+        [L - 0.55, -0.3, 0.0],  # just outside that slab
+        [5.0, 0.25, 0.0],  # 0.05 from the tendon: inside its tube, radius 0.1 H(5) = 0.075
+        [5.0, 0.3, 0.0],  # 0.1 from it: outside the tube
     ])
-    assert bulk_mask(points, [chain], geometry).tolist() == [False, True, False, True, True]
+    assert bulk_mask(points, [chain], geometry).tolist() == [False, True, False, True, False,
+                                                            True]
 
 
 @pytest.mark.parametrize("anchor", ["point", "face"])
