@@ -268,8 +268,6 @@ class BeamProblem:
         degree = model.mesh.degree
         cell = self.mesh.ufl_cell()
         self.multipliers = constrained_strains(model.options.constraint)
-        # multiplier rows have a zero diagonal: the linear systems need a pivoting solver
-        self.saddle_point = bool(self.multipliers)
         elements = [ufl.FiniteElement("Lagrange", cell, degree)] * 3
         elements += [ufl.FiniteElement("DG", cell, degree - 1)] * len(self.multipliers)
         self.space = compat.function_space(self.mesh, ufl.MixedElement(elements))
@@ -403,6 +401,21 @@ class BeamProblem:
         """Scale the prescribed end values only (dynamics drives them by their own function)."""
         for function, target in self._prescribed:
             function.x.array[:] = value * target
+
+    @property
+    def saddle_point(self) -> bool:
+        """Multiplier rows have a zero diagonal: the linear systems need a pivoting solver."""
+        return bool(self.multipliers)
+
+    @property
+    def global_dofs(self) -> int:
+        return self.space.dofmap.index_map.size_global * self.space.dofmap.index_map_bs
+
+    def multiplier_dofs(self) -> np.ndarray:
+        """Local dofs (in w, ghosts included) of all multiplier fields."""
+        parts = [np.asarray(compat.sub_space_collapsed(self.space, 3 + i)[1])
+                 for i in range(len(self.multipliers))]
+        return np.concatenate(parts) if parts else np.empty(0, dtype=np.int32)
 
     # --- quantities of interest ----------------------------------------------------------------
     def component_dofs(self, name: str, end: str | None = None) -> np.ndarray:

@@ -280,7 +280,7 @@ class GeneralizedAlpha:
         mass = self.inertia(a_parts[:3], test)
         for index in range(3, len(a_parts)):  # multipliers: identity, their "acceleration" is 0
             mass += a_parts[index] * t[index] * ufl.dx
-        u, v, theta, multipliers = p.fields()
+        u, v, theta, _ = p.fields()
         state = (u, v, theta)
         velocity = tuple(ufl.split(self.v_old)[:3])
         force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
@@ -291,9 +291,7 @@ class GeneralizedAlpha:
         p.set_prescribed_factor(0.0)
         compat.solve_linear(mass, -force, p.bcs, self.a_old)
         p.set_prescribed_factor(self.motion_function(0.0))
-        array = compat.local_array(self.a_old)
-        for index in range(3, 3 + len(multipliers)):
-            array[np.asarray(compat.sub_space_collapsed(p.space, index)[1])] = 0.0
+        compat.local_array(self.a_old)[p.multiplier_dofs()] = 0.0
 
     def _set_time_values(self, t_new: float, t_old: float) -> None:
         p = self.problem

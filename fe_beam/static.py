@@ -132,7 +132,7 @@ class StaticContinuation:
         problem, nonlinear = self.problem, self.snes.problem
         pull_in = self.tendons is not None and any(
             t.controlled_by_pull_in for t in self.tendons.tendons)
-        size = problem.space.dofmap.index_map.size_global * problem.space.dofmap.index_map_bs
+        size = problem.global_dofs
         if (problem.comm.size > 1 or size > STABILITY_MAX_DOFS or pull_in
                 or self.config.model.loads.follower):
             return None
@@ -145,8 +145,7 @@ class StaticContinuation:
         tangent = scipy.sparse.csr_matrix((values, columns, rows), shape=(size, size)).toarray()
         tangent = 0.5 * (tangent + tangent.T)
         multiplier = np.zeros(size, dtype=bool)
-        for i in range(len(problem.multipliers)):
-            multiplier[np.asarray(compat.sub_space_collapsed(problem.space, 3 + i)[1])] = True
+        multiplier[problem.multiplier_dofs()] = True
         stiffness = tangent[~multiplier][:, ~multiplier]
         # Jacobi scaling is a congruence (same inertia) that brings the axial and bending
         # scales together: unscaled, a buckling direction sits below the round-off of the
@@ -198,9 +197,7 @@ def solve_static(
     started = time.perf_counter()
     run = StaticContinuation(config, comm)
     problem, tendons = run.problem, run.tendons
-    result = StaticResult(
-        dofs=problem.space.dofmap.index_map.size_global * problem.space.dofmap.index_map_bs
-    )
+    result = StaticResult(dofs=problem.global_dofs)
     root = comm.rank == 0
     writing = out is not None
     if writing and root:
