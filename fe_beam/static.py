@@ -71,10 +71,15 @@ class StaticContinuation:
     its current converged value to any other by load stepping (``advance``): continuation for
     inverse problems and parameter sweeps, where each new equilibrium starts from the last."""
 
-    def __init__(self, config: StaticConfig, comm=MPI.COMM_WORLD):
+    def __init__(self, config: StaticConfig, comm=MPI.COMM_WORLD,
+                 problem: BeamProblem | None = None, prefix: str = "fe_beam_static_"):
+        """``problem``: an existing problem of ``config.model`` to load (e.g. the static
+        pre-state of a dynamic run); built from ``config`` when None."""
+        if problem is not None and config.tendons:
+            raise ValueError("StaticContinuation: a given problem cannot take tendons")
         self.config = config
         self.tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
-        self.problem = BeamProblem(
+        self.problem = problem or BeamProblem(
             config.model,
             comm,
             breakpoints=self.tendons.breakpoints if self.tendons else (),
@@ -82,8 +87,8 @@ class StaticContinuation:
         )
         self.snes = SNESSolver(
             NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
-            config.solver.for_problem(self.problem.saddle_point, comm),
-            prefix="fe_beam_static_",
+            config.solver.for_problem(self.problem.saddle_point, self.problem.comm),
+            prefix=prefix,
             state_scale=config.model.length,
         )
         self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
@@ -95,7 +100,8 @@ class StaticContinuation:
             self.tendons.set_tension_controlled(value)
             self.solver.set_load_factor(value)
 
-    def advance(self, target: float, stepping, on_converged=None, progress: bool = False) -> None:
+    def advance(self, target: float, stepping, on_converged=None, progress: bool = False,
+                label: str = "load") -> None:
         """Load-step from the current load factor to ``target``; ``on_converged(step)`` gets
         the actual load factor. Raises `LoadSteppingFailed` with the last converged state kept
         (and ``load_factor`` at its value)."""
@@ -118,6 +124,7 @@ class StaticContinuation:
             reject_step=rotation_jump_check(self.problem.rotation_dofs(),
                                             self.config.max_rotation_jump),
             progress=progress,
+            label=label,
         )
 
     def stability(self) -> dict | None:

@@ -28,11 +28,8 @@ from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSett
 from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, write_csv
 from fe_beam.solver import (
     LoadSteppingFailed,
-    NonlinearProblem,
-    SNESSolver,
-    rotation_jump_check,
-    run_load_stepping,
 )
+from fe_beam.static import StaticContinuation
 from fe_beam.timefunctions import TimeFunctionError, parse_formula, time_function
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
@@ -152,19 +149,13 @@ def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
 
 
 def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool) -> None:
-    solver = SNESSolver(NonlinearProblem(problem.residual, problem.w, problem.bcs),
-                        static.solver.for_problem(problem.saddle_point, problem.comm),
-                        prefix="fe_beam_prestate_",
-                        state_scale=problem.model.length)
+    run = StaticContinuation(static, problem=problem, prefix="fe_beam_prestate_")
     try:
-        run_load_stepping(solver, problem.set_load_factor, static.stepping,
-                          reject_step=rotation_jump_check(problem.rotation_dofs(),
-                                                          static.max_rotation_jump),
-                          progress=progress, label="static pre-state")
+        run.advance(1.0, static.stepping, progress=progress, label="static pre-state")
     except LoadSteppingFailed as failure:
         raise DynamicsFailed(f"static pre-state: {failure}", 0.0) from None
     finally:
-        solver.destroy()
+        run.destroy()
 
 
 @dataclass
