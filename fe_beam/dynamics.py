@@ -29,7 +29,7 @@ from dolfinx import fem
 from fe_beam import compat
 from fe_beam.beam import BeamProblem
 from fe_beam.laws import axis_tangent, strains_from_gradient
-from fe_beam.mpi import assemble_scalar
+from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
@@ -332,8 +332,7 @@ class GeneralizedAlpha:
         scale[self._theta_dofs()] = self.problem.model.length
         local = float(np.max(difference[self._motion_dofs()] * scale[self._motion_dofs()],
                              initial=0.0))
-        comm = self.problem.comm
-        return comm.allreduce(local, op=_mpi_max()) * dt**2 * abs(self.params["beta"] - 1 / 6)
+        return global_max(self.problem.comm, local) * dt**2 * abs(self.params["beta"] - 1 / 6)
 
     def accept(self) -> None:
         w, v_new, a_new, t_old, t_new = self._candidate
@@ -434,12 +433,6 @@ class GeneralizedAlpha:
             bar.close()
         return {"steps": steps, "rejected_steps": rejected, "newton_iterations": newton,
                 "wall_time_s": time.perf_counter() - started}
-
-
-def _mpi_max():
-    from mpi4py import MPI
-
-    return MPI.MAX
 
 
 def period_from_crossings(times: np.ndarray, signal: np.ndarray) -> float:

@@ -18,6 +18,7 @@ from petsc4py import PETSc
 
 from fe_beam import compat
 from fe_beam.beam import BeamProblem
+from fe_beam.mpi import global_max, global_sum
 
 __all__ = ["Modes", "natural_frequencies"]
 
@@ -93,8 +94,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     pairs = pairs[:count]
     for _, shape in pairs:
         array = compat.local_array(shape)
-        scale = problem.comm.allreduce(float(np.max(np.abs(array), initial=0.0)),
-                                       op=_mpi_max())
+        scale = global_max(problem.comm, np.max(np.abs(array), initial=0.0))
         if scale > 0:
             array /= scale
     shares = [_transverse_share(problem, shape) for _, shape in pairs]
@@ -105,9 +105,8 @@ def _lives_on_fixed_dofs(vector: PETSc.Vec, fixed: np.ndarray) -> bool:
     """A spurious pair of the Dirichlet rows (K: identity, M: zero): a true mode vanishes on
     the fixed dofs, this one is mostly there."""
     array = vector.getArray(readonly=True)
-    on_fixed = float(np.sum(array[fixed] ** 2))
-    total = float(np.sum(array**2))
-    on_fixed, total = (vector.getComm().tompi4py().allreduce(x) for x in (on_fixed, total))
+    on_fixed, total = global_sum(vector.getComm().tompi4py(),
+                                 np.array([np.sum(array[fixed] ** 2), np.sum(array**2)]))
     return on_fixed > 1e-6 * total
 
 
@@ -118,9 +117,3 @@ def _transverse_share(problem: BeamProblem, shape: fem.Function) -> float:
     axial = assemble_scalar(fem.form(problem.section_props.A * u**2 * ufl.dx))
     transverse = assemble_scalar(fem.form(problem.section_props.A * v**2 * ufl.dx))
     return transverse / (axial + transverse) if axial + transverse > 0 else 0.0
-
-
-def _mpi_max():
-    from mpi4py import MPI
-
-    return MPI.MAX

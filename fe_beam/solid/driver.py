@@ -55,6 +55,7 @@ from fe_beam.solid.problem import (
     SolidFingerProblem,
     TendonLoad,
     evaluate_at_points,
+    stretch_keys,
 )
 from fe_beam.solver import LoadStepping, LoadSteppingFailed, SolverSettings, run_load_stepping
 
@@ -639,8 +640,7 @@ class SolidRun:
             "backbone": self.backbone(),
             "newton_iterations": int(newton_iterations),
             "linear_iterations": int(linear_iterations),
-            "max_principal_stretch": self.problem.max_principal_stretch(),
-            "max_principal_stretch_bulk": self.problem.max_principal_stretch(bulk=True),
+            **stretch_keys(self.problem.max_principal_stretches()),
         }
 
     def destroy(self) -> None:

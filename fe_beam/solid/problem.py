@@ -444,21 +444,24 @@ class SolidFingerProblem:
             "displacement": u_mean.tolist(),
         }
 
-    def max_principal_stretch(self, bulk: bool = False) -> float:
-        """max over cells and P2 nodes of sqrt(largest eigenvalue of C = F^T F); with ``bulk``,
-        only over the nodes of the bulk (`bulk_mask`)."""
+    def max_principal_stretches(self) -> dict:
+        """{"anywhere", "bulk"}: max over cells and P2 nodes of sqrt(largest eigenvalue of
+        C = F^T F), over all nodes and over the nodes of the bulk (`bulk_mask`); F is evaluated
+        once for both."""
         tdim = self.mesh.topology.dim
         cells = np.arange(self.mesh.topology.index_map(tdim).size_local, dtype=np.int32)
-        local = 1.0
+        anywhere = bulk = 1.0
         if len(cells):
             F = compat.evaluate_expression(self._F_nodes, self.mesh, cells).reshape(-1, 3, 3)
-            C = np.einsum("nki,nkj->nij", F, F)
-            stretch = np.sqrt(np.linalg.eigvalsh(C)[:, -1])
-            if bulk:
-                stretch = stretch[self._bulk_nodes]
-            if stretch.size:
-                local = float(stretch.max())
-        return global_max(self.comm, local)
+            stretch = np.sqrt(np.linalg.eigvalsh(np.einsum("nki,nkj->nij", F, F))[:, -1])
+            anywhere = float(stretch.max())
+            if self._bulk_nodes.any():
+                bulk = float(stretch[self._bulk_nodes].max())
+        return {"anywhere": global_max(self.comm, anywhere), "bulk": global_max(self.comm, bulk)}
+
+    def max_principal_stretch(self, bulk: bool = False) -> float:
+        """One of `max_principal_stretches`."""
+        return self.max_principal_stretches()["bulk" if bulk else "anywhere"]
 
     def summary(self) -> dict:
         """Plain-data results of the current state."""
@@ -473,9 +476,14 @@ class SolidFingerProblem:
             "tendon_lengths": self.tendon_lengths(),
             "tendon_reference_lengths": [c.reference_length for c in self.cables],
             "backbone": self.backbone(),
-            "max_principal_stretch": self.max_principal_stretch(),
-            "max_principal_stretch_bulk": self.max_principal_stretch(bulk=True),
+            **stretch_keys(self.max_principal_stretches()),
         }
+
+
+def stretch_keys(stretches: dict) -> dict:
+    """The summary keys of `SolidFingerProblem.max_principal_stretches`."""
+    return {"max_principal_stretch": stretches["anywhere"],
+            "max_principal_stretch_bulk": stretches["bulk"]}
 
 
 def plate_weights(vertices: np.ndarray, lumped: np.ndarray, anchor: np.ndarray) -> np.ndarray:
