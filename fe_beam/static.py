@@ -195,8 +195,9 @@ def solve_static(
     Tendons of ``config.tendons`` add their potential; steps then also record ``tensions`` and
     ``pull_ins``. ``on_step(problem, record)`` is called after each converged step (on all ranks),
     e.g. to sample profiles along the beam. ``record_shapes=False`` skips the per-step deformed
-    shapes and profiles (``result.shapes``) when nothing is written: a solve-only run (inverse
-    problems, benchmarks) then costs the Newton iterations alone.
+    shapes and profiles (``result.shapes``) and the stability check of the final state
+    (``steps[-1]["stability"]``, `StaticContinuation.stability`) when nothing is written: a
+    solve-only run (benchmarks, sweeps) then costs the Newton iterations alone.
 
     summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
     On failure the last converged state is written and the result has status "failed".
