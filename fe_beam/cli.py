@@ -158,11 +158,17 @@ def run_modes(args, config: dict, comm) -> int:
 
     static, modes = parse_modes(config)
     summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
-    for index, (frequency, share) in enumerate(
-        zip(summary["frequencies_hz"], summary["transverse_fraction"], strict=True), start=1
-    ):
-        kind = "bending" if share > 0.5 else "axial"
-        _say(comm, f"mode {index}: {frequency:.6g} Hz ({kind})")
+    kinds = summary.get("mode_kinds") or [
+        "bending" if share > 0.5 else "axial" for share in summary["transverse_fraction"]]
+    for index, (frequency, kind) in enumerate(zip(summary["frequencies_hz"], kinds, strict=True),
+                                              start=1):
+        _say(comm, f"mode {index}: {frequency:.6g} Hz ({'rigid body' if kind == 'rigid' else kind})")
+    for index, mode in enumerate(summary.get("unstable_modes", []), start=1):
+        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g} rad^2/s^2 "
+                   f"(growth rate {mode['growth_rate']:.6g} 1/s)")
+    for note in summary.get("notes", []):
+        kind = "warning" if note.startswith("the state is unstable") else "note"
+        _say(comm, f"fe-beam modes: {kind}: {note}", sys.stderr)
     found = len(summary["frequencies_hz"])
     if found < modes["count"]:
         _say(comm, f"fe-beam modes: note: [modes] count = {modes['count']} asked for more modes "

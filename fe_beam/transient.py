@@ -356,18 +356,48 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                "prestress": modes["prestress"], "dofs": problem.space.dofmap.index_map.size_global
                * problem.space.dofmap.index_map_bs,
                "wall_time_s": time.perf_counter() - started}
+    summary.update(_modes_summary(result))
     if out is not None:
         if comm.rank == 0:
             out.mkdir(parents=True, exist_ok=True)
         comm.barrier()
-        writer = BeamXDMFWriter(problem, out / "modes.xdmf" if static.output.xdmf else None)
         state = compat.local_array(problem.w).copy()
-        for index, shape in enumerate(result.shapes, start=1):
-            compat.local_array(problem.w)[:] = compat.local_array(shape)
-            writer.write(float(index))
+        for name, shapes in (("modes.xdmf", result.shapes),
+                             ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
+            if name == "unstable_modes.xdmf" and not shapes:
+                continue
+            writer = BeamXDMFWriter(problem, out / name if static.output.xdmf else None)
+            for index, shape in enumerate(shapes, start=1):
+                compat.local_array(problem.w)[:] = compat.local_array(shape)
+                writer.write(float(index))
+            writer.close()
         compat.local_array(problem.w)[:] = state
-        writer.close()
         if comm.rank == 0:
             atomic_write_json(out / "summary.json", summary)
     return summary
 
+
+def _modes_summary(result) -> dict:
+    """The summary keys beyond frequencies_hz: eigenvalues omega^2 [rad^2/s^2] and kind
+    ("rigid" | "bending" | "axial") of each listed mode, the number of rigid-body modes, every
+    unstable direction (omega^2 < 0: eigenvalue, growth_rate = sqrt(-omega^2) [1/s], shape at
+    time index k of unstable_modes.xdmf), stable, and notes (also warnings on stderr)."""
+    unstable = [{"eigenvalue": mode.eigenvalue, "growth_rate": mode.growth_rate,
+                 "transverse_fraction": mode.transverse_fraction,
+                 "shape": {"file": "unstable_modes.xdmf", "index": index}}
+                for index, mode in enumerate(result.unstable, start=1)]
+    notes = list(result.notes)
+    if result.unstable_count:
+        rates = ", ".join(f"{mode.growth_rate:.4g}" for mode in result.unstable[:5])
+        notes.insert(0, f"the state is unstable: {result.unstable_count} direction(s) with "
+                        f"omega^2 < 0 (growth rates {rates} 1/s); see unstable_modes")
+    if len(result.unstable) < result.unstable_count:
+        notes.append(f"only the first {len(result.unstable)} of {result.unstable_count} unstable "
+                     "directions are listed and written")
+    if result.rigid_body_modes:
+        notes.append(f"{result.rigid_body_modes} rigid-body mode(s) (0 Hz): the supports leave "
+                     "the beam free to move as a rigid body")
+    return {"eigenvalues": result.eigenvalues, "mode_kinds": result.kinds,
+            "rigid_body_modes": result.rigid_body_modes, "unstable_modes": unstable,
+            "unstable_count": result.unstable_count, "stable": result.unstable_count == 0,
+            "notes": notes}
