@@ -1,0 +1,188 @@
+"""The low end of the spectrum is never dropped (issue 9, item 3): rigid-body modes at 0 Hz
+(all of them: 3 for a free-free planar beam), and the unstable directions of a state past
+buckling (omega^2 < 0), counted and compared with the straight prestressed column."""
+
+import json
+import math
+
+import pytest
+from beam_cases import RHO, E, square
+from mpi4py import MPI
+
+from fe_beam import BeamModel, BeamProblem, Discretisation, Loads, Material, ModelOptions, Supports
+from fe_beam.config import StaticConfig
+from fe_beam.modes import natural_frequencies
+from fe_beam.transient import _static_prestate
+
+L = 1.0
+BETA_FREE_FREE = 4.730040744862704  # first root of cos(bL) cosh(bL) = 1
+
+
+def rod(h=0.005, supports=Supports(), law="reissner", constraint="none", elements=24,
+        degree=2, loads=Loads(), comm=MPI.COMM_WORLD):
+    model = BeamModel(L, square(h), Material(E, nu=0.3, rho=RHO), ModelOptions(law, constraint),
+                      Discretisation(elements, degree), supports, loads)
+    return BeamProblem(model, comm)
+
+
+def prestressed(problem):
+    _static_prestate(problem, StaticConfig(problem.model), progress=False)
+    return problem
+
+
+def euler_bernoulli_eigenvalue(h, k, axial_force=0.0):
+    """omega^2 of the straight column: (EI k^4 + N k^2) / (rho A + rho I k^2) (N > 0 tension;
+    rotary inertia kept, no shear: exact for the inextensible-unshearable rod)."""
+    EI, rho_area, rho_inertia = E * h**4 / 12, RHO * h * h, RHO * h**4 / 12
+    return (EI * k**4 + axial_force * k**2) / (rho_area + rho_inertia * k**2)
+
+
+@pytest.mark.parametrize(("law", "constraint", "elements", "degree"), [
+    ("reissner", "none", 24, 2), ("nonstandard", "none", 41, 1),
+    ("reissner", "inextensible-unshearable", 17, 2), ("nonstandard", "unshearable", 30, 2)])
+def test_free_free_beam_has_exactly_three_rigid_modes(law, constraint, elements, degree):
+    """L/h = 200: the first elastic frequency is the Euler-Bernoulli free-free one (bL = 4.7300)
+    up to shear and rotary inertia, O((bL)^2 (h/L)^2 / 12 (1 + E/G)) ~ 1e-4."""
+    h = 0.005
+    modes = natural_frequencies(rod(h, Supports("free", "free"), law, constraint, elements,
+                                    degree), 5)
+    assert modes.rigid_body_modes == 3
+    assert modes.kinds[:3] == ["rigid"] * 3 and "rigid" not in modes.kinds[3:]
+    assert modes.frequencies_hz[:3] == [0.0, 0.0, 0.0]
+    assert modes.unstable == [] and modes.unstable_count == 0
+    expected = math.sqrt(euler_bernoulli_eigenvalue(h, BETA_FREE_FREE / L)) / (2 * math.pi)
+    tolerance = 3e-4 if degree == 2 else 2e-3  # P1: 41 linear elements
+    assert modes.frequencies_hz[3] == pytest.approx(expected, rel=tolerance)
+    assert modes.bending()[0] == modes.frequencies_hz[3]
+    # the rigid shapes are the rigid motions: u, v translations and the rotation (v = x)
+    assert len(modes.shapes) == 5
+
+
+@pytest.mark.parametrize(("x0", "xL", "rigid"), [
+    ("pinned", "free", 1), ("roller", "free", 2), ("roller", "roller", 1), (["theta"], "free", 2),
+    (["u"], "free", 2), ("free", ["u", "theta"], 1), ("pinned", "roller", 0), ("clamped", "free", 0)])
+def test_rigid_mode_count_follows_the_supports(x0, xL, rigid):
+    modes = natural_frequencies(rod(0.01, Supports(x0, xL), elements=12), 4)
+    assert modes.rigid_body_modes == rigid
+    assert modes.frequencies_hz[:rigid] == [0.0] * rigid
+    # every elastic eigenvalue is >= 1.8751^4 EI/(rho A L^4) (the cantilever's): 0.1615 Hz here
+    assert all(f > 0.16 for f in modes.frequencies_hz[rigid:])
+    assert len(modes.frequencies_hz) == 4 and modes.unstable_count == 0
+
+
+@pytest.mark.parametrize(("factor", "passed"), [(0.5, 0), (1.5, 1), (3.0, 1), (5.0, 2), (10.0, 3)])
+def test_pinned_column_past_buckling_reports_unstable_modes(factor, passed):
+    """Pinned-roller column, straight (no imperfection: the pre-state stays on the trivial
+    branch) under P = factor P_E: critical loads n^2 P_E, so `passed` unstable directions, with
+    omega_n^2 = (EI k^4 - P k^2)/(rho A + rho I k^2), k = n pi / L."""
+    h = 0.01
+    euler = math.pi**2 * E * h**4 / 12 / L**2
+    P = factor * euler
+    problem = prestressed(rod(h, Supports("pinned", "roller"), constraint="inextensible-unshearable",
+                              elements=30, loads=Loads(tip_force=(-P, 0.0))))
+    modes = natural_frequencies(problem, 3)
+    assert modes.unstable_count == passed == len(modes.unstable)
+    assert modes.rigid_body_modes == 0
+    # n = 1 .. passed + 1, ascending; tolerance 1e-4 of the larger term EI k^4 / (rho A)
+    waves = sorted(range(1, passed + 2),
+                   key=lambda n: euler_bernoulli_eigenvalue(h, n * math.pi / L, -P))
+    measured = [m.eigenvalue for m in modes.unstable] + modes.eigenvalues
+    for n, value in zip(waves, measured, strict=False):
+        if n > 3:  # 30 elements: n = 4 carries a 3e-4 discretisation error
+            continue
+        k = n * math.pi / L
+        scale = euler_bernoulli_eigenvalue(h, k)
+        assert value == pytest.approx(euler_bernoulli_eigenvalue(h, k, -P), abs=1e-4 * scale), n
+    for mode in modes.unstable:
+        assert mode.growth_rate == pytest.approx(math.sqrt(-mode.eigenvalue))
+        assert mode.transverse_fraction > 0.99
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+@pytest.mark.parametrize(("factor", "passed"), [(1.5, 1), (3.0, 1), (12.0, 2)])
+def test_extensible_cantilever_column_counts_the_euler_loads_passed(law, factor, passed):
+    """Cantilever: critical loads (2n - 1)^2 P_E, P_E = pi^2 EI / (4 L^2); extensible and
+    shearable, so the first eigenvalue is the straight-column one within O(P/EA, (h/L)^2)."""
+    h = 0.01
+    euler = math.pi**2 * E * h**4 / 12 / (4 * L**2)
+    P = factor * euler
+    problem = prestressed(rod(h, Supports("clamped", "free"), law=law, elements=30,
+                              loads=Loads(tip_force=(-P, 0.0))))
+    modes = natural_frequencies(problem, 2)
+    assert modes.unstable_count == passed
+    assert [m.eigenvalue < 0 for m in modes.unstable] == [True] * passed
+    assert modes.unstable[0].eigenvalue < modes.unstable[-1].eigenvalue or passed == 1
+    # the cantilever's modes of a column under a dead axial load have no closed form; the
+    # growth rate is bounded by the pinned one of length 2L (same first critical load)
+    assert modes.eigenvalues[0] > 0 and all(f > 0 for f in modes.frequencies_hz)
+
+
+def test_below_buckling_unchanged_frequencies():
+    """P = 0.5 P_E on the pinned column: the compression lowers omega_n^2 as the formula says,
+    nothing is unstable (the frequencies are those the old code gave)."""
+    h = 0.01
+    P = 0.5 * math.pi**2 * E * h**4 / 12
+    problem = prestressed(rod(h, Supports("pinned", "roller"), constraint="inextensible-unshearable",
+                              elements=30, loads=Loads(tip_force=(-P, 0.0))))
+    modes = natural_frequencies(problem, 3)
+    assert modes.unstable_count == 0 and modes.rigid_body_modes == 0
+    expected = [euler_bernoulli_eigenvalue(h, n * math.pi / L, -P) for n in (1, 2, 3)]
+    assert modes.eigenvalues == pytest.approx(expected, rel=1e-4)
+
+
+def test_cli_reports_unstable_modes_and_rigid_modes(tmp_path, capsys):
+    from test_config import BASE, dump_toml
+
+    from fe_beam.cli import main
+
+    h = 0.01
+    euler = math.pi**2 * E * h**4 / 12
+    config = {**BASE, "material": {"E": E, "nu": 0.3, "rho": RHO},
+              "section": {"shape": "rectangle", "b": h, "h": h},
+              "supports": {"x0": "pinned", "xL": "roller"},
+              "loads": {"tip_force": [-4.5 * euler, 0.0], "steps": 2},
+              "mesh": {"elements": 20, "degree": 2},
+              "modes": {"count": 3, "prestress": True}}
+    path = tmp_path / "column.toml"
+    path.write_text(dump_toml(config))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["modes", str(path), "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["unstable_count"] == 2 and summary["stable"] is False
+    assert len(summary["unstable_modes"]) == 2
+    first = summary["unstable_modes"][0]
+    assert first["growth_rate"] == pytest.approx(math.sqrt(-first["eigenvalue"]))
+    assert first["eigenvalue"] < summary["unstable_modes"][1]["eigenvalue"] < 0
+    assert len(summary["frequencies_hz"]) == 3 and min(summary["frequencies_hz"]) > 0
+    assert "warning: the state is unstable: 2 direction(s)" in err
+    assert any("unstable" in note for note in summary["notes"])
+    assert "asked for more modes" not in err
+    if config.get("output", {}).get("xdmf", True):
+        assert (out / "unstable_modes.xdmf").is_file()
+
+    # free-free, no prestress: three rigid-body modes listed first at 0 Hz
+    config["supports"] = {"x0": "free", "xL": "free"}
+    config["modes"] = {"count": 5}
+    path.write_text(dump_toml(config))
+    assert main(["modes", str(path), "--out", str(tmp_path / "ff"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "ff" / "summary.json").read_text())
+    assert summary["rigid_body_modes"] == 3 and summary["unstable_modes"] == []
+    assert summary["frequencies_hz"][:3] == [0.0] * 3 and summary["frequencies_hz"][3] > 1.0
+    assert summary["mode_kinds"][:4] == ["rigid"] * 3 + ["bending"]
+
+
+@pytest.mark.mpi
+def test_rigid_and_unstable_modes_on_all_ranks():
+    """Same counts and eigenvalues on MPI.COMM_WORLD (2 ranks under mpirun) as in serial."""
+    modes = natural_frequencies(rod(0.005, Supports("free", "free"), elements=20), 4)
+    assert modes.rigid_body_modes == 3 and modes.frequencies_hz[:3] == [0.0] * 3
+    h = 0.01
+    P = 5.0 * math.pi**2 * E * h**4 / 12
+    problem = prestressed(rod(h, Supports("pinned", "roller"), constraint="inextensible-unshearable",
+                              elements=24, loads=Loads(tip_force=(-P, 0.0))))
+    modes = natural_frequencies(problem, 2)
+    assert modes.unstable_count == 2
+    expected = [euler_bernoulli_eigenvalue(h, n * math.pi / L, -P) for n in (1, 2)]
+    assert [m.eigenvalue for m in modes.unstable] == pytest.approx(sorted(expected), rel=1e-4)
