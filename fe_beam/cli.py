@@ -162,7 +162,8 @@ def run_modes(args, config: dict, comm) -> int:
         "bending" if share > 0.5 else "axial" for share in summary["transverse_fraction"]]
     for index, (frequency, kind) in enumerate(zip(summary["frequencies_hz"], kinds, strict=True),
                                               start=1):
-        _say(comm, f"mode {index}: {frequency:.6g} Hz ({'rigid body' if kind == 'rigid' else kind})")
+        label = "rigid body" if kind == "rigid" else kind
+        _say(comm, f"mode {index}: {frequency:.6g} Hz ({label})")
     for index, mode in enumerate(summary.get("unstable_modes", []), start=1):
         _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g} rad^2/s^2 "
                    f"(growth rate {mode['growth_rate']:.6g} 1/s)")

@@ -136,7 +136,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     pairs = []
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
     extra = 0
-    for attempt in range(3):
+    for _attempt in range(3):
         nev = count + len(rigid) + wanted_unstable + extra
         pairs = _solve(SLEPc, K, M, sigma, nev, fixed, problem)
         found_unstable = sum(1 for value, _ in pairs if value < -zero)
@@ -156,7 +156,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     is_rigid = set()
     if rigid:
         ranked = sorted(pairs, key=lambda pair: -shares[id(pair[1])])[: len(rigid)]
-        for value, shape in ranked:
+        for _value, shape in ranked:
             if shares[id(shape)] > 0.5:
                 is_rigid.add(id(shape))
         if len(is_rigid) < len(rigid):
@@ -180,7 +180,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         shape.name = f"mode_{index}"
     kinds = []
     transverse = [_transverse_share(problem, shape) for _, shape in chosen]
-    for (value, shape), share in zip(chosen, transverse, strict=True):
+    for (_value, shape), share in zip(chosen, transverse, strict=True):
         kinds.append("rigid" if id(shape) in is_rigid else ("bending" if share > 0.5 else "axial"))
     frequencies = [math.sqrt(value) / (2 * math.pi) for value, _ in chosen]
     return Modes(frequencies, [s for _, s in chosen], transverse,
