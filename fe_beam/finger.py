@@ -386,13 +386,14 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     every = max(1, len(result.shapes) // 8)
     for (_, shape), step in list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]:
         axis.plot(shape["x"] + shape["u"], shape["v"], label=f"tension {step['tensions'][0]:.3g} N")
-    axis.set_aspect("equal")
+    axis.set_aspect("equal", adjustable="datalim")
     axis.set_xlabel("x [m]")
     axis.set_ylabel("y [m]")
     axis.set_title("Backbone in the XY plane (cf. chapter Fig. 3.9a)")
     axis.grid(alpha=0.3)
-    axis.legend(fontsize=7)
-    figure.tight_layout()
+    from fe_beam.plotting import legend_inside
+
+    legend_inside(axis, fontsize=7)
     figure.savefig(out / "fig3_9_backbone.png", dpi=130)
     plt.close(figure)
 
@@ -411,22 +412,54 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     figure.tight_layout()
     figure.savefig(out / "tension_tip.png", dpi=130)
     plt.close(figure)
-    render_3d(out / "finger_3d.png", final, config)
+    reason = render_3d_skipped(out / "finger_3d.png", final, config)
+    if reason is not None:
+        note_skipped_picture(out, f"finger_3d.png was not made: {reason}")
+
+
+def note_skipped_picture(out: Path, note: str) -> None:
+    """Say why a picture is missing: on stderr and in summary.json's ``notes``."""
+    import json
+    import sys
+
+    print(f"fe-beam: note: {note}", file=sys.stderr, flush=True)
+    path = out / "summary.json"
+    try:
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return
+    notes = summary.get("notes")
+    summary["notes"] = (notes if isinstance(notes, list) else []) + [note]
+    atomic_write_json(path, summary)
 
 
 def render_3d(path: Path, shape: dict, config: StaticConfig) -> bool:
     """pyvista tube rendering of the deformed finger with its tendon (Fig. 3.9b); skipped
     (returns False) when pyvista or a virtual screen is not available."""
+    return render_3d_skipped(path, shape, config) is None
+
+
+def render_3d_skipped(path: Path, shape: dict, config: StaticConfig) -> str | None:
+    """Render the 3D picture; None when done, else why it was skipped (one sentence)."""
+    import os
+    import shutil
+
     try:
         import pyvista
     except ImportError:
-        return False
+        return ("pyvista is not installed (./bootstrap installs it; or pip install "
+                "'fe_beam[viz]')")
+    if not os.environ.get("DISPLAY") and shutil.which("Xvfb") is None:
+        return "no display to render on: set DISPLAY or install Xvfb (apt-get install xvfb)"
     try:
         with virtual_display():
             _render_tube(pyvista, path, shape, config)
-        return True
-    except Exception:  # a picture must never fail an analysis
-        return False
+    except Exception as error:  # a picture must never fail an analysis
+        first = (str(error).strip().splitlines() or [""])[0][:200]
+        return f"rendering with pyvista failed ({type(error).__name__}: {first})"
+    if not path.is_file():
+        return "rendering with pyvista produced no file"
+    return None
 
 
 def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None:

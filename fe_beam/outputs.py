@@ -197,13 +197,15 @@ def plot_deformed_shapes(
         axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
     for i, (label, x, y) in enumerate(reference):
         axes.plot(x, y, "kx", ms=7, label=label if i == 0 else None)
-    axes.set_aspect("equal")
+    # true shape (equal scales) in an axes that keeps its size: the legend fits inside it
+    axes.set_aspect("equal", adjustable="datalim")
     axes.set_xlabel("x + u [m]")
     axes.set_ylabel("y + v [m]")
     axes.set_title(title)
     axes.grid(alpha=0.3)
-    axes.legend(fontsize=7, loc="best")
-    figure.tight_layout()
+    from fe_beam.plotting import legend_inside
+
+    legend_inside(axes, fontsize=7)
     figure.savefig(path, dpi=130)
     plt.close(figure)
 
