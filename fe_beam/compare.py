@@ -312,6 +312,11 @@ STYLES = {"solid": ("-", "3D solid"), "nonstandard": ("--", "rod, non-standard l
 COLOURS = {"solid": "tab:blue", "nonstandard": "tab:orange", "reissner": "tab:green"}
 
 
+def sweep_label(value: float, tension_axis: bool) -> str:
+    """A sweep point with its unit: "tension 0.5 N" or "load factor 0.5"."""
+    return f"tension {value:.3g} N" if tension_axis else f"load factor {value:.3g}"
+
+
 def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
     plt = _pyplot()
     rows = summary["table"]
@@ -332,7 +337,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                 continue
             style, text = STYLES[name]
             axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
-                      lw=1.6, label=f"{text}, {label.split(' ')[0]} {value:.3g}")
+                      lw=1.6, label=f"{text}, {sweep_label(value, bool(tensions))}")
     axis.set_xlabel("x + u [m]")
     axis.set_ylabel("y + v [m]")
     axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
