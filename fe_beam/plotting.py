@@ -39,7 +39,7 @@ def legend_inside(axes, fontsize: float = 7, layout: bool = True, **options):
              (3, fontsize - 2), (4, fontsize - 2)]
     tries = [(ncol, size) for ncol, size in tries if ncol <= max(entries, 1)]
     legend = None
-    for widening in range(5):
+    for _widening in range(5):
         for ncol, size in tries:
             legend = axes.legend(fontsize=size, ncol=ncol, loc=options.get("loc", "best"),
                                  framealpha=0.85)

@@ -567,7 +567,6 @@ def plot_convergence(summary: dict, path: Path) -> None:
     from fe_beam.outputs import _pyplot
 
     plt = _pyplot()
-    from matplotlib.ticker import NullFormatter
 
     quantities = summary["quantities"]
     done = [r for r in summary["levels"] if r["values"]]
@@ -597,7 +596,9 @@ def plot_convergence(summary: dict, path: Path) -> None:
                 *zip(*differences, strict=True), "s--", mfc="none", label="|q_k - q_(k-1)| at h_k"
             )
             drawn = True
-        if order is not None and drawn:
+        shown = order if order is not None else table_order(result)[0]
+        if shown is not None and drawn:
+            order = shown
             anchor_h, anchor = errors[-1] if errors else differences[-1]
             xs = [h[0], h[-1]]
             axis.loglog(  # offset below the data so that neither hides the other
@@ -616,14 +617,12 @@ def plot_convergence(summary: dict, path: Path) -> None:
                 va="center",
                 transform=axis.transAxes,
             )
-        title = f"{quantity} [{unit}]"
-        if order is None:
-            title += ": order undefined"
-        axis.set_title(title, fontsize=10)
+        axis.set_title(f"{quantity} [{unit}]\n{table_order(result)[1]}", fontsize=10)
         axis.set_xlabel("element size h [m]")
         axis.set_ylabel(f"error estimate [{unit}]")
         axis.grid(alpha=0.3, which="both")
-        axis.xaxis.set_minor_formatter(NullFormatter())  # overlapping 3x10^-2, 4x10^-2 ...
+        if drawn:
+            _log_ticks(axis, h)
         if drawn:
             axis.legend(fontsize=7)
     figure.suptitle(
@@ -638,6 +637,48 @@ def plot_convergence(summary: dict, path: Path) -> None:
     finally:
         plt.close(figure)
         Path(temporary).unlink(missing_ok=True)
+
+
+def table_order(result: dict) -> tuple[float | None, str]:
+    """The observed order as the printed table shows it, and a title text for it: the study's
+    order, else the last level with a clean order (then, e.g., round-off at the finest level:
+    converged), else "order undefined"."""
+    rows = result.get("levels", [])
+    if result.get("order") is not None:
+        return result["order"], f"observed order {result['order']:.2f}"
+    clean = [(k, row) for k, row in enumerate(rows) if row.get("order") is not None
+             and not row.get("note")]
+    final = rows[-1].get("note") if rows else None
+    if clean:
+        k, row = clean[-1]
+        text = f"observed order {row['order']:.2f} (level {k})"
+        if final == "round-off":
+            text += ", then round-off"
+        elif final:
+            text += f", finest level {final}"
+        return row["order"], text
+    if final == "round-off":
+        return None, "converged to round-off"
+    return None, "order undefined"
+
+
+def _log_ticks(axis, h: list[float]) -> None:
+    """Readable log-log ticks on less than a decade: the mesh sizes on x, and 1-2-5 steps on y
+    when the default decades leave fewer than two labels."""
+    from matplotlib.ticker import FixedLocator, LogFormatterSciNotation, LogLocator, NullLocator
+
+    sizes = sorted(set(h))
+    axis.xaxis.set_major_locator(FixedLocator(sizes))
+    axis.xaxis.set_major_formatter(lambda x, _: f"{x:.3g}")
+    axis.xaxis.set_minor_locator(NullLocator())
+    for label in axis.get_xticklabels():
+        label.set_rotation(30)
+    bottom, top = axis.get_ylim()
+    if bottom > 0 and top / bottom < 100:
+        axis.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.yaxis.set_major_formatter(LogFormatterSciNotation(labelOnlyBase=False))
+        axis.yaxis.set_minor_locator(LogLocator(base=10, subs="auto"))
+        axis.yaxis.set_minor_formatter(lambda y, _: "")
 
 
 def _number(value, spec: str) -> str:
