@@ -24,6 +24,9 @@ Nothing at the low end of the spectrum is dropped:
   exactly by Sylvester's law of inertia (LDL^T of K - sigma M with MUMPS, minus one negative
   pivot per multiplier row) and the shift sigma is lowered until no eigenvalue lies below it,
   so that shift-and-invert returns the lowest eigenvalues in order, the negative ones included.
+  (With free rigid motions the state is the unloaded one, a static pre-state needing supports:
+  the inertia would count their round-off, so the non-rigid negative pairs found are counted.
+  With follower loads K is not symmetric: no inertia, the pairs found are counted.)
 """
 
 from __future__ import annotations
@@ -120,16 +123,18 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     zero = ZERO_TOLERANCE * scale
     rigid = _rigid_motions(problem, K, M)
     symmetric = not problem.model.loads.follower and _is_symmetric(K)
+    unstable_count, sigma = None, -scale
     if symmetric:
         counter = _EigenvalueCounter(problem, K, M)
-        unstable_count = counter.below(-zero)
-        sigma = -scale
+        if not rigid:
+            # with free rigid motions the state is the unloaded one (a static pre-state needs
+            # supports) and their round-off eigenvalues, of either sign, would be counted
+            unstable_count = counter.below(-zero)
         for _ in range(60):  # lower the shift until no eigenvalue lies below it
             if counter.below(sigma) == 0:
                 break
             sigma *= 4.0
     else:
-        unstable_count, sigma = None, -scale
         notes.append("the stiffness is not symmetric (follower loads): unstable directions are "
                      "those the eigensolver finds, not counted by inertia")
     wanted_unstable = min(unstable_count, MAX_UNSTABLE) if unstable_count is not None else 0
@@ -143,11 +148,6 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         if unstable_count is None or found_unstable >= wanted_unstable:
             break
         extra = 2 * extra + 10  # a missed negative eigenvalue: widen the search
-    if unstable_count is None:
-        unstable_count = sum(1 for value, _ in pairs if value < -zero)
-    elif sum(1 for value, _ in pairs if value < -zero) < wanted_unstable:
-        notes.append(f"the inertia counts {unstable_count} unstable directions but the "
-                     f"eigensolver found {sum(1 for v, _ in pairs if v < -zero)}")
     shares = {id(shape): _rigid_share(shape, rigid, M) for _, shape in pairs}
     K.destroy()
     M.destroy()
@@ -162,6 +162,13 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         if len(is_rigid) < len(rigid):
             notes.append(f"the supports leave {len(rigid)} rigid-body motions but only "
                          f"{len(is_rigid)} were found among the computed modes")
+    found_unstable = sum(1 for value, shape in pairs
+                         if value < -zero and id(shape) not in is_rigid)
+    if unstable_count is None:
+        unstable_count = found_unstable
+    elif found_unstable < wanted_unstable:
+        notes.append(f"the inertia counts {unstable_count} unstable directions but the "
+                     f"eigensolver found {found_unstable}")
     for _, shape in pairs:
         _normalise(problem, shape)
     unstable = [UnstableMode(value, shape, _transverse_share(problem, shape))
