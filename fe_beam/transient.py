@@ -357,6 +357,9 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                * problem.space.dofmap.index_map_bs,
                "wall_time_s": time.perf_counter() - started}
     summary.update(_modes_summary(result))
+    if not static.output.xdmf:
+        for mode in summary["unstable_modes"]:
+            mode["shape"] = None  # [output] xdmf = false: no shapes written
     if out is not None:
         if comm.rank == 0:
             out.mkdir(parents=True, exist_ok=True)
