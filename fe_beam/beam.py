@@ -224,9 +224,23 @@ class BeamModel:
         return {"EA": E * p.A, "GA": G * p.A, "EI": E * p.I, "EI3": E * p.I3, "EI4": E * p.I4}
 
 
+# points are located within this fraction of the smallest element (global)
+POINT_FRACTION = 1e-3
+
+
+def smallest_cell_size(msh) -> float:
+    """The smallest element length of an interval mesh, over all ranks."""
+    x = compat.cell_vertex_x(msh)
+    local = float(np.min(np.abs(x[:, 1] - x[:, 0]))) if len(x) else np.inf
+    return msh.comm.allreduce(local, op=MPI.MIN)
+
+
 def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
     """Uniform mesh of [0, L] in which every breakpoint is a vertex (the nearest uniform vertex
-    moves onto it when closer than a quarter element, otherwise a vertex is inserted)."""
+    moves onto it when closer than a quarter element, otherwise a vertex is inserted).
+
+    A breakpoint within 1e-9 of an element of a vertex that cannot move (an end, or another
+    breakpoint) is that vertex: inserting it would create an element of round-off size."""
     interior = sorted({float(x) for x in breakpoints if 0 < x < length})
     if not interior:
         return compat.create_interval(comm, elements, length)
@@ -239,6 +253,8 @@ def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
         if abs(vertices[nearest] - x) < spacing / 4 and movable:
             vertices[nearest] = x
             placed.add(x)
+        elif abs(vertices[nearest] - x) <= 1e-9 * spacing:
+            continue
         else:
             vertices = np.sort(np.append(vertices, x))
             placed.add(x)
@@ -308,14 +324,48 @@ class BeamProblem:
         self.gravity = fem.Constant(self.mesh, np.array(m.loads.gravity, dtype=float))
 
     def _mark_ends(self) -> None:
+        """End markers, the tip measure, and the tolerance every point is located with.
+
+        A point is "at x" when its coordinate is within ``point_tolerance`` = POINT_FRACTION of
+        the smallest element (global over the ranks): never more than one vertex or dof of a
+        Lagrange space can match, whatever the mesh size or the length (a tolerance relative
+        to the length matched several nodes from ~50k elements, and their values were summed).
+        """
         length = self.model.length
-        self.end_markers = {
-            "x0": lambda x: np.isclose(x[0], 0.0),
-            "xL": lambda x: np.isclose(x[0], length),
-        }
+        self.h_min = smallest_cell_size(self.mesh)
+        self.point_tolerance = POINT_FRACTION * self.h_min
+        self.end_x = {"x0": 0.0, "xL": float(length)}
+        self.end_markers = {end: self.point_marker(x) for end, x in self.end_x.items()}
         tip = compat.locate_entities_boundary(self.mesh, 0, self.end_markers["xL"])
         tags = compat.meshtags(self.mesh, 0, tip, np.full(len(tip), 2))
         self.ds_tip = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)(2)
+        one = fem.Constant(self.mesh, 1.0)
+        measure = global_sum(self.comm, fem.assemble_scalar(fem.form(one * self.ds_tip)))
+        if measure != 1.0:
+            raise RuntimeError(
+                f"the tip x = {length!r} was found on {measure:g} boundary points instead of one"
+            )
+
+    def point_marker(self, x: float):
+        """Marker (for locate_dofs_geometrical / locate_entities) of the point x."""
+        tol = self.point_tolerance
+        return lambda points: np.abs(points[0] - x) <= tol
+
+    def point_dofs(self, name: str, x: float, what: str = "point") -> np.ndarray:
+        """Owned local dofs (in w) of component ``name`` at the mesh point x: exactly one dof
+        over all ranks (RuntimeError otherwise: x is not a vertex, or is found twice)."""
+        index = COMPONENTS.index(name)
+        sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
+        collapsed = compat.locate_dofs_geometrical(sub, self.point_marker(x))
+        dofs = np.asarray(parent_dofs)[collapsed]
+        owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
+        dofs = dofs[dofs < owned]
+        found = int(global_sum(self.comm, len(dofs)))
+        if found != 1:
+            raise RuntimeError(
+                f"{what} x = {x!r}: {name} found at {found} mesh nodes instead of exactly one"
+            )
+        return dofs
 
     def _dirichlet_conditions(self):
         bcs, prescribed = [], []
@@ -327,6 +377,7 @@ class BeamProblem:
                 dofs = compat.locate_dofs_geometrical(
                     (self.space.sub(index), sub), self.end_markers[end]
                 )
+                self.point_dofs(name, self.end_x[end], f"support {end} at")  # exactly one
                 value = fem.Function(sub)
                 bcs.append(fem.dirichletbc(value, dofs, self.space.sub(index)))
                 if values.get(name, 0.0) != 0.0:
@@ -419,13 +470,13 @@ class BeamProblem:
 
     # --- quantities of interest ----------------------------------------------------------------
     def component_dofs(self, name: str, end: str | None = None) -> np.ndarray:
-        """Owned local dofs (in w) of a component, optionally only those at an end."""
-        index = COMPONENTS.index(name)
-        sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
-        parent_dofs = np.asarray(parent_dofs)
+        """Owned local dofs (in w) of a component, optionally only the one at an end (on
+        exactly one rank; see `point_dofs`)."""
         if end is not None:
-            collapsed = compat.locate_dofs_geometrical(sub, self.end_markers[end])
-            parent_dofs = parent_dofs[collapsed]
+            return self.point_dofs(name, self.end_x[end], f"end {end} at")
+        index = COMPONENTS.index(name)
+        _, parent_dofs = compat.sub_space_collapsed(self.space, index)
+        parent_dofs = np.asarray(parent_dofs)
         owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
         return parent_dofs[parent_dofs < owned]
 
@@ -435,11 +486,16 @@ class BeamProblem:
             self._end_dofs = {}
         if end not in self._end_dofs:
             self._end_dofs[end] = {n: self.component_dofs(n, end) for n in COMPONENTS}
+        return self._values_at(self._end_dofs[end])
+
+    def point_values(self, x: float) -> dict:
+        """{u, v, theta} at a mesh vertex x (exactly one owner; RuntimeError if x is not a
+        vertex)."""
+        return self._values_at({n: self.point_dofs(n, x) for n in COMPONENTS})
+
+    def _values_at(self, dofs: dict) -> dict:
         values = compat.local_array(self.w)
-        return {
-            name: global_sum(self.comm, values[dofs].sum())
-            for name, dofs in self._end_dofs[end].items()
-        }
+        return {name: global_sum(self.comm, values[d].sum()) for name, d in dofs.items()}
 
     def output_expressions(self) -> dict:
         """UFL expressions of the strains and section resultants for output (not for solving)."""

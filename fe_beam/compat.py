@@ -24,6 +24,7 @@ __all__ = [
     "create_interval_from_vertices",
     "create_matrix",
     "create_vector",
+    "cell_vertex_x",
     "function_space",
     "gmsh_model_to_mesh",
     "local_array",
@@ -62,6 +63,14 @@ def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.
         points, cells = np.empty((0, 1)), np.empty((0, 2))
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", "interval", 1, dim=1))
     return mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+
+
+def cell_vertex_x(msh: mesh.Mesh) -> np.ndarray:
+    """(local cells, 2) x coordinates of the two vertices of each local cell of an interval
+    mesh (owned and ghost cells)."""
+    dofmap = msh.geometry.dofmap
+    nodes = np.asarray(getattr(dofmap, "array", dofmap)).reshape(-1, 2)
+    return msh.geometry.x[nodes, 0]
 
 
 def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:
