@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 import pytest
-from beam_cases import E, NU, bending_stiffness, cantilever
+from beam_cases import NU, E, bending_stiffness, cantilever
 from mpi4py import MPI
 
 from fe_beam import LoadStepping, SolverSettings, Supports
