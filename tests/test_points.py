@@ -135,3 +135,37 @@ def test_breakpoints_are_vertices_without_round_off_elements():
         assert np.min(np.abs(x - p)) == 0.0
     # no element of round-off size next to 0.5 or the end
     assert smallest_cell_size(msh) > 0.2 / 200_000
+
+
+@pytest.mark.parametrize("size", [0.3, 0.07])
+def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
+    """The 3D solid's faces are gmsh physical groups (topological: no tolerance at all) and
+    a tendon's anchor is the last vertex of its embedded chain, located as one owned dof."""
+    import ufl
+    from dolfinx import fem
+
+    from fe_beam.mpi import assemble_scalar
+    from fe_beam.solid import (
+        CLAMP_TAG,
+        TIP_TAG,
+        FingerGeometry,
+        MeshSizes,
+        TendonPath,
+        create_finger_mesh,
+        locate_vertex_dofs,
+    )
+
+    L, B, H0, H1 = 2.0, 0.8, 0.6, 0.4
+    tendon = TendonPath.from_offsets(L, 0.2, 0.1, x_entry=0.0, x_anchor=L, z=0.1)
+    finger = create_finger_mesh(FingerGeometry(L, B, H0, H1, tendons=(tendon,)),
+                                MeshSizes(size, order=1))
+    msh = finger.mesh
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=finger.facet_tags)
+    one = fem.Constant(msh, 1.0)
+    assert assemble_scalar(fem.form(one * ds(TIP_TAG))) == pytest.approx(B * H1, rel=1e-12)
+    assert assemble_scalar(fem.form(one * ds(CLAMP_TAG))) == pytest.approx(B * H0, rel=1e-12)
+    chain = finger.tendon_chains[0]
+    assert chain[-1][0] == pytest.approx(L, abs=1e-12 * L)
+    space = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
+    dofs = locate_vertex_dofs(space, chain[[0, -1]])
+    assert dofs.shape == (2, 3) and np.all(dofs >= 0)
