@@ -180,3 +180,27 @@ def test_strain_range_thresholds():
     assert len(StrainRange(1.0, 0.101, 0.0).warnings()) == 1
     assert len(StrainRange(1.0, 0.0, 0.101).warnings()) == 1
     assert len(StrainRange(1.0, 0.0, 0.0, 0.35).warnings()) == 1
+
+
+def test_finger_compressed_past_its_stretch_stops_at_the_last_admissible_factor(tmp_path,
+                                                                                capsys):
+    """`fe-beam finger` (tendons) with a Reissner law and a tip thrust of 1.4 EA at the tip
+    section: the same rejection and exit 3 as `fe-beam static`."""
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "finger.toml"
+    text = example.read_text().split("[inverse]")[0]
+    text = text.replace('law = "nonstandard"', 'law = "reissner"')
+    text = text.replace("elements = 40", "elements = 10")
+    ea_tip = 0.6e6 * 0.02 * 0.01
+    text = text.replace("[loads]", f"[loads]\ntip_force = [{-1.4 * ea_tip!r}, 0.0]")
+    path = tmp_path / "finger.toml"
+    path.write_text(text + "\n[output]\nplots = false\nxdmf = false\n")
+    capsys.readouterr()
+    code = main(["finger", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert "inadmissible" in summary["message"]
+    assert summary["steps"][-1]["load_factor"] == pytest.approx(_last_factor(err), rel=1e-5)
+    assert summary["strain_range"]["min_stretch"] > 0
