@@ -382,6 +382,7 @@ class BeamProblem:
         self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
         self._make_constants()
         self._mark_ends()
+        self._check_breakpoints(breakpoints)
         self.bcs, self._prescribed = self._dirichlet_conditions()
         self.extra_energy = extra_energy
         self.residual = self._residual()
@@ -434,6 +435,16 @@ class BeamProblem:
             raise RuntimeError(
                 f"the tip x = {length!r} was found on {measure:g} boundary points instead of one"
             )
+
+    def _check_breakpoints(self, breakpoints) -> None:
+        """Every interior breakpoint (tendon entry, anchor, kink) is exactly one mesh vertex."""
+        owned = self.mesh.topology.index_map(0).size_local
+        for x in sorted({float(b) for b in breakpoints if 0 < b < self.model.length}):
+            vertices = compat.locate_entities(self.mesh, 0, self.point_marker(x))
+            found = int(global_sum(self.comm, np.count_nonzero(vertices < owned)))
+            if found != 1:
+                raise RuntimeError(f"breakpoint x = {x!r} is {found} mesh vertices instead of "
+                                   "exactly one")
 
     def point_marker(self, x: float):
         """Marker (for locate_dofs_geometrical / locate_entities) of the point x."""

@@ -31,6 +31,7 @@ __all__ = [
     "facet_vertex_coordinates",
     "locate_dofs_geometrical",
     "owned_bc_dofs",
+    "locate_entities",
     "locate_entities_boundary",
     "meshtags",
     "set_bc",
@@ -95,6 +96,10 @@ def local_array(function: fem.Function) -> np.ndarray:
 
 def locate_dofs_geometrical(spaces, marker):
     return fem.locate_dofs_geometrical(spaces, marker)
+
+
+def locate_entities(msh: mesh.Mesh, dim: int, marker):
+    return mesh.locate_entities(msh, dim, marker)
 
 
 def locate_entities_boundary(msh: mesh.Mesh, dim: int, marker):

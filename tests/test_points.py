@@ -169,3 +169,19 @@ def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
     space = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
     dofs = locate_vertex_dofs(space, chain[[0, -1]])
     assert dofs.shape == (2, 3) and np.all(dofs >= 0)
+
+
+@pytest.mark.mpi
+def test_tendon_anchor_and_entry_are_single_vertices_on_a_fine_mesh():
+    """Tendon entry/anchor/kinks become mesh vertices (checked at set-up: one owned vertex
+    each, over all ranks); a fine mesh with an anchor off the uniform grid."""
+    from fe_beam.tendons import Tendon, TendonSet
+
+    model = cantilever("reissner", "none", elements=100_000, degree=1)
+    tendons = TendonSet([Tendon(name="t", paths=(((0.0, 0.004), (1.0, 0.002)),),
+                                entry=0.1234567, anchor=0.87654321, tension=1.0)], 1.0)
+    problem = BeamProblem(model, MPI.COMM_WORLD, breakpoints=tendons.breakpoints,
+                          extra_energy=tendons.energy)
+    assert set(problem.point_values(0.87654321)) == {"u", "v", "theta"}
+    with pytest.raises(RuntimeError, match="mesh vertices instead of exactly one"):
+        problem._check_breakpoints((0.5 + 0.3e-5,))
