@@ -10,6 +10,7 @@ discontinuous Lagrange of degree p - 1, which enforces the constraints at the Ga
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,6 +40,8 @@ __all__ = [
     "Discretisation",
     "Loads",
     "ModelOptions",
+    "StrainRange",
+    "StrainWatch",
     "Supports",
 ]
 
@@ -224,9 +227,109 @@ class BeamModel:
         return {"EA": E * p.A, "GA": G * p.A, "EI": E * p.I, "EI3": E * p.I3, "EI4": E * p.I4}
 
 
+# points are located within this fraction of the smallest element (global)
+POINT_FRACTION = 1e-3
+
+
+def smallest_cell_size(msh) -> float:
+    """The smallest element length of an interval mesh, over all ranks."""
+    x = compat.cell_vertex_x(msh)
+    local = float(np.min(np.abs(x[:, 1] - x[:, 0]))) if len(x) else np.inf
+    return msh.comm.allreduce(local, op=MPI.MIN)
+
+
+# --- admissibility and the range the model is meant for -----------------------------------------
+EPS_WARNING = 0.1  # |eps| beyond this: far outside the small-strain range of the laws
+GAMMA_WARNING = 0.1  # rad: |gamma| beyond this: shear far outside the range
+BENDING_FRACTION = 0.8  # warn beyond this fraction of the non-standard law's limit curvature
+
+
+@dataclass(frozen=True)
+class StrainRange:
+    """Extremes of the strains of one state over all Gauss points of the energy rule.
+
+    ``min_stretch`` = min (1 + e) = min lambda cos(gamma): <= 0 means the axis is folded onto
+    itself or turned inside out somewhere: not a state of a real beam (inadmissible).
+    ``max_abs_eps``, ``max_abs_gamma``: the largest |eps| and |gamma| (rad).
+    ``min_bending_tangent`` (non-standard law without the inextensible constraint, else None):
+    the smallest condensed bending tangent K_red / EI, with
+
+        K_red = W_kk - W_ke^2 / W_ee     (W(eps, kappa) at g = 0, the axial strain condensed)
+        W = 1/2 EA eps^2 + 1/2 EI kappa^2 (1 + 3 eps) + 1/2 E I3 kappa^3 lambda + 1/8 E I4 kappa^4
+
+    (MODEL.md, with (1 + e)^2 = 1 + 2 eps = lambda^2 at g = 0). For a section with I3 = 0 and
+    no axial force, minimising W over eps gives eps = -3/2 (I/A) kappa^2 and
+
+        M(kappa) = EI kappa (1 - c kappa^2),   c = (9 I^2 / A - I4) / (2 I),
+
+    (rectangle b x h: c = 0.3 h^2), whose maximum, the largest moment the section can carry, is
+    at kappa* = 1 / sqrt(3 c) (rectangle: 1.054 / h, M* = 2/3 EI kappa* = 0.703 EI / h). There
+    K_red = dM/dkappa = EI (1 - (kappa / kappa*)^2): K_red / EI < 1 - 0.8^2 = 0.36 is exactly
+    |kappa| > 0.8 kappa*. With I3 != 0 or an axial force the same test measures how much bending
+    stiffness is left before the limit point (K_red = 0), where there is no equilibrium beyond.
+    """
+
+    min_stretch: float
+    max_abs_eps: float
+    max_abs_gamma: float
+    min_bending_tangent: float | None = None
+
+    def inadmissible(self) -> str | None:
+        """Why the state is not admissible, or None."""
+        if not self.min_stretch > 0:
+            return (f"inadmissible state: axial stretch 1 + e = {self.min_stretch:.3g} <= 0 "
+                    "(the beam would be turned inside out)")
+        return None
+
+    def warnings(self) -> list[str]:
+        """Departures from the range the model is meant for (one sentence each)."""
+        notes = []
+        if self.max_abs_eps > EPS_WARNING:
+            notes.append(f"the axial strain reaches |eps| = {self.max_abs_eps:.3g} > "
+                         f"{EPS_WARNING:g}: far outside the small-strain range the laws are "
+                         "meant for")
+        if self.max_abs_gamma > GAMMA_WARNING:
+            notes.append(f"the shear angle reaches |gamma| = {self.max_abs_gamma:.3g} rad > "
+                         f"{GAMMA_WARNING:g}: far outside the range the laws are meant for")
+        limit = 1 - BENDING_FRACTION**2
+        if self.min_bending_tangent is not None and self.min_bending_tangent < limit:
+            notes.append(f"the curvature exceeds {BENDING_FRACTION:.0%} of the non-standard "
+                         "law's limit curvature (bending tangent down to "
+                         f"{max(self.min_bending_tangent, 0.0):.3g} EI): near the largest "
+                         "moment the section can carry, beyond which there is no equilibrium")
+        return notes
+
+
+class StrainWatch:
+    """The extremes of `StrainRange` over all accepted states of a run, and their notes."""
+
+    def __init__(self):
+        self.worst: StrainRange | None = None
+
+    def observe(self, value: StrainRange) -> None:
+        if self.worst is None:
+            self.worst = value
+            return
+        w = self.worst
+        tangents = [t for t in (w.min_bending_tangent, value.min_bending_tangent) if t is not None]
+        self.worst = StrainRange(min(w.min_stretch, value.min_stretch),
+                                 max(w.max_abs_eps, value.max_abs_eps),
+                                 max(w.max_abs_gamma, value.max_abs_gamma),
+                                 min(tangents) if tangents else None)
+
+    def notes(self) -> list[str]:
+        return self.worst.warnings() if self.worst is not None else []
+
+    def summary(self) -> dict | None:
+        return dataclasses.asdict(self.worst) if self.worst is not None else None
+
+
 def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
     """Uniform mesh of [0, L] in which every breakpoint is a vertex (the nearest uniform vertex
-    moves onto it when closer than a quarter element, otherwise a vertex is inserted)."""
+    moves onto it when closer than a quarter element, otherwise a vertex is inserted).
+
+    A breakpoint within 1e-9 of an element of a vertex that cannot move (an end, or another
+    breakpoint) is that vertex: inserting it would create an element of round-off size."""
     interior = sorted({float(x) for x in breakpoints if 0 < x < length})
     if not interior:
         return compat.create_interval(comm, elements, length)
@@ -239,6 +342,8 @@ def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
         if abs(vertices[nearest] - x) < spacing / 4 and movable:
             vertices[nearest] = x
             placed.add(x)
+        elif abs(vertices[nearest] - x) <= 1e-9 * spacing:
+            continue
         else:
             vertices = np.sort(np.append(vertices, x))
             placed.add(x)
@@ -277,6 +382,7 @@ class BeamProblem:
         self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
         self._make_constants()
         self._mark_ends()
+        self._check_breakpoints(breakpoints)
         self.bcs, self._prescribed = self._dirichlet_conditions()
         self.extra_energy = extra_energy
         self.residual = self._residual()
@@ -308,14 +414,58 @@ class BeamProblem:
         self.gravity = fem.Constant(self.mesh, np.array(m.loads.gravity, dtype=float))
 
     def _mark_ends(self) -> None:
+        """End markers, the tip measure, and the tolerance every point is located with.
+
+        A point is "at x" when its coordinate is within ``point_tolerance`` = POINT_FRACTION of
+        the smallest element (global over the ranks): never more than one vertex or dof of a
+        Lagrange space can match, whatever the mesh size or the length (a tolerance relative
+        to the length matched several nodes from ~50k elements, and their values were summed).
+        """
         length = self.model.length
-        self.end_markers = {
-            "x0": lambda x: np.isclose(x[0], 0.0),
-            "xL": lambda x: np.isclose(x[0], length),
-        }
+        self.h_min = smallest_cell_size(self.mesh)
+        self.point_tolerance = POINT_FRACTION * self.h_min
+        self.end_x = {"x0": 0.0, "xL": float(length)}
+        self.end_markers = {end: self.point_marker(x) for end, x in self.end_x.items()}
         tip = compat.locate_entities_boundary(self.mesh, 0, self.end_markers["xL"])
         tags = compat.meshtags(self.mesh, 0, tip, np.full(len(tip), 2))
         self.ds_tip = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)(2)
+        one = fem.Constant(self.mesh, 1.0)
+        measure = global_sum(self.comm, fem.assemble_scalar(fem.form(one * self.ds_tip)))
+        if measure != 1.0:
+            raise RuntimeError(
+                f"the tip x = {length!r} was found on {measure:g} boundary points instead of one"
+            )
+
+    def _check_breakpoints(self, breakpoints) -> None:
+        """Every interior breakpoint (tendon entry, anchor, kink) is exactly one mesh vertex."""
+        owned = self.mesh.topology.index_map(0).size_local
+        for x in sorted({float(b) for b in breakpoints if 0 < b < self.model.length}):
+            vertices = compat.locate_entities(self.mesh, 0, self.point_marker(x))
+            found = int(global_sum(self.comm, np.count_nonzero(vertices < owned)))
+            if found != 1:
+                raise RuntimeError(f"breakpoint x = {x!r} is {found} mesh vertices instead of "
+                                   "exactly one")
+
+    def point_marker(self, x: float):
+        """Marker (for locate_dofs_geometrical / locate_entities) of the point x."""
+        tol = self.point_tolerance
+        return lambda points: np.abs(points[0] - x) <= tol
+
+    def point_dofs(self, name: str, x: float, what: str = "point") -> np.ndarray:
+        """Owned local dofs (in w) of component ``name`` at the mesh point x: exactly one dof
+        over all ranks (RuntimeError otherwise: x is not a vertex, or is found twice)."""
+        index = COMPONENTS.index(name)
+        sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
+        collapsed = compat.locate_dofs_geometrical(sub, self.point_marker(x))
+        dofs = np.asarray(parent_dofs)[collapsed]
+        owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
+        dofs = dofs[dofs < owned]
+        found = int(global_sum(self.comm, len(dofs)))
+        if found != 1:
+            raise RuntimeError(
+                f"{what} x = {x!r}: {name} found at {found} mesh nodes instead of exactly one"
+            )
+        return dofs
 
     def _dirichlet_conditions(self):
         bcs, prescribed = [], []
@@ -327,6 +477,7 @@ class BeamProblem:
                 dofs = compat.locate_dofs_geometrical(
                     (self.space.sub(index), sub), self.end_markers[end]
                 )
+                self.point_dofs(name, self.end_x[end], f"support {end} at")  # exactly one
                 value = fem.Function(sub)
                 bcs.append(fem.dirichletbc(value, dofs, self.space.sub(index)))
                 if values.get(name, 0.0) != 0.0:
@@ -419,13 +570,13 @@ class BeamProblem:
 
     # --- quantities of interest ----------------------------------------------------------------
     def component_dofs(self, name: str, end: str | None = None) -> np.ndarray:
-        """Owned local dofs (in w) of a component, optionally only those at an end."""
-        index = COMPONENTS.index(name)
-        sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
-        parent_dofs = np.asarray(parent_dofs)
+        """Owned local dofs (in w) of a component, optionally only the one at an end (on
+        exactly one rank; see `point_dofs`)."""
         if end is not None:
-            collapsed = compat.locate_dofs_geometrical(sub, self.end_markers[end])
-            parent_dofs = parent_dofs[collapsed]
+            return self.point_dofs(name, self.end_x[end], f"end {end} at")
+        index = COMPONENTS.index(name)
+        _, parent_dofs = compat.sub_space_collapsed(self.space, index)
+        parent_dofs = np.asarray(parent_dofs)
         owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
         return parent_dofs[parent_dofs < owned]
 
@@ -435,11 +586,16 @@ class BeamProblem:
             self._end_dofs = {}
         if end not in self._end_dofs:
             self._end_dofs[end] = {n: self.component_dofs(n, end) for n in COMPONENTS}
+        return self._values_at(self._end_dofs[end])
+
+    def point_values(self, x: float) -> dict:
+        """{u, v, theta} at a mesh vertex x (exactly one owner; RuntimeError if x is not a
+        vertex)."""
+        return self._values_at({n: self.point_dofs(n, x) for n in COMPONENTS})
+
+    def _values_at(self, dofs: dict) -> dict:
         values = compat.local_array(self.w)
-        return {
-            name: global_sum(self.comm, values[dofs].sum())
-            for name, dofs in self._end_dofs[end].items()
-        }
+        return {name: global_sum(self.comm, values[d].sum()) for name, d in dofs.items()}
 
     def output_expressions(self) -> dict:
         """UFL expressions of the strains and section resultants for output (not for solving)."""
@@ -460,6 +616,52 @@ class BeamProblem:
             "M": moment,
             "axial_force": axial,
         }
+
+    def strain_range(self) -> StrainRange:
+        """Extremes of the strains of the current state over every energy Gauss point of every
+        element, reduced over all ranks (collective): see `StrainRange`."""
+        if not hasattr(self, "_strain_expression"):
+            self._strain_expression = self._compile_strain_expression()
+        compiled, count = self._strain_expression
+        cells = np.arange(self.mesh.topology.index_map(1).size_local, dtype=np.int32)
+        values = compat.evaluate_expression(compiled, self.mesh, cells).reshape(-1, count)
+        local = np.full(4, np.inf)
+        if len(values):
+            with np.errstate(invalid="ignore"):
+                stretch = values[:, 0]
+                local[0] = np.min(np.where(np.isfinite(stretch), stretch, -np.inf))
+                local[1] = -np.max(np.abs(values[:, 1]))
+                local[2] = -np.max(np.abs(values[:, 2]))
+                tangent = values[:, 3]
+                local[3] = np.min(np.where(np.isfinite(tangent), tangent, -np.inf))
+        reduced = np.empty_like(local)
+        self.comm.Allreduce(local, reduced, op=MPI.MIN)
+        reduced = np.where(np.isnan(reduced), -np.inf, reduced)
+        bending = None if not self._bending_limit_applies() else float(reduced[3])
+        return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), bending)
+
+    def _bending_limit_applies(self) -> bool:
+        return (self.model.options.law == "nonstandard"
+                and "eps" not in constrained_strains(self.model.options.constraint))
+
+    def _compile_strain_expression(self):
+        """[1 + e, eps, gamma, K_red / EI] at the Gauss points of the energy rule."""
+        u, v, theta, _ = self.fields()
+        s = strains(u, v, theta)
+        gamma = ufl.atan_2(s.g, s.one_plus_e)
+        if self._bending_limit_applies():
+            k, kappa, eps = self.stiffness, s.kappa, s.eps
+            stretch = ufl.sqrt(ufl.max_value(1 + 2 * eps, 1e-300))
+            w_ee = k.EA - k.EI3 * kappa**3 / (2 * stretch**3)
+            w_ek = 3 * k.EI * kappa + 1.5 * k.EI3 * kappa**2 / stretch
+            w_kk = k.EI * (1 + 3 * eps) + 3 * k.EI3 * kappa * stretch + 1.5 * k.EI4 * kappa**2
+            tangent = (w_kk - w_ek**2 / w_ee) / k.EI
+        else:
+            tangent = ufl.as_ufl(1.0) + 0 * s.eps
+        points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)
+        reference = ((points + 1) / 2).reshape(-1, 1)
+        expression = ufl.as_vector([s.one_plus_e, s.eps, gamma, tangent])
+        return compat.expression(expression, reference), 4
 
     def strain_energy_form(self) -> fem.Form:
         u, v, theta, _ = self.fields()

@@ -75,6 +75,8 @@ def _say(comm, text: str, stream=None) -> None:
 
 def _finish(comm, result, out) -> int:
     """The closing line of a static-type run, and its exit code."""
+    for note in getattr(result, "notes", None) or []:
+        _say(comm, f"fe-beam: warning: {note}", sys.stderr)
     stability = result.steps[-1].get("stability") if result.steps else None
     if stability and not stability["stable"]:
         _say(comm, "fe-beam: warning: the final equilibrium is unstable (the tangent stiffness "
@@ -145,6 +147,8 @@ def run_dynamic(args, config: dict, comm) -> int:
         tip = last["tip"]
         _say(comm, f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, "
                    f"theta = {tip['theta']:.6g} rad")
+    for note in getattr(result, "notes", None) or []:
+        _say(comm, f"fe-beam: warning: {note}", sys.stderr)
     _say(comm, f"{result.info.get('steps', len(result.history))} time steps, {result.dofs} dofs, "
                f"{result.info.get('wall_time_s', 0.0):.2f} s; results in {args.out}")
     if result.status != "completed":

@@ -24,12 +24,14 @@ __all__ = [
     "create_interval_from_vertices",
     "create_matrix",
     "create_vector",
+    "cell_vertex_x",
     "function_space",
     "gmsh_model_to_mesh",
     "local_array",
     "facet_vertex_coordinates",
     "locate_dofs_geometrical",
     "owned_bc_dofs",
+    "locate_entities",
     "locate_entities_boundary",
     "meshtags",
     "set_bc",
@@ -64,6 +66,14 @@ def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.
     return mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
 
 
+def cell_vertex_x(msh: mesh.Mesh) -> np.ndarray:
+    """(local cells, 2) x coordinates of the two vertices of each local cell of an interval
+    mesh (owned and ghost cells)."""
+    dofmap = msh.geometry.dofmap
+    nodes = np.asarray(getattr(dofmap, "array", dofmap)).reshape(-1, 2)
+    return msh.geometry.x[nodes, 0]
+
+
 def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:
     """Function space from a UFL element (FiniteElement, VectorElement or MixedElement)."""
     return fem.FunctionSpace(msh, element)
@@ -86,6 +96,10 @@ def local_array(function: fem.Function) -> np.ndarray:
 
 def locate_dofs_geometrical(spaces, marker):
     return fem.locate_dofs_geometrical(spaces, marker)
+
+
+def locate_entities(msh: mesh.Mesh, dim: int, marker):
+    return mesh.locate_entities(msh, dim, marker)
 
 
 def locate_entities_boundary(msh: mesh.Mesh, dim: int, marker):

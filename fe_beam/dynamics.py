@@ -27,7 +27,7 @@ import ufl
 from dolfinx import fem
 
 from fe_beam import compat
-from fe_beam.beam import BeamProblem
+from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.laws import axis_tangent, strains_from_gradient
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
@@ -169,6 +169,9 @@ class GeneralizedAlpha:
         self.c = const(damping.c)
         self.eta = const(damping.kelvin_voigt)
         self.time = 0.0
+        # extremes of the strains over the accepted states (`fe_beam.beam.StrainRange`)
+        self.watch = StrainWatch()
+        self._trial_range = None
         w_parts = ufl.split(problem.w)
         q, v, a = (ufl.split(f) for f in (self.q_old, self.v_old, self.a_old))
         dt = self.dt
@@ -317,6 +320,11 @@ class GeneralizedAlpha:
         q, v, a = (compat.local_array(f) for f in (self.q_old, self.v_old, self.a_old))
         w[:] = q  # same-displacement predictor: robust when accelerations jump (releases)
         iterations = self.solver.solve()
+        # a state with 1 + e <= 0 anywhere is not one of a real beam: a failed step (cut back)
+        self._trial_range = self.problem.strain_range()  # collective: on every rank
+        reason = self._trial_range.inadmissible()
+        if reason is not None:
+            raise SolveFailed(reason)
         beta, gamma = self.params["beta"], self.params["gamma"]
         a_new = (w - q - dt * v) / (beta * dt**2) - (1 - 2 * beta) / (2 * beta) * a
         v_new = v + dt * ((1 - gamma) * a + gamma * a_new)
@@ -351,6 +359,8 @@ class GeneralizedAlpha:
         self._work += load_mid * (load_energy - self._load_energy)
         self._load_energy = load_energy
         self.time = t_new
+        if self._trial_range is not None:
+            self.watch.observe(self._trial_range)
 
     def reject(self) -> None:
         compat.local_array(self.problem.w)[:] = compat.local_array(self.q_old)
@@ -407,7 +417,8 @@ class GeneralizedAlpha:
                     if dt < s.smallest_step:
                         raise DynamicsFailed(
                             f"time step fell below {s.smallest_step:.3g} s at t = "
-                            f"{self.time:.6g} s ({failure})", self.time) from None
+                            f"{self.time:.6g} s ({failure}); last converged time "
+                            f"{self.time:.6g} s", self.time) from None
                     bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({failure})")
                     continue
                 if s.adaptive:

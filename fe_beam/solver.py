@@ -441,6 +441,7 @@ def run_load_stepping(
     previous = state.copy()
     before_previous, previous_increment = None, None
     bar = ProgressBar(comm, total=1.0, label=label, enabled=progress)
+    failures: list[str] = []  # why the tries since the last converged step failed
     try:
         while lam < 1.0 - 1e-12:
             increment = min(increment, 1.0 - lam)
@@ -466,19 +467,21 @@ def run_load_stepping(
             if failure is not None:
                 state[:] = previous
                 set_load_factor(lam)
+                failures.append(failure)
                 if (
                     not stepping.adaptive
                     or increment * stepping.cut_factor < stepping.min_increment
                 ):
                     raise LoadSteppingFailed(
-                        f"load stepping stopped at load factor {target:.6g} ({failure}); "
-                        f"last converged load factor {lam:.6g}",
+                        f"load stepping stopped at load factor {target:.6g} "
+                        f"({_failure_reasons(failures)}); last converged load factor {lam:.6g}",
                         lam,
                         results,
                     )
                 increment *= stepping.cut_factor
                 bar.note(f"cut back to increment {increment:.3g} ({failure})")
                 continue
+            failures.clear()
             before_previous, previous_increment = previous, increment
             previous = state.copy()
             lam = target
@@ -498,6 +501,19 @@ def run_load_stepping(
     finally:
         bar.close()
     return results
+
+
+def _failure_reasons(failures: list[str]) -> str:
+    """The last failure, and the other kinds of failure of the larger tries before it (e.g. an
+    inadmissible state beyond a step that then no longer converged)."""
+    last = failures[-1]
+    kinds, earlier = {last.split(":")[0].split("(")[0]}, []
+    for reason in reversed(failures[:-1]):
+        kind = reason.split(":")[0].split("(")[0]
+        if kind not in kinds:
+            kinds.add(kind)
+            earlier.append(reason)
+    return last if not earlier else f"{last}; larger steps: {'; '.join(earlier[:2])}"
 
 
 def _agreed(comm, reason: str | None) -> str | None:

@@ -12,7 +12,7 @@ import scipy.sparse
 from mpi4py import MPI
 
 from fe_beam import compat
-from fe_beam.beam import BeamProblem
+from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import StaticConfig
 from fe_beam.outputs import (
     BeamXDMFWriter,
@@ -42,6 +42,8 @@ class StaticResult:
     wall_time_s: float = 0.0
     status: str = "running"
     message: str = ""
+    notes: list[str] = field(default_factory=list)
+    strain_range: dict | None = None
 
     def summary(self, extra: dict | None = None) -> dict:
         data = {
@@ -50,7 +52,10 @@ class StaticResult:
             "steps": self.steps,
             "dofs": self.dofs,
             "wall_time_s": self.wall_time_s,
+            "notes": list(self.notes),
         }
+        if self.strain_range is not None:
+            data["strain_range"] = self.strain_range
         return data | (extra or {})
 
 
@@ -93,6 +98,9 @@ class StaticContinuation:
         )
         self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
         self.load_factor = 0.0
+        # extremes of the strains over the converged states (notes when out of range)
+        self.watch = StrainWatch()
+        self._trial_range = None
 
     def _set_load_factor(self, value: float) -> None:
         self.problem.set_load_factor(value)
@@ -113,6 +121,8 @@ class StaticContinuation:
         def converged(step: StepResult) -> None:
             step = replace(step, load_factor=start + step.load_factor * (target - start))
             self.load_factor = step.load_factor
+            if self._trial_range is not None:
+                self.watch.observe(self._trial_range)
             if on_converged is not None:
                 on_converged(step)
 
@@ -121,11 +131,23 @@ class StaticContinuation:
             set_fraction,
             stepping,
             on_converged=converged,
-            reject_step=rotation_jump_check(self.problem.rotation_dofs(),
-                                            self.config.max_rotation_jump),
+            reject_step=self._step_check(),
             progress=progress,
             label=label,
         )
+
+    def _step_check(self):
+        """Reject a converged step that jumped branch (rotation jump) or is inadmissible
+        (1 + e <= 0 somewhere: `fe_beam.beam.StrainRange`); collective on all ranks."""
+        rotation = rotation_jump_check(self.problem.rotation_dofs(),
+                                       self.config.max_rotation_jump)
+
+        def check(previous, current):
+            reason = rotation(previous, current)
+            self._trial_range = self.problem.strain_range()  # collective: on every rank
+            return reason or self._trial_range.inadmissible()
+
+        return check
 
     def stability(self) -> dict | None:
         """Is the current equilibrium stable? The inertia of the tangent stiffness (dense, so
@@ -222,6 +244,7 @@ def solve_static(
                 "pull_ins": tendons.pull_ins().tolist(),
             }
         result.steps.append(entry)
+        result.notes, result.strain_range = run.watch.notes(), run.watch.summary()
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
@@ -245,6 +268,8 @@ def solve_static(
         if writer is not None:
             writer.close()
         run.destroy()
+    result.notes = run.watch.notes()
+    result.strain_range = run.watch.summary()
     result.wall_time_s = time.perf_counter() - started
     if writing and root:
         _write_tables(out, result, extra)

@@ -22,7 +22,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import compat
-from fe_beam.beam import BeamProblem
+from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, write_csv
@@ -148,8 +148,13 @@ def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
     return static, modes
 
 
-def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool) -> None:
+def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
+                     watch=None) -> None:
+    """Load the problem to the static state of ``static``; ``watch`` (a StrainWatch) sees
+    the strains of its converged steps."""
     run = StaticContinuation(static, problem=problem, prefix="fe_beam_prestate_")
+    if watch is not None:
+        run.watch = watch
     try:
         run.advance(1.0, static.stepping, progress=progress, label="static pre-state")
     except LoadSteppingFailed as failure:
@@ -165,6 +170,8 @@ class DynamicResult:
     status: str = "completed"
     message: str = ""
     dofs: int = 0
+    notes: list = field(default_factory=list)
+    strain_range: dict | None = None
 
 
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
@@ -173,10 +180,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
     problem = BeamProblem(config.static.model, comm)
+    watch = StrainWatch()
     if config.from_static:
-        _static_prestate(problem, config.static, progress)
+        _static_prestate(problem, config.static, progress, watch)
     integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
                                   config.motion_function, config.static.solver)
+    integrator.watch = watch
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
     if writing and root:
@@ -191,6 +200,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
+        result.notes, result.strain_range = watch.notes(), watch.summary()
         writer.write(t)
         if config.static.output.plots:
             shape = writer.vertex_values()
@@ -206,6 +216,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     finally:
         writer.close()
         integrator.solver.destroy()
+    result.notes, result.strain_range = watch.notes(), watch.summary()
     result.info["wall_time_s"] = time.perf_counter() - started
     if writing and root:
         _write_dynamic(out, result, config, result.info["wall_time_s"])
@@ -271,7 +282,8 @@ def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
         "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
-    })
+        "notes": list(result.notes),
+    } | ({"strain_range": result.strain_range} if result.strain_range else {}))
     rows = [[h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
              *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
             for h in result.history]

@@ -1,0 +1,206 @@
+"""Inadmissible states (axial stretch 1 + e <= 0) are rejected, and strains outside the range
+the model is meant for are reported (issue 9, item 2).
+
+Axial compression of a cantilever by P (straight, so the states are known in closed form):
+- Reissner: N = EA e, so e = -P / EA; the stretch 1 + e reaches 0 at P = EA: beyond load
+  factor EA / P the only "solutions" are turned inside out;
+- non-standard: the axial force lambda W_eps = EA lambda (lambda^2 - 1) / 2 is largest in
+  compression at lambda = 1/sqrt(3), EA / (3 sqrt 3) = 0.1925 EA: no equilibrium beyond it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import pytest
+from mpi4py import MPI
+from test_config import BASE, dump_toml
+
+from fe_beam import (
+    BeamModel,
+    Discretisation,
+    Loads,
+    LoadStepping,
+    Material,
+    ModelOptions,
+    Section,
+    SolverSettings,
+    Supports,
+)
+from fe_beam.beam import StrainRange
+from fe_beam.cli import main
+from fe_beam.config import StaticConfig
+from fe_beam.static import solve_static
+
+E, D = 1.0e7, 0.02  # a circular section (the issue's case was a square)
+AREA = math.pi * D**2 / 4
+EA = E * AREA
+
+
+def _compression(law: str, factor: float, elements: int = 12, steps: int = 5) -> BeamModel:
+    return BeamModel(1.0, Section("circle", {"d": D}), Material(E, nu=0.3, rho=1000.0),
+                     ModelOptions(law, "none"), Discretisation(elements, 2),
+                     Supports("clamped", "free"), Loads(tip_force=(-factor * EA, 0.0)))
+
+
+def _static(model, steps=5):
+    config = StaticConfig(model, SolverSettings(), LoadStepping(steps=steps))
+    return solve_static(config, None, MPI.COMM_WORLD, progress=False)
+
+
+def _last_factor(message: str) -> float:
+    match = re.search(r"last converged load factor ([0-9.eE+-]+)", message)
+    assert match, message
+    return float(match.group(1))
+
+
+@pytest.mark.mpi
+def test_reissner_beyond_ea_stops_at_the_last_admissible_factor():
+    """P = 1.4 EA: 1 + e = 1 - 1.4 lambda; the last admissible load factor is just below
+    1 / 1.4 and every recorded state has 1 + e > 0 (on 1 or 2 ranks)."""
+    result = _static(_compression("reissner", 1.4))
+    assert result.status == "failed"
+    assert "inadmissible" in result.message
+    last = _last_factor(result.message)
+    assert 0.99 / 1.4 < last < 1 / 1.4
+    assert result.steps[-1]["load_factor"] == pytest.approx(last, rel=1e-5)
+    assert result.steps[-1]["tip"]["u"] > -1.0  # not folded beyond the clamp
+    assert result.strain_range["min_stretch"] > 0
+
+
+@pytest.mark.mpi
+def test_nonstandard_compression_past_its_limit_is_not_reported_converged():
+    """P = 0.6 EA (the issue: 0.5 EA gave u = -5.7 m, 'converged'): stops below the axial
+    limit force EA / (3 sqrt 3), the last recorded state admissible."""
+    result = _static(_compression("nonstandard", 0.6), steps=4)
+    assert result.status == "failed"
+    last = _last_factor(result.message)
+    limit = 1 / (3 * math.sqrt(3)) / 0.6
+    assert 0.97 * limit < last <= limit
+    assert -1.0 < result.steps[-1]["tip"]["u"] < 0
+    assert result.strain_range["min_stretch"] > 0
+
+
+def _run_cli(tmp_path, command, config, capsys):
+    path = tmp_path / "c.toml"
+    path.write_text(dump_toml(config))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    code = main([command, str(path), "--out", str(out), "--quiet"])
+    return code, capsys.readouterr().err, json.loads((out / "summary.json").read_text())
+
+
+def _config(law: str, tip_force, **tables) -> dict:
+    config = {name: dict(values) for name, values in BASE.items()}
+    config["section"] = {"shape": "circle", "d": D}
+    config["material"] = {"E": E, "nu": 0.3, "rho": 1000.0}
+    config["model"] = {"law": law, "constraint": "none"}
+    config["loads"] = {"tip_force": list(tip_force), "steps": 5}
+    config["output"] = {"xdmf": False, "plots": False}
+    for name, values in tables.items():
+        config.setdefault(name, {}).update(values)
+    return config
+
+
+def test_cli_compression_exit_3_names_the_last_admissible_factor(tmp_path, capsys):
+    code, err, summary = _run_cli(tmp_path, "static", _config("reissner", [-1.4 * EA, 0.0]),
+                                  capsys)
+    assert code == 3, err
+    assert "Traceback" not in err
+    assert summary["status"] == "failed"
+    last = _last_factor(err)
+    assert 0.99 / 1.4 < last < 1 / 1.4
+    assert summary["steps"][-1]["load_factor"] == pytest.approx(last, rel=1e-5)
+    assert "inadmissible" in summary["message"]
+
+
+def test_dynamic_step_into_an_inadmissible_state_is_rejected(tmp_path, capsys):
+    """A sudden compression of 1.5 EA (Reissner): the axial wave folds the tip element; the
+    time steps are cut back and the run ends with exit 3 at the last admissible time."""
+    config = _config("reissner", [-1.5 * EA, 0.0],
+                     loads={"time_function": "1"},
+                     time={"t_end": 0.01, "dt": 0.001, "rho_inf": 0.9},
+                     mesh={"elements": 6, "degree": 2})
+    code, err, summary = _run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 3, err
+    assert summary["status"] == "failed"
+    assert "inadmissible" in summary["message"]
+    match = re.search(r"last converged time ([0-9.eE+-]+)", summary["message"])
+    assert match, summary["message"]
+    assert summary["history"][-1]["t"] == pytest.approx(float(match.group(1)), rel=1e-5)
+    assert 0 < summary["history"][-1]["t"] < 0.01
+    assert summary["strain_range"]["min_stretch"] > 0
+
+
+def test_large_tension_is_noted_but_converges(tmp_path, capsys):
+    """Tension 0.15 EA, non-standard: eps ~ 0.14 > 0.1: exit 0, a note in summary and stderr."""
+    code, err, summary = _run_cli(tmp_path, "static", _config("nonstandard", [0.15 * EA, 0.0]),
+                                  capsys)
+    assert code == 0, err
+    assert summary["status"] == "converged"
+    assert any("|eps|" in note for note in summary["notes"]), summary["notes"]
+    assert "warning" in err and "|eps|" in err
+    assert summary["strain_range"]["max_abs_eps"] > 0.1
+
+
+def test_ordinary_run_has_no_notes(tmp_path, capsys):
+    code, err, summary = _run_cli(tmp_path, "static", _config("nonstandard", [0.0, -2e-3 * EA]),
+                                  capsys)
+    assert code == 0, err
+    assert summary["notes"] == []
+    assert "warning" not in err
+
+
+def test_bending_near_the_largest_moment_is_noted():
+    """Non-standard pure bending of a square h: M(kappa) = EI kappa (1 - 0.3 h^2 kappa^2),
+    largest at kappa* = 1 / (h sqrt 0.9), M* = 0.703 EI / h. M = 0.97 M* needs
+    kappa ~ 0.87 kappa* (> 80 %): noted; M = 0.5 M* (kappa ~ 0.36 kappa*): not noted."""
+    h, length = 0.01, 0.05
+    EI = E * h**4 / 12
+    m_max = 2 / 3 * EI / (h * math.sqrt(0.9))
+    notes = {}
+    for share in (0.5, 0.97):
+        model = BeamModel(length, Section("rectangle", {"b": h, "h": h}), Material(E, nu=0.3),
+                          ModelOptions("nonstandard", "none"), Discretisation(20, 2),
+                          Supports("clamped", "free"), Loads(tip_moment=share * m_max))
+        result = _static(model, steps=10)
+        assert result.status == "converged", result.message
+        notes[share] = result.notes
+    assert notes[0.5] == []
+    assert any("limit curvature" in note for note in notes[0.97]), notes[0.97]
+
+
+def test_strain_range_thresholds():
+    assert StrainRange(0.5, 0.0, 0.0).inadmissible() is None
+    assert "inadmissible" in StrainRange(0.0, 0.0, 0.0).inadmissible()
+    assert "inadmissible" in StrainRange(float("nan"), 0.0, 0.0).inadmissible()
+    assert StrainRange(1.0, 0.099, 0.099, 0.37).warnings() == []
+    assert len(StrainRange(1.0, 0.101, 0.0).warnings()) == 1
+    assert len(StrainRange(1.0, 0.0, 0.101).warnings()) == 1
+    assert len(StrainRange(1.0, 0.0, 0.0, 0.35).warnings()) == 1
+
+
+def test_finger_compressed_past_its_stretch_stops_at_the_last_admissible_factor(tmp_path,
+                                                                                capsys):
+    """`fe-beam finger` (tendons) with a Reissner law and a tip thrust of 1.4 EA at the tip
+    section: the same rejection and exit 3 as `fe-beam static`."""
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "finger.toml"
+    text = example.read_text().split("[inverse]")[0]
+    text = text.replace('law = "nonstandard"', 'law = "reissner"')
+    text = text.replace("elements = 40", "elements = 10")
+    ea_tip = 0.6e6 * 0.02 * 0.01
+    text = text.replace("[loads]", f"[loads]\ntip_force = [{-1.4 * ea_tip!r}, 0.0]")
+    path = tmp_path / "finger.toml"
+    path.write_text(text + "\n[output]\nplots = false\nxdmf = false\n")
+    capsys.readouterr()
+    code = main(["finger", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert "inadmissible" in summary["message"]
+    assert summary["steps"][-1]["load_factor"] == pytest.approx(_last_factor(err), rel=1e-5)
+    assert summary["strain_range"]["min_stretch"] > 0
