@@ -399,9 +399,11 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
 
 # --- checks over the whole configuration, before any command reads it ---------------------------
 MAX_COUNT = 2**31 - 1  # integer keys are counts (elements, steps, iterations): C ints downstream
-MAX_MAGNITUDE = 1e30  # beyond it, squares and products of a few numbers overflow or lose meaning
+# Magnitudes of nonzero numbers (SI units): beyond them products of a few numbers overflow or
+# underflow, or the factorisations meet "zero" pivots; no physical input of a rod is near them.
+MAGNITUDES = (1e-30, 1e30)
 # Keys whose numbers may be as small or as large as the user likes (tolerances; PETSc's own).
-UNBOUNDED = ("tol", "petsc_options")
+UNBOUNDED = ("tol", "petsc_options", "min_increment")
 
 
 def _where(path: tuple) -> str:
@@ -420,7 +422,8 @@ def _where(path: tuple) -> str:
 
 def check_values(config: dict) -> None:
     """Every number anywhere in the configuration is finite (no nan or inf: no key gives them a
-    meaning), fits the 64-bit integers of TOML and, outside tolerances, has |x| <= 1e30; a table
+    meaning), fits the 64-bit integers of TOML and, outside tolerances, is 0 or has a magnitude
+    in MAGNITUDES; a table
     meant as an array of tables ([[tendons]]) is one. ConfigError naming the key otherwise."""
     if not isinstance(config, dict):
         raise ConfigError("the configuration must be a table")
@@ -446,9 +449,10 @@ def check_values(config: dict) -> None:
         if isinstance(value, float) and not math.isfinite(value):
             raise ConfigError(f"{_where(path)} must be a finite number; got {value!r}")
         bounded = not any(part in str(name) for name in path for part in UNBOUNDED)
-        if bounded and abs(value) > MAX_MAGNITUDE:
+        low, high = MAGNITUDES
+        if bounded and value != 0 and not low <= abs(value) <= high:
             raise ConfigError(f"{_where(path)} = {value:.6g} is out of range: fe-beam takes "
-                              f"numbers of magnitude up to {MAX_MAGNITUDE:g} (SI units)")
+                              f"numbers of magnitude {low:g} to {high:g} (SI units), or 0")
     _check_ranges(config)
     _check_pairs(config)
 
