@@ -276,7 +276,10 @@ def _check_output_folder(out: Path, comm) -> None:
     leaves no empty folder behind."""
     problem = None
     if comm.rank == 0:
-        problem = _output_folder_problem(out)
+        try:
+            problem = _output_folder_problem(out)
+        except OSError as error:  # e.g. a name too long to look up
+            problem = f"--out {out} cannot be used as an output folder ({error.strerror})"
     problem = comm.bcast(problem, root=0)
     if problem:
         raise ConfigError(problem)
@@ -288,8 +291,10 @@ def _output_folder_problem(out: Path) -> str | None:
     ancestor = out.absolute()
     while not ancestor.exists():
         ancestor = ancestor.parent
-    if not ancestor.is_dir():
+    if ancestor.is_file():
         return f"--out {out}: {ancestor} is a file, not a folder"
+    if not ancestor.is_dir():
+        return f"--out {out}: {ancestor} is not a folder"
     if not os.access(ancestor, os.W_OK | os.X_OK):
         return f"--out {out}: no permission to write in {ancestor}"
     made = []

@@ -125,7 +125,7 @@ FILE_KINDS = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a characte
 def _file_problem(path: Path) -> str | None:
     """Why ``path`` cannot be read as a configuration file (None: it can). Never opens a FIFO
     or a device (reading one could block or never end)."""
-    name = shown(str(path))
+    name = shown(str(path), 300)
     try:
         info = path.stat()
     except ValueError:
@@ -153,7 +153,7 @@ def _file_problem(path: Path) -> str | None:
 
 def load_config(path: str | Path) -> dict:
     path = Path(path)
-    name = shown(str(path))
+    name = shown(str(path), 300)
     problem = _file_problem(path)
     if problem:
         raise ConfigError(problem)

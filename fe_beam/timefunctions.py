@@ -42,10 +42,10 @@ MAX_DEPTH = 100
 SHOWN = 60
 
 
-def shown(text) -> str:
-    """A value as echoed in a message: repr, cut to about SHOWN characters."""
+def shown(text, limit: int = SHOWN) -> str:
+    """A value as echoed in a message: repr, cut to about ``limit`` characters."""
     text = repr(text)
-    return text if len(text) <= SHOWN else f"{text[:SHOWN - 5]}...{text[-2:]}"
+    return text if len(text) <= limit else f"{text[:limit - 5]}...{text[-2:]}"
 
 
 def _depth(tree: ast.AST) -> int:
