@@ -135,7 +135,9 @@ def _file_problem(path: Path) -> str | None:
             return f"config file {name} is a symbolic link to a file that does not exist"
         return f"config file {name} does not exist"
     except NotADirectoryError:
-        return f"config file {name} does not exist (a folder in its path is a file)"
+        blocking = next((parent for parent in path.parents if parent.is_file()), path.parent)
+        return (f"config file {name} cannot exist: {shown(str(blocking), 300)} is a file, not a "
+                "folder")
     except OSError as error:
         return f"config file {name} cannot be read ({error.strerror})"
     if stat.S_ISDIR(info.st_mode):
@@ -483,17 +485,13 @@ def _check_pairs(config: dict) -> None:
     time = config.get("time")
     if not isinstance(time, dict):
         return
-    values = {key: _number(config, "time", key) for key in ("min_dt", "dt", "max_dt", "t_end")}
+    values = {key: _number(config, "time", key) for key in ("min_dt", "dt", "max_dt")}
     order = ("min_dt", "dt", "max_dt")
     for i, small in enumerate(order):
         for large in order[i + 1:]:
             a, b = values[small], values[large]
             if a is not None and b is not None and a > 0 and b > 0 and a > b:
                 raise ConfigError(f"[time] {small} = {a:g} s must not exceed {large} = {b:g} s")
-    if values["min_dt"] is not None and values["t_end"] is not None and (
-            0 < values["t_end"] < values["min_dt"]):
-        raise ConfigError(f"[time] min_dt = {values['min_dt']:g} s must not exceed t_end = "
-                          f"{values['t_end']:g} s")
 
 
 # Tables each command reads besides the rod's (SCHEMA). A table another command reads is refused
