@@ -426,7 +426,7 @@ def main(argv: list[str] | None = None) -> int:
         config = apply_overrides(load_config(args.config), args.set)
         check_values(config)
         notes.extend(check_command_tables(args.command, config))
-        check_partition(config, comm.size)
+        check_partition(config, comm.size, args.command)
         code = RUNNERS[args.command](args, config, comm)
         for note in notes:
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)

@@ -544,9 +544,12 @@ def check_command_tables(command: str, config: dict) -> list[str]:
     return notes
 
 
-def check_partition(config: dict, ranks: int) -> None:
+def check_partition(config: dict, ranks: int, command: str = "static") -> None:
     """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
-    that owns none)."""
+    that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
+    hang in parallel, while they run serially)."""
+    if ranks > 1 and command in ("solid", "compare", "refine"):
+        _check_solid_partition(config, ranks)
     mesh = config.get("mesh")
     elements = mesh.get("elements", SCHEMA["mesh"]["elements"].default) if isinstance(
         mesh, dict) else SCHEMA["mesh"]["elements"].default
@@ -555,3 +558,16 @@ def check_partition(config: dict, ranks: int) -> None:
         raise ConfigError(
             f"[mesh] elements = {elements} is fewer than the {ranks} MPI ranks: every rank needs "
             f"at least one element; use elements >= {ranks} or run on fewer ranks")
+
+
+def _check_solid_partition(config: dict, ranks: int) -> None:
+    solid = config.get("solid")
+    size = _number(config, "solid", "mesh_size") if isinstance(solid, dict) else None
+    dimensions = [value for key in ("b", "h", "h_tip")
+                  if (value := _number(config, "section", key)) is not None and value > 0]
+    if size is None or not dimensions or size <= max(dimensions):
+        return
+    raise ConfigError(
+        f"[solid] mesh_size = {size:g} m is larger than the cross-section ({max(dimensions):g} m):"
+        f" such a coarse 3D mesh does not run on {ranks} MPI ranks; use mesh_size <= "
+        f"{max(dimensions):g} m, or run on one rank")

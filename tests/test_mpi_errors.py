@@ -76,6 +76,19 @@ def test_fewer_elements_than_ranks_is_refused_with_exit_2(tmp_path, elements, de
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+@pytest.mark.parametrize("command", ["solid", "compare"])
+def test_solid_mesh_coarser_than_the_section_is_refused_on_2_ranks(tmp_path, command):
+    """Serially a 3D mesh with elements larger than the cross-section runs; on 2 ranks it gave
+    NaN (mesh_size 0.1) or hung (0.05)."""
+    config = (ROOT / "examples" / "finger_solid.toml").read_text()
+    process, seconds = fe_beam(tmp_path, config, "--out", str(tmp_path / "o"),
+                               "--set", "solid.mesh_size=0.04", command=command)
+    assert process.returncode == 2, process.stderr
+    message = one_message(process)
+    assert "mesh_size = 0.04" in message and "2 MPI ranks" in message, message
+    assert seconds < 60
+
+
 def test_as_many_elements_as_ranks_runs(tmp_path):
     config = edited({"mesh.elements": 2, "loads.steps": 1, "output.plots": False,
                      "output.xdmf": False})
