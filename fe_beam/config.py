@@ -513,7 +513,11 @@ def _readers(name: str) -> str:
     commands = [command for command, tables in COMMAND_TABLES.items() if name in tables]
     if name in ("tendons", "solid", "refine"):
         commands.append("refine")
-    return " and ".join(f"fe-beam {command}" for command in commands) or "no command"
+    if not commands:
+        return "no command"
+    listed = commands[0] if len(commands) == 1 else (
+        f"{', '.join(commands[:-1])} and {commands[-1]}")
+    return f"fe-beam {listed}"
 
 
 def check_command_tables(command: str, config: dict) -> list[str]:
@@ -522,7 +526,7 @@ def check_command_tables(command: str, config: dict) -> list[str]:
     if command not in COMMAND_TABLES:
         return []
     used = COMMAND_TABLES[command]
-    notes = []
+    unused: dict[str, list[str]] = {}
     for name in config:
         if name in SCHEMA or name in used or name not in OTHER_TABLES + ("inverse",):
             continue
@@ -533,8 +537,13 @@ def check_command_tables(command: str, config: dict) -> list[str]:
             raise ConfigError(
                 f"fe-beam {command} does not use {what}, which is read by {_readers(name)}: "
                 f"run {hint}, or remove {what}")
-        notes.append(f"[{name}] is not used by fe-beam {command} (it is read by "
-                     f"{_readers(name)}) and was ignored")
+        unused.setdefault(_readers(name), []).append(f"[{name}]")
+    notes = []
+    for readers, names in unused.items():
+        listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+        verb = "is" if len(names) == 1 else "are"
+        notes.append(f"{listed} {verb} not used by fe-beam {command} and ignored (read by "
+                     f"{readers})")
     loads = config.get("loads")
     if command not in ("dynamic", "modes") and isinstance(loads, dict):
         timed = [key for key in DYNAMIC_LOAD_KEYS if key in loads]

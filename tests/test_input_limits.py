@@ -197,6 +197,7 @@ def test_unused_tables_are_noted_not_silently_ignored():
     text = " | ".join(notes)
     for name in ("[time]", "[initial]", "[solid]", "[modes]", "time_function"):
         assert name in text, text
+    assert len(notes) == 3, notes  # one per group of readers, and the [loads] key
     assert check_command_tables("finger", {**FINGER, "compare": {}})[0].startswith("[compare]")
 
 
