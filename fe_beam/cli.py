@@ -12,6 +12,7 @@ import contextlib
 import errno
 import logging
 import os
+import re
 import sys
 import time
 import traceback
@@ -338,9 +339,18 @@ def _error_comm(comm):
     return _ERROR_COMM[0]
 
 
+LONG_VALUE = re.compile(r"'[^']{100,}'|\"[^\"]{100,}\"|\S{200,}")
+
+
+def _shorter(match: re.Match) -> str:
+    value = match.group(0)
+    return f"{value[:60]}...{value[-15:]}"
+
+
 def _one_line(text: str) -> str:
-    """A message as one line of reasonable length (values may echo huge inputs)."""
-    text = " ".join(str(text).split())
+    """A message as one line of reasonable length: a value that echoes a huge input (a quoted
+    string or an unbroken run of characters) keeps its start and end only."""
+    text = LONG_VALUE.sub(_shorter, " ".join(str(text).split()))
     if len(text) > MAX_MESSAGE:
         text = f"{text[:MAX_MESSAGE // 2 - 3]} ... {text[-MAX_MESSAGE // 2 + 3:]}"
     return text

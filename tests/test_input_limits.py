@@ -254,7 +254,9 @@ def test_empty_out_exits_2(tmp_path, capsys, out):
 ])
 def test_huge_values_are_not_echoed_back(tmp_path, capsys, changes):
     code, err, _ = run(tmp_path, "static", edited(changes), capsys)
-    assert len(one_sentence(code, err)) < 700, len(err)
+    message = one_sentence(code, err)
+    assert len(message) < 700, len(err)
+    assert not re.search(r"(\w)\1{80}", message), message  # no value echoed at length
 
 
 def test_huge_formula_is_not_echoed_back(tmp_path, capsys):
@@ -284,3 +286,14 @@ def test_typo_table_still_named():
         from fe_beam.config import parse_static
 
         parse_static({**BASE, "lods": {}})
+
+
+def test_static_on_a_dynamic_config_runs_and_says_what_it_ignored(tmp_path, capsys):
+    config = copy.deepcopy(DYNAMIC)
+    config["loads"]["steps"] = 1
+    code, err, _ = run(tmp_path, "static", config, capsys)
+    assert code == 0, err
+    lines = err.splitlines()
+    assert len(lines) == 2, err  # the ignored tables in one note, the [loads] key in another
+    assert all(line.startswith("fe-beam static: note: ") for line in lines), err
+    assert "[initial] and [time]" in lines[0] and "time_function" in lines[1], err
