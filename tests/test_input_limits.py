@@ -297,3 +297,40 @@ def test_static_on_a_dynamic_config_runs_and_says_what_it_ignored(tmp_path, caps
     assert len(lines) == 2, err  # the ignored tables in one note, the [loads] key in another
     assert all(line.startswith("fe-beam static: note: ") for line in lines), err
     assert "[initial] and [time]" in lines[0] and "time_function" in lines[1], err
+
+
+@pytest.mark.parametrize("error, code, words", [
+    (KeyError("bug"), 1, "internal error"),
+    (FloatingPointError("overflow in the residual"), 3, "the analysis failed"),
+    (MemoryError(), 3, "out of memory"),
+    (OSError(28, "No space left on device", "/full/summary.json"), 2, "/full/summary.json"),
+    (ConfigError("[mesh] elements too many"), 2, "[mesh] elements"),
+    (TimeFunctionError("'exp(t)' is not finite at t = 800"), 2, "not finite"),
+])
+def test_any_exception_becomes_one_line_and_its_exit_code(capsys, error, code, words):
+    from mpi4py import MPI
+
+    from fe_beam.cli import run_guarded
+
+    def work():
+        raise error
+
+    capsys.readouterr()
+    assert run_guarded(MPI.COMM_WORLD, "static", "c.toml", work) == code
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("fe-beam static: ") and words in err, err
+
+
+def test_petsc_error_is_an_analysis_failure(capsys):
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    from fe_beam.cli import run_guarded
+
+    def work():
+        PETSc.Mat().createAIJ((2, 2), comm=MPI.COMM_SELF).getValue(5, 5)  # out of range
+
+    capsys.readouterr()
+    code = run_guarded(MPI.COMM_WORLD, "static", "c.toml", work)
+    err = capsys.readouterr().err
+    assert code == 3 and err.count("\n") == 1 and "Traceback" not in err, err
