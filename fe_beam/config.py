@@ -164,7 +164,7 @@ def load_config(path: str | Path) -> dict:
             return tomllib.load(stream)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as error:
         # ValueError: e.g. an integer of more than 4300 digits
-        raise ConfigError(f"{name}: not valid TOML ({shown(str(error))[1:-1]})") from None
+        raise ConfigError(f"{name}: not valid TOML ({shown(str(error), 200)[1:-1]})") from None
     except RecursionError:
         raise ConfigError(f"{name}: not valid TOML (arrays or inline tables nested too "
                           "deeply)") from None
@@ -445,7 +445,7 @@ def check_values(config: dict) -> None:
             continue
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             continue
-        if isinstance(value, int) and abs(value) >= 2**63:
+        if isinstance(value, int) and not -(2**63) <= value < 2**63:
             raise ConfigError(f"{_where(path)} = {shown(value)} is too large (TOML integers "
                               "are 64-bit)")
         if isinstance(value, float) and not math.isfinite(value):
