@@ -234,8 +234,8 @@ def _checked(table: str, key: str, value, spec: Key):
     if isinstance(value, float) and not math.isfinite(value):
         raise ConfigError(f"[{table}] {key} must be finite; got {value!r}")
     if spec.types == (int,) and abs(value) > MAX_COUNT:
-        raise ConfigError(f"[{table}] {key} must be an integer of at most {MAX_COUNT} "
-                          f"({spec.doc}); got {shown(value)}")
+        raise ConfigError(f"[{table}] {key} = {shown(value)} is out of range ({spec.doc}; an "
+                          f"integer from -{MAX_COUNT} to {MAX_COUNT})")
     return value
 
 
