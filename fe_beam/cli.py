@@ -8,13 +8,27 @@ the last converged step are written).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
 import logging
 import os
+import re
 import sys
+import time
+import traceback
 from pathlib import Path
 
-from fe_beam.config import ConfigError, apply_overrides, load_config
+from fe_beam.config import (
+    ConfigError,
+    apply_overrides,
+    check_command_tables,
+    check_partition,
+    check_values,
+    load_config,
+)
+from fe_beam.timefunctions import TimeFunctionError
 
+EXIT_INTERNAL = 1
 EXIT_USAGE = 2
 EXIT_FAILED = 3
 
@@ -29,8 +43,23 @@ COMMANDS = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (the usage is one --help away)."""
+
+    def error(self, message: str):
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _output_folder(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must name a folder; got an empty name")
+    if "\0" in text:
+        raise argparse.ArgumentTypeError("must name a folder; the name contains a NUL byte")
+    return Path(text)
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="fe-beam",
         description="Finite-element analysis of slender bodies that bend a lot.",
     )
@@ -39,7 +68,8 @@ def _parser() -> argparse.ArgumentParser:
         command = sub.add_parser(name, help=help_text, description=help_text)
         command.add_argument("config", help="TOML configuration file")
         command.add_argument(
-            "--out", type=Path, default=None, help="output folder (default: results/<config name>)"
+            "--out", type=_output_folder, default=None,
+            help="output folder (default: results/<config name>)",
         )
         command.add_argument(
             "--set",
@@ -253,40 +283,177 @@ RUNNERS["compare"] = run_compare_command
 
 
 def _check_output_folder(out: Path, comm) -> None:
-    """A folder that cannot be made is a usage error, not a crash after the solve. Nothing is
-    created here: a config that turns out to be wrong leaves no empty folder behind."""
+    """A folder that cannot be made is a usage error, not a crash after the solve. Rank 0 makes
+    it (and a probe file in it) and removes what it made: a config that turns out to be wrong
+    leaves no empty folder behind."""
     problem = None
     if comm.rank == 0:
-        if out.exists() and not out.is_dir():
-            problem = f"--out {out} exists and is not a folder"
-        else:
-            ancestor = out.absolute()
-            while not ancestor.exists():
-                ancestor = ancestor.parent
-            if not ancestor.is_dir():
-                problem = f"--out {out}: {ancestor} is a file, not a folder"
-            elif not os.access(ancestor, os.W_OK | os.X_OK):
-                problem = f"--out {out}: no permission to write in {ancestor}"
+        try:
+            problem = _output_folder_problem(out)
+        except OSError as error:  # e.g. a name too long to look up
+            problem = f"--out {out} cannot be used as an output folder ({error.strerror})"
     problem = comm.bcast(problem, root=0)
     if problem:
         raise ConfigError(problem)
 
 
+def _output_folder_problem(out: Path) -> str | None:
+    if out.exists() and not out.is_dir():
+        return f"--out {out} exists and is not a folder"
+    ancestor = out.absolute()
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if ancestor.is_file():
+        return f"--out {out}: {ancestor} is a file, not a folder"
+    if not ancestor.is_dir():
+        return f"--out {out}: {ancestor} is not a folder"
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        return f"--out {out}: no permission to write in {ancestor}"
+    made = []
+    try:
+        folder = out.absolute()
+        missing = []
+        while not folder.exists():
+            missing.append(folder)
+            folder = folder.parent
+        for folder in reversed(missing):
+            folder.mkdir()
+            made.append(folder)
+        probe = out / f".fe-beam-probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        return f"--out {out} cannot be used as an output folder ({error.strerror})"
+    finally:
+        for folder in reversed(made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+    return None
+
+
+# --- errors: one message, and every MPI rank ends ------------------------------------------------
+# How long a failing rank waits for the other ranks to fail at the same point (then all return
+# normally and rank 0 prints) before it aborts the job (the others are in a collective operation
+# that will never complete).
+ERROR_AGREEMENT_S = float(os.environ.get("FE_BEAM_ERROR_WAIT_S", "3"))
+_ERROR_COMM = []
+USER_ERRNOS = {errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOSPC, errno.EROFS, errno.ENOTDIR,
+               errno.EISDIR, errno.ENAMETOOLONG, errno.EEXIST, errno.EDQUOT, errno.ELOOP}
+MAX_MESSAGE = 600
+
+
+def _error_comm(comm):
+    """A private duplicate of ``comm`` for the error agreement (made once, collectively, at the
+    start of the first command; never used by the analysis)."""
+    if not _ERROR_COMM:
+        _ERROR_COMM.append(comm.Dup())
+    return _ERROR_COMM[0]
+
+
+LONG_VALUE = re.compile(r"'[^']{100,}'|\"[^\"]{100,}\"|\S{200,}")
+
+
+def _shorter(match: re.Match) -> str:
+    value = match.group(0)
+    return f"{value[:60]}...{value[-15:]}"
+
+
+def _one_line(text: str) -> str:
+    """A message as one line of reasonable length: a value that echoes a huge input (a quoted
+    string or an unbroken run of characters) keeps its start and end only."""
+    text = LONG_VALUE.sub(_shorter, " ".join(str(text).split()))
+    if len(text) > MAX_MESSAGE:
+        text = f"{text[:MAX_MESSAGE // 2 - 3]} ... {text[-MAX_MESSAGE // 2 + 3:]}"
+    return text
+
+
+def describe_error(error: BaseException, command: str, config: str) -> tuple[int, str]:
+    """(exit code, one-line message) for an exception that ended a command."""
+    label = f"fe-beam {command}"
+    if isinstance(error, (ConfigError, TimeFunctionError)):
+        return EXIT_USAGE, _one_line(f"{label}: error in {config}: {error}")
+    if isinstance(error, OSError) and error.errno in USER_ERRNOS and error.filename:
+        return EXIT_USAGE, _one_line(
+            f"{label}: error: {error.filename}: {error.strerror or error}")
+    if isinstance(error, MemoryError):
+        return EXIT_FAILED, f"{label}: the analysis ran out of memory (use a coarser model)"
+    failure = isinstance(error, ArithmeticError) or type(error).__module__.startswith("petsc4py")
+    if failure:
+        return EXIT_FAILED, _one_line(
+            f"{label}: the analysis failed: {type(error).__name__}: {error}")
+    return EXIT_INTERNAL, _one_line(
+        f"{label}: internal error ({type(error).__name__}: {error}); please report it with the "
+        "configuration (FE_BEAM_DEBUG=1 shows the traceback)")
+
+
+def end_on_error(comm, code: int, message: str) -> int:
+    """Report a failed command once and return its exit code, on every rank. When all ranks
+    failed (the usual case: the same check on the same input) rank 0 prints and all return;
+    when the others do not join within ERROR_AGREEMENT_S they are stuck in a collective
+    operation, and this rank prints and aborts the whole job with ``code``."""
+    if comm.size == 1:
+        print(message, file=sys.stderr, flush=True)
+        return code
+    request = _error_comm(comm).Ibarrier()
+    deadline = time.monotonic() + ERROR_AGREEMENT_S
+    while not request.Test():
+        if time.monotonic() > deadline:
+            print(message, file=sys.stderr, flush=True)
+            sys.stdout.flush()
+            comm.Abort(code)
+        time.sleep(0.005)
+    code, message = _error_comm(comm).bcast((code, message), root=0)
+    if comm.rank == 0:
+        print(message, file=sys.stderr, flush=True)
+    return code
+
+
+def run_guarded(comm, command: str, config: str, work) -> int:
+    """``work()``'s exit code; any exception becomes one message and an exit code on every
+    rank (see end_on_error) instead of a traceback or a hung MPI job."""
+    try:
+        return work()
+    except Exception as error:  # noqa: BLE001 - every error ends with one message
+        if os.environ.get("FE_BEAM_DEBUG"):
+            traceback.print_exc()
+        code, message = describe_error(error, command, config)
+    return end_on_error(comm, code, message)
+
+
+def _parse_arguments(argv, comm) -> argparse.Namespace:
+    """Parsed arguments; usage errors and --help are printed by rank 0 only (every rank parses
+    the same command line and exits with the same code)."""
+    if comm.rank == 0:
+        return _parser().parse_args(argv)
+    with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink), \
+            contextlib.redirect_stderr(sink):
+        return _parser().parse_args(argv)
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    quiet_jit_logging()
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
+    args = _parse_arguments(argv, comm)
+    quiet_jit_logging()
     if args.out is None:
         args.out = Path("results") / Path(args.config).stem
-    try:
+    if comm.size > 1:
+        _error_comm(comm)
+    notes = []
+
+    def work() -> int:
         _check_output_folder(args.out, comm)
         config = apply_overrides(load_config(args.config), args.set)
-        return RUNNERS[args.command](args, config, comm)
-    except ConfigError as error:
-        _say(comm, f"fe-beam {args.command}: error in {args.config}: {error}", sys.stderr)
-        return EXIT_USAGE
+        check_values(config)
+        notes.extend(check_command_tables(args.command, config))
+        check_partition(config, comm.size, args.command)
+        code = RUNNERS[args.command](args, config, comm)
+        for note in notes:
+            _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
+        return code
+
+    return run_guarded(comm, args.command, args.config, work)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import copy
 import math
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,12 +17,15 @@ from fe_beam.beam import BeamModel, Discretisation, Loads, ModelOptions, Support
 from fe_beam.materials import Material
 from fe_beam.sections import SHAPES, Section
 from fe_beam.solver import LoadStepping, SolverSettings
+from fe_beam.timefunctions import shown
 
 __all__ = [
     "ConfigError",
     "OutputOptions",
     "StaticConfig",
     "apply_overrides",
+    "check_command_tables",
+    "check_values",
     "load_config",
     "parse_static",
 ]
@@ -113,22 +117,66 @@ OTHER_TABLES = (
 )
 
 
+MAX_CONFIG_BYTES = 256 * 2**20
+FILE_KINDS = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+              (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be read as a configuration file (None: it can). Never opens a FIFO
+    or a device (reading one could block or never end)."""
+    name = shown(str(path), 300)
+    try:
+        info = path.stat()
+    except ValueError:
+        return f"config file {name} is not a usable file name (it contains a NUL byte)"
+    except FileNotFoundError:
+        if path.is_symlink():
+            return f"config file {name} is a symbolic link to a file that does not exist"
+        return f"config file {name} does not exist"
+    except NotADirectoryError:
+        blocking = next((parent for parent in path.parents if parent.is_file()), path.parent)
+        return (f"config file {name} cannot exist: {shown(str(blocking), 300)} is a file, not a "
+                "folder")
+    except OSError as error:
+        return f"config file {name} cannot be read ({error.strerror})"
+    if stat.S_ISDIR(info.st_mode):
+        return f"config file {name} is a directory, not a TOML file"
+    for test, kind in FILE_KINDS:
+        if test(info.st_mode):
+            return f"config file {name} is {kind}, not a regular file"
+    if not stat.S_ISREG(info.st_mode):
+        return f"config file {name} is not a regular file"
+    if info.st_size > MAX_CONFIG_BYTES:
+        return (f"config file {name} has {info.st_size / 2**20:.0f} MiB; a configuration has at "
+                f"most {MAX_CONFIG_BYTES // 2**20} MiB")
+    return None
+
+
 def load_config(path: str | Path) -> dict:
     path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"config file {str(path)!r} does not exist")
+    name = shown(str(path), 300)
+    problem = _file_problem(path)
+    if problem:
+        raise ConfigError(problem)
     try:
         with path.open("rb") as stream:
             return tomllib.load(stream)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise ConfigError(f"{path}: not valid TOML ({error})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as error:
+        # ValueError: e.g. an integer of more than 4300 digits
+        raise ConfigError(f"{name}: not valid TOML ({shown(str(error), 200)[1:-1]})") from None
+    except RecursionError:
+        raise ConfigError(f"{name}: not valid TOML (arrays or inline tables nested too "
+                          "deeply)") from None
+    except OSError as error:
+        raise ConfigError(f"config file {name} cannot be read ({error.strerror})") from None
 
 
 def _parse_value(text: str):
     try:
         return tomllib.loads(f"value = {text}")["value"]
-    except tomllib.TOMLDecodeError:
-        return text  # a bare word such as reissner
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError):
+        return text  # a bare word such as reissner (or a value the checks then refuse)
 
 
 def apply_overrides(config: dict, assignments: list[str]) -> dict:
@@ -137,11 +185,11 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
     config = copy.deepcopy(config)
     for assignment in assignments or []:
         if "=" not in assignment:
-            raise ConfigError(f"--set {assignment!r}: expected table.key=value")
+            raise ConfigError(f"--set {shown(assignment)}: expected table.key=value")
         dotted, text = assignment.split("=", 1)
         names = dotted.strip().split(".")
         if len(names) < 2 or not all(names):
-            raise ConfigError(f"--set {assignment!r}: expected table.key=value")
+            raise ConfigError(f"--set {shown(assignment)}: expected table.key=value")
         target, position = config, 0
         while position < len(names) - 1:
             name = names[position]
@@ -151,13 +199,14 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
                 index = names[position]
                 if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
                     raise ConfigError(
-                        f"--set {assignment!r}: {name} is an array of {len(target)} tables; "
+                        f"--set {shown(assignment)}: {shown(name)[1:-1]} is an array of "
+                        f"{len(target)} tables; "
                         f"address one as {name}.<index 0..{len(target) - 1}>.key"
                     )
                 target = target[int(index)]
                 position += 1
             elif not isinstance(target, dict):
-                raise ConfigError(f"--set {assignment!r}: {name} is not a table")
+                raise ConfigError(f"--set {shown(assignment)}: {shown(name)[1:-1]} is not a table")
         target[names[-1]] = _parse_value(text.strip())
     return config
 
@@ -180,10 +229,13 @@ def _checked(table: str, key: str, value, spec: Key):
     ok = isinstance(value, spec.types) and not (isinstance(value, bool) and bool not in spec.types)
     if not ok:
         raise ConfigError(
-            f"[{table}] {key} must be {_type_name(spec.types)} ({spec.doc}); got {value!r}"
+            f"[{table}] {key} must be {_type_name(spec.types)} ({spec.doc}); got {shown(value)}"
         )
     if isinstance(value, float) and not math.isfinite(value):
         raise ConfigError(f"[{table}] {key} must be finite; got {value!r}")
+    if spec.types == (int,) and abs(value) > MAX_COUNT:
+        raise ConfigError(f"[{table}] {key} = {shown(value)} is out of range ({spec.doc}; an "
+                          f"integer from -{MAX_COUNT} to {MAX_COUNT})")
     return value
 
 
@@ -193,11 +245,14 @@ def table(
     """A validated table with defaults filled in (unknown keys and wrong types are errors)."""
     schema = SCHEMA[name] if schema is None else schema
     given = config.get(name, {})
+    if isinstance(given, list):
+        raise ConfigError(f"[{name}] must be one table, written [{name}]; the config has an "
+                          f"array of tables [[{name}]]")
     if not isinstance(given, dict):
-        raise ConfigError(f"[{name}] must be a table")
+        raise ConfigError(f"[{name}] must be a table; got {shown(given)}")
     unknown = [k for k in given if k not in schema and not open_keys(k)]
     if unknown:
-        raise ConfigError(f"[{name}] unknown key {unknown[0]!r}; allowed: {', '.join(schema)}")
+        raise ConfigError(f"[{name}] unknown key {shown(unknown[0])}; allowed: {', '.join(schema)}")
     values = {}
     for key, spec in schema.items():
         if key in given:
@@ -213,7 +268,8 @@ def table(
 def check_tables(config: dict, known: tuple[str, ...]) -> None:
     unknown = [name for name in config if name not in known]
     if unknown:
-        raise ConfigError(f"unknown table [{unknown[0]}]; known tables: {', '.join(known)}")
+        raise ConfigError(f"unknown table [{shown(unknown[0])[1:-1]}]; known tables: "
+                          f"{', '.join(known)}")
 
 
 @dataclass(frozen=True)
@@ -251,7 +307,7 @@ def parse_section(config: dict) -> Section:
     for key, value in values.items():
         target, name = (dims_tip, key[:-4]) if key.endswith("_tip") else (dims, key)
         if isinstance(value, bool) or not isinstance(value, NUMBER):
-            raise ConfigError(f"[section] {key} must be a number; got {value!r}")
+            raise ConfigError(f"[section] {shown(key)[1:-1]} must be a number; got {shown(value)}")
         target[name] = value
     orphans = [n for n in dims_tip if n not in dims]
     if orphans:
@@ -341,3 +397,186 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
         )
     output = OutputOptions(**table(config, "output"))
     return StaticConfig(model, settings, stepping, jump, output, raw=config)
+
+
+# --- checks over the whole configuration, before any command reads it ---------------------------
+MAX_COUNT = 2**31 - 1  # integer keys are counts (elements, steps, iterations): C ints downstream
+# Magnitudes of nonzero numbers (SI units): beyond them products of a few numbers overflow or
+# underflow, or the factorisations meet "zero" pivots; no physical input of a rod is near them.
+MAGNITUDES = (1e-30, 1e30)
+# Keys whose numbers may be as small or as large as the user likes (tolerances; PETSc's own).
+UNBOUNDED = ("tol", "petsc_options", "min_increment")
+
+
+def _where(path: tuple) -> str:
+    """A key path as the user wrote it: ``[loads] prescribed_xL.theta``, ``[loads]
+    tip_force[1]``, ``[[tendons]] #2 tension``."""
+    head, rest = path[0], list(path[1:])
+    if rest and isinstance(rest[0], int):
+        text = f"[[{head}]] #{rest.pop(0) + 1}"
+    else:
+        text = f"[{head}]"
+    key = ""
+    for part in rest:
+        key += f"[{part}]" if isinstance(part, int) else (f".{part}" if key else str(part))
+    return f"{text} {key}".strip() if key else text
+
+
+def check_values(config: dict) -> None:
+    """Every number anywhere in the configuration is finite (no nan or inf: no key gives them a
+    meaning), fits the 64-bit integers of TOML and, outside tolerances, is 0 or has a magnitude
+    in MAGNITUDES; a table
+    meant as an array of tables ([[tendons]]) is one. ConfigError naming the key otherwise."""
+    if not isinstance(config, dict):
+        raise ConfigError("the configuration must be a table")
+    tendons = config.get("tendons")
+    if isinstance(tendons, dict):
+        raise ConfigError(
+            "tendons must be an array of tables: write each tendon as [[tendons]] (double "
+            "brackets), not [tendons]")
+    stack = [((name,), value) for name, value in config.items()]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, dict):
+            stack.extend((path + (str(key),), item) for key, item in value.items())
+            continue
+        if isinstance(value, list):
+            stack.extend((path + (index,), item) for index, item in enumerate(value))
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if isinstance(value, int) and not -(2**63) <= value < 2**63:
+            raise ConfigError(f"{_where(path)} = {shown(value)} is too large (TOML integers "
+                              "are 64-bit)")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{_where(path)} must be a finite number; got {value!r}")
+        bounded = not any(part in str(name) for name in path for part in UNBOUNDED)
+        low, high = MAGNITUDES
+        if bounded and value != 0 and not low <= abs(value) <= high:
+            raise ConfigError(f"{_where(path)} = {value:.6g} is out of range: fe-beam takes "
+                              f"numbers of magnitude {low:g} to {high:g} (SI units), or 0")
+    _check_ranges(config)
+    _check_pairs(config)
+
+
+# Lengths below this are beyond what the mesh generator and point location resolve (they work
+# with absolute tolerances near 1e-15 m); above the upper bound a "beam" is not a structure.
+LENGTH_RANGE = (1e-6, 1e6)
+
+
+def _number(config: dict, table_name: str, key: str):
+    given = config.get(table_name)
+    value = given.get(key) if isinstance(given, dict) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return value
+
+
+def _check_ranges(config: dict) -> None:
+    low, high = LENGTH_RANGE
+    length = _number(config, "beam", "length")
+    if length is not None and length > 0 and not low <= length <= high:
+        raise ConfigError(f"[beam] length = {length:g} m is outside the range fe-beam computes "
+                          f"with ({low:g} m to {high:g} m)")
+
+
+def _check_pairs(config: dict) -> None:
+    """Keys that bound each other: the smaller must not exceed the larger."""
+    time = config.get("time")
+    if not isinstance(time, dict):
+        return
+    values = {key: _number(config, "time", key) for key in ("min_dt", "dt", "max_dt")}
+    order = ("min_dt", "dt", "max_dt")
+    for i, small in enumerate(order):
+        for large in order[i + 1:]:
+            a, b = values[small], values[large]
+            if a is not None and b is not None and a > 0 and b > 0 and a > b:
+                raise ConfigError(f"[time] {small} = {a:g} s must not exceed {large} = {b:g} s")
+
+
+# Tables each command reads besides the rod's (SCHEMA). A table another command reads is refused
+# when ignoring it would change the answer (tendons pull on the beam; [inverse] asks a question
+# the command does not answer) and noted otherwise. refine sorts its configurations itself.
+COMMAND_TABLES = {
+    "static": (),
+    "finger": ("tendons", "inverse"),
+    "dynamic": ("time", "initial", "damping", "modes"),
+    "modes": ("time", "initial", "damping", "modes"),
+    "solid": ("tendons", "solid", "compare"),
+    "compare": ("tendons", "solid", "compare"),
+}
+REFUSED_UNUSED = ("tendons", "inverse")
+DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
+
+
+def _readers(name: str) -> str:
+    commands = [command for command, tables in COMMAND_TABLES.items() if name in tables]
+    if name in ("tendons", "solid", "refine"):
+        commands.append("refine")
+    if not commands:
+        return "no command"
+    listed = commands[0] if len(commands) == 1 else (
+        f"{', '.join(commands[:-1])} and {commands[-1]}")
+    return f"fe-beam {listed}"
+
+
+def check_command_tables(command: str, config: dict) -> list[str]:
+    """ConfigError for a table the command would silently ignore although it changes the
+    answer; notes (sentences) for other tables and keys the command does not use."""
+    if command not in COMMAND_TABLES:
+        return []
+    used = COMMAND_TABLES[command]
+    unused: dict[str, list[str]] = {}
+    for name in config:
+        if name in SCHEMA or name in used or name not in OTHER_TABLES + ("inverse",):
+            continue
+        if name in REFUSED_UNUSED:
+            what = "[[tendons]]" if name == "tendons" else f"[{name}]"
+            hint = ("fe-beam finger for a rod pulled by tendons" if name == "tendons"
+                    else "fe-beam finger for the tension that reaches a target")
+            raise ConfigError(
+                f"fe-beam {command} does not use {what}, which is read by {_readers(name)}: "
+                f"run {hint}, or remove {what}")
+        unused.setdefault(_readers(name), []).append(f"[{name}]")
+    notes = []
+    for readers, names in unused.items():
+        listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+        verb = "is" if len(names) == 1 else "are"
+        notes.append(f"{listed} {verb} not used by fe-beam {command} and ignored (read by "
+                     f"{readers})")
+    loads = config.get("loads")
+    if command not in ("dynamic", "modes") and isinstance(loads, dict):
+        timed = [key for key in DYNAMIC_LOAD_KEYS if key in loads]
+        if timed:
+            notes.append(f"[loads] {timed[0]} is read by fe-beam dynamic only; fe-beam {command} "
+                         "applies the loads in full")
+    return notes
+
+
+def check_partition(config: dict, ranks: int, command: str = "static") -> None:
+    """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
+    that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
+    hang in parallel, while they run serially)."""
+    if ranks > 1 and command in ("solid", "compare", "refine"):
+        _check_solid_partition(config, ranks)
+    mesh = config.get("mesh")
+    elements = mesh.get("elements", SCHEMA["mesh"]["elements"].default) if isinstance(
+        mesh, dict) else SCHEMA["mesh"]["elements"].default
+    if (isinstance(elements, int) and not isinstance(elements, bool)
+            and 1 <= elements < ranks):
+        raise ConfigError(
+            f"[mesh] elements = {elements} is fewer than the {ranks} MPI ranks: every rank needs "
+            f"at least one element; use elements >= {ranks} or run on fewer ranks")
+
+
+def _check_solid_partition(config: dict, ranks: int) -> None:
+    solid = config.get("solid")
+    size = _number(config, "solid", "mesh_size") if isinstance(solid, dict) else None
+    dimensions = [value for key in ("b", "h", "h_tip")
+                  if (value := _number(config, "section", key)) is not None and value > 0]
+    if size is None or not dimensions or size <= max(dimensions):
+        return
+    raise ConfigError(
+        f"[solid] mesh_size = {size:g} m is larger than the cross-section ({max(dimensions):g} m):"
+        f" such a coarse 3D mesh does not run on {ranks} MPI ranks; use mesh_size <= "
+        f"{max(dimensions):g} m, or run on one rank")

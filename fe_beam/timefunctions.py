@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import math
 import operator
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -25,7 +26,8 @@ FUNCTIONS: dict[str, Callable] = {
     "sin": math.sin, "cos": math.cos, "tan": math.tan, "exp": math.exp, "log": math.log,
     "sqrt": math.sqrt, "abs": abs, "min": min, "max": max, "tanh": math.tanh,
     "asin": math.asin, "acos": math.acos, "atan": math.atan, "sinh": math.sinh,
-    "cosh": math.cosh, "floor": math.floor, "ceil": math.ceil,
+    "cosh": math.cosh, "floor": lambda x: float(math.floor(x)),
+    "ceil": lambda x: float(math.ceil(x)),
     "step": lambda x: 1.0 if x >= 0 else 0.0,
 }
 CONSTANTS = {"pi": math.pi, "e": math.e}
@@ -33,6 +35,28 @@ BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
           ast.Div: operator.truediv, ast.Pow: operator.pow, ast.Mod: operator.mod}
 UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
 COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge}
+# Bounds that keep parsing and evaluation far from Python's recursion limit: a formula is a
+# short expression, not a program (a load history with many points belongs in time_table).
+MAX_LENGTH = 2000
+MAX_DEPTH = 100
+SHOWN = 60
+
+
+def shown(text, limit: int = SHOWN) -> str:
+    """A value as echoed in a message: repr, cut to about ``limit`` characters."""
+    text = repr(text)
+    return text if len(text) <= limit else f"{text[:limit - 5]}...{text[-2:]}"
+
+
+def _depth(tree: ast.AST) -> int:
+    """Nesting depth of an AST, without recursion."""
+    deepest, stack = 0, [(tree, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if depth <= MAX_DEPTH:
+            stack.extend((child, depth + 1) for child in ast.iter_child_nodes(node))
+    return deepest
 
 
 def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float], float]:
@@ -41,7 +65,12 @@ def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float],
     if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(
         node.value, bool
     ):
-        value = float(node.value)
+        try:
+            value = float(node.value)
+        except OverflowError:
+            raise TimeFunctionError(
+                f"{shown(text)}: the number {str(node.value)[:20]}... is too large "
+                "(at most about 1e308)") from None
         return lambda t: value
     if isinstance(node, ast.Name):
         if node.id == variable:
@@ -50,7 +79,7 @@ def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float],
             value = CONSTANTS[node.id]
             return lambda t: value
         raise TimeFunctionError(
-            f"unknown name {node.id!r} in {text!r} (use {variable}, pi, e and "
+            f"unknown name {shown(node.id)} in {shown(text)} (use {variable}, pi, e and "
             f"{', '.join(FUNCTIONS)})"
         )
     if isinstance(node, ast.BinOp) and type(node.op) in BINARY:
@@ -79,10 +108,12 @@ def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float],
     if isinstance(node, ast.Call):
         name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
         raise TimeFunctionError(
-            f"{text!r}: function {name!r} is not allowed (allowed, positional arguments only: "
+            f"{shown(text)}: function {shown(name)} is not allowed (allowed, positional "
+            "arguments only: "
             f"{', '.join(FUNCTIONS)})")
     raise TimeFunctionError(
-        f"{text!r}: {ast.unparse(node)!r} is not allowed in a formula (use numbers, {variable}, "
+        f"{shown(text)}: {shown(ast.unparse(node))} is not allowed in a formula (use numbers, "
+        f"{variable}, "
         f"pi, e, + - * / ** ^ %, comparisons, 'a if cond else b' and {', '.join(FUNCTIONS)})")
 
 
@@ -90,11 +121,28 @@ def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
     """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``
     (``variable`` names the argument, e.g. "x" for initial velocity profiles)."""
     if not isinstance(text, str) or not text.strip():
-        raise TimeFunctionError(f"a time formula must be a non-empty string, got {text!r}")
+        raise TimeFunctionError(f"a time formula must be a non-empty string, got {shown(text)}")
+    if len(text) > MAX_LENGTH:
+        raise TimeFunctionError(
+            f"the formula {shown(text)} has {len(text)} characters; a formula has at most "
+            f"{MAX_LENGTH} (give a long load history as time_table = [[t, f], ...])")
+    control = next((c for c in text if not c.isprintable() and c not in " \t\n"), None)
+    if control is not None:
+        raise TimeFunctionError(
+            f"the formula {shown(text)} contains the control character {control!r}")
     try:
-        tree = ast.parse(text.replace("^", "**"), mode="eval")
+        with warnings.catch_warnings():  # e.g. "invalid decimal literal": the error says it
+            warnings.simplefilter("ignore")
+            tree = ast.parse(text.replace("^", "**"), mode="eval")
     except SyntaxError as error:
-        raise TimeFunctionError(f"{text!r} is not a formula ({error.msg})") from None
+        raise TimeFunctionError(f"{shown(text)} is not a formula ({error.msg})") from None
+    except (RecursionError, MemoryError, ValueError):
+        raise TimeFunctionError(
+            f"the formula {shown(text)} is nested too deeply to be parsed") from None
+    if _depth(tree) > MAX_DEPTH:
+        raise TimeFunctionError(
+            f"the formula {shown(text)} is nested more than {MAX_DEPTH} levels deep (count "
+            "operators and parentheses); write it shorter, or as time_table = [[t, f], ...]")
     function = _compile(tree, text, variable)
 
     def evaluate(t: float) -> float:
@@ -102,10 +150,10 @@ def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
             value = float(function(float(t)))
         except (ArithmeticError, ValueError, TypeError) as error:
             raise TimeFunctionError(
-                f"{text!r} cannot be evaluated at {variable} = {t:g}: {error}"
+                f"{shown(text)} cannot be evaluated at {variable} = {t:g}: {error}"
             ) from None
         if not math.isfinite(value):
-            raise TimeFunctionError(f"{text!r} is not finite at {variable} = {t:g}")
+            raise TimeFunctionError(f"{shown(text)} is not finite at {variable} = {t:g}")
         return value
 
     evaluate(0.0)  # fail early on formulas that cannot even start
@@ -116,8 +164,8 @@ def table_function(table) -> Callable[[float], float]:
     """Piecewise-linear f(t) through [[t0, f0], [t1, f1], ...], constant beyond the ends."""
     try:
         points = np.array(table, dtype=float)
-    except (TypeError, ValueError):
-        message = f"time_table must be a list of [t, f] pairs, got {table!r}"
+    except (TypeError, ValueError, OverflowError):
+        message = f"time_table must be a list of [t, f] pairs, got {shown(table)}"
         raise TimeFunctionError(message) from None
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2:
         raise TimeFunctionError("time_table needs at least two [t, f] pairs")
