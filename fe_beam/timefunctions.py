@@ -38,7 +38,7 @@ COMPARE = {ast.Lt: operator.lt, ast.LtE: operator.le, ast.Gt: operator.gt, ast.G
 # Bounds that keep parsing and evaluation far from Python's recursion limit: a formula is a
 # short expression, not a program (a load history with many points belongs in time_table).
 MAX_LENGTH = 2000
-MAX_DEPTH = 100
+MAX_DEPTH = 250  # a 120-term Fourier sum fits; evaluation stays far below the recursion limit
 SHOWN = 60
 
 

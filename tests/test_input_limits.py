@@ -95,9 +95,9 @@ def test_output_folder_check_leaves_nothing_behind(tmp_path, capsys):
 @pytest.mark.parametrize("formula", [
     "+".join(["2*t"] * 3000),                 # a long sum
     "-" * 700 + "t",                           # deep unary minus, under the length cap
-    "sin(" * 150 + "t" + ")" * 150,            # deep calls
+    "sin(" * 300 + "t" + ")" * 300,            # deep calls
     "(" * 400 + "t" + ")" * 400,               # parentheses beyond Python's parser
-    "t" + "**t" * 120,                         # deep powers
+    "t" + "**t" * 300,                         # deep powers
     "3" * 500 + "*t",                          # a 500-digit literal
     "sin(t)\x00+1",                            # NUL byte
     "t\x1b[2J",                                # terminal escape
@@ -112,6 +112,14 @@ def test_formula_that_broke_the_parser_exits_2(tmp_path, capsys, formula, key):
     code, err, _ = run(tmp_path, "dynamic", config, capsys)
     message = one_sentence(code, err, "dynamic")
     assert len(message) < 400, message
+
+
+def test_long_fourier_sum_is_a_formula():
+    """The depth cap refuses pathological nesting, not a realistic load history."""
+    terms = range(1, 101)
+    formula = "+".join(f"sin({k}*pi*t)/{k}" for k in terms)
+    value = parse_formula(formula)(0.37)
+    assert value == pytest.approx(sum(math.sin(k * math.pi * 0.37) / k for k in terms), rel=1e-12)
 
 
 def test_velocity_formula_in_x_is_bounded_too(tmp_path, capsys):
