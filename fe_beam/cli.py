@@ -1,8 +1,11 @@
 """The ``fe-beam`` command line: ``fe-beam COMMAND CONFIG.toml --out DIR [--set key=value ...]``.
 
 Exit codes: 0 success, 2 a mistake in the command line or configuration (one sentence, no
-traceback), 3 the analysis ran but did not complete (e.g. load stepping gave up; the results of
-the last converged step are written).
+traceback; also: the output folder is in use by another run, or the run is beyond the up-front
+limits of fe_beam.runctl without ``[solver] allow_large = true``), 3 the analysis ran but did not
+complete (e.g. load stepping gave up; the results of the last converged step are written),
+130 interrupted by SIGINT (Ctrl-C), 143 interrupted by SIGTERM: the run stops at the next step
+boundary, writes the last converged state with summary status "interrupted" and prints one line.
 """
 
 from __future__ import annotations
@@ -261,7 +264,35 @@ def _check_output_folder(out: Path, comm) -> None:
         raise ConfigError(problem)
 
 
+def _run_guarded(args, config: dict, comm) -> int:
+    """Run a command holding the lock of its output folder, with SIGINT/SIGTERM noticed at step
+    boundaries (fe_beam.runctl): one line on stderr and exit 130/143 instead of a traceback."""
+    from fe_beam import runctl
+
+    try:
+        with runctl.output_session(args.out, args.command, comm):
+            runctl.check(comm, "the start of the analysis")
+            code = RUNNERS[args.command](args, config, comm)
+            runctl.check(comm, "the end of the analysis (the results are complete)")
+            return code
+    except (runctl.FolderBusy, runctl.TooLarge) as error:
+        _say(comm, f"fe-beam {args.command}: {error}", sys.stderr)
+        return EXIT_USAGE
+    except runctl.Interrupted as stop:
+        where = f" at {stop.where}" if stop.where else ""
+        _say(comm, f"fe-beam: interrupted{where} ({stop.name}); results of the last converged "
+                   f"step are in {args.out}", sys.stderr)
+        return stop.exit_code
+
+
 def main(argv: list[str] | None = None) -> int:
+    from fe_beam import runctl
+
+    with runctl.signals_deferred():
+        return _main(argv)
+
+
+def _main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     quiet_jit_logging()
     from mpi4py import MPI
@@ -272,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         _check_output_folder(args.out, comm)
         config = apply_overrides(load_config(args.config), args.set)
-        return RUNNERS[args.command](args, config, comm)
+        return _run_guarded(args, config, comm)
     except ConfigError as error:
         _say(comm, f"fe-beam {args.command}: error in {args.config}: {error}", sys.stderr)
         return EXIT_USAGE

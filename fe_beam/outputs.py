@@ -1,8 +1,17 @@
 """Result writers: XDMF for ParaView, summary.json and CSV (atomic), PNG plots.
 
 Writers take Functions/problems and are called from the driver between solves; solvers never
-write files. Text files are replaced atomically (write to a temporary file, then rename), so an
-interrupted run always leaves readable results of the last converged step.
+write files. Every file is readable at any moment of a run, even after SIGKILL:
+
+* whole files (summary.json, the XDMF index, plots) are replaced atomically (write a temporary
+  file, then rename) and follow the umask like any other file;
+* files that grow with the run (the HDF5 data of `XDMFSeries`, the CSV histories of
+  `AppendCSV`) are kept as two hidden copies, ``.NAME.a`` and ``.NAME.b``: new steps are appended
+  to the copy that is not the visible one, which is then hard-linked into place atomically. A
+  copy is never written while it is visible, appending costs O(1) per step, and NAME is always a
+  complete, closed file;
+* files that are rewritten whole as they grow are rewritten at a bounded share of the wall time
+  (`fe_beam.runctl.Throttle`), and always at the end.
 """
 
 from __future__ import annotations
@@ -22,10 +31,13 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from fe_beam import compat
+from fe_beam import compat, runctl
 
 __all__ = [
+    "AppendCSV",
     "BeamXDMFWriter",
+    "ThrottledJSON",
+    "XDMFSeries",
     "atomic_write_json",
     "atomic_write_text",
     "gather_line",
@@ -35,11 +47,20 @@ __all__ = [
 ]
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write_text(path: str | Path, text: str) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    runctl.register_output(path)
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
+        # mkstemp makes 0600 files: give the result the mode of any other file (umask)
+        os.fchmod(handle, 0o666 & ~_umask())
         with os.fdopen(handle, "w") as stream:
             stream.write(text)
         os.replace(temporary, path)
@@ -66,6 +87,275 @@ def write_csv(path: str | Path, header: list[str], rows: list[list]) -> None:
     writer.writerow(header)
     writer.writerows(rows)
     atomic_write_text(path, buffer.getvalue())
+
+
+class _TwoCopies:
+    """A file that only grows, readable at any moment (see the module docstring).
+
+    ``create(path)`` writes the initial content of a copy, ``append(path, items)`` adds items
+    to a copy. Rank-local (the caller decides which rank writes)."""
+
+    def __init__(self, path: Path, create, append):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        runctl.register_output(self.path)
+        self._append = append
+        self.copies = [self.path.with_name(f".{self.path.name}.{tag}") for tag in "ab"]
+        create(self.copies[0])
+        shutil.copyfile(self.copies[0], self.copies[1])
+        self._pending: list[list] = [[], []]
+        self._current = 0
+        self._publish(0)
+
+    def _publish(self, index: int) -> None:
+        temporary = self.path.with_name(f".{self.path.name}.link{os.getpid()}")
+        temporary.unlink(missing_ok=True)
+        try:
+            os.link(self.copies[index], temporary)
+        except OSError:  # no hard links on this file system: publish a copy instead
+            shutil.copyfile(self.copies[index], temporary)
+        os.replace(temporary, self.path)
+        self._current = index
+
+    def add(self, items: list) -> None:
+        self._pending[0].extend(items)
+        self._pending[1].extend(items)
+
+    @property
+    def pending(self) -> bool:
+        return bool(self._pending[self._current])
+
+    def flush(self) -> None:
+        if not self.pending:
+            return
+        target = 1 - self._current
+        self._append(self.copies[target], self._pending[target])
+        self._pending[target] = []
+        self._publish(target)
+
+    def close(self) -> None:
+        self.flush()
+        for copy in self.copies:
+            copy.unlink(missing_ok=True)  # the visible name keeps the current copy's data
+
+
+class AppendCSV:
+    """A CSV history that gains rows as the run goes: O(1) per row, readable at any moment."""
+
+    def __init__(self, path: str | Path, header: list[str], throttle: bool = False):
+        self.header = list(header)
+        self._throttle = runctl.Throttle() if throttle else None
+        self._file = _TwoCopies(Path(path), self._create, self._append_rows)
+
+    def _create(self, path: Path) -> None:
+        with open(path, "w", newline="") as stream:
+            csv.writer(stream).writerow(self.header)
+
+    @staticmethod
+    def _append_rows(path: Path, rows: list) -> None:
+        with open(path, "a", newline="") as stream:
+            csv.writer(stream).writerows(rows)
+
+    def add(self, rows: list[list], flush: bool = True) -> None:
+        self._file.add(rows)
+        if flush:
+            self.flush()
+
+    def flush(self, force: bool = False) -> None:
+        if self._throttle is None or force or self._throttle.due():
+            if self._throttle is None:
+                self._file.flush()
+            else:
+                with self._throttle.timing():
+                    self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+class ThrottledJSON:
+    """summary.json of a running analysis: rewritten whole (atomically) at a bounded share of
+    the wall time, and always when ``force`` (status changes, the end)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self._throttle = runctl.Throttle()
+
+    def write(self, data, force: bool = False) -> None:
+        """``data``: a dict, or a function returning it (only called when written)."""
+        if force or self._throttle.due():
+            with self._throttle.timing():
+                atomic_write_json(self.path, data() if callable(data) else data)
+
+
+_XDMF_TOPOLOGY = {("interval", 2): "Polyline", ("interval", 3): "Edge_3",
+                  ("triangle", 3): "Triangle", ("triangle", 6): "Triangle_6",
+                  ("tetrahedron", 4): "Tetrahedron", ("tetrahedron", 10): "Tetrahedron_10",
+                  ("quadrilateral", 4): "Quadrilateral", ("hexahedron", 8): "Hexahedron"}
+
+
+class XDMFSeries:
+    """An XDMF + HDF5 time series written by rank 0 with h5py, readable at any moment.
+
+    Functions are gathered on rank 0: node-centred ones must live in the Lagrange space of the
+    mesh geometry (same degree), cell-centred ones in DG0. Each rank contributes its owned cells
+    with their own nodes (a node on a partition boundary appears once per rank that has it).
+    Layout: ``/Mesh/mesh/geometry`` (n x 3), ``/Mesh/mesh/topology`` (VTK node order) and
+    ``/Function/NAME/K`` for output step K; the XDMF index (one temporal collection, readable by
+    ParaView, meshio and dolfinx's mesh reader) is rewritten atomically, the HDF5 file grows by
+    the two-copy scheme, so both are complete files after an interruption at any moment. The
+    index lists the steps that are in the HDF5 file (it may lag it by the steps of one flush).
+    """
+
+    def __init__(self, mesh, path: str | Path):
+        from dolfinx.cpp.io import perm_vtk
+
+        self.comm = mesh.comm
+        self.path = Path(path)
+        self.h5_path = self.path.with_suffix(".h5")
+        self.root = self.comm.rank == 0
+        tdim = mesh.topology.dim
+        cells = mesh.topology.index_map(tdim).size_local
+        offsets = mesh.geometry.dofmap.offsets
+        per_cell = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 1
+        nodes = mesh.geometry.dofmap.array.reshape(-1, per_cell)[:cells]
+        self._nodes, inverse = np.unique(nodes, return_inverse=True)
+        self._cell_nodes = inverse.reshape(nodes.shape)
+        self._cells = cells
+        cell_name = mesh.topology.cell_type.name
+        order = np.argsort(np.asarray(perm_vtk(mesh.topology.cell_type, per_cell)))
+        topology = self._cell_nodes[:, order].astype(np.int64)
+        gathered = self.comm.gather((mesh.geometry.x[self._nodes], topology), root=0)
+        self._maps: dict = {}
+        self._steps: list[tuple[float, dict]] = []  # in the index: (time, {name: (kind, n)})
+        self._buffered: list[tuple[float, dict]] = []
+        self._throttle = runctl.Throttle()
+        if not self.root:
+            return
+        shift = np.cumsum([0] + [len(x) for x, _ in gathered])
+        self._geometry = np.concatenate([x for x, _ in gathered])
+        self._topology = np.concatenate([t + s for (_, t), s in zip(gathered, shift,
+                                                                     strict=False)])
+        self._topology_type = _XDMF_TOPOLOGY.get((cell_name, per_cell), "Mixed")
+        self._h5 = _TwoCopies(self.h5_path, self._create_h5, self._append_h5)
+        self._written = 0  # output steps in the HDF5 file (visible copy)
+        self._write_index()
+
+    # --- gathering (collective) -----------------------------------------------------------
+    def _local_values(self, function) -> tuple[str, np.ndarray]:
+        space = function.function_space
+        key = id(space)
+        if key not in self._maps:
+            element = space.ufl_element()
+            bs = space.dofmap.index_map_bs
+            per_cell = space.dofmap.dof_layout.num_dofs
+            dofs = space.dofmap.list.array.reshape(-1, per_cell)[: self._cells]
+            if element.degree() == 0:
+                self._maps[key] = ("Cell", dofs[:, 0], bs)
+            else:
+                if per_cell != self._cell_nodes.shape[1]:
+                    raise ValueError(f"XDMFSeries: {function.name} is not in the space of the "
+                                     "mesh geometry")
+                where = np.empty(len(self._nodes), dtype=np.int64)
+                where[self._cell_nodes.ravel()] = dofs.ravel()
+                self._maps[key] = ("Node", where, bs)
+        kind, where, bs = self._maps[key]
+        values = function.x.array.reshape(-1, bs)[where].real
+        if bs == 2:  # XDMF vectors have three components
+            values = np.hstack([values, np.zeros((len(values), 1))])
+        return kind, values
+
+    def write(self, t: float, functions) -> None:
+        """Add the values of ``functions`` (name -> Function, or Functions) at time ``t``
+        (collective); written to disk at a bounded share of the wall time and by `flush`."""
+        if isinstance(functions, dict):
+            functions = list(functions.values())
+        local = [(f.name, *self._local_values(f)) for f in functions]
+        gathered = self.comm.gather([v for _, _, v in local], root=0)
+        if not self.root:
+            return
+        step = {name: (kind, np.concatenate([part[i] for part in gathered]))
+                for i, (name, kind, _) in enumerate(local)}
+        self._buffered.append((float(t), step))
+        if self._throttle.due():
+            self.flush()
+
+    # --- files (rank 0) -----------------------------------------------------------------
+    def _create_h5(self, path: Path) -> None:
+        import h5py
+
+        with h5py.File(path, "w") as h5:
+            h5.create_dataset("/Mesh/mesh/geometry", data=self._geometry)
+            h5.create_dataset("/Mesh/mesh/topology", data=self._topology)
+            h5.create_group("/Function")
+
+    def _append_h5(self, path: Path, items: list) -> None:
+        import h5py
+
+        with h5py.File(path, "a") as h5:
+            for index, step in items:
+                for name, (_, values) in step.items():
+                    h5.create_dataset(f"/Function/{name}/{index}", data=values)
+
+    def flush(self) -> None:
+        """Write the buffered steps (rank 0; a no-op elsewhere)."""
+        if not self.root or not self._buffered:
+            return
+        with self._throttle.timing():
+            items = []
+            for t, step in self._buffered:
+                index = len(self._steps)
+                items.append((index, step))
+                self._steps.append((t, {n: (k, v.shape) for n, (k, v) in step.items()}))
+            self._buffered = []
+            self._h5.add(items)
+            self._h5.flush()
+            self._write_index()
+
+    def _write_index(self) -> None:
+        h5 = self.h5_path.name
+        n, per_cell = self._topology.shape
+        lines = [
+            '<?xml version="1.0"?>',
+            '<Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">',
+            "  <Domain>",
+            '    <Grid Name="mesh" GridType="Uniform">',
+            f'      <Topology TopologyType="{self._topology_type}" NumberOfElements="{n}" '
+            f'NodesPerElement="{per_cell}">',
+            f'        <DataItem Dimensions="{n} {per_cell}" NumberType="Int" Precision="8" '
+            f'Format="HDF">{h5}:/Mesh/mesh/topology</DataItem>',
+            "      </Topology>",
+            '      <Geometry GeometryType="XYZ">',
+            f'        <DataItem Dimensions="{len(self._geometry)} 3" Format="HDF">'
+            f"{h5}:/Mesh/mesh/geometry</DataItem>",
+            "      </Geometry>",
+            "    </Grid>",
+            '    <Grid Name="TimeSeries" GridType="Collection" CollectionType="Temporal">',
+        ]
+        include = ('        <xi:include xpointer="xpointer(/Xdmf/Domain/Grid[@Name=\'mesh\']'
+                   '/*[self::Topology or self::Geometry])" />')
+        for index, (t, step) in enumerate(self._steps):
+            lines += [f'      <Grid Name="step_{index}" GridType="Uniform">', include,
+                      f'        <Time Value="{t!r}" />']
+            for name, (kind, shape) in step.items():
+                kind_name = "Vector" if len(shape) > 1 and shape[1] == 3 else "Scalar"
+                dims = f"{shape[0]} {shape[1] if len(shape) > 1 else 1}"
+                lines += [
+                    f'        <Attribute Name="{name}" AttributeType="{kind_name}" '
+                    f'Center="{kind}">',
+                    f'          <DataItem Dimensions="{dims}" Format="HDF">'
+                    f"{h5}:/Function/{name}/{index}</DataItem>",
+                    "        </Attribute>",
+                ]
+            lines.append("      </Grid>")
+        lines += ["    </Grid>", "  </Domain>", "</Xdmf>", ""]
+        atomic_write_text(self.path, "\n".join(lines))
+
+    def close(self) -> None:
+        """Write what is buffered and finish the files (collective)."""
+        if self.root:
+            self.flush()
+            self._h5.close()
 
 
 def gather_line(problem, functions: dict) -> dict | None:
@@ -112,10 +402,7 @@ class BeamXDMFWriter:
             function = fem.Function(space, name=name)
             self.functions[name] = function
             self._expressions.append((function, compat.interpolation_expression(expr, space)))
-        self._file = None
-        if path is not None:
-            self._file = compat.XDMFFile(mesh.comm, str(path), "w")
-            self._file.write_mesh(mesh)
+        self._file = XDMFSeries(mesh, path) if path is not None else None
 
     def update(self) -> None:
         for function, expression in self._expressions:
@@ -124,8 +411,12 @@ class BeamXDMFWriter:
     def write(self, time: float) -> None:
         self.update()
         if self._file is not None:
-            for function in self.functions.values():
-                self._file.write_function(function, time)
+            self._file.write(time, self.functions)
+
+    def flush(self) -> None:
+        """Put every written step into the files now (rank 0; e.g. before an exit)."""
+        if self._file is not None:
+            self._file.flush()
 
     def vertex_values(self) -> dict | None:
         """Current nodal u, v, theta and x, plus element-midpoint profiles under "cells"

@@ -11,15 +11,15 @@ import scipy.linalg
 import scipy.sparse
 from mpi4py import MPI
 
-from fe_beam import compat
+from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem
 from fe_beam.config import StaticConfig
 from fe_beam.outputs import (
+    AppendCSV,
     BeamXDMFWriter,
-    atomic_write_json,
+    ThrottledJSON,
     plot_deformed_shapes,
     plot_load_displacement,
-    write_csv,
 )
 from fe_beam.solver import (
     LoadSteppingFailed,
@@ -199,8 +199,11 @@ def solve_static(
     (``steps[-1]["stability"]``, `StaticContinuation.stability`) when nothing is written: a
     solve-only run (benchmarks, sweeps) then costs the Newton iterations alone.
 
-    summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
-    On failure the last converged state is written and the result has status "failed".
+    summary.json (status "running" meanwhile), load_displacement.csv and the XDMF file are
+    updated as steps converge, at O(1) cost per step (rows and steps are appended; summary.json
+    is rewritten at a bounded share of the wall time). On failure the last converged state is
+    written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
+    it is written with status "interrupted" and the exception is re-raised.
     """
     started = time.perf_counter()
     run = StaticContinuation(config, comm)
@@ -213,6 +216,11 @@ def solve_static(
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     extra = {"model": _model_summary(config)} | (extra_summary or {})
+    summary_file = table = None
+    if writing and root:
+        summary_file = ThrottledJSON(out / "summary.json")
+        summary_file.write(result.summary(extra), force=True)
+        table = AppendCSV(out / "load_displacement.csv", CSV_HEADER)
 
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
@@ -231,7 +239,8 @@ def solve_static(
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
         if writing and root:
-            _write_tables(out, result, extra)
+            table.add([_csv_row(entry)])
+            summary_file.write(lambda: result.summary(extra))
 
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
@@ -241,13 +250,21 @@ def solve_static(
             result.steps[-1]["stability"] = stability
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
+    except runctl.Interrupted as stop:
+        last = result.steps[-1]["load_factor"] if result.steps else 0.0
+        stop.where = f"load factor {last:.4g}"
+        result.status = "interrupted"
+        result.message = f"interrupted by {stop.name} at load factor {last:.6g}"
+        raise
     finally:
         if writer is not None:
             writer.close()
         run.destroy()
-    result.wall_time_s = time.perf_counter() - started
+        result.wall_time_s = time.perf_counter() - started
+        if table is not None:
+            table.close()
+            summary_file.write(result.summary(extra), force=True)
     if writing and root:
-        _write_tables(out, result, extra)
         if config.output.plots and result.shapes:
             _write_plots(out, result, config)
     return result
@@ -269,17 +286,12 @@ def _model_summary(config: StaticConfig) -> dict:
     }
 
 
-def _write_tables(out: Path, result: StaticResult, extra: dict) -> None:
-    atomic_write_json(out / "summary.json", result.summary(extra))
-    rows = [
-        [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"], s["newton_iterations"]]
-        for s in result.steps
-    ]
-    write_csv(
-        out / "load_displacement.csv",
-        ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"],
-        rows,
-    )
+CSV_HEADER = ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"]
+
+
+def _csv_row(s: dict) -> list:
+    return [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"],
+            s["newton_iterations"]]
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
