@@ -21,11 +21,18 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import compat
+from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
-from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, write_csv
+from fe_beam.outputs import (
+    AppendCSV,
+    BeamXDMFWriter,
+    ThrottledJSON,
+    _pyplot,
+    atomic_write_json,
+    write_csv,
+)
 from fe_beam.solver import (
     LoadSteppingFailed,
 )
@@ -183,9 +190,14 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
-    result = DynamicResult([], {}, dofs=problem.space.dofmap.index_map.size_global
+    result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs)
     shapes = []
+    summary_file = table = None
+    if writing and root:
+        summary_file = ThrottledJSON(out / "summary.json")
+        summary_file.write(_dynamic_summary(result, config, 0.0), force=True)
+        table = AppendCSV(out / "history.csv", HISTORY_HEADER)
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
@@ -197,18 +209,32 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             if root:
                 shapes.append((t, shape))
         if writing and root:
-            _write_dynamic(out, result, config, time.perf_counter() - started)
+            table.add([_history_row(result.history[-1])])
+            summary_file.write(lambda: _dynamic_summary(result, config,
+                                                        time.perf_counter() - started))
 
     try:
         result.info = integrator.run(record, progress=progress)
+        result.status = "completed"
     except DynamicsFailed as failure:
         result.status, result.message = "failed", str(failure)
+    except runctl.Interrupted as stop:
+        # the state is the last accepted step: record it unless it was the last output
+        if not result.history or integrator.time > result.history[-1]["t"]:
+            record(integrator.time, -1)
+        stop.where = f"t = {integrator.time:.6g} s"
+        result.status = "interrupted"
+        result.message = f"interrupted by {stop.name} at t = {integrator.time:.6g} s"
+        raise
     finally:
         writer.close()
         integrator.solver.destroy()
-    result.info["wall_time_s"] = time.perf_counter() - started
+        result.info["wall_time_s"] = time.perf_counter() - started
+        if table is not None:
+            table.close()
+            summary_file.write(_dynamic_summary(result, config, result.info["wall_time_s"]),
+                               force=True)
     if writing and root:
-        _write_dynamic(out, result, config, result.info["wall_time_s"])
         if config.static.output.plots and result.history:
             _plot_dynamic(out, result, shapes, config)
     return result
@@ -266,17 +292,26 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     return result
 
 
-def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
-    atomic_write_json(out / "summary.json", {
+HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "external_work",
+                  "dissipated"]
+
+
+def _history_row(h: dict) -> list:
+    return [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
+            *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
+
+
+def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
+    return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
         "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
-    })
-    rows = [[h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
-             *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
-            for h in result.history]
-    write_csv(out / "history.csv", ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain",
-                                    "external_work", "dissipated"], rows)
+    }
+
+
+def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
+    atomic_write_json(out / "summary.json", _dynamic_summary(result, config, wall))
+    write_csv(out / "history.csv", HISTORY_HEADER, [_history_row(h) for h in result.history])
 
 
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
@@ -343,15 +378,24 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
 
     started = time.perf_counter()
     problem = BeamProblem(static.model, comm)
+    if out is not None and comm.rank == 0:
+        atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
     if modes["prestress"]:
         try:
             _static_prestate(problem, static, progress)
         except DynamicsFailed as failure:
             raise ConfigError(str(failure)) from None
+        except runctl.Interrupted as stop:
+            stop.where = "the static pre-state"
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", {
+                    "status": "interrupted",
+                    "message": f"interrupted by {stop.name} in the static pre-state"})
+            raise
     else:
         problem.set_load_factor(0.0)
     result = natural_frequencies(problem, modes["count"])
-    summary = {"frequencies_hz": result.frequencies_hz,
+    summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
                "transverse_fraction": result.transverse_fraction,
                "prestress": modes["prestress"], "dofs": problem.space.dofmap.index_map.size_global
                * problem.space.dofmap.index_map_bs,

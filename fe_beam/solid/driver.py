@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam import runctl
 from fe_beam.config import (
     NUMBER,
     OTHER_TABLES,
@@ -782,6 +783,21 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         if out is not None and root:
             _write_tables(out, summary)
 
+    save()  # status "running" from the start
+    try:
+        return _run_solid(config, out, comm, progress, summary, save)
+    except runctl.Interrupted as stop:
+        last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
+        stop.where = f"load factor {last:.4g}"
+        summary |= {"status": "interrupted",
+                    "message": f"interrupted by {stop.name} at load factor {last:.6g}"}
+        save()
+        raise
+
+
+def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summary: dict,
+               save) -> dict:
+    root = comm.rank == 0
     rod = None
     if config.rod is not None:
         rod = run_rod(config.rod, config.stations, comm, progress=progress)
