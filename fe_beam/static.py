@@ -206,6 +206,7 @@ def solve_static(
     it is written with status "interrupted" and the exception is re-raised.
     """
     started = time.perf_counter()
+    notes = check_beam_work(config, config.stepping.steps, comm, quiet=out is None)
     run = StaticContinuation(config, comm)
     problem, tendons = run.problem, run.tendons
     result = StaticResult(dofs=problem.global_dofs)
@@ -216,6 +217,8 @@ def solve_static(
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     extra = {"model": _model_summary(config)} | (extra_summary or {})
+    if notes:
+        extra["notes"] = list(extra.get("notes", [])) + notes
     summary_file = table = None
     if writing and root:
         summary_file = ThrottledJSON(out / "summary.json")
@@ -268,6 +271,26 @@ def solve_static(
         if config.output.plots and result.shapes:
             _write_plots(out, result, config)
     return result
+
+
+def beam_dofs_estimate(config: StaticConfig) -> int:
+    """Unknowns of the rod model of ``config``: u, v, theta and one field per constraint."""
+    mesh = config.model.mesh
+    fields = 3 + {"inextensible": 1, "unshearable": 1,
+                  "inextensible-unshearable": 2}.get(config.model.options.constraint, 0)
+    return int(fields * (mesh.elements * mesh.degree + 1))
+
+
+def check_beam_work(config: StaticConfig, steps: float, comm, what: str = " of load stepping",
+                    quiet: bool = False) -> list[str]:
+    """Up-front limits (`fe_beam.runctl.check_work`): raises `fe_beam.runctl.TooLarge` on work
+    beyond them unless ``[solver] allow_large = true``; warns on stderr (unless ``quiet``) and
+    returns the warnings for the summary's ``notes``."""
+    allow = bool((config.raw.get("solver") or {}).get("allow_large", False))
+    notes = runctl.check_work(steps, beam_dofs_estimate(config), allow, what)
+    if not quiet:
+        runctl.warn(comm, notes)
+    return notes
 
 
 def _model_summary(config: StaticConfig) -> dict:

@@ -36,7 +36,7 @@ from fe_beam.outputs import (
 from fe_beam.solver import (
     LoadSteppingFailed,
 )
-from fe_beam.static import StaticContinuation
+from fe_beam.static import StaticContinuation, check_beam_work
 from fe_beam.timefunctions import TimeFunctionError, parse_formula, time_function
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
@@ -172,6 +172,7 @@ class DynamicResult:
     status: str = "completed"
     message: str = ""
     dofs: int = 0
+    notes: list = field(default_factory=list)
 
 
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
@@ -179,6 +180,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     if config.time.scheme != "generalized-alpha":
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
+    steps = config.time.t_end / config.time.dt
+    if config.time.adaptive and config.time.max_dt:
+        steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
+    notes = check_beam_work(config.static, steps, comm, " of time stepping",
+                            quiet=out is None)
     problem = BeamProblem(config.static.model, comm)
     if config.from_static:
         _static_prestate(problem, config.static, progress)
@@ -191,7 +197,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
-                           * problem.space.dofmap.index_map_bs)
+                           * problem.space.dofmap.index_map_bs, notes=notes)
     shapes = []
     summary_file = table = None
     if writing and root:
@@ -306,7 +312,7 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
         "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
-    }
+    } | ({"notes": result.notes} if result.notes else {})
 
 
 def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
@@ -377,6 +383,7 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
     from fe_beam.modes import natural_frequencies
 
     started = time.perf_counter()
+    check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)
     problem = BeamProblem(static.model, comm)
     if out is not None and comm.rank == 0:
         atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
