@@ -36,7 +36,7 @@ from fe_beam import compat, runctl
 __all__ = [
     "AppendCSV",
     "BeamXDMFWriter",
-    "ThrottledJSON",
+    "RunOutput",
     "XDMFSeries",
     "atomic_write_json",
     "atomic_write_text",
@@ -142,9 +142,8 @@ class _TwoCopies:
 class AppendCSV:
     """A CSV history that gains rows as the run goes: O(1) per row, readable at any moment."""
 
-    def __init__(self, path: str | Path, header: list[str], throttle: bool = False):
+    def __init__(self, path: str | Path, header: list[str]):
         self.header = list(header)
-        self._throttle = runctl.Throttle() if throttle else None
         self._file = _TwoCopies(Path(path), self._create, self._append_rows)
 
     def _create(self, path: Path) -> None:
@@ -159,33 +158,57 @@ class AppendCSV:
     def add(self, rows: list[list], flush: bool = True) -> None:
         self._file.add(rows)
         if flush:
-            self.flush()
+            self._file.flush()
 
-    def flush(self, force: bool = False) -> None:
-        if self._throttle is None or force or self._throttle.due():
-            if self._throttle is None:
-                self._file.flush()
-            else:
-                with self._throttle.timing():
-                    self._file.flush()
+    def flush(self) -> None:
+        self._file.flush()
 
     def close(self) -> None:
         self._file.close()
 
 
-class ThrottledJSON:
-    """summary.json of a running analysis: rewritten whole (atomically) at a bounded share of
-    the wall time, and always when ``force`` (status changes, the end)."""
+class RunOutput:
+    """The files of a stepping run that grow with it: summary.json, a CSV history and (given
+    to `step`) an XDMF writer, brought up to date together, so that after an interruption at any
+    moment they hold the same steps (up to the one being written).
 
-    def __init__(self, path: str | Path):
-        self.path = Path(path)
+    Rows and XDMF steps are appended (O(1) per step); summary.json, whose ``steps``/``history``
+    grows, is rewritten whole, so the files are brought up to date at a bounded share of the
+    wall time (`fe_beam.runctl.Throttle`: after every step while that is cheap, less often as
+    the summary grows), and always by `finish`. Text files are written by rank 0 only;
+    ``writer.write(t, flush=...)`` is collective.
+    """
+
+    def __init__(self, out: Path | None, csv_name: str, header: list[str], comm):
+        self.root = comm.rank == 0
+        self.active = out is not None and self.root
+        self.summary_path = None if out is None else Path(out) / "summary.json"
+        self.table = AppendCSV(Path(out) / csv_name, header) if self.active else None
         self._throttle = runctl.Throttle()
 
-    def write(self, data, force: bool = False) -> None:
-        """``data``: a dict, or a function returning it (only called when written)."""
-        if force or self._throttle.due():
-            with self._throttle.timing():
-                atomic_write_json(self.path, data() if callable(data) else data)
+    def write_summary(self, summary) -> None:
+        if self.active:
+            atomic_write_json(self.summary_path, summary() if callable(summary) else summary)
+
+    def step(self, rows: list[list], summary, writer=None, t: float = 0.0) -> None:
+        """Record one step: its CSV ``rows``, ``summary`` (a dict or a function returning one)
+        and, with ``writer``, its fields at time ``t`` (collective)."""
+        due = self._throttle.due() if self.root else False
+        with self._throttle.timing() if due else contextlib.nullcontext():
+            if writer is not None:
+                writer.write(t, flush=due)
+            if self.active:
+                self.table.add(rows, flush=due)
+                if due:
+                    self.write_summary(summary)
+
+    def finish(self, summary, writer=None) -> None:
+        """Close the writer (collective) and write everything, with the final ``summary``."""
+        if writer is not None:
+            writer.close()
+        if self.active:
+            self.table.close()
+            self.write_summary(summary)
 
 
 _XDMF_TOPOLOGY = {("interval", 2): "Polyline", ("interval", 3): "Edge_3",
@@ -265,9 +288,10 @@ class XDMFSeries:
             values = np.hstack([values, np.zeros((len(values), 1))])
         return kind, values
 
-    def write(self, t: float, functions) -> None:
+    def write(self, t: float, functions, flush: bool | None = None) -> None:
         """Add the values of ``functions`` (name -> Function, or Functions) at time ``t``
-        (collective); written to disk at a bounded share of the wall time and by `flush`."""
+        (collective); written to disk now if ``flush``, else by a later `flush`/`close`; by
+        default at a bounded share of the wall time (`fe_beam.runctl.Throttle`)."""
         if isinstance(functions, dict):
             functions = list(functions.values())
         local = [(f.name, *self._local_values(f)) for f in functions]
@@ -277,7 +301,7 @@ class XDMFSeries:
         step = {name: (kind, np.concatenate([part[i] for part in gathered]))
                 for i, (name, kind, _) in enumerate(local)}
         self._buffered.append((float(t), step))
-        if self._throttle.due():
+        if self._throttle.due() if flush is None else flush:
             self.flush()
 
     # --- files (rank 0) -----------------------------------------------------------------
@@ -408,10 +432,10 @@ class BeamXDMFWriter:
         for function, expression in self._expressions:
             function.interpolate(expression)
 
-    def write(self, time: float) -> None:
+    def write(self, time: float, flush: bool | None = None) -> None:
         self.update()
         if self._file is not None:
-            self._file.write(time, self.functions)
+            self._file.write(time, self.functions, flush)
 
     def flush(self) -> None:
         """Put every written step into the files now (rank 0; e.g. before an exit)."""

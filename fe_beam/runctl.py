@@ -107,21 +107,21 @@ def check(comm, where: str = "") -> None:
 
 # --- cost-bounded rewriting --------------------------------------------------------------------
 class Throttle:
-    """When to rewrite a file that grows with the run (summary.json, the XDMF index): at most
-    ``share`` of the wall time goes to it, and never more often than every ``min_interval`` s
-    once a rewrite costs more than ``cheap`` s. Small files are rewritten after every step, large
-    ones less and less often: the total cost stays a bounded fraction of the run."""
+    """When to rewrite files that grow with the run (summary.json, the XDMF index): at most
+    ``share`` of the wall time goes to it (a write that took c seconds waits c / share before
+    the next one), and always when a write costs less than ``cheap`` seconds. Small files are
+    rewritten after every step, large ones less and less often: the total cost stays a bounded
+    fraction of the run however many steps it has."""
 
-    def __init__(self, share: float = 0.05, cheap: float = 2e-3, min_interval: float = 2.0):
-        self.share, self.cheap, self.min_interval = share, cheap, min_interval
+    def __init__(self, share: float = 0.1, cheap: float = 1e-3):
+        self.share, self.cheap = share, cheap
         self._cost = 0.0
         self._last = -math.inf
 
     def due(self) -> bool:
-        since = time.perf_counter() - self._last
         if self._cost <= self.cheap:
             return True
-        return since >= max(self._cost / self.share, self.min_interval)
+        return time.perf_counter() - self._last >= self._cost / self.share
 
     @contextlib.contextmanager
     def timing(self):

@@ -15,9 +15,8 @@ from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem
 from fe_beam.config import StaticConfig
 from fe_beam.outputs import (
-    AppendCSV,
     BeamXDMFWriter,
-    ThrottledJSON,
+    RunOutput,
     plot_deformed_shapes,
     plot_load_displacement,
 )
@@ -214,16 +213,13 @@ def solve_static(
     writing = out is not None
     if writing and root:
         out.mkdir(parents=True, exist_ok=True)
-    xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
-    writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     extra = {"model": _model_summary(config)} | (extra_summary or {})
     if notes:
         extra["notes"] = list(extra.get("notes", [])) + notes
-    summary_file = table = None
-    if writing and root:
-        summary_file = ThrottledJSON(out / "summary.json")
-        summary_file.write(result.summary(extra), force=True)
-        table = AppendCSV(out / "load_displacement.csv", CSV_HEADER)
+    files = RunOutput(out, "load_displacement.csv", CSV_HEADER, comm)
+    files.write_summary(result.summary(extra))  # status "running" from the start
+    xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
+    writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
 
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
@@ -236,14 +232,11 @@ def solve_static(
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
-        if writer is not None:
-            writer.write(step.load_factor)
+        files.step([_csv_row(entry)], lambda: result.summary(extra), writer, step.load_factor)
+        if writer is not None and record_shapes:
             shape = writer.vertex_values()
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
-        if writing and root:
-            table.add([_csv_row(entry)])
-            summary_file.write(lambda: result.summary(extra))
 
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
@@ -260,13 +253,9 @@ def solve_static(
         result.message = f"interrupted by {stop.name} at load factor {last:.6g}"
         raise
     finally:
-        if writer is not None:
-            writer.close()
         run.destroy()
         result.wall_time_s = time.perf_counter() - started
-        if table is not None:
-            table.close()
-            summary_file.write(result.summary(extra), force=True)
+        files.finish(result.summary(extra), writer)
     if writing and root:
         if config.output.plots and result.shapes:
             _write_plots(out, result, config)

@@ -26,9 +26,8 @@ from fe_beam.beam import BeamProblem
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.outputs import (
-    AppendCSV,
     BeamXDMFWriter,
-    ThrottledJSON,
+    RunOutput,
     _pyplot,
     atomic_write_json,
     write_csv,
@@ -194,30 +193,25 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     root, writing = comm.rank == 0, out is not None
     if writing and root:
         out.mkdir(parents=True, exist_ok=True)
-    xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
-    writer = BeamXDMFWriter(problem, xdmf)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
+    files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+    files.write_summary(_dynamic_summary(result, config, 0.0))  # status "running"
+    xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
+    writer = BeamXDMFWriter(problem, xdmf)
     shapes = []
-    summary_file = table = None
-    if writing and root:
-        summary_file = ThrottledJSON(out / "summary.json")
-        summary_file.write(_dynamic_summary(result, config, 0.0), force=True)
-        table = AppendCSV(out / "history.csv", HISTORY_HEADER)
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
-        writer.write(t)
+        files.step([_history_row(result.history[-1])],
+                   lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+                   writer, t)
         if config.static.output.plots:
             shape = writer.vertex_values()
             if root:
                 shapes.append((t, shape))
-        if writing and root:
-            table.add([_history_row(result.history[-1])])
-            summary_file.write(lambda: _dynamic_summary(result, config,
-                                                        time.perf_counter() - started))
 
     try:
         result.info = integrator.run(record, progress=progress)
@@ -233,13 +227,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.message = f"interrupted by {stop.name} at t = {integrator.time:.6g} s"
         raise
     finally:
-        writer.close()
         integrator.solver.destroy()
         result.info["wall_time_s"] = time.perf_counter() - started
-        if table is not None:
-            table.close()
-            summary_file.write(_dynamic_summary(result, config, result.info["wall_time_s"]),
-                               force=True)
+        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]), writer)
     if writing and root:
         if config.static.output.plots and result.history:
             _plot_dynamic(out, result, shapes, config)

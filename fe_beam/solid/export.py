@@ -31,10 +31,11 @@ class DisplacementXDMF:
         self.path = Path(path)
         self._file = XDMFSeries(msh, self.path)
 
-    def write(self, t: float | None = None) -> None:
-        """Write the current displacement at time ``t`` (default: the current load factor)."""
+    def write(self, t: float | None = None, flush: bool | None = True) -> None:
+        """Write the current displacement at time ``t`` (default: the current load factor);
+        ``flush=None``: to disk at a bounded share of the wall time (see `XDMFSeries`)."""
         self.output.interpolate(self.problem.displacement())
-        self._file.write(self.problem.load_factor if t is None else t, [self.output])
+        self._file.write(self.problem.load_factor if t is None else t, [self.output], flush)
 
     def flush(self) -> None:
         self._file.flush()
