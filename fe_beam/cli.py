@@ -271,17 +271,15 @@ def _run_guarded(args, config: dict, comm) -> int:
 
     try:
         with runctl.output_session(args.out, args.command, comm):
-            runctl.check(comm, "the start of the analysis")
+            runctl.check(comm, runctl.BEFORE)
             code = RUNNERS[args.command](args, config, comm)
-            runctl.check(comm, "the end of the analysis (the results are complete)")
+            runctl.check(comm, runctl.AFTER)
             return code
     except (runctl.FolderBusy, runctl.TooLarge) as error:
         _say(comm, f"fe-beam {args.command}: {error}", sys.stderr)
         return EXIT_USAGE
     except runctl.Interrupted as stop:
-        where = f" at {stop.where}" if stop.where else ""
-        _say(comm, f"fe-beam: interrupted{where} ({stop.name}); results of the last converged "
-                   f"step are in {args.out}", sys.stderr)
+        _say(comm, stop.line(args.out), sys.stderr)
         return stop.exit_code
 
 

@@ -44,6 +44,7 @@ KNOWN_OUTPUTS = (
     "tip_vs_tension.png",
 )
 
+BEFORE, AFTER = "<before>", "<after>"  # `Interrupted.where` outside the analysis
 _SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 _pending: int = 0
 
@@ -64,6 +65,18 @@ class Interrupted(Exception):
     def exit_code(self) -> int:
         return EXIT_SIGINT if self.signum == signal.SIGINT else EXIT_SIGTERM
 
+    def line(self, out) -> str:
+        """The one line the command line prints."""
+        if self.where == BEFORE:
+            return (f"fe-beam: interrupted ({self.name}) before the analysis started; no "
+                    f"results were written to {out}")
+        if self.where == AFTER:
+            return (f"fe-beam: interrupted ({self.name}) after the analysis ended; the results "
+                    f"in {out} are complete")
+        where = f" at {self.where}" if self.where else ""
+        return (f"fe-beam: interrupted{where} ({self.name}); results of the last converged "
+                f"step are in {out}")
+
 
 def _handler(signum, frame) -> None:
     global _pending
@@ -74,21 +87,28 @@ def _handler(signum, frame) -> None:
     _pending = signum
 
 
+def defer_signals() -> dict:
+    """From now on SIGINT/SIGTERM set a flag for `check` (main thread only); returns the
+    previous handlers."""
+    try:
+        return {s: signal.signal(s, _handler) for s in _SIGNAL_NAMES}
+    except ValueError:  # not the main thread: leave the default handling
+        return {}
+
+
 @contextlib.contextmanager
 def signals_deferred():
-    """SIGINT/SIGTERM set a flag for `check` instead of ending the process (main thread)."""
+    """SIGINT/SIGTERM set a flag for `check` instead of ending the process, for the duration
+    (a signal that came before, e.g. while the command imported its modules, stays pending)."""
     global _pending
-    _pending = 0
-    try:
-        previous = {s: signal.signal(s, _handler) for s in _SIGNAL_NAMES}
-    except ValueError:  # not the main thread: leave the default handling
-        yield
-        return
+    previous = defer_signals()
     try:
         yield
     finally:
+        _pending = 0
         for s, handler in previous.items():
-            signal.signal(s, handler)
+            if handler is not _handler:
+                signal.signal(s, handler)
 
 
 def pending() -> int:

@@ -186,7 +186,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                             quiet=out is None)
     problem = BeamProblem(config.static.model, comm)
     if config.from_static:
-        _static_prestate(problem, config.static, progress)
+        try:
+            _static_prestate(problem, config.static, progress)
+        except runctl.Interrupted as stop:
+            stop.where = "the static pre-state (before the time stepping)"
+            raise
     integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
                                   config.motion_function, config.static.solver)
     integrator.initialise(config.velocity)
