@@ -10,8 +10,9 @@ write files. Every file is readable at any moment of a run, even after SIGKILL:
   to the copy that is not the visible one, which is then hard-linked into place atomically. A
   copy is never written while it is visible, appending costs O(1) per step, and NAME is always a
   complete, closed file;
-* files that are rewritten whole as they grow are rewritten at a bounded share of the wall time
-  (`fe_beam.runctl.Throttle`), and always at the end.
+* files that are rewritten whole as they grow (summary.json, the XDMF index) are rewritten at
+  most once a second and at a bounded share of the wall time (`fe_beam.runctl.Throttle`), and
+  always at the end, together with the appends, so all files hold the same steps.
 """
 
 from __future__ import annotations
@@ -172,11 +173,11 @@ class RunOutput:
     to `step`) an XDMF writer, brought up to date together, so that after an interruption at any
     moment they hold the same steps (up to the one being written).
 
-    Rows and XDMF steps are appended (O(1) per step); summary.json, whose ``steps``/``history``
-    grows, is rewritten whole, so the files are brought up to date at a bounded share of the
-    wall time (`fe_beam.runctl.Throttle`: after every step while that is cheap, less often as
-    the summary grows), and always by `finish`. Text files are written by rank 0 only;
-    ``writer.write(t, flush=...)`` is collective.
+    Rows and XDMF steps are appended (O(1) per step, buffered in between); summary.json,
+    whose ``steps``/``history`` grows, is rewritten whole, so the files are brought up to date
+    together at most once a second and at a bounded share of the wall time
+    (`fe_beam.runctl.Throttle`; the first step at once), and always by `finish`. Text files
+    are written by rank 0 only; ``writer.write(t, flush=...)`` is collective.
     """
 
     def __init__(self, out: Path | None, csv_name: str, header: list[str], comm):

@@ -127,21 +127,21 @@ def check(comm, where: str = "") -> None:
 
 # --- cost-bounded rewriting --------------------------------------------------------------------
 class Throttle:
-    """When to rewrite files that grow with the run (summary.json, the XDMF index): at most
-    ``share`` of the wall time goes to it (a write that took c seconds waits c / share before
-    the next one), and always when a write costs less than ``cheap`` seconds. Small files are
-    rewritten after every step, large ones less and less often: the total cost stays a bounded
-    fraction of the run however many steps it has."""
+    """When to bring files that grow with the run up to date (summary.json, whose step list
+    grows, and with it the CSV and XDMF appends, see `fe_beam.outputs.RunOutput`): the first
+    time at once, then at most every ``min_interval`` seconds, and never spending more than
+    ``share`` of the wall time on it (a write that took c seconds waits c / share). The work
+    per step is O(1) (appends are buffered); whole-file rewrites happen a bounded number of
+    times per second, whatever the number of steps."""
 
-    def __init__(self, share: float = 0.1, cheap: float = 1e-3):
-        self.share, self.cheap = share, cheap
+    def __init__(self, share: float = 0.1, min_interval: float = 1.0):
+        self.share, self.min_interval = share, min_interval
         self._cost = 0.0
         self._last = -math.inf
 
     def due(self) -> bool:
-        if self._cost <= self.cheap:
-            return True
-        return time.perf_counter() - self._last >= self._cost / self.share
+        waited = time.perf_counter() - self._last
+        return waited >= max(self.min_interval, self._cost / self.share)
 
     @contextlib.contextmanager
     def timing(self):
