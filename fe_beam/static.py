@@ -234,7 +234,7 @@ def solve_static(
         result.wall_time_s = time.perf_counter() - started
         files.step([_csv_row(entry)], lambda: result.summary(extra), writer, step.load_factor)
         if writer is not None and record_shapes:
-            shape = writer.vertex_values()
+            shape = writer.vertex_values(update=False)
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
 

@@ -213,7 +213,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                    lambda: _dynamic_summary(result, config, time.perf_counter() - started),
                    writer, t)
         if config.static.output.plots:
-            shape = writer.vertex_values()
+            shape = writer.vertex_values(update=False)
             if root:
                 shapes.append((t, shape))
 
