@@ -203,3 +203,62 @@ def test_interrupted_runs_leave_readable_results(kind, tmp_path):
     print(kind, [(r["signal"].name, r["mode"]) for r in plan], statuses)
     # the plan must have hit runs while they were stepping, not only before or after
     assert "interrupted" in statuses and "running" in statuses, statuses
+
+
+def _shared_folder(tmp_path: Path) -> Path:
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    return Path(comm.bcast(str(tmp_path) if comm.rank == 0 else None, root=0))
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("command, stop_at", [("static", 3), ("dynamic", 5)])
+def test_a_signal_on_one_rank_stops_all_ranks_at_the_same_step(command, stop_at, tmp_path,
+                                                               capsys, monkeypatch):
+    """SIGTERM reaches one rank only (the last): every rank stops at the same step boundary,
+    the files hold the steps up to it, and the command ends with exit 143 and one line."""
+    from mpi4py import MPI
+    from test_config import dump_toml, edited
+
+    from fe_beam import progress
+    from fe_beam.cli import main
+
+    comm = MPI.COMM_WORLD
+    folder = _shared_folder(tmp_path)
+    config = edited({"loads.steps": 8, "mesh.elements": 12, "solver.adaptive": False,
+                     "output.plots": False, "material.rho": 7850.0})
+    if command == "dynamic":
+        config["loads"]["tip_force"] = [0.0, -1.0]
+        config["time"] = {"t_end": 0.02, "dt": 1e-3, "output_every": 1}
+    path = folder / "c.toml"
+    if comm.rank == 0:
+        path.write_text(dump_toml(config))
+    comm.barrier()
+    calls = {"n": 0}
+    update = progress.ProgressBar.update
+
+    def counting(self, value, message=""):
+        calls["n"] += 1
+        if calls["n"] == stop_at and comm.rank == comm.size - 1:
+            os.kill(os.getpid(), signal.SIGTERM)
+        update(self, value, message)
+
+    monkeypatch.setattr(progress.ProgressBar, "update", counting)
+    out = folder / "out"
+    capsys.readouterr()
+    code = main([command, str(path), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 143, err
+    assert calls["n"] == stop_at  # no rank went on stepping
+    if comm.rank == 0:
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("fe-beam: interrupted"), err
+    comm.barrier()
+    kind = "dynamic" if command == "dynamic" else "static"
+    status = check_folder(kind, out, code, err, signal.SIGTERM) if comm.rank == 0 else None
+    assert comm.bcast(status, root=0) == "interrupted"
+    summary = json.loads((out / "summary.json").read_text())
+    # the dynamic history starts with t = 0; the interrupted step is recorded in both
+    assert len(summary["steps" if kind == "static" else "history"]) == \
+        (stop_at if kind == "static" else stop_at + 1)
