@@ -504,9 +504,37 @@ def _pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
+    import matplotlib.figure
     import matplotlib.pyplot as plt
 
+    figure = matplotlib.figure.Figure
+    if not hasattr(figure.savefig, "__wrapped__"):
+        figure.savefig = _atomic_savefig(figure.savefig)
     return plt
+
+
+def _atomic_savefig(savefig):
+    """Figure.savefig to a file name writes a temporary file and renames it: a plot is never
+    seen half-written, whenever the run is interrupted (streams are left alone)."""
+
+    def save(self, fname, *args, **kwargs):
+        if not isinstance(fname, (str, os.PathLike)):
+            return savefig(self, fname, *args, **kwargs)
+        path = Path(fname)
+        if path.suffix and "format" not in kwargs:
+            kwargs["format"] = path.suffix[1:]
+        runctl.register_output(path)
+        temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            result = savefig(self, temporary, *args, **kwargs)
+            os.replace(temporary, path)
+        except BaseException:
+            temporary.unlink(missing_ok=True)
+            raise
+        return result
+
+    save.__wrapped__ = savefig
+    return save
 
 
 def plot_deformed_shapes(

@@ -87,25 +87,42 @@ def _handler(signum, frame) -> None:
     _pending = signum
 
 
+_deferring = 0  # nesting depth of defer_signals / signals_deferred
+
+
 def defer_signals() -> dict:
     """From now on SIGINT/SIGTERM set a flag for `check` (main thread only); returns the
     previous handlers."""
+    global _deferring
     try:
-        return {s: signal.signal(s, _handler) for s in _SIGNAL_NAMES}
+        previous = {s: signal.signal(s, _handler) for s in _SIGNAL_NAMES}
     except ValueError:  # not the main thread: leave the default handling
         return {}
+    _deferring += 1
+    return previous
+
+
+def reassert() -> None:
+    """Put the deferring handlers back if a library replaced them (``import gmsh`` sets
+    SIGINT to its default action, which would kill the run without writing anything)."""
+    if _deferring:
+        with contextlib.suppress(ValueError):
+            for s in _SIGNAL_NAMES:
+                if signal.getsignal(s) is not _handler:
+                    signal.signal(s, _handler)
 
 
 @contextlib.contextmanager
 def signals_deferred():
     """SIGINT/SIGTERM set a flag for `check` instead of ending the process, for the duration
     (a signal that came before, e.g. while the command imported its modules, stays pending)."""
-    global _pending
+    global _pending, _deferring
     previous = defer_signals()
     try:
         yield
     finally:
         _pending = 0
+        _deferring = max(0, _deferring - (1 if previous else 0))
         for s, handler in previous.items():
             if handler is not _handler:
                 signal.signal(s, handler)
@@ -120,6 +137,7 @@ def check(comm, where: str = "") -> None:
     """Collective: raise `Interrupted` on every rank when any rank got SIGINT/SIGTERM."""
     from mpi4py import MPI
 
+    reassert()
     flag = comm.allreduce(_pending, op=MPI.MAX) if comm.size > 1 else _pending
     if flag:
         raise Interrupted(flag, where)

@@ -61,6 +61,17 @@ from fe_beam.solid.problem import (
 from fe_beam.solver import LoadStepping, LoadSteppingFailed, SolverSettings, run_load_stepping
 from fe_beam.static import beam_dofs_estimate
 
+
+def _import_gmsh() -> None:
+    """gmsh (4.8) resets SIGINT to its default action when first imported: import it now, then
+    put the deferring handlers of fe_beam.runctl back, so Ctrl-C while meshing ends cleanly."""
+    import gmsh  # noqa: F401
+
+    runctl.reassert()
+
+
+_import_gmsh()
+
 __all__ = [
     "SOLID_KEYS",
     "SolidConfig",
