@@ -199,7 +199,7 @@ class OutputSession:
         fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        except BlockingIOError:
             try:
                 owner = os.read(fd, 400).decode(errors="replace").split()
             finally:
@@ -209,6 +209,8 @@ class OutputSession:
                 who += f" on {owner[1]}"
             raise FolderBusy(f"--out {out} is in use by another fe-beam run ({who}); wait for "
                              "it to finish or choose another folder") from None
+        except OSError:
+            pass  # a file system without locks (some network mounts): run unlocked
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()} {socket.gethostname()} {self.command}\n".encode())
         self._fd = fd
@@ -297,6 +299,8 @@ def output_session(out: Path, command: str, comm):
             session.acquire()
         except FolderBusy as error:
             problem = str(error)
+        except OSError as error:
+            problem = f"--out {out}: cannot write there ({error.strerror or error})"
     problem = comm.bcast(problem, root=0) if comm.size > 1 else problem
     if problem:
         raise FolderBusy(problem)
