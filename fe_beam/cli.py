@@ -269,8 +269,9 @@ def _run_guarded(args, config: dict, comm) -> int:
     boundaries (fe_beam.runctl): one line on stderr and exit 130/143 instead of a traceback."""
     from fe_beam import runctl
 
+    session = None
     try:
-        with runctl.output_session(args.out, args.command, comm):
+        with runctl.output_session(args.out, args.command, comm) as session:
             runctl.check(comm, runctl.BEFORE)
             code = RUNNERS[args.command](args, config, comm)
             runctl.check(comm, runctl.AFTER)
@@ -279,7 +280,8 @@ def _run_guarded(args, config: dict, comm) -> int:
         _say(comm, f"fe-beam {args.command}: {error}", sys.stderr)
         return EXIT_USAGE
     except runctl.Interrupted as stop:
-        _say(comm, stop.line(args.out), sys.stderr)
+        wrote = session is None or bool(session.files)  # known on rank 0, which prints
+        _say(comm, stop.line(args.out, wrote), sys.stderr)
         return stop.exit_code
 
 

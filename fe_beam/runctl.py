@@ -65,11 +65,12 @@ class Interrupted(Exception):
     def exit_code(self) -> int:
         return EXIT_SIGINT if self.signum == signal.SIGINT else EXIT_SIGTERM
 
-    def line(self, out) -> str:
-        """The one line the command line prints."""
-        if self.where == BEFORE:
-            return (f"fe-beam: interrupted ({self.name}) before the analysis started; no "
-                    f"results were written to {out}")
+    def line(self, out, wrote: bool = True) -> str:
+        """The one line the command line prints (``wrote``: whether any result was written)."""
+        if self.where == BEFORE or not wrote:
+            where = "" if self.where == BEFORE or not self.where else f" at {self.where}"
+            return (f"fe-beam: interrupted{where} ({self.name}) before any result was written; "
+                    f"nothing was written to {out}")
         if self.where == AFTER:
             return (f"fe-beam: interrupted ({self.name}) after the analysis ended; the results "
                     f"in {out} are complete")
