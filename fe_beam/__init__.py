@@ -1,5 +1,13 @@
 """fe_beam: finite elements (FEniCSx) for slender bodies that bend a lot."""
 
+import os as _os
+import sys as _sys
+
+if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "fe-beam":
+    # the command line: SIGINT/SIGTERM during the imports below are deferred too (fe_beam.runctl)
+    from fe_beam import runctl as _runctl
+
+    _runctl.defer_signals()
 from fe_beam.beam import (
     BeamModel,
     BeamProblem,

@@ -1,8 +1,11 @@
 """The ``fe-beam`` command line: ``fe-beam COMMAND CONFIG.toml --out DIR [--set key=value ...]``.
 
 Exit codes: 0 success, 2 a mistake in the command line or configuration (one sentence, no
-traceback), 3 the analysis ran but did not complete (e.g. load stepping gave up; the results of
-the last converged step are written).
+traceback; also: the output folder is in use by another run, or the run is beyond the up-front
+limits of fe_beam.runctl without ``[solver] allow_large = true``), 3 the analysis ran but did not
+complete (e.g. load stepping gave up; the results of the last converged step are written),
+130 interrupted by SIGINT (Ctrl-C), 143 interrupted by SIGTERM: the run stops at the next step
+boundary, writes the last converged state with summary status "interrupted" and prints one line.
 """
 
 from __future__ import annotations
@@ -430,7 +433,35 @@ def _parse_arguments(argv, comm) -> argparse.Namespace:
         return _parser().parse_args(argv)
 
 
+def _run_locked(args, config: dict, comm) -> int:
+    """Run a command holding the lock of its output folder, with SIGINT/SIGTERM noticed at step
+    boundaries (fe_beam.runctl): one line on stderr and exit 130/143 instead of a traceback."""
+    from fe_beam import runctl
+
+    session = None
+    try:
+        with runctl.output_session(args.out, args.command, comm) as session:
+            runctl.check(comm, runctl.BEFORE)
+            code = RUNNERS[args.command](args, config, comm)
+            runctl.check(comm, runctl.AFTER)
+            return code
+    except (runctl.FolderBusy, runctl.TooLarge) as error:
+        _say(comm, f"fe-beam {args.command}: {error}", sys.stderr)
+        return EXIT_USAGE
+    except runctl.Interrupted as stop:
+        wrote = session is None or bool(session.files)  # known on rank 0, which prints
+        _say(comm, stop.line(args.out, wrote), sys.stderr)
+        return stop.exit_code
+
+
 def main(argv: list[str] | None = None) -> int:
+    from fe_beam import runctl
+
+    with runctl.signals_deferred():
+        return _main(argv)
+
+
+def _main(argv: list[str] | None = None) -> int:
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
@@ -448,7 +479,7 @@ def main(argv: list[str] | None = None) -> int:
         check_values(config)
         notes.extend(check_command_tables(args.command, config))
         check_partition(config, comm.size, args.command)
-        code = RUNNERS[args.command](args, config, comm)
+        code = _run_locked(args, config, comm)
         for note in notes:
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
         return code

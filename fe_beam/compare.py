@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam import runctl
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, table
 from fe_beam.outputs import _pyplot, atomic_write_json, write_csv
 from fe_beam.solid.driver import (
@@ -201,6 +202,7 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
             comm.barrier()
         return summary
     summary["dofs"] = run.dofs
+    save()  # status "running" from the start
     try:
         for factor in config.load_factors:
             last = {}
@@ -233,6 +235,13 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
             save()
         else:
             summary["status"] = "converged"
+    except runctl.Interrupted as stop:
+        last = summary["table"][-1]["load_factor"] if summary["table"] else 0.0
+        stop.where = f"load factor {last:.4g} of the sweep"
+        summary |= {"status": "interrupted",
+                    "message": f"interrupted by {stop.name} after load factor {last:.6g}"}
+        save()
+        raise
     finally:
         run.destroy()
     save()

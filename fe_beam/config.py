@@ -96,6 +96,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "adaptive": Key((bool,), True, "cut back / grow load steps"),
         "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
         "max_rotation_jump": Key(NUMBER, 1.0, "branch check: largest rotation change per step"),
+        "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
+                           "memory; fe_beam.runctl)"),
     },
     "output": {
         "xdmf": Key((bool,), True, "write XDMF for ParaView"),
@@ -362,6 +364,7 @@ def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
         min_increment=min(solver.pop("min_increment"), 1.0 / max(steps, 1)),
     )
     jump = solver.pop("max_rotation_jump")
+    solver.pop("allow_large")  # read from the raw table by the drivers (fe_beam.runctl)
     if not jump > 0:
         raise ConfigError(f"[solver] max_rotation_jump must be > 0; got {jump!r}")
     return _wrap(SolverSettings, **solver), stepping, float(jump)

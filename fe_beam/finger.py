@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam import runctl
 from fe_beam.config import (
     NUMBER,
     ConfigError,
@@ -318,13 +319,29 @@ def run_finger(
         ]
     }
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
-    result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
-                          record_shapes=out is not None)
+    sweep = []
+    try:
+        result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
+                              record_shapes=out is not None,
+                              on_step=lambda problem, entry: sweep.append(entry))
+    except runctl.Interrupted:
+        if out is not None and comm.rank == 0 and sweep:
+            write_sweep(out, StaticResult(steps=sweep))  # the converged part of the sweep
+        raise
     inverse = {}
     if isinstance(target, (int, float)):
         target = InverseTarget("tip_angle", float(target))
     if target is not None and result.status == "converged":
-        inverse = solve_inverse(config, target, comm, sweep=result.steps)
+        try:
+            inverse = solve_inverse(config, target, comm, sweep=result.steps)
+        except runctl.Interrupted as stop:
+            stop.where = "the inverse solve (the sweep is complete)"
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", result.summary(extra | {
+                    "status": "interrupted",
+                    "message": f"interrupted by {stop.name} during the inverse solve"}))
+                write_sweep(out, result)
+            raise
     if out is not None and comm.rank == 0 and result.steps:
         if inverse:
             atomic_write_json(out / "summary.json", result.summary(extra | {"inverse": inverse}))

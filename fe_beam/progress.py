@@ -1,4 +1,8 @@
-"""Progress bars on rank 0 only (tqdm), quiet in tests and under ``FE_BEAM_PROGRESS=0``."""
+"""Progress bars on rank 0 only (tqdm), quiet in tests and under ``FE_BEAM_PROGRESS=0``.
+
+`ProgressBar.update` is also the step boundary where a pending SIGINT/SIGTERM is noticed: every
+load- and time-stepping loop calls it after each converged step on all ranks, so it checks the
+signal flag collectively (`fe_beam.runctl.check`) whether or not a bar is shown."""
 
 from __future__ import annotations
 
@@ -12,6 +16,7 @@ class ProgressBar:
     def __init__(self, comm, total: float, label: str, enabled: bool = True, unit: str = ""):
         self._bar = None
         self._done = 0.0
+        self._comm = comm
         if not enabled or comm.rank != 0 or os.environ.get("FE_BEAM_PROGRESS", "1") == "0":
             return
         try:
@@ -31,6 +36,14 @@ class ProgressBar:
         )
 
     def update(self, value: float, message: str = "") -> None:
+        """Show ``value``; then raise `fe_beam.runctl.Interrupted` on every rank if any rank
+        got SIGINT/SIGTERM (collective)."""
+        from fe_beam import runctl
+
+        self._show(value, message)
+        runctl.check(self._comm)
+
+    def _show(self, value: float, message: str) -> None:
         if self._bar is None:
             return
         self._bar.update(value - self._done)

@@ -23,6 +23,7 @@ import sys
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
+from fe_beam import runctl
 from fe_beam.config import ConfigError
 
 __all__ = [
@@ -497,6 +498,14 @@ def run_refinement(
                 report(_level_line(record, plan))
             if record["status"] != "converged":
                 break
+    except runctl.Interrupted as stop:
+        stop.where = f"level {len(records)} of the refinement study"
+        summary = study_summary(plan, records, config_path) | {
+            "status": "interrupted",
+            "message": f"interrupted by {stop.name} during level {len(records)}"}
+        if out is not None and comm.rank == 0:
+            write_outputs(out, summary, plot=False)
+        raise
     finally:
         bar.close()
     if out is not None and comm.rank == 0:

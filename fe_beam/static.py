@@ -11,15 +11,14 @@ import scipy.linalg
 import scipy.sparse
 from mpi4py import MPI
 
-from fe_beam import compat
+from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import StaticConfig
 from fe_beam.outputs import (
     BeamXDMFWriter,
-    atomic_write_json,
+    RunOutput,
     plot_deformed_shapes,
     plot_load_displacement,
-    write_csv,
 )
 from fe_beam.solver import (
     LoadSteppingFailed,
@@ -46,13 +45,16 @@ class StaticResult:
     strain_range: dict | None = None
 
     def summary(self, extra: dict | None = None) -> dict:
+        """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's."""
+        extra = dict(extra or {})
+        notes = list(extra.pop("notes", []))
         data = {
             "status": self.status,
             "message": self.message,
             "steps": self.steps,
             "dofs": self.dofs,
             "wall_time_s": self.wall_time_s,
-            "notes": list(self.notes),
+            "notes": notes + [note for note in self.notes if note not in notes],
         }
         if self.strain_range is not None:
             data["strain_range"] = self.strain_range
@@ -221,10 +223,14 @@ def solve_static(
     (``steps[-1]["stability"]``, `StaticContinuation.stability`) when nothing is written: a
     solve-only run (benchmarks, sweeps) then costs the Newton iterations alone.
 
-    summary.json, load_displacement.csv and the XDMF file are updated after every converged step.
-    On failure the last converged state is written and the result has status "failed".
+    summary.json (status "running" meanwhile), load_displacement.csv and the XDMF file are
+    updated as steps converge, at O(1) cost per step (rows and steps are appended; summary.json
+    is rewritten at a bounded share of the wall time). On failure the last converged state is
+    written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
+    it is written with status "interrupted" and the exception is re-raised.
     """
     started = time.perf_counter()
+    notes = check_beam_work(config, config.stepping.steps, comm, quiet=out is None)
     run = StaticContinuation(config, comm)
     problem, tendons = run.problem, run.tendons
     result = StaticResult(dofs=problem.global_dofs)
@@ -232,9 +238,13 @@ def solve_static(
     writing = out is not None
     if writing and root:
         out.mkdir(parents=True, exist_ok=True)
+    extra = {"model": _model_summary(config)} | (extra_summary or {})
+    if notes:
+        extra["notes"] = list(extra.get("notes", [])) + notes
+    files = RunOutput(out, "load_displacement.csv", CSV_HEADER, comm)
+    files.write_summary(result.summary(extra))  # status "running" from the start
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
-    extra = {"model": _model_summary(config)} | (extra_summary or {})
 
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
@@ -248,13 +258,11 @@ def solve_static(
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
-        if writer is not None:
-            writer.write(step.load_factor)
-            shape = writer.vertex_values()
+        files.step([_csv_row(entry)], lambda: result.summary(extra), writer, step.load_factor)
+        if writer is not None and record_shapes:
+            shape = writer.vertex_values(update=False)
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
-        if writing and root:
-            _write_tables(out, result, extra)
 
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
@@ -264,18 +272,42 @@ def solve_static(
             result.steps[-1]["stability"] = stability
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
+    except runctl.Interrupted as stop:
+        last = result.steps[-1]["load_factor"] if result.steps else 0.0
+        stop.where = f"load factor {last:.4g}"
+        result.status = "interrupted"
+        result.message = f"interrupted by {stop.name} at load factor {last:.6g}"
+        raise
     finally:
-        if writer is not None:
-            writer.close()
         run.destroy()
-    result.notes = run.watch.notes()
-    result.strain_range = run.watch.summary()
-    result.wall_time_s = time.perf_counter() - started
+        result.notes = run.watch.notes()
+        result.strain_range = run.watch.summary()
+        result.wall_time_s = time.perf_counter() - started
+        files.finish(result.summary(extra), writer)
     if writing and root:
-        _write_tables(out, result, extra)
         if config.output.plots and result.shapes:
             _write_plots(out, result, config)
     return result
+
+
+def beam_dofs_estimate(config: StaticConfig) -> int:
+    """Unknowns of the rod model of ``config``: u, v, theta and one field per constraint."""
+    mesh = config.model.mesh
+    fields = 3 + {"inextensible": 1, "unshearable": 1,
+                  "inextensible-unshearable": 2}.get(config.model.options.constraint, 0)
+    return int(fields * (mesh.elements * mesh.degree + 1))
+
+
+def check_beam_work(config: StaticConfig, steps: float, comm, what: str = " of load stepping",
+                    quiet: bool = False) -> list[str]:
+    """Up-front limits (`fe_beam.runctl.check_work`): raises `fe_beam.runctl.TooLarge` on work
+    beyond them unless ``[solver] allow_large = true``; warns on stderr (unless ``quiet``) and
+    returns the warnings for the summary's ``notes``."""
+    allow = bool((config.raw.get("solver") or {}).get("allow_large", False))
+    notes = runctl.check_work(steps, beam_dofs_estimate(config), allow, what)
+    if not quiet:
+        runctl.warn(comm, notes)
+    return notes
 
 
 def _model_summary(config: StaticConfig) -> dict:
@@ -294,17 +326,12 @@ def _model_summary(config: StaticConfig) -> dict:
     }
 
 
-def _write_tables(out: Path, result: StaticResult, extra: dict) -> None:
-    atomic_write_json(out / "summary.json", result.summary(extra))
-    rows = [
-        [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"], s["newton_iterations"]]
-        for s in result.steps
-    ]
-    write_csv(
-        out / "load_displacement.csv",
-        ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"],
-        rows,
-    )
+CSV_HEADER = ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"]
+
+
+def _csv_row(s: dict) -> list:
+    return [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"],
+            s["newton_iterations"]]
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:

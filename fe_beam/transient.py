@@ -21,15 +21,21 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import compat
+from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
-from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, write_csv
+from fe_beam.outputs import (
+    BeamXDMFWriter,
+    RunOutput,
+    _pyplot,
+    atomic_write_json,
+    write_csv,
+)
 from fe_beam.solver import (
     LoadSteppingFailed,
 )
-from fe_beam.static import StaticContinuation
+from fe_beam.static import StaticContinuation, check_beam_work
 from fe_beam.timefunctions import TimeFunctionError, parse_formula, time_function
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
@@ -179,10 +185,19 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     if config.time.scheme != "generalized-alpha":
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
+    steps = config.time.t_end / config.time.dt
+    if config.time.adaptive and config.time.max_dt:
+        steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
+    notes = check_beam_work(config.static, steps, comm, " of time stepping",
+                            quiet=out is None)
     problem = BeamProblem(config.static.model, comm)
     watch = StrainWatch()
     if config.from_static:
-        _static_prestate(problem, config.static, progress, watch)
+        try:
+            _static_prestate(problem, config.static, progress, watch)
+        except runctl.Interrupted as stop:
+            stop.where = "the static pre-state (before the time stepping)"
+            raise
     integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
                                   config.motion_function, config.static.solver)
     integrator.watch = watch
@@ -190,36 +205,46 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     root, writing = comm.rank == 0, out is not None
     if writing and root:
         out.mkdir(parents=True, exist_ok=True)
+    result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
+                           * problem.space.dofmap.index_map_bs, notes=notes)
+    files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+    files.write_summary(_dynamic_summary(result, config, 0.0))  # status "running"
     xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
-    result = DynamicResult([], {}, dofs=problem.space.dofmap.index_map.size_global
-                           * problem.space.dofmap.index_map_bs)
     shapes = []
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
-        result.notes, result.strain_range = watch.notes(), watch.summary()
-        writer.write(t)
+        result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+        files.step([_history_row(result.history[-1])],
+                   lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+                   writer, t)
         if config.static.output.plots:
-            shape = writer.vertex_values()
+            shape = writer.vertex_values(update=False)
             if root:
                 shapes.append((t, shape))
-        if writing and root:
-            _write_dynamic(out, result, config, time.perf_counter() - started)
 
     try:
         result.info = integrator.run(record, progress=progress)
+        result.status = "completed"
     except DynamicsFailed as failure:
         result.status, result.message = "failed", str(failure)
+    except runctl.Interrupted as stop:
+        # the state is the last accepted step: record it unless it was the last output
+        if not result.history or integrator.time > result.history[-1]["t"]:
+            record(integrator.time, -1)
+        stop.where = f"t = {integrator.time:.6g} s"
+        result.status = "interrupted"
+        result.message = f"interrupted by {stop.name} at t = {integrator.time:.6g} s"
+        raise
     finally:
-        writer.close()
         integrator.solver.destroy()
-    result.notes, result.strain_range = watch.notes(), watch.summary()
-    result.info["wall_time_s"] = time.perf_counter() - started
+        result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+        result.info["wall_time_s"] = time.perf_counter() - started
+        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]), writer)
     if writing and root:
-        _write_dynamic(out, result, config, result.info["wall_time_s"])
         if config.static.output.plots and result.history:
             _plot_dynamic(out, result, shapes, config)
     return result
@@ -277,18 +302,27 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     return result
 
 
-def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
-    atomic_write_json(out / "summary.json", {
+HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "external_work",
+                  "dissipated"]
+
+
+def _history_row(h: dict) -> list:
+    return [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
+            *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
+
+
+def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
+    return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
         "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
         "notes": list(result.notes),
-    } | ({"strain_range": result.strain_range} if result.strain_range else {}))
-    rows = [[h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
-             *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
-            for h in result.history]
-    write_csv(out / "history.csv", ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain",
-                                    "external_work", "dissipated"], rows)
+    } | ({"strain_range": result.strain_range} if result.strain_range else {})
+
+
+def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
+    atomic_write_json(out / "summary.json", _dynamic_summary(result, config, wall))
+    write_csv(out / "history.csv", HISTORY_HEADER, [_history_row(h) for h in result.history])
 
 
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
@@ -354,16 +388,26 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
     from fe_beam.modes import natural_frequencies
 
     started = time.perf_counter()
+    check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)
     problem = BeamProblem(static.model, comm)
+    if out is not None and comm.rank == 0:
+        atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
     if modes["prestress"]:
         try:
             _static_prestate(problem, static, progress)
         except DynamicsFailed as failure:
             raise ConfigError(str(failure)) from None
+        except runctl.Interrupted as stop:
+            stop.where = "the static pre-state"
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", {
+                    "status": "interrupted",
+                    "message": f"interrupted by {stop.name} in the static pre-state"})
+            raise
     else:
         problem.set_load_factor(0.0)
     result = natural_frequencies(problem, modes["count"])
-    summary = {"frequencies_hz": result.frequencies_hz,
+    summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
                "transverse_fraction": result.transverse_fraction,
                "prestress": modes["prestress"], "dofs": problem.space.dofmap.index_map.size_global
                * problem.space.dofmap.index_map_bs,

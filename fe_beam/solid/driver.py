@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam import runctl
 from fe_beam.config import (
     NUMBER,
     OTHER_TABLES,
@@ -58,6 +59,18 @@ from fe_beam.solid.problem import (
     stretch_keys,
 )
 from fe_beam.solver import LoadStepping, LoadSteppingFailed, SolverSettings, run_load_stepping
+from fe_beam.static import beam_dofs_estimate
+
+
+def _import_gmsh() -> None:
+    """gmsh (4.8) resets SIGINT to its default action when first imported: import it now, then
+    put the deferring handlers of fe_beam.runctl back, so Ctrl-C while meshing ends cleanly."""
+    import gmsh  # noqa: F401
+
+    runctl.reassert()
+
+
+_import_gmsh()
 
 __all__ = [
     "SOLID_KEYS",
@@ -761,6 +774,7 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
     """
     started = time.perf_counter()
     config = parse_solid(raw)
+    notes = check_solid_work(config, comm, quiet=out is None)
     out = None if out is None else Path(out)
     root = comm.rank == 0
     if out is not None and root:
@@ -774,7 +788,7 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         "wall_time_s": 0.0,
         "model": config.model_summary(),
         "rod": None,
-        "notes": list(config.notes),
+        "notes": list(config.notes) + notes,
     }
 
     def save() -> None:
@@ -782,6 +796,43 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         if out is not None and root:
             _write_tables(out, summary)
 
+    save()  # status "running" from the start
+    try:
+        return _run_solid(config, out, comm, progress, summary, save)
+    except runctl.Interrupted as stop:
+        last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
+        stop.where = f"load factor {last:.4g}"
+        summary |= {"status": "interrupted",
+                    "message": f"interrupted by {stop.name} at load factor {last:.6g}"}
+        save()
+        raise
+
+
+def solid_dofs_estimate(config: SolidConfig) -> float:
+    """About how many unknowns the 3D mesh will have (before gmsh meshes it): ~1.5 V / h^3
+    vertices for tetrahedra of size h, 8 times as many nodes for P2, 3 components."""
+    g, sizes = config.geometry, config.sizes
+    volume = g.length * g.width * 0.5 * (g.height_base + (g.height_tip or g.height_base))
+    h = min(sizes.size, sizes.tendon or sizes.size)
+    nodes = 1.5 * volume / h**3 * (8 if config.discretization.degree >= 2 else 1)
+    return 3.0 * nodes
+
+
+def check_solid_work(config: SolidConfig, comm, quiet: bool = False) -> list[str]:
+    """Up-front limits of `fe_beam.runctl.check_work` for the 3D solid (and its rod)."""
+    allow = bool((config.raw.get("solver") or {}).get("allow_large", False))
+    notes = runctl.check_work(config.stepping.steps, solid_dofs_estimate(config), allow,
+                              " of load stepping", kind="solid")
+    if config.rod is not None:
+        notes += runctl.check_work(None, beam_dofs_estimate(config.rod), allow)
+    if not quiet:
+        runctl.warn(comm, notes)
+    return notes
+
+
+def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summary: dict,
+               save) -> dict:
+    root = comm.rank == 0
     rod = None
     if config.rod is not None:
         rod = run_rod(config.rod, config.stations, comm, progress=progress)

@@ -3,6 +3,7 @@
 XDMF stores one field per mesh node, so the displacement is interpolated into the Lagrange
 space of the mesh geometry: P1 for linear tetrahedra (``MeshSizes.order = 1``), P2 for quadratic
 ones. Use it once (`write_xdmf`) or per load step (`DisplacementXDMF` as ``on_converged`` hook).
+The files are written by `fe_beam.outputs.XDMFSeries`: readable at any moment of the run.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import ufl
 from dolfinx import fem
 
 from fe_beam import compat
+from fe_beam.outputs import XDMFSeries
 
 __all__ = ["DisplacementXDMF", "write_xdmf"]
 
@@ -27,13 +29,16 @@ class DisplacementXDMF:
         space = compat.function_space(msh, ufl.VectorElement("Lagrange", msh.ufl_cell(), degree))
         self.output = fem.Function(space, name="displacement")
         self.path = Path(path)
-        self._file = compat.XDMFFile(msh.comm, str(self.path), "w")
-        self._file.write_mesh(msh)
+        self._file = XDMFSeries(msh, self.path)
 
-    def write(self, t: float | None = None) -> None:
-        """Write the current displacement at time ``t`` (default: the current load factor)."""
+    def write(self, t: float | None = None, flush: bool | None = True) -> None:
+        """Write the current displacement at time ``t`` (default: the current load factor);
+        ``flush=None``: to disk at a bounded share of the wall time (see `XDMFSeries`)."""
         self.output.interpolate(self.problem.displacement())
-        self._file.write_function(self.output, self.problem.load_factor if t is None else t)
+        self._file.write(self.problem.load_factor if t is None else t, [self.output], flush)
+
+    def flush(self) -> None:
+        self._file.flush()
 
     def __call__(self, step=None) -> None:
         self.write(None if step is None else step.load_factor)
