@@ -106,10 +106,18 @@ def _say(comm, text: str, stream=None) -> None:
         print(text, file=stream or sys.stdout, flush=True)
 
 
+def _warn_notes(comm, notes) -> None:
+    """The run's notes on stderr, each once (set-up warnings were printed when they arose)."""
+    from fe_beam.runctl import WARNED
+
+    for note in notes or []:
+        if note not in WARNED:
+            _say(comm, f"fe-beam: warning: {note}", sys.stderr)
+
+
 def _finish(comm, result, out) -> int:
     """The closing line of a static-type run, and its exit code."""
-    for note in getattr(result, "notes", None) or []:
-        _say(comm, f"fe-beam: warning: {note}", sys.stderr)
+    _warn_notes(comm, getattr(result, "notes", None))
     stability = result.steps[-1].get("stability") if result.steps else None
     if stability and not stability["stable"]:
         _say(comm, "fe-beam: warning: the final equilibrium is unstable (the tangent stiffness "
@@ -180,8 +188,7 @@ def run_dynamic(args, config: dict, comm) -> int:
         tip = last["tip"]
         _say(comm, f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, "
                    f"theta = {tip['theta']:.6g} rad")
-    for note in getattr(result, "notes", None) or []:
-        _say(comm, f"fe-beam: warning: {note}", sys.stderr)
+    _warn_notes(comm, getattr(result, "notes", None))
     _say(comm, f"{result.info.get('steps', len(result.history))} time steps, {result.dofs} dofs, "
                f"{result.info.get('wall_time_s', 0.0):.2f} s; results in {args.out}")
     if result.status != "completed":
@@ -480,7 +487,7 @@ def _main(argv: list[str] | None = None) -> int:
         notes.extend(check_command_tables(args.command, config))
         check_partition(config, comm.size, args.command)
         code = _run_locked(args, config, comm)
-        for note in notes:
+        for note in notes if code != EXIT_USAGE else []:  # a usage error is one sentence
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
         return code
 

@@ -189,12 +189,17 @@ class OutputSession:
         self.started = time.time()
         self._fd: int | None = None
         self._created = False
+        self._made: list[Path] = []
         self._cleared = False
         self.files: set[str] = set()
 
     def acquire(self) -> None:
         out = self.out
-        if not out.exists():
+        folder = out.absolute()
+        while not folder.exists():  # the folders this run makes, deepest first
+            self._made.append(folder)
+            folder = folder.parent
+        if self._made:
             out.mkdir(parents=True, exist_ok=True)
             self._created = True
         fd = os.open(out / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o666)
@@ -278,8 +283,9 @@ class OutputSession:
             for name in (LOCK_NAME, MANIFEST_NAME):
                 with contextlib.suppress(OSError):
                     (self.out / name).unlink()
-            with contextlib.suppress(OSError):
-                self.out.rmdir()
+            for folder in self._made:
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
 
 
 def register_output(path) -> None:
@@ -366,7 +372,11 @@ def check_work(steps: float | None, dofs: float | None, allow_large: bool,
     return notes + (problems if allow_large else [])
 
 
+WARNED: set[str] = set()  # notes already printed by `warn` (the CLI does not repeat them)
+
+
 def warn(comm, notes: list[str]) -> None:
+    WARNED.update(notes)
     if comm.rank == 0:
         for note in notes:
             print(f"fe-beam: warning: {note}", file=sys.stderr, flush=True)
