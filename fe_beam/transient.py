@@ -164,9 +164,23 @@ def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
     try:
         run.advance(1.0, static.stepping, progress=progress, label="static pre-state")
     except LoadSteppingFailed as failure:
-        raise DynamicsFailed(f"static pre-state: {failure}", 0.0) from None
+        raise PrestateFailed(f"static pre-state: {failure}", failure.last_load_factor) from None
     finally:
         run.destroy()
+
+
+class PrestateFailed(DynamicsFailed):
+    """The static pre-state of a dynamic or modal run could not be reached (no equilibrium,
+    or only inadmissible ones, beyond ``load_factor``, whose state the problem keeps)."""
+
+    def __init__(self, message: str, load_factor: float):
+        super().__init__(message, 0.0)
+        self.load_factor = load_factor
+
+
+def _prestate_record(problem: BeamProblem, failure: PrestateFailed) -> dict:
+    """The last converged pre-state (collective): its load factor and tip."""
+    return {"load_factor": failure.load_factor, "tip": problem.end_values("xL")}
 
 
 @dataclass
@@ -198,6 +212,21 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         except runctl.Interrupted as stop:
             stop.where = "the static pre-state (before the time stepping)"
             raise
+        except PrestateFailed as failure:
+            # no time stepping: the run failed (exit 3) with the last converged pre-state
+            # written (summary "prestate", beam.xdmf at t = 0)
+            result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
+                                   dofs=problem.global_dofs, notes=notes + watch.notes(),
+                                   strain_range=watch.summary())
+            prestate = _prestate_record(problem, failure)
+            files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+            writer = BeamXDMFWriter(problem, out / "beam.xdmf"
+                                    if out is not None and config.static.output.xdmf else None)
+            writer.write(0.0)
+            result.info["wall_time_s"] = time.perf_counter() - started
+            summary = _dynamic_summary(result, config, result.info["wall_time_s"])
+            files.finish(summary | {"prestate": prestate}, writer)
+            return result
     integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
                                   config.motion_function, config.static.solver)
     integrator.watch = watch
@@ -392,11 +421,23 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
     problem = BeamProblem(static.model, comm)
     if out is not None and comm.rank == 0:
         atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
+    watch = StrainWatch()
     if modes["prestress"]:
         try:
-            _static_prestate(problem, static, progress)
-        except DynamicsFailed as failure:
-            raise ConfigError(str(failure)) from None
+            _static_prestate(problem, static, progress, watch)
+        except PrestateFailed as failure:
+            # no equilibrium (or only inadmissible ones) beyond the last converged factor:
+            # the analysis failed (exit 3), no modes of a state that is not an equilibrium
+            summary = {"status": "failed", "message": str(failure),
+                       "prestate": _prestate_record(problem, failure), "frequencies_hz": [],
+                       "transverse_fraction": [], "prestress": True,
+                       "dofs": problem.global_dofs, "notes": watch.notes(),
+                       "strain_range": watch.summary(),
+                       "wall_time_s": time.perf_counter() - started}
+            runctl.warn(comm, watch.notes())
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+            return summary
         except runctl.Interrupted as stop:
             stop.where = "the static pre-state"
             if out is not None and comm.rank == 0:
@@ -413,6 +454,11 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                * problem.space.dofmap.index_map_bs,
                "wall_time_s": time.perf_counter() - started}
     summary.update(_modes_summary(result))
+    if modes["prestress"]:
+        # strains of the pre-state outside the range the model is meant for: warnings
+        summary["strain_range"] = watch.summary()
+        runctl.warn(comm, watch.notes())
+        summary["notes"] = watch.notes() + summary["notes"]
     if not static.output.xdmf:
         for mode in summary["unstable_modes"]:
             mode["shape"] = None  # [output] xdmf = false: no shapes written
