@@ -42,6 +42,7 @@ from petsc4py import PETSc
 from fe_beam import compat
 from fe_beam.beam import BeamProblem
 from fe_beam.mpi import assemble_scalar, global_max, global_sum
+from fe_beam.solver import SADDLE_POINT_WORKSPACE
 
 __all__ = ["Modes", "UnstableMode", "natural_frequencies", "ZERO_TOLERANCE"]
 
@@ -213,6 +214,9 @@ def _solve(SLEPc, K, M, sigma, nev, fixed, problem):
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
+    if problem.saddle_point:  # multiplier rows: pivoting beyond MUMPS's default workspace
+        option, percent = SADDLE_POINT_WORKSPACE
+        PETSc.Options()[f"fe_beam_modes_st_{option}"] = percent
     eps.setTolerances(1e-12, 200)
     eps.setFromOptions()
     eps.solve()
@@ -257,6 +261,8 @@ class _EigenvalueCounter:
             factor = pc.getFactorMatrix()
             factor.setMumpsIcntl(13, 1)  # global inertia on more than one rank
             factor.setMumpsIcntl(24, 1)  # null pivots counted apart (PETSc requires it)
+            if self.multipliers:  # pivoting beyond MUMPS's default workspace estimate
+                factor.setMumpsIcntl(14, SADDLE_POINT_WORKSPACE[1])
             pc.setUp()
             negative, _, _ = factor.getInertia()
         finally:

@@ -218,3 +218,21 @@ def test_rigid_and_unstable_modes_on_all_ranks():
     assert modes.unstable_count == 2
     expected = [euler_bernoulli_eigenvalue(h, n * math.pi / L, -P) for n in (1, 2)]
     assert [m.eigenvalue for m in modes.unstable] == pytest.approx(sorted(expected), rel=1e-4)
+
+
+def test_constrained_degree_1_fine_mesh_unstable_column():
+    """Inextensible-unshearable pinned column, degree 1 on 2001 elements, P = 1.5 P_E: the
+    shift-and-invert factorisation used to overrun MUMPS's workspace (an exception, no modes).
+    One unstable direction, omega_1^2 = (EI k^4 - P k^2)/(rho A + rho I k^2), and the second
+    wave's frequency."""
+    h = 0.01
+    euler = math.pi**2 * E * h**4 / 12 / L**2
+    P = 1.5 * euler
+    problem = prestressed(rod(h, PINNED, constraint="inextensible-unshearable",
+                              elements=2001, degree=1, loads=Loads(tip_force=(-P, 0.0))))
+    modes = natural_frequencies(problem, 1)
+    assert modes.unstable_count == 1 == len(modes.unstable)
+    for n, value in ((1, modes.unstable[0].eigenvalue), (2, modes.eigenvalues[0])):
+        k = n * math.pi / L
+        scale = euler_bernoulli_eigenvalue(h, k)
+        assert value == pytest.approx(euler_bernoulli_eigenvalue(h, k, -P), abs=1e-5 * scale), n
