@@ -213,7 +213,9 @@ def run_modes(args, config: dict, comm) -> int:
         label = "rigid body" if kind == "rigid" else kind
         _say(comm, f"mode {index}: {frequency:.6g} Hz ({label})")
     for index, mode in enumerate(summary.get("unstable_modes", []), start=1):
-        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g} rad^2/s^2 "
+        imag = mode.get("eigenvalue_imag") or 0.0  # flutter: a complex pair a +- i b
+        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g}"
+                   f"{f' +- {abs(imag):.6g} i' if imag else ''} rad^2/s^2 "
                    f"(growth rate {mode['growth_rate']:.6g} 1/s)")
     for note in summary.get("notes", []):
         if note in WARNED:

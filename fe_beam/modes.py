@@ -58,10 +58,20 @@ class UnstableMode:
     eigenvalue: float
     shape: fem.Function
     transverse_fraction: float
+    # imaginary part of omega^2 (non-symmetric stiffness, follower loads): a complex pair
+    # omega^2 = a +- i b, b != 0, is flutter: one root omega has Im < 0, the motion grows
+    eigenvalue_imag: float = 0.0
 
     @property
     def growth_rate(self) -> float:
+        """The largest |Im omega| of omega^2 = eigenvalue + i eigenvalue_imag [1/s]."""
+        if self.eigenvalue_imag:
+            return abs((complex(self.eigenvalue, self.eigenvalue_imag) ** 0.5).imag)
         return math.sqrt(max(-self.eigenvalue, 0.0))
+
+    @property
+    def kind(self) -> str:
+        return "flutter" if self.eigenvalue_imag else "divergence"
 
 
 @dataclass
@@ -141,14 +151,26 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     wanted_unstable = min(unstable_count, MAX_UNSTABLE) if unstable_count is not None else 0
     pairs = []
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
-    extra = 0
-    for _attempt in range(3):
-        nev = count + len(rigid) + wanted_unstable + extra
-        pairs = _solve(SLEPc, K, M, sigma, nev, fixed, problem)
+    extra = uncounted = 0
+    for _attempt in range(4):
+        nev = count + len(rigid) + wanted_unstable + extra + uncounted
+        pairs, imaginary = _solve(SLEPc, K, M, sigma, nev, fixed, problem)
         found_unstable = sum(1 for value, _ in pairs if value < -zero)
+        # without the inertia count (non-symmetric K) the unstable pairs found, complex
+        # (flutter) ones included, take places of the `count` frequencies: solve again
+        # with that many more
+        found_uncounted = (len(imaginary) + found_unstable) if unstable_count is None else 0
+        if found_uncounted > uncounted:
+            uncounted = found_uncounted
+            continue
         if unstable_count is None or found_unstable >= wanted_unstable:
             break
         extra = 2 * extra + 10  # a missed negative eigenvalue: widen the search
+    # complex pairs omega^2 = a +- i b (follower loads past the flutter load): one unstable
+    # (flutter) mode per pair, never listed as a frequency (each pair: keep the b > 0 member)
+    flutter = {id(shape) for _, shape in pairs if imaginary.get(id(shape), 0.0) > 0}
+    pairs = [(value, shape) for value, shape in pairs if imaginary.get(id(shape), 0.0) == 0
+             or id(shape) in flutter]
     shares = {id(shape): _rigid_share(shape, rigid, M) for _, shape in pairs}
     K.destroy()
     M.destroy()
@@ -163,8 +185,10 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         if len(is_rigid) < len(rigid):
             notes.append(f"the supports leave {len(rigid)} rigid-body motions but only "
                          f"{len(is_rigid)} were found among the computed modes")
-    found_unstable = sum(1 for value, shape in pairs
-                         if value < -zero and id(shape) not in is_rigid)
+    def unstable_pair(value, shape) -> bool:
+        return id(shape) in flutter or (value < -zero and id(shape) not in is_rigid)
+
+    found_unstable = sum(1 for value, shape in pairs if unstable_pair(value, shape))
     if unstable_count is None:
         unstable_count = found_unstable
     elif found_unstable < wanted_unstable:
@@ -172,14 +196,16 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                      f"eigensolver found {found_unstable}")
     for _, shape in pairs:
         _normalise(problem, shape)
-    unstable = [UnstableMode(value, shape, _transverse_share(problem, shape))
-                for value, shape in pairs if value < -zero and id(shape) not in is_rigid]
+    unstable = [UnstableMode(value, shape, _transverse_share(problem, shape),
+                             imaginary.get(id(shape), 0.0))
+                for value, shape in pairs if unstable_pair(value, shape)]
+    unstable.sort(key=lambda mode: -mode.growth_rate)
     unstable = unstable[:MAX_UNSTABLE]
     for index, mode in enumerate(unstable, start=1):
         mode.shape.name = f"unstable_{index}"
     rigid_pairs = [(0.0, shape) for _, shape in pairs if id(shape) in is_rigid]
     elastic = [(max(value, 0.0), shape) for value, shape in pairs
-               if value >= -zero and id(shape) not in is_rigid]
+               if not unstable_pair(value, shape) and id(shape) not in is_rigid]
     if any(value <= zero for value, _ in elastic[:count]):
         notes.append("an eigenvalue is zero within the tolerance (a neutral, critical direction: "
                      "the state is at a stability limit)")
@@ -220,20 +246,22 @@ def _solve(SLEPc, K, M, sigma, nev, fixed, problem):
     eps.setTolerances(1e-12, 200)
     eps.setFromOptions()
     eps.solve()
-    pairs = []
+    pairs, imaginary = [], {}
     vector = K.createVecRight()
     for i in range(eps.getConverged()):
-        value = eps.getEigenpair(i, vector).real
-        if math.isfinite(value) and not _lives_on_fixed_dofs(vector, fixed):
+        value = complex(eps.getEigenpair(i, vector))
+        if math.isfinite(value.real) and not _lives_on_fixed_dofs(vector, fixed):
             shape = fem.Function(problem.space)
             vector.copy(compat.vector_of(shape))
             compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
                                                 mode=PETSc.ScatterMode.FORWARD)
-            pairs.append((value, shape))
+            pairs.append((value.real, shape))
+            if value.imag != 0.0:  # a complex pair (only with a non-symmetric K)
+                imaginary[id(shape)] = value.imag
     vector.destroy()
     eps.destroy()
     pairs.sort(key=lambda pair: pair[0])
-    return pairs
+    return pairs, imaginary
 
 
 class _EigenvalueCounter:

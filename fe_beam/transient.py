@@ -488,14 +488,18 @@ def _modes_summary(result) -> dict:
     unstable direction (omega^2 < 0: eigenvalue, growth_rate = sqrt(-omega^2) [1/s], shape at
     time index k of unstable_modes.xdmf), stable, and notes (also warnings on stderr)."""
     unstable = [{"eigenvalue": mode.eigenvalue, "growth_rate": mode.growth_rate,
+                 "eigenvalue_imag": mode.eigenvalue_imag, "kind": mode.kind,
                  "transverse_fraction": mode.transverse_fraction,
                  "shape": {"file": "unstable_modes.xdmf", "index": index}}
                 for index, mode in enumerate(result.unstable, start=1)]
     notes = list(result.notes)
     if result.unstable_count:
         rates = ", ".join(f"{mode.growth_rate:.4g}" for mode in result.unstable[:5])
+        flutter = sum(1 for mode in result.unstable if mode.eigenvalue_imag)
+        kinds = (f"omega^2 < 0 or complex ({flutter} flutter)" if flutter
+                 else "omega^2 < 0")
         notes.insert(0, f"the state is unstable: {result.unstable_count} direction(s) with "
-                        f"omega^2 < 0 (growth rates {rates} 1/s); see unstable_modes")
+                        f"{kinds} (growth rates {rates} 1/s); see unstable_modes")
     if len(result.unstable) < result.unstable_count:
         notes.append(f"only the first {len(result.unstable)} of {result.unstable_count} unstable "
                      "directions are listed and written")

@@ -236,3 +236,29 @@ def test_constrained_degree_1_fine_mesh_unstable_column():
         k = n * math.pi / L
         scale = euler_bernoulli_eigenvalue(h, k)
         assert value == pytest.approx(euler_bernoulli_eigenvalue(h, k, -P), abs=1e-5 * scale), n
+
+
+@pytest.mark.parametrize(("factor", "flutter"), [(18.0, False), (22.0, True)])
+def test_follower_column_past_the_flutter_load_is_unstable(factor, flutter):
+    """Beck's column (cantilever under a compressive follower tip force P): no divergence,
+    but the two lowest eigenvalues omega^2 meet at P = 20.05 EI / L^2 and become a complex
+    pair a +- i b: flutter, a motion growing like exp(|Im omega| t). It used to be listed as
+    two equal real frequencies with stable = true."""
+    h, count = 0.01, 3
+    EI = E * h**4 / 12
+    problem = prestressed(rod(h, Supports("clamped", "free"), constraint="inextensible-unshearable",
+                              elements=20, loads=Loads(tip_force=(-factor * EI / L**2, 0.0),
+                                                       follower=True)))
+    modes = natural_frequencies(problem, count)
+    assert len(modes.frequencies_hz) == count
+    assert len(set(modes.frequencies_hz)) == count  # no coalesced pair listed as frequencies
+    if not flutter:
+        assert modes.unstable_count == 0 and modes.unstable == []
+        return
+    assert modes.unstable_count == 1 == len(modes.unstable)
+    mode = modes.unstable[0]
+    assert mode.kind == "flutter" and mode.eigenvalue_imag > 0
+    root = complex(mode.eigenvalue, mode.eigenvalue_imag) ** 0.5
+    assert mode.growth_rate == pytest.approx(abs(root.imag)) and mode.growth_rate > 0
+    # the pair lies below the next (third) cantilever-like eigenvalue, which stays real
+    assert 0 < mode.eigenvalue < modes.eigenvalues[0]
