@@ -220,6 +220,7 @@ def test_rigid_and_unstable_modes_on_all_ranks():
     assert [m.eigenvalue for m in modes.unstable] == pytest.approx(sorted(expected), rel=1e-4)
 
 
+@pytest.mark.mpi
 def test_constrained_degree_1_fine_mesh_unstable_column():
     """Inextensible-unshearable pinned column, degree 1 on 2001 elements, P = 1.5 P_E: the
     shift-and-invert factorisation used to overrun MUMPS's workspace (an exception, no modes).
@@ -238,6 +239,7 @@ def test_constrained_degree_1_fine_mesh_unstable_column():
         assert value == pytest.approx(euler_bernoulli_eigenvalue(h, k, -P), abs=1e-5 * scale), n
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize(("factor", "flutter"), [(18.0, False), (22.0, True)])
 def test_follower_column_past_the_flutter_load_is_unstable(factor, flutter):
     """Beck's column (cantilever under a compressive follower tip force P): no divergence,

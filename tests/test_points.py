@@ -187,6 +187,7 @@ def test_tendon_anchor_and_entry_are_single_vertices_on_a_fine_mesh():
         problem._check_breakpoints((0.5 + 0.3e-5,))
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("constraint", ["inextensible-unshearable"])
 def test_constrained_degree_1_fine_mesh_tip_moment(constraint):
     """Degree 1 with multipliers on a fine mesh (2001 elements): the saddle-point factorisation
