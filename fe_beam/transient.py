@@ -22,7 +22,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import compat, runctl
-from fe_beam.beam import BeamProblem, StrainWatch
+from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.outputs import (
@@ -305,8 +305,15 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         supports=supports[key], Px=loads.tip_force[0], Py=loads.tip_force[1],
         M=loads.tip_moment, qx=loads.distributed[0], qy=loads.distributed[1],
         load_time=config.load_function)
-    q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps) if config.from_static \
-        else None
+    q0 = None
+    if config.from_static:
+        try:
+            q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps)
+        except RuntimeError as error:  # no static equilibrium: the analysis failed
+            return _fd_failed(config, out, comm, params, f"static pre-state: {error}")
+        reason = _fd_strains(params, q0).inadmissible()
+        if reason:
+            return _fd_failed(config, out, comm, params, f"static pre-state: {reason}")
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
@@ -323,11 +330,48 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
                                      "wall_time_s": solution.wall_time},
                            "completed" if solution.success else "failed", solution.message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
+    # the explicit scheme has no step to reject: the outputs up to the first inadmissible
+    # state (1 + e <= 0 at a midpoint: turned inside out) are kept, and the run failed
+    watch = StrainWatch()
+    for index, q in enumerate(solution.q):
+        strains = _fd_strains(params, q)
+        reason = strains.inadmissible()
+        if reason:
+            last = history[index - 1]["t"] if index else 0.0
+            result.history = history[:index]
+            result.status = "failed"
+            result.message = (f"{reason} at t = {history[index]['t']:.6g} s; last admissible "
+                              f"time {last:.6g} s")
+            break
+        watch.observe(strains)
+    result.notes, result.strain_range = watch.notes(), watch.summary()
+    runctl.warn(comm, result.notes)
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         _write_dynamic(out, result, config, solution.wall_time)
         if config.static.output.plots:
             _plot_dynamic(out, result, [], config)
+    return result
+
+
+def _fd_strains(params, q) -> StrainRange:
+    """`StrainRange` of a state of the finite-difference scheme (its midpoint strains)."""
+    from fe_beam.baselines import fd_rk
+
+    st = fd_rk.midpoint_strains(params, q)
+    gamma = np.arctan2(st["g"], st["E1"])
+    return StrainRange(float(np.min(st["E1"])), float(np.max(np.abs(st["eps"]))),
+                       float(np.max(np.abs(gamma))))
+
+
+def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: str):
+    from fe_beam.baselines import fd_rk
+
+    result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
+                           dofs=int(fd_rk.free_dofs(params).sum()))
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        _write_dynamic(out, result, config, 0.0)
     return result
 
 

@@ -252,3 +252,35 @@ def test_modes_about_a_strongly_compressed_prestate_warn_about_the_strain(tmp_pa
     assert any("|eps| = 0.18" in note for note in summary["notes"]), summary["notes"]
     assert "warning: the axial strain reaches |eps| = 0.18" in err
     assert err.count("|eps| = 0.18") == 1
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_finite_difference_scheme_stops_at_the_first_inadmissible_state(tmp_path, capsys, law):
+    """The paper's FD + Runge-Kutta scheme (scheme = fd-rk45) has no step to reject: under a
+    sudden compression of 2 EA the wave front turns the tip intervals inside out within a few
+    outputs (1 + e = 1 - 2 on a linear front). It used to report every output, inside-out
+    ones included, as completed with exit 0; now the outputs stop at the last admissible one,
+    exit 3, with the strain warning."""
+    config = _config(law, [-2.0 * EA, 0.0], loads={"time_function": "1"},
+                     time={"t_end": 0.002, "dt": 0.0002, "scheme": "fd-rk45"},
+                     mesh={"elements": 5, "degree": 2})
+    code, err, summary = _run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 3, err
+    assert summary["status"] == "failed" and "inadmissible" in summary["message"]
+    assert 0 < len(summary["history"]) < 11
+    assert summary["strain_range"]["min_stretch"] > 0
+    # the tip of the last admissible output has not passed through its neighbour node
+    assert summary["history"][-1]["tip"]["u"] > -0.2
+    assert "warning" in err and "|eps|" in err
+
+
+def test_finite_difference_scheme_without_static_pre_state_exit_3(tmp_path, capsys):
+    """fd-rk45 from a static pre-state beyond the non-standard axial limit (0.3 EA >
+    EA / (3 sqrt 3)): exit 3 and status failed (it used to be an internal error, exit 1)."""
+    config = _config("nonstandard", [-0.3 * EA, 0.0], loads={"time_function": "1"},
+                     time={"t_end": 0.002, "dt": 0.0002, "scheme": "fd-rk45"},
+                     initial={"from_static": True}, mesh={"elements": 5, "degree": 2})
+    code, err, summary = _run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 3, err
+    assert "internal error" not in err and "Traceback" not in err
+    assert summary["status"] == "failed" and "static pre-state" in summary["message"]
