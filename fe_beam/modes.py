@@ -159,7 +159,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         # without the inertia count (non-symmetric K) the unstable pairs found, complex
         # (flutter) ones included, take places of the `count` frequencies: solve again
         # with that many more
-        found_uncounted = (len(imaginary) + found_unstable) if unstable_count is None else 0
+        found_uncounted = len(imaginary) + (found_unstable if unstable_count is None else 0)
         if found_uncounted > uncounted:
             uncounted = found_uncounted
             continue
@@ -168,7 +168,18 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         extra = 2 * extra + 10  # a missed negative eigenvalue: widen the search
     # complex pairs omega^2 = a +- i b (follower loads past the flutter load): one unstable
     # (flutter) mode per pair, never listed as a frequency (each pair: keep the b > 0 member)
+    # With a symmetric K (conservative loads) the eigenvalues are real: a complex pair there
+    # is an artefact of the singular mass (multiplier and Dirichlet rows), high in the
+    # spectrum: dropped, with a note.
     flutter = {id(shape) for _, shape in pairs if imaginary.get(id(shape), 0.0) > 0}
+    if symmetric and not rigid:
+        # the shift lies below every eigenvalue (counted by inertia): a pair below it is an
+        # artefact of the singular mass too (rigid modes' round-off may lie anywhere near 0)
+        pairs = [(value, shape) for value, shape in pairs if value >= sigma * (1 + 1e-9)]
+    if symmetric and flutter:
+        notes.append(f"{len(flutter)} complex eigenvalue pair(s) of the symmetric problem "
+                     "(spurious, from the singular mass of the constraint rows) were left out")
+        flutter = set()
     pairs = [(value, shape) for value, shape in pairs if imaginary.get(id(shape), 0.0) == 0
              or id(shape) in flutter]
     shares = {id(shape): _rigid_share(shape, rigid, M) for _, shape in pairs}

@@ -264,3 +264,27 @@ def test_follower_column_past_the_flutter_load_is_unstable(factor, flutter):
     assert mode.growth_rate == pytest.approx(abs(root.imag)) and mode.growth_rate > 0
     # the pair lies below the next (third) cantilever-like eigenvalue, which stays real
     assert 0 < mode.eigenvalue < modes.eigenvalues[0]
+
+
+@pytest.mark.mpi
+def test_many_modes_of_a_constrained_column_list_no_spurious_unstable_modes():
+    """Unshearable pinned column at 3.5 P_E, 50 modes: the pencil's singular mass (multiplier
+    rows) gives complex and far negative artefacts high in the spectrum; exactly the one
+    unstable direction (inertia count) is listed, at omega^2 = (EI k^4 - P k^2)/(rho A +
+    rho I k^2), k = pi / L, and every listed frequency is real and ascending."""
+    h, steel, density = 0.01, 2.0e11, 7850.0  # steel: K's scale far from the unit BC rows
+    EI, rho_area, rho_inertia = steel * h**4 / 12, density * h * h, density * h**4 / 12
+    P = 3.5 * math.pi**2 * EI / L**2
+    model = BeamModel(L, square(h), Material(steel, nu=0.3, rho=density),
+                      ModelOptions("reissner", "unshearable"), Discretisation(200, 2), PINNED,
+                      Loads(tip_force=(-P, 0.0)))
+    problem = prestressed(BeamProblem(model, MPI.COMM_WORLD))
+    modes = natural_frequencies(problem, 50)
+    assert modes.unstable_count == 1 == len(modes.unstable)
+    k = math.pi / L
+    expected = (EI * k**4 - P * k**2) / (rho_area + rho_inertia * k**2)
+    assert modes.unstable[0].eigenvalue == pytest.approx(expected, abs=1e-3 * EI * k**4 / rho_area)
+    assert modes.unstable[0].eigenvalue_imag == 0.0
+    assert len(modes.frequencies_hz) == 50
+    assert all(a < b for a, b in zip(modes.eigenvalues, modes.eigenvalues[1:], strict=False))
+    assert modes.eigenvalues[0] > 0
