@@ -198,10 +198,14 @@ def run_dynamic(args, config: dict, comm) -> int:
 
 
 def run_modes(args, config: dict, comm) -> int:
+    from fe_beam.runctl import WARNED
     from fe_beam.transient import parse_modes, run_modes
 
     static, modes = parse_modes(config)
     summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
+    if summary["status"] == "failed":  # the static pre-state was not reached
+        _say(comm, f"fe-beam modes: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
     kinds = summary.get("mode_kinds") or [
         "bending" if share > 0.5 else "axial" for share in summary["transverse_fraction"]]
     for index, (frequency, kind) in enumerate(zip(summary["frequencies_hz"], kinds, strict=True),
@@ -209,9 +213,13 @@ def run_modes(args, config: dict, comm) -> int:
         label = "rigid body" if kind == "rigid" else kind
         _say(comm, f"mode {index}: {frequency:.6g} Hz ({label})")
     for index, mode in enumerate(summary.get("unstable_modes", []), start=1):
-        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g} rad^2/s^2 "
+        imag = mode.get("eigenvalue_imag") or 0.0  # flutter: a complex pair a +- i b
+        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g}"
+                   f"{f' +- {abs(imag):.6g} i' if imag else ''} rad^2/s^2 "
                    f"(growth rate {mode['growth_rate']:.6g} 1/s)")
     for note in summary.get("notes", []):
+        if note in WARNED:
+            continue  # printed as a warning when it arose
         kind = "warning" if note.startswith("the state is unstable") else "note"
         _say(comm, f"fe-beam modes: {kind}: {note}", sys.stderr)
     found = len(summary["frequencies_hz"])

@@ -42,6 +42,7 @@ from petsc4py import PETSc
 from fe_beam import compat
 from fe_beam.beam import BeamProblem
 from fe_beam.mpi import assemble_scalar, global_max, global_sum
+from fe_beam.solver import SADDLE_POINT_WORKSPACE
 
 __all__ = ["Modes", "UnstableMode", "natural_frequencies", "ZERO_TOLERANCE"]
 
@@ -57,10 +58,20 @@ class UnstableMode:
     eigenvalue: float
     shape: fem.Function
     transverse_fraction: float
+    # imaginary part of omega^2 (non-symmetric stiffness, follower loads): a complex pair
+    # omega^2 = a +- i b, b != 0, is flutter: one root omega has Im < 0, the motion grows
+    eigenvalue_imag: float = 0.0
 
     @property
     def growth_rate(self) -> float:
+        """The largest |Im omega| of omega^2 = eigenvalue + i eigenvalue_imag [1/s]."""
+        if self.eigenvalue_imag:
+            return abs((complex(self.eigenvalue, self.eigenvalue_imag) ** 0.5).imag)
         return math.sqrt(max(-self.eigenvalue, 0.0))
+
+    @property
+    def kind(self) -> str:
+        return "flutter" if self.eigenvalue_imag else "divergence"
 
 
 @dataclass
@@ -140,14 +151,37 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     wanted_unstable = min(unstable_count, MAX_UNSTABLE) if unstable_count is not None else 0
     pairs = []
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
-    extra = 0
-    for _attempt in range(3):
-        nev = count + len(rigid) + wanted_unstable + extra
-        pairs = _solve(SLEPc, K, M, sigma, nev, fixed, problem)
+    extra = uncounted = 0
+    for _attempt in range(4):
+        nev = count + len(rigid) + wanted_unstable + extra + uncounted
+        pairs, imaginary = _solve(SLEPc, K, M, sigma, nev, fixed, problem, symmetric)
         found_unstable = sum(1 for value, _ in pairs if value < -zero)
+        # without the inertia count (non-symmetric K) the unstable pairs found, complex
+        # (flutter) ones included, take places of the `count` frequencies: solve again
+        # with that many more
+        found_uncounted = len(imaginary) + (found_unstable if unstable_count is None else 0)
+        if found_uncounted > uncounted:
+            uncounted = found_uncounted
+            continue
         if unstable_count is None or found_unstable >= wanted_unstable:
             break
         extra = 2 * extra + 10  # a missed negative eigenvalue: widen the search
+    # complex pairs omega^2 = a +- i b (follower loads past the flutter load): one unstable
+    # (flutter) mode per pair, never listed as a frequency (each pair: keep the b > 0 member)
+    # With a symmetric K (conservative loads) the eigenvalues are real: a complex pair there
+    # is an artefact of the singular mass (multiplier and Dirichlet rows), high in the
+    # spectrum: dropped, with a note.
+    flutter = {id(shape) for _, shape in pairs if imaginary.get(id(shape), 0.0) > 0}
+    if symmetric and not rigid:
+        # the shift lies below every eigenvalue (counted by inertia): a pair below it is an
+        # artefact of the singular mass too (rigid modes' round-off may lie anywhere near 0)
+        pairs = [(value, shape) for value, shape in pairs if value >= sigma * (1 + 1e-9)]
+    if symmetric and flutter:
+        notes.append(f"{len(flutter)} complex eigenvalue pair(s) of the symmetric problem "
+                     "(spurious, from the singular mass of the constraint rows) were left out")
+        flutter = set()
+    pairs = [(value, shape) for value, shape in pairs if imaginary.get(id(shape), 0.0) == 0
+             or id(shape) in flutter]
     shares = {id(shape): _rigid_share(shape, rigid, M) for _, shape in pairs}
     K.destroy()
     M.destroy()
@@ -162,8 +196,10 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         if len(is_rigid) < len(rigid):
             notes.append(f"the supports leave {len(rigid)} rigid-body motions but only "
                          f"{len(is_rigid)} were found among the computed modes")
-    found_unstable = sum(1 for value, shape in pairs
-                         if value < -zero and id(shape) not in is_rigid)
+    def unstable_pair(value, shape) -> bool:
+        return id(shape) in flutter or (value < -zero and id(shape) not in is_rigid)
+
+    found_unstable = sum(1 for value, shape in pairs if unstable_pair(value, shape))
     if unstable_count is None:
         unstable_count = found_unstable
     elif found_unstable < wanted_unstable:
@@ -171,14 +207,16 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                      f"eigensolver found {found_unstable}")
     for _, shape in pairs:
         _normalise(problem, shape)
-    unstable = [UnstableMode(value, shape, _transverse_share(problem, shape))
-                for value, shape in pairs if value < -zero and id(shape) not in is_rigid]
+    unstable = [UnstableMode(value, shape, _transverse_share(problem, shape),
+                             imaginary.get(id(shape), 0.0))
+                for value, shape in pairs if unstable_pair(value, shape)]
+    unstable.sort(key=lambda mode: -mode.growth_rate)
     unstable = unstable[:MAX_UNSTABLE]
     for index, mode in enumerate(unstable, start=1):
         mode.shape.name = f"unstable_{index}"
     rigid_pairs = [(0.0, shape) for _, shape in pairs if id(shape) in is_rigid]
     elastic = [(max(value, 0.0), shape) for value, shape in pairs
-               if value >= -zero and id(shape) not in is_rigid]
+               if not unstable_pair(value, shape) and id(shape) not in is_rigid]
     if any(value <= zero for value, _ in elastic[:count]):
         notes.append("an eigenvalue is zero within the tolerance (a neutral, critical direction: "
                      "the state is at a stability limit)")
@@ -196,13 +234,19 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                  unstable_count=int(unstable_count), notes=notes)
 
 
-def _solve(SLEPc, K, M, sigma, nev, fixed, problem):
+def _solve(SLEPc, K, M, sigma, nev, fixed, problem, symmetric=False):
     """Eigenpairs nearest the shift ``sigma`` (below every eigenvalue: the lowest ones),
-    ascending, without the spurious pairs of the Dirichlet rows."""
+    ascending, without the spurious pairs of the Dirichlet rows.
+
+    A symmetric K is solved as a generalised Hermitian problem: with the singular mass
+    (Dirichlet and multiplier rows) the non-Hermitian solver returns wrong eigenvalues high in
+    the spectrum (e.g. the 45th-50th of a constrained column off by 1-15 %, and different on
+    1 and 2 ranks), the Hermitian one with SLEPc's purification the exact ones."""
     eps = SLEPc.EPS().create(problem.comm)
     eps.setOptionsPrefix("fe_beam_modes_")
     eps.setOperators(K, M)
-    eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP if symmetric
+                       else SLEPc.EPS.ProblemType.GNHEP)
     eps.setDimensions(nev, max(2 * nev + 1, nev + 10))
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
     eps.setTarget(sigma)
@@ -213,23 +257,28 @@ def _solve(SLEPc, K, M, sigma, nev, fixed, problem):
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
+    if problem.saddle_point:  # multiplier rows: pivoting beyond MUMPS's default workspace
+        option, percent = SADDLE_POINT_WORKSPACE
+        PETSc.Options()[f"fe_beam_modes_st_{option}"] = percent
     eps.setTolerances(1e-12, 200)
     eps.setFromOptions()
     eps.solve()
-    pairs = []
+    pairs, imaginary = [], {}
     vector = K.createVecRight()
     for i in range(eps.getConverged()):
-        value = eps.getEigenpair(i, vector).real
-        if math.isfinite(value) and not _lives_on_fixed_dofs(vector, fixed):
+        value = complex(eps.getEigenpair(i, vector))
+        if math.isfinite(value.real) and not _lives_on_fixed_dofs(vector, fixed):
             shape = fem.Function(problem.space)
             vector.copy(compat.vector_of(shape))
             compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
                                                 mode=PETSc.ScatterMode.FORWARD)
-            pairs.append((value, shape))
+            pairs.append((value.real, shape))
+            if value.imag != 0.0:  # a complex pair (only with a non-symmetric K)
+                imaginary[id(shape)] = value.imag
     vector.destroy()
     eps.destroy()
     pairs.sort(key=lambda pair: pair[0])
-    return pairs
+    return pairs, imaginary
 
 
 class _EigenvalueCounter:
@@ -257,6 +306,8 @@ class _EigenvalueCounter:
             factor = pc.getFactorMatrix()
             factor.setMumpsIcntl(13, 1)  # global inertia on more than one rank
             factor.setMumpsIcntl(24, 1)  # null pivots counted apart (PETSc requires it)
+            if self.multipliers:  # pivoting beyond MUMPS's default workspace estimate
+                factor.setMumpsIcntl(14, SADDLE_POINT_WORKSPACE[1])
             pc.setUp()
             negative, _, _ = factor.getInertia()
         finally:

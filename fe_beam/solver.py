@@ -93,10 +93,17 @@ class SolverSettings:
     def for_problem(self, saddle_point: bool, comm) -> SolverSettings:
         """These settings with "auto" resolved for a problem: PETSc's LU (no pivoting) only
         for a serial system without multiplier rows (zero diagonal), MUMPS otherwise."""
-        if self.linear_solver != "auto":
-            return self
-        serial_spd_like = comm.size == 1 and not saddle_point
-        return replace(self, linear_solver="lu" if serial_spd_like else "mumps")
+        settings = self
+        if self.linear_solver == "auto":
+            serial_spd_like = comm.size == 1 and not saddle_point
+            settings = replace(self, linear_solver="lu" if serial_spd_like else "mumps")
+        if saddle_point and settings.linear_solver in ("auto", "mumps"):
+            # the pivoting that the zero diagonal of the multiplier rows needs overruns MUMPS's
+            # default workspace estimate (+20%) on fine meshes (degree 1, inextensible-
+            # unshearable, from ~1000 elements: INFOG(1) = -9, "DIVERGED_LINEAR_SOLVE")
+            options = {SADDLE_POINT_WORKSPACE[0]: SADDLE_POINT_WORKSPACE[1]}
+            settings = replace(settings, petsc_options=options | dict(settings.petsc_options))
+        return settings
 
     def options(self) -> dict:
         """PETSc options (without prefix): defaults first, the user's options over them."""
@@ -124,6 +131,9 @@ class SolverSettings:
         opts |= {str(k): v for k, v in self.petsc_options.items()}
         return opts
 
+
+# MUMPS ICNTL(14): percentage by which the factorisation workspace may exceed its estimate
+SADDLE_POINT_WORKSPACE = ("mat_mumps_icntl_14", 100)
 
 _PETSC_ERRORS = {56: "not supported", 62: "invalid argument", 63: "out of range or not a "
                  "number", 86: "unknown type"}

@@ -26,7 +26,7 @@ from petsc4py import PETSc
 
 from fe_beam import compat
 from fe_beam.mpi import assemble_scalar
-from fe_beam.solver import SNESSolver, SolveFailed
+from fe_beam.solver import SADDLE_POINT_WORKSPACE, SNESSolver, SolveFailed
 
 __all__ = ["PullInSolver", "Tendon", "TendonSet", "looped_tendon", "tendon_length_density"]
 
@@ -291,6 +291,9 @@ class PullInSolver:
         ksp.setType("preonly")
         ksp.getPC().setType("lu")
         ksp.getPC().setFactorSolverType("mumps")
+        # multiplier rows (constraints) need pivoting beyond MUMPS's default workspace
+        ksp.getPC().setFactorSetUpSolverType()
+        ksp.getPC().getFactorMatrix().setMumpsIcntl(14, SADDLE_POINT_WORKSPACE[1])
         gradients = [self.tendons.gradient(i, problem.bcs) for i in self.controlled]
         response = gradients[0].duplicate()
         size = len(self.controlled)

@@ -22,7 +22,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import compat, runctl
-from fe_beam.beam import BeamProblem, StrainWatch
+from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.outputs import (
@@ -164,9 +164,23 @@ def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
     try:
         run.advance(1.0, static.stepping, progress=progress, label="static pre-state")
     except LoadSteppingFailed as failure:
-        raise DynamicsFailed(f"static pre-state: {failure}", 0.0) from None
+        raise PrestateFailed(f"static pre-state: {failure}", failure.last_load_factor) from None
     finally:
         run.destroy()
+
+
+class PrestateFailed(DynamicsFailed):
+    """The static pre-state of a dynamic or modal run could not be reached (no equilibrium,
+    or only inadmissible ones, beyond ``load_factor``, whose state the problem keeps)."""
+
+    def __init__(self, message: str, load_factor: float):
+        super().__init__(message, 0.0)
+        self.load_factor = load_factor
+
+
+def _prestate_record(problem: BeamProblem, failure: PrestateFailed) -> dict:
+    """The last converged pre-state (collective): its load factor and tip."""
+    return {"load_factor": failure.load_factor, "tip": problem.end_values("xL")}
 
 
 @dataclass
@@ -198,6 +212,21 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         except runctl.Interrupted as stop:
             stop.where = "the static pre-state (before the time stepping)"
             raise
+        except PrestateFailed as failure:
+            # no time stepping: the run failed (exit 3) with the last converged pre-state
+            # written (summary "prestate", beam.xdmf at t = 0)
+            result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
+                                   dofs=problem.global_dofs, notes=notes + watch.notes(),
+                                   strain_range=watch.summary())
+            prestate = _prestate_record(problem, failure)
+            files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+            writer = BeamXDMFWriter(problem, out / "beam.xdmf"
+                                    if out is not None and config.static.output.xdmf else None)
+            writer.write(0.0)
+            result.info["wall_time_s"] = time.perf_counter() - started
+            summary = _dynamic_summary(result, config, result.info["wall_time_s"])
+            files.finish(summary | {"prestate": prestate}, writer)
+            return result
     integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
                                   config.motion_function, config.static.solver)
     integrator.watch = watch
@@ -276,8 +305,15 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         supports=supports[key], Px=loads.tip_force[0], Py=loads.tip_force[1],
         M=loads.tip_moment, qx=loads.distributed[0], qy=loads.distributed[1],
         load_time=config.load_function)
-    q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps) if config.from_static \
-        else None
+    q0 = None
+    if config.from_static:
+        try:
+            q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps)
+        except RuntimeError as error:  # no static equilibrium: the analysis failed
+            return _fd_failed(config, out, comm, params, f"static pre-state: {error}")
+        reason = _fd_strains(params, q0).inadmissible()
+        if reason:
+            return _fd_failed(config, out, comm, params, f"static pre-state: {reason}")
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
@@ -294,11 +330,48 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
                                      "wall_time_s": solution.wall_time},
                            "completed" if solution.success else "failed", solution.message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
+    # the explicit scheme has no step to reject: the outputs up to the first inadmissible
+    # state (1 + e <= 0 at a midpoint: turned inside out) are kept, and the run failed
+    watch = StrainWatch()
+    for index, q in enumerate(solution.q):
+        strains = _fd_strains(params, q)
+        reason = strains.inadmissible()
+        if reason:
+            last = history[index - 1]["t"] if index else 0.0
+            result.history = history[:index]
+            result.status = "failed"
+            result.message = (f"{reason} at t = {history[index]['t']:.6g} s; last admissible "
+                              f"time {last:.6g} s")
+            break
+        watch.observe(strains)
+    result.notes, result.strain_range = watch.notes(), watch.summary()
+    runctl.warn(comm, result.notes)
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         _write_dynamic(out, result, config, solution.wall_time)
         if config.static.output.plots:
             _plot_dynamic(out, result, [], config)
+    return result
+
+
+def _fd_strains(params, q) -> StrainRange:
+    """`StrainRange` of a state of the finite-difference scheme (its midpoint strains)."""
+    from fe_beam.baselines import fd_rk
+
+    st = fd_rk.midpoint_strains(params, q)
+    gamma = np.arctan2(st["g"], st["E1"])
+    return StrainRange(float(np.min(st["E1"])), float(np.max(np.abs(st["eps"]))),
+                       float(np.max(np.abs(gamma))))
+
+
+def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: str):
+    from fe_beam.baselines import fd_rk
+
+    result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
+                           dofs=int(fd_rk.free_dofs(params).sum()))
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        _write_dynamic(out, result, config, 0.0)
     return result
 
 
@@ -392,11 +465,23 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
     problem = BeamProblem(static.model, comm)
     if out is not None and comm.rank == 0:
         atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
+    watch = StrainWatch()
     if modes["prestress"]:
         try:
-            _static_prestate(problem, static, progress)
-        except DynamicsFailed as failure:
-            raise ConfigError(str(failure)) from None
+            _static_prestate(problem, static, progress, watch)
+        except PrestateFailed as failure:
+            # no equilibrium (or only inadmissible ones) beyond the last converged factor:
+            # the analysis failed (exit 3), no modes of a state that is not an equilibrium
+            summary = {"status": "failed", "message": str(failure),
+                       "prestate": _prestate_record(problem, failure), "frequencies_hz": [],
+                       "transverse_fraction": [], "prestress": True,
+                       "dofs": problem.global_dofs, "notes": watch.notes(),
+                       "strain_range": watch.summary(),
+                       "wall_time_s": time.perf_counter() - started}
+            runctl.warn(comm, watch.notes())
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+            return summary
         except runctl.Interrupted as stop:
             stop.where = "the static pre-state"
             if out is not None and comm.rank == 0:
@@ -413,6 +498,11 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                * problem.space.dofmap.index_map_bs,
                "wall_time_s": time.perf_counter() - started}
     summary.update(_modes_summary(result))
+    if modes["prestress"]:
+        # strains of the pre-state outside the range the model is meant for: warnings
+        summary["strain_range"] = watch.summary()
+        runctl.warn(comm, watch.notes())
+        summary["notes"] = watch.notes() + summary["notes"]
     if not static.output.xdmf:
         for mode in summary["unstable_modes"]:
             mode["shape"] = None  # [output] xdmf = false: no shapes written
@@ -442,14 +532,18 @@ def _modes_summary(result) -> dict:
     unstable direction (omega^2 < 0: eigenvalue, growth_rate = sqrt(-omega^2) [1/s], shape at
     time index k of unstable_modes.xdmf), stable, and notes (also warnings on stderr)."""
     unstable = [{"eigenvalue": mode.eigenvalue, "growth_rate": mode.growth_rate,
+                 "eigenvalue_imag": mode.eigenvalue_imag, "kind": mode.kind,
                  "transverse_fraction": mode.transverse_fraction,
                  "shape": {"file": "unstable_modes.xdmf", "index": index}}
                 for index, mode in enumerate(result.unstable, start=1)]
     notes = list(result.notes)
     if result.unstable_count:
         rates = ", ".join(f"{mode.growth_rate:.4g}" for mode in result.unstable[:5])
+        flutter = sum(1 for mode in result.unstable if mode.eigenvalue_imag)
+        kinds = (f"omega^2 < 0 or complex ({flutter} flutter)" if flutter
+                 else "omega^2 < 0")
         notes.insert(0, f"the state is unstable: {result.unstable_count} direction(s) with "
-                        f"omega^2 < 0 (growth rates {rates} 1/s); see unstable_modes")
+                        f"{kinds} (growth rates {rates} 1/s); see unstable_modes")
     if len(result.unstable) < result.unstable_count:
         notes.append(f"only the first {len(result.unstable)} of {result.unstable_count} unstable "
                      "directions are listed and written")

@@ -28,6 +28,7 @@ from fe_beam import (
     Section,
     SolverSettings,
     Supports,
+    runctl,
 )
 from fe_beam.beam import StrainRange
 from fe_beam.cli import main
@@ -88,6 +89,7 @@ def _run_cli(tmp_path, command, config, capsys):
     path.write_text(dump_toml(config))
     out = tmp_path / "out"
     capsys.readouterr()
+    runctl.WARNED.clear()  # one CLI run per process: notes warned by an earlier test print again
     code = main([command, str(path), "--out", str(out), "--quiet"])
     return code, capsys.readouterr().err, json.loads((out / "summary.json").read_text())
 
@@ -204,3 +206,81 @@ def test_finger_compressed_past_its_stretch_stops_at_the_last_admissible_factor(
     assert "inadmissible" in summary["message"]
     assert summary["steps"][-1]["load_factor"] == pytest.approx(_last_factor(err), rel=1e-5)
     assert summary["strain_range"]["min_stretch"] > 0
+
+
+def _column_modes_config(law: str, factor: float) -> dict:
+    config = _config(law, [-factor * EA, 0.0], mesh={"elements": 8, "degree": 2})
+    config["modes"] = {"count": 3, "prestress": True}
+    return config
+
+
+@pytest.mark.parametrize("command", ["modes", "dynamic"])
+def test_prestate_past_the_axial_limit_fails_with_exit_3(tmp_path, capsys, command):
+    """A modal or dynamic run about a static pre-state that has no admissible equilibrium
+    (non-standard, P = 0.3 EA > EA / (3 sqrt 3)) is an analysis that did not complete: exit 3
+    (not a configuration error, not an internal error), status failed, the last converged
+    pre-state's load factor (just below 0.1925 / 0.3) named and written."""
+    config = _column_modes_config("nonstandard", 0.3)
+    if command == "dynamic":
+        config["initial"] = {"from_static": True}
+        config["time"] = {"t_end": 0.01, "dt": 0.001}
+        config["loads"]["time_function"] = "1"
+    code, err, summary = _run_cli(tmp_path, command, config, capsys)
+    assert code == 3, err
+    assert "Traceback" not in err and "internal error" not in err and "error in" not in err
+    assert summary["status"] == "failed"
+    last = _last_factor(summary["message"])
+    limit = 1 / (3 * math.sqrt(3)) / 0.3
+    assert 0.97 * limit < last <= limit
+    assert summary["prestate"]["load_factor"] == pytest.approx(last, rel=1e-5)
+    # straight compression: e = u' uniform, the tip shortening of the last admissible state
+    assert -1.0 < summary["prestate"]["tip"]["u"] < 0
+    assert summary["strain_range"]["min_stretch"] > 0
+    assert any("|eps|" in note for note in summary["notes"])
+    assert "warning" in err and "|eps|" in err
+    if command == "modes":
+        assert summary["frequencies_hz"] == []
+
+
+def test_modes_about_a_strongly_compressed_prestate_warn_about_the_strain(tmp_path, capsys):
+    """Reissner, P = 0.2 EA: e = -0.2, eps = ((0.8)^2 - 1) / 2 = -0.18 in the pre-state: the
+    modes are computed (exit 0) but the strain is reported (summary notes + stderr warning)."""
+    code, err, summary = _run_cli(tmp_path, "modes", _column_modes_config("reissner", 0.2),
+                                  capsys)
+    assert code == 0, err
+    assert summary["strain_range"]["max_abs_eps"] == pytest.approx(0.18, rel=1e-6)
+    assert any("|eps| = 0.18" in note for note in summary["notes"]), summary["notes"]
+    assert "warning: the axial strain reaches |eps| = 0.18" in err
+    assert err.count("|eps| = 0.18") == 1
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_finite_difference_scheme_stops_at_the_first_inadmissible_state(tmp_path, capsys, law):
+    """The paper's FD + Runge-Kutta scheme (scheme = fd-rk45) has no step to reject: under a
+    sudden compression of 2 EA the wave front turns the tip intervals inside out within a few
+    outputs (1 + e = 1 - 2 on a linear front). It used to report every output, inside-out
+    ones included, as completed with exit 0; now the outputs stop at the last admissible one,
+    exit 3, with the strain warning."""
+    config = _config(law, [-2.0 * EA, 0.0], loads={"time_function": "1"},
+                     time={"t_end": 0.002, "dt": 0.0002, "scheme": "fd-rk45"},
+                     mesh={"elements": 5, "degree": 2})
+    code, err, summary = _run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 3, err
+    assert summary["status"] == "failed" and "inadmissible" in summary["message"]
+    assert 0 < len(summary["history"]) < 11
+    assert summary["strain_range"]["min_stretch"] > 0
+    # the tip of the last admissible output has not passed through its neighbour node
+    assert summary["history"][-1]["tip"]["u"] > -0.2
+    assert "warning" in err and "|eps|" in err
+
+
+def test_finite_difference_scheme_without_static_pre_state_exit_3(tmp_path, capsys):
+    """fd-rk45 from a static pre-state beyond the non-standard axial limit (0.3 EA >
+    EA / (3 sqrt 3)): exit 3 and status failed (it used to be an internal error, exit 1)."""
+    config = _config("nonstandard", [-0.3 * EA, 0.0], loads={"time_function": "1"},
+                     time={"t_end": 0.002, "dt": 0.0002, "scheme": "fd-rk45"},
+                     initial={"from_static": True}, mesh={"elements": 5, "degree": 2})
+    code, err, summary = _run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 3, err
+    assert "internal error" not in err and "Traceback" not in err
+    assert summary["status"] == "failed" and "static pre-state" in summary["message"]

@@ -185,3 +185,18 @@ def test_tendon_anchor_and_entry_are_single_vertices_on_a_fine_mesh():
     assert set(problem.point_values(0.87654321)) == {"u", "v", "theta"}
     with pytest.raises(RuntimeError, match="mesh vertices instead of exactly one"):
         problem._check_breakpoints((0.5 + 0.3e-5,))
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("constraint", ["inextensible-unshearable"])
+def test_constrained_degree_1_fine_mesh_tip_moment(constraint):
+    """Degree 1 with multipliers on a fine mesh (2001 elements): the saddle-point factorisation
+    used to overrun MUMPS's workspace (INFOG(1) = -9) from ~1000 elements and the run stopped
+    at load factor 0. The tip of the circle of curvature k = M / EI: theta = kL exactly,
+    v = (1 - cos kL)/k and u = sin(kL)/k - L to the midpoint rule's (kh)^2 / 24."""
+    k = 0.5
+    model = cantilever("reissner", constraint, elements=2001, degree=1, tip_moment=k * EI)
+    end = _tip(model)
+    assert end["theta"] == pytest.approx(k, rel=1e-8)
+    assert end["v"] == pytest.approx((1 - math.cos(k)) / k, rel=1e-6)
+    assert end["u"] == pytest.approx(math.sin(k) / k - 1, rel=1e-5)
