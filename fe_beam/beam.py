@@ -293,10 +293,11 @@ class StrainRange:
                          f"{GAMMA_WARNING:g}: far outside the range the laws are meant for")
         limit = 1 - BENDING_FRACTION**2
         if self.min_bending_tangent is not None and self.min_bending_tangent < limit:
-            notes.append(f"the curvature exceeds {BENDING_FRACTION:.0%} of the non-standard "
-                         "law's limit curvature (bending tangent down to "
-                         f"{max(self.min_bending_tangent, 0.0):.3g} EI): near the largest "
-                         "moment the section can carry, beyond which there is no equilibrium")
+            notes.append("the non-standard law's bending tangent drops to "
+                         f"{max(self.min_bending_tangent, 0.0):.3g} EI (< {limit:.2g} EI: the "
+                         f"curvature beyond {BENDING_FRACTION:.0%} of the law's limit curvature, "
+                         "or strong axial compression): near the limit point of the law, "
+                         "beyond which there is no equilibrium")
         return notes
 
 

@@ -202,6 +202,14 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     found_unstable = sum(1 for value, shape in pairs if unstable_pair(value, shape))
     if unstable_count is None:
         unstable_count = found_unstable
+        if found_unstable and problem.multipliers:
+            # known limitation: the non-symmetric pencil with the singular mass of the
+            # multiplier rows can return spurious negative or complex eigenvalues when many
+            # modes are asked for; they are kept (a false alarm rather than a hidden one)
+            notes.append("follower loads with constraint multipliers: the non-symmetric "
+                         "eigenproblem may report spurious unstable modes (more so for large "
+                         "[modes] count); confirm them with a smaller count or constraint = "
+                         "\"none\"")
     elif found_unstable < wanted_unstable:
         notes.append(f"the inertia counts {unstable_count} unstable directions but the "
                      f"eigensolver found {found_unstable}")
