@@ -81,6 +81,15 @@ class Interrupted(Exception):
 
 def _handler(signum, frame) -> None:
     global _pending
+    session = _session
+    if session is not None and not session._cleared and not session.files:
+        # still setting up (meshing, compiling, assembling: no step boundary to stop at, for
+        # minutes on a large model) and nothing written yet: stop now, nothing is lost
+        stop = Interrupted(signum, BEFORE)
+        with contextlib.suppress(Exception):
+            session.release()
+        os.write(2, (stop.line(session.out, False) + "\n").encode())
+        os._exit(stop.exit_code)
     if _pending:
         os.write(2, f"fe-beam: {_SIGNAL_NAMES.get(signum, signum)} again: stopping at once\n"
                  .encode())

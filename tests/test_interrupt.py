@@ -296,3 +296,29 @@ def test_the_fd_scheme_stops_on_a_signal(sent, tmp_path):
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("fe-beam: interrupted"), stderr
     assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+
+
+def test_a_signal_while_setting_up_a_large_model_stops_at_once(tmp_path):
+    """SIGTERM while a large model is set up (mesh, forms, first assembly: no step boundary for
+    many seconds) ends the run at once, before anything is written: one line, exit 143, no
+    folder left behind. (It used to run on to the end of the first load step.)"""
+    out = tmp_path / "big"
+    process = subprocess.Popen(
+        [str(FE_BEAM), "static", str(ROOT / "examples" / "cantilever.toml"), "--set",
+         "mesh.elements=200000", "--out", str(out), "--quiet"], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, env=_environment())
+    lock = out / ".fe-beam.lock"
+    deadline = time.monotonic() + 120
+    while not (lock.exists() and lock.stat().st_size) and process.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    time.sleep(0.3)
+    assert not (out / "summary.json").exists(), "the set-up was too quick for this test"
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 143, stderr
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert lines[-1].startswith("fe-beam: interrupted") and "before any result" in lines[-1], \
+        stderr
+    assert "Traceback" not in stderr
+    assert not out.exists(), sorted(os.listdir(out))
