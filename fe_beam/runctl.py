@@ -41,7 +41,7 @@ KNOWN_OUTPUTS = (
     "solid.xdmf", "solid.h5", "rod.xdmf", "beam.gif", "backbone.png", "backbones.png",
     "deformed_shapes.png", "dynamics.png", "fig3_8_profiles.png", "fig3_9_backbone.png",
     "finger_3d.png", "load_displacement.png", "refinement.png", "tension_tip.png",
-    "tip_vs_tension.png",
+    "tip_vs_tension.png", "unstable_modes.xdmf", "unstable_modes.h5",
 )
 
 BEFORE, AFTER = "<before>", "<after>"  # `Interrupted.where` outside the analysis
@@ -81,6 +81,15 @@ class Interrupted(Exception):
 
 def _handler(signum, frame) -> None:
     global _pending
+    session = _session
+    if session is not None and not session._cleared and not session.files:
+        # still setting up (meshing, compiling, assembling: no step boundary to stop at, for
+        # minutes on a large model) and nothing written yet: stop now, nothing is lost
+        stop = Interrupted(signum, BEFORE)
+        with contextlib.suppress(Exception):
+            session.release()
+        os.write(2, (stop.line(session.out, False) + "\n").encode())
+        os._exit(stop.exit_code)
     if _pending:
         os.write(2, f"fe-beam: {_SIGNAL_NAMES.get(signum, signum)} again: stopping at once\n"
                  .encode())
@@ -265,10 +274,11 @@ class OutputSession:
         os.replace(temporary, self.out / MANIFEST_NAME)
 
     def release(self) -> None:
-        # everything written during the run (plots included), for the next run to clear
+        # every fe_beam output written during the run (plots included), for the next run to
+        # clear; a file of another name that changed meanwhile is the user's, never listed
         with contextlib.suppress(OSError):
             for path in self.out.iterdir():
-                if (path.is_file() and not path.name.startswith(".")
+                if (path.name in KNOWN_OUTPUTS and path.is_file()
                         and path.stat().st_mtime >= self.started - 1.0):
                     self.files.add(path.name)
             if self._cleared or self.files:

@@ -204,6 +204,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
     notes = check_beam_work(config.static, steps, comm, " of time stepping",
                             quiet=out is None)
+    if config.from_static:  # the load steps of the static pre-state count too
+        notes += check_beam_work(config.static, config.static.stepping.steps, comm,
+                                 " of load stepping (static pre-state)", quiet=out is None)
     problem = BeamProblem(config.static.model, comm)
     watch = StrainWatch()
     if config.from_static:
@@ -294,6 +297,8 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     loads = model.loads
     if loads.follower or any(loads.gravity):
         raise ConfigError("[time] scheme = fd-*: no follower loads or gravity")
+    notes = check_beam_work(config.static, config.time.t_end / config.time.dt, comm,
+                            " of time stepping (output times)", quiet=out is None)
     stiffness = model.stiffness_at(0.0)
     props = model.section.properties(0.0)
     k = model.options.shear_correction if model.options.law == "reissner" else 1.0
@@ -304,7 +309,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         rhoI=model.material.rho * props.I, c=config.damping.c, law=model.options.law,
         supports=supports[key], Px=loads.tip_force[0], Py=loads.tip_force[1],
         M=loads.tip_moment, qx=loads.distributed[0], qy=loads.distributed[1],
-        load_time=config.load_function)
+        load_time=_interruptible(config.load_function, comm))
     q0 = None
     if config.from_static:
         try:
@@ -317,8 +322,20 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
-    solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
-                              rtol=tolerance, atol=tolerance * 1e-3 * model.length)
+    if out is not None and comm.rank == 0:
+        atomic_write_json(out / "summary.json", {"status": "running", "message": "",
+                                                 "scheme": config.time.scheme, "notes": notes})
+    try:
+        solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
+                                  rtol=tolerance, atol=tolerance * 1e-3 * model.length)
+    except runctl.Interrupted as stop:
+        stop.where = "the FD + Runge-Kutta integration, whose history is written at its end"
+        if out is not None and comm.rank == 0:
+            atomic_write_json(out / "summary.json", {
+                "status": "interrupted", "history": [], "scheme": config.time.scheme,
+                "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
+                "Runge-Kutta integration (its history is written at its end)"})
+        raise
     history = [{"t": float(t), "tip": {"u": float(u), "v": float(v), "theta": float(th)},
                 "energies": {"kinetic": float(kin), "strain": float(strain),
                              "external_work": float(work), "dissipated": float(diss)}}
@@ -344,8 +361,8 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
                               f"time {last:.6g} s")
             break
         watch.observe(strains)
-    result.notes, result.strain_range = watch.notes(), watch.summary()
-    runctl.warn(comm, result.notes)
+    result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+    runctl.warn(comm, watch.notes())
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         _write_dynamic(out, result, config, solution.wall_time)
@@ -373,6 +390,21 @@ def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: s
         out.mkdir(parents=True, exist_ok=True)
         _write_dynamic(out, result, config, 0.0)
     return result
+
+
+def _interruptible(load_time, comm, every: int = 200):
+    """``load_time`` that looks for SIGINT/SIGTERM (`fe_beam.runctl.check`, collective: every
+    rank integrates the same system, so every rank calls it equally often) every ``every``
+    calls: the FD scheme's right-hand side calls it once per evaluation."""
+    calls = [0]
+
+    def checked(t):
+        calls[0] += 1
+        if calls[0] % every == 0:
+            runctl.check(comm)
+        return load_time(t)
+
+    return checked
 
 
 HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "external_work",

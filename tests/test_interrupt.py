@@ -269,3 +269,56 @@ def test_a_signal_on_one_rank_stops_all_ranks_at_the_same_step(command, stop_at,
     # the dynamic history starts with t = 0; the interrupted step is recorded in both
     assert len(summary["steps" if kind == "static" else "history"]) == \
         (stop_at if kind == "static" else stop_at + 1)
+
+
+@pytest.mark.parametrize("sent", [signal.SIGINT, signal.SIGTERM])
+def test_the_fd_scheme_stops_on_a_signal(sent, tmp_path):
+    """The paper's FD + Runge-Kutta scheme (one scipy call for the whole run) heeds SIGINT and
+    SIGTERM too: it ignored them (deferred, never looked at) and ran on for minutes."""
+    out = tmp_path / "fd"
+    process = subprocess.Popen(
+        [str(FE_BEAM), "dynamic", str(ROOT / "examples" / "release.toml"), "--set",
+         'time.scheme="fd-rk45"', "--set", "time.t_end=1000", "--set", "time.dt=0.05", "--set",
+         "mesh.elements=8",
+         "--out", str(out), "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, env=_environment())
+    deadline = time.monotonic() + 120
+    while not (out / "summary.json").exists() and process.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    assert json.loads((out / "summary.json").read_text())["status"] == "running"
+    time.sleep(0.5)
+    process.send_signal(sent)
+    signalled = time.monotonic()
+    _, stderr = process.communicate(timeout=60)
+    assert time.monotonic() - signalled < 10, "the signal was not heeded"
+    assert process.returncode == {signal.SIGINT: 130, signal.SIGTERM: 143}[sent], stderr
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("fe-beam: interrupted"), stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+
+
+def test_a_signal_while_setting_up_a_large_model_stops_at_once(tmp_path):
+    """SIGTERM while a large model is set up (mesh, forms, first assembly: no step boundary for
+    many seconds) ends the run at once, before anything is written: one line, exit 143, no
+    folder left behind. (It used to run on to the end of the first load step.)"""
+    out = tmp_path / "big"
+    process = subprocess.Popen(
+        [str(FE_BEAM), "static", str(ROOT / "examples" / "cantilever.toml"), "--set",
+         "mesh.elements=200000", "--out", str(out), "--quiet"], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, env=_environment())
+    lock = out / ".fe-beam.lock"
+    deadline = time.monotonic() + 120
+    while not (lock.exists() and lock.stat().st_size) and process.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    time.sleep(0.3)
+    assert not (out / "summary.json").exists(), "the set-up was too quick for this test"
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 143, stderr
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert lines[-1].startswith("fe-beam: interrupted") and "before any result" in lines[-1], \
+        stderr
+    assert "Traceback" not in stderr
+    assert not out.exists(), sorted(os.listdir(out))

@@ -107,6 +107,22 @@ def test_too_many_time_steps_are_refused_with_the_estimate(t_end, dt, tmp_path, 
     assert _estimate(err, "steps") == pytest.approx(t_end / dt, rel=0.01)
 
 
+@pytest.mark.parametrize("scheme", ["fd-rk45", "fd-dop853"])
+def test_the_fd_schemes_are_refused_too(scheme, tmp_path, capsys):
+    """The paper's FD + Runge-Kutta schemes keep a state per output time (t_end / dt of them):
+    they are refused like the generalised-alpha steps (they ran for minutes and filled the
+    memory)."""
+    err = _refused(tmp_path, "dynamic", edited(DYNAMIC) | {
+        "time": {"t_end": 2e7, "dt": 0.5, "scheme": scheme}}, capsys)
+    assert _estimate(err, "steps") == pytest.approx(4e7, rel=0.01)
+
+
+def test_too_many_load_steps_of_the_static_prestate_are_refused(tmp_path, capsys):
+    err = _refused(tmp_path, "dynamic", edited(DYNAMIC | {"loads.steps": 3 * 10**6}) | {
+        "initial": {"from_static": True}, "time": {"t_end": 0.1, "dt": 0.01}}, capsys)
+    assert _estimate(err, "steps") == pytest.approx(3e6, rel=0.01)
+
+
 def test_too_many_load_steps_are_refused(tmp_path, capsys):
     err = _refused(tmp_path, "static", edited({"loads.steps": 5 * 10**6}), capsys)
     assert _estimate(err, "steps") == pytest.approx(5e6, rel=0.01)

@@ -196,3 +196,22 @@ def test_output_files_follow_the_umask(tmp_path, capsys):
         assert {"summary.json", "load_displacement.csv", "beam.xdmf", "beam.h5",
                 "deformed_shapes.png"} <= set(modes)
         assert set(modes.values()) == {0o666 & ~mask}, modes
+
+
+def test_a_user_file_written_during_a_run_is_not_taken_for_an_output(tmp_path, capsys):
+    """A file the user puts into the folder while a run writes there is not fe_beam's: the next
+    run must not delete it."""
+    out = tmp_path / "out"
+    static = tmp_path / "s.toml"
+    static.write_text(dump_toml(edited({"loads.steps": 2})))
+    with runctl.output_session(out, "static", __import__("mpi4py").MPI.COMM_SELF):
+        runctl.register_output(out / "summary.json")
+        (out / "summary.json").write_text("{}")
+        (out / "my_notes.txt").write_text("mine")  # the user, meanwhile
+        (out / "run.log").write_text("mine too")
+    manifest = json.loads((out / runctl.MANIFEST_NAME).read_text())
+    assert manifest["files"] == ["summary.json"], manifest
+    assert main(["static", str(static), "--out", str(out), "--quiet"]) == 0, \
+        capsys.readouterr().err
+    assert (out / "my_notes.txt").read_text() == "mine"
+    assert (out / "run.log").read_text() == "mine too"
