@@ -62,20 +62,29 @@ def test_writing_per_step_does_not_grow_with_the_steps(command, tmp_path, capsys
                                                    "output_every": 1}}
 
     _run(tmp_path, "warm", command, config(2), capsys)  # JIT compilation outside the count
-    appended = {}
     for steps in (20, 200, 400):
         rewrites.update(count={}, bytes=0)
         started = time.perf_counter()
-        written, summary = _run(tmp_path, f"n{steps}", command, config(steps), capsys)
+        _, summary = _run(tmp_path, f"n{steps}", command, config(steps), capsys)
         wall = time.perf_counter() - started
         assert len(summary["steps" if command == "static" else "history"]) >= steps
-        appended[steps] = written - rewrites["bytes"]
         for name in ("summary.json", "beam.xdmf"):
             # the start, the first step, then at most once a second, the end
             assert rewrites["count"][name] <= 3 + wall / 1.0, (steps, wall, rewrites)
-    early = (appended[200] - appended[20]) / 180
-    late = (appended[400] - appended[200]) / 200
-    assert 0 < late < 1.6 * early, (appended, early, late)
+    # the appends, measured with the files brought up to date after every step (how often
+    # the throttle lets them be depends on the machine's speed: each update appends the steps
+    # since the last one to the hidden copy, so the bytes per step are the same only when the
+    # number of updates is): O(1) bytes per step, where rewriting the growing h5 or CSV would
+    # make them grow with the steps
+    monkeypatch.setattr(runctl.Throttle, "due", lambda self: True)
+    appended = {}
+    for steps in (20, 100, 200):
+        rewrites.update(count={}, bytes=0)
+        written, _ = _run(tmp_path, f"every{steps}", command, config(steps), capsys)
+        appended[steps] = written - rewrites["bytes"]
+    early = (appended[100] - appended[20]) / 80
+    late = (appended[200] - appended[100]) / 100
+    assert 0 < late < 1.3 * early, (appended, early, late)
 
 
 def _refused(tmp_path, command: str, config: dict, capsys, *extra) -> str:
