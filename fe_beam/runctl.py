@@ -56,6 +56,7 @@ class Interrupted(Exception):
         super().__init__(_SIGNAL_NAMES.get(signum, str(signum)))
         self.signum = signum
         self.where = where
+        self.written = ""  # what was written, when not "the last converged step"
 
     @property
     def name(self) -> str:
@@ -75,8 +76,8 @@ class Interrupted(Exception):
             return (f"fe-beam: interrupted ({self.name}) after the analysis ended; the results "
                     f"in {out} are complete")
         where = f" at {self.where}" if self.where else ""
-        return (f"fe-beam: interrupted{where} ({self.name}); results of the last converged "
-                f"step are in {out}")
+        written = self.written or "results of the last converged step are"
+        return f"fe-beam: interrupted{where} ({self.name}); {written} in {out}"
 
 
 def _handler(signum, frame) -> None:

@@ -329,7 +329,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
                                   rtol=tolerance, atol=tolerance * 1e-3 * model.length)
     except runctl.Interrupted as stop:
-        stop.where = "the FD + Runge-Kutta integration, whose history is written at its end"
+        stop.where = "the FD + Runge-Kutta integration"
+        stop.written = ("no history (the scheme writes it at its end): only summary.json, status "
+                        "interrupted, is")
         if out is not None and comm.rank == 0:
             atomic_write_json(out / "summary.json", {
                 "status": "interrupted", "history": [], "scheme": config.time.scheme,

@@ -295,7 +295,9 @@ def test_the_fd_scheme_stops_on_a_signal(sent, tmp_path):
     assert process.returncode == {signal.SIGINT: 130, signal.SIGTERM: 143}[sent], stderr
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and lines[0].startswith("fe-beam: interrupted"), stderr
-    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+    assert "no history" in lines[0] and "last converged step" not in lines[0], stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["history"] == [], summary
 
 
 def test_a_signal_while_setting_up_a_large_model_stops_at_once(tmp_path):
