@@ -28,6 +28,7 @@ from fe_beam.laws import (
     section_resultants,
     strain_energy,
     strains,
+    strains_from_angles,
     strains_from_gradient,
 )
 from fe_beam.materials import Material
@@ -651,12 +652,13 @@ class BeamProblem:
         s = strains(u, v, theta)
         gamma = ufl.atan_2(s.g, s.one_plus_e)
         if self._bending_limit_applies():
-            k, kappa, eps = self.stiffness, s.kappa, s.eps
-            stretch = ufl.sqrt(ufl.max_value(1 + 2 * eps, 1e-300))
-            w_ee = k.EA - k.EI3 * kappa**3 / (2 * stretch**3)
-            w_ek = 3 * k.EI * kappa + 1.5 * k.EI3 * kappa**2 / stretch
-            w_kk = k.EI * (1 + 3 * eps) + 3 * k.EI3 * kappa * stretch + 1.5 * k.EI4 * kappa**2
-            tangent = (w_kk - w_ek**2 / w_ee) / k.EI
+            # the law's own energy W(eps, kappa) at gamma = 0, differentiated by UFL
+            eps, kappa = ufl.variable(s.eps), ufl.variable(s.kappa)
+            energy = strain_energy("nonstandard", strains_from_angles(eps, 0.0, kappa),
+                                   self.stiffness)
+            w_e, w_k = ufl.diff(energy, eps), ufl.diff(energy, kappa)
+            w_ee, w_ek, w_kk = ufl.diff(w_e, eps), ufl.diff(w_e, kappa), ufl.diff(w_k, kappa)
+            tangent = (w_kk - w_ek**2 / w_ee) / self.stiffness.EI
         else:
             tangent = ufl.as_ufl(1.0) + 0 * s.eps
         points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)

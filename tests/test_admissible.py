@@ -170,6 +170,11 @@ def test_bending_near_the_largest_moment_is_noted():
         result = _static(model, steps=10)
         assert result.status == "converged", result.message
         notes[share] = result.notes
+        # the condensed tangent of the law vs the closed form EI (1 - (kappa / kappa*)^2)
+        kappa = result.steps[-1]["tip"]["theta"] / length  # uniform curvature
+        kappa_star = 1 / (h * math.sqrt(0.9))
+        expected = 1 - (kappa / kappa_star) ** 2
+        assert result.strain_range["min_bending_tangent"] == pytest.approx(expected, rel=1e-6)
     assert notes[0.5] == []
     assert any("limit curvature" in note for note in notes[0.97]), notes[0.97]
 
