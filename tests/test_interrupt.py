@@ -163,6 +163,19 @@ def check_folder(kind: str, out: Path, code: int, stderr: str, sent: int | None)
     return status
 
 
+def _wait_for_a_step(kind: str, out: Path, process: subprocess.Popen) -> None:
+    """Until summary.json of a running run holds a step (or the run ended)."""
+    deadline = time.monotonic() + 240
+    while process.poll() is None and time.monotonic() < deadline:
+        try:
+            summary = json.loads((out / "summary.json").read_text())
+            if summary.get("status") == "running" and _steps(kind, summary):
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.01)
+
+
 def _signal_all(runs: list[dict]) -> None:
     """Send each run its signal at its moment: ``delay`` seconds after the launch ("launch":
     start-up, imports, meshing) or after summary.json appeared ("writing": the stepping)."""
@@ -208,7 +221,17 @@ def test_interrupted_runs_leave_readable_results(kind, tmp_path):
             statuses.append(check_folder(kind, run["out"], run["process"].returncode, stderr,
                                          run["signal"]))
     print(kind, [(r["signal"].name, r["mode"]) for r in plan], statuses)
-    # the plan must have hit runs while they were stepping, not only before or after
+    # the random plan may miss the stepping phase on a loaded machine: make sure a SIGKILL
+    # and a SIGTERM hit runs that are stepping (their first step written)
+    for wanted, sent in (("running", signal.SIGKILL), ("interrupted", signal.SIGTERM)):
+        if wanted not in statuses:
+            out = tmp_path / f"stepping_{wanted}"
+            process = _start(kind, out)
+            _wait_for_a_step(kind, out, process)
+            process.send_signal(sent)
+            _, stderr = process.communicate(timeout=300)
+            statuses.append(check_folder(kind, out, process.returncode, stderr, sent))
+    # the runs must have been hit while they were stepping, not only before or after
     assert "interrupted" in statuses and "running" in statuses, statuses
 
 
