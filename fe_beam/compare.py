@@ -237,9 +237,8 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
             summary["status"] = "converged"
     except runctl.Interrupted as stop:
         last = summary["table"][-1]["load_factor"] if summary["table"] else 0.0
-        stop.where = f"load factor {last:.4g} of the sweep"
-        summary |= {"status": "interrupted",
-                    "message": f"interrupted by {stop.name} after load factor {last:.6g}"}
+        summary |= stop.stopped(f"load factor {last:.4g} of the sweep",
+                                f"after load factor {last:.6g}")
         save()
         raise
     finally:

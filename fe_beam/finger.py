@@ -335,11 +335,10 @@ def run_finger(
         try:
             inverse = solve_inverse(config, target, comm, sweep=result.steps)
         except runctl.Interrupted as stop:
-            stop.where = "the inverse solve (the sweep is complete)"
+            status = stop.stopped("the inverse solve (the sweep is complete)",
+                                  "during the inverse solve")
             if out is not None and comm.rank == 0:
-                atomic_write_json(out / "summary.json", result.summary(extra | {
-                    "status": "interrupted",
-                    "message": f"interrupted by {stop.name} during the inverse solve"}))
+                atomic_write_json(out / "summary.json", result.summary(extra | status))
                 write_sweep(out, result)
             raise
     if out is not None and comm.rank == 0 and result.steps:

@@ -499,10 +499,8 @@ def run_refinement(
             if record["status"] != "converged":
                 break
     except runctl.Interrupted as stop:
-        stop.where = f"level {len(records)} of the refinement study"
-        summary = study_summary(plan, records, config_path) | {
-            "status": "interrupted",
-            "message": f"interrupted by {stop.name} during level {len(records)}"}
+        summary = study_summary(plan, records, config_path) | stop.stopped(
+            f"level {len(records)} of the refinement study", f"during level {len(records)}")
         if out is not None and comm.rank == 0:
             write_outputs(out, summary, plot=False)
         raise

@@ -62,6 +62,12 @@ class Interrupted(Exception):
     def name(self) -> str:
         return _SIGNAL_NAMES.get(self.signum, f"signal {self.signum}")
 
+    def stopped(self, where: str, message: str) -> dict:
+        """Note ``where`` the run stopped (for the closing line) and return the summary's
+        ``status`` and ``message`` ("interrupted by SIGNAL ``message``")."""
+        self.where = where
+        return {"status": "interrupted", "message": f"interrupted by {self.name} {message}"}
+
     @property
     def exit_code(self) -> int:
         return EXIT_SIGINT if self.signum == signal.SIGINT else EXIT_SIGTERM

@@ -274,9 +274,8 @@ def solve_static(
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:
         last = result.steps[-1]["load_factor"] if result.steps else 0.0
-        stop.where = f"load factor {last:.4g}"
-        result.status = "interrupted"
-        result.message = f"interrupted by {stop.name} at load factor {last:.6g}"
+        status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+        result.status, result.message = status["status"], status["message"]
         raise
     finally:
         run.destroy()

@@ -267,9 +267,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         # the state is the last accepted step: record it unless it was the last output
         if not result.history or integrator.time > result.history[-1]["t"]:
             record(integrator.time, -1)
-        stop.where = f"t = {integrator.time:.6g} s"
-        result.status = "interrupted"
-        result.message = f"interrupted by {stop.name} at t = {integrator.time:.6g} s"
+        status = stop.stopped(f"t = {integrator.time:.6g} s", f"at t = {integrator.time:.6g} s")
+        result.status, result.message = status["status"], status["message"]
         raise
     finally:
         integrator.solver.destroy()
@@ -517,11 +516,9 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                 atomic_write_json(out / "summary.json", summary)
             return summary
         except runctl.Interrupted as stop:
-            stop.where = "the static pre-state"
+            status = stop.stopped("the static pre-state", "in the static pre-state")
             if out is not None and comm.rank == 0:
-                atomic_write_json(out / "summary.json", {
-                    "status": "interrupted",
-                    "message": f"interrupted by {stop.name} in the static pre-state"})
+                atomic_write_json(out / "summary.json", status)
             raise
     else:
         problem.set_load_factor(0.0)

@@ -801,9 +801,7 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         return _run_solid(config, out, comm, progress, summary, save)
     except runctl.Interrupted as stop:
         last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
-        stop.where = f"load factor {last:.4g}"
-        summary |= {"status": "interrupted",
-                    "message": f"interrupted by {stop.name} at load factor {last:.6g}"}
+        summary |= stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
         save()
         raise
 
