@@ -26,6 +26,9 @@ until the sign changes; for bulk = inf, a = l1^(-1/2) exactly (J = 1). For svk t
 a^2 (W is quadratic in the lateral Green strain), so the stationary point exists for every E11,
 also where the formal a^2 = 1 - 2 nu E11 is negative (E11 > 1/(2 nu)); the result is then the
 closed form 1/2 E E11^2 with E = mu (3 lambda + 2 mu)/(lambda + mu).
+The fibre energy is evaluated without cancellation at small strain (J - 1 and the isochoric
+stretch by expm1/log1p, U(J) in J - 1, Ib1 - 3 and Ib2 - 3 as products), so it keeps ~1e-13
+relative accuracy down to E11 ~ 1e-4, also for kappa/mu0 ~ 1e4.
 The fibre stress s = dw/dE11 (2nd Piola-Kirchhoff) follows from the envelope theorem:
 s = (dW/dl1 at fixed a) / l1 (for bulk = inf the constraint a = l1^(-1/2) is differentiated).
 
@@ -111,17 +114,46 @@ def from_solid_law(law) -> tuple:
     return _name(law.name), coeffs, float(law.kappa), law.volumetric
 
 
-def _iso(name: str, coeffs: dict, ib1, ib2):
-    """(W_iso, dW/dIb1, dW/dIb2) of the isochoric part."""
+def _iso(name: str, coeffs: dict, i1m3, i2m3):
+    """(W_iso, dW/dIb1, dW/dIb2) of the isochoric part, from Ib1 - 3 and Ib2 - 3."""
     if name == "neo-hookean":
         mu = shear_modulus(name, coeffs)
-        return mu / 2 * (ib1 - 3), mu / 2 + 0 * ib1, 0 * ib1
+        return mu / 2 * i1m3, mu / 2 + 0 * i1m3, 0 * i1m3
     if name == "mooney-rivlin":
         c10, c01 = _c(coeffs, "c10"), _c(coeffs, "c01")
-        return c10 * (ib1 - 3) + c01 * (ib2 - 3), c10 + 0 * ib1, c01 + 0 * ib1
+        return c10 * i1m3 + c01 * i2m3, c10 + 0 * i1m3, c01 + 0 * i1m3
     c10, c20, c30 = _c(coeffs, "c10"), _c(coeffs, "c20"), _c(coeffs, "c30")
-    d = ib1 - 3
-    return c10 * d + c20 * d**2 + c30 * d**3, c10 + 2 * c20 * d + 3 * c30 * d**2, 0 * ib1
+    d = i1m3
+    return c10 * d + c20 * d**2 + c30 * d**3, c10 + 2 * c20 * d + 3 * c30 * d**2, 0 * i1m3
+
+
+def _z_minus_log1p(z: float) -> float:
+    """z - ln(1 + z), by its series where |z| < 1e-2 (no cancellation)."""
+    if abs(z) < 1e-2:
+        return sum((-1) ** n * z**n / n for n in range(2, 14))
+    return z - math.log1p(z)
+
+
+def _vol_energy_d(bulk: float, volumetric: str, d: float) -> float:
+    """U at J = 1 + d, written in d so that it keeps its digits near J = 1:
+    J^2 - 1 - 2 ln J = z - ln(1 + z) with z = d (2 + d)."""
+    if volumetric == "simo_taylor":
+        return bulk / 4 * _z_minus_log1p(d * (2 + d))
+    if volumetric == "quadratic":
+        return bulk / 2 * d**2
+    raise ValueError(f"unknown volumetric law {volumetric!r}")
+
+
+def _uniaxial_energy(name, coeffs, bulk, volumetric, E11: float, a: float) -> float:
+    """W(l1, a, a) of a split law without cancellation at small strain: J - 1 = expm1(ln l1 +
+    2 ln a), isochoric stretch alpha = l1 J^(-1/3) (lateral alpha^(-1/2)),
+    Ib1 - 3 = (alpha - 1)^2 (alpha + 2)/alpha, Ib2 - 3 = (alpha - 1)^2 (2 alpha + 1)/alpha^2."""
+    log_l1 = 0.5 * math.log1p(2 * E11)
+    d = 0.0 if math.isinf(bulk) else math.expm1(log_l1 + 2 * math.log(a))
+    am1 = math.expm1(log_l1 - math.log1p(d) / 3)
+    alpha = 1 + am1
+    w = _iso(name, coeffs, am1**2 * (alpha + 2) / alpha, am1**2 * (2 * alpha + 1) / alpha**2)[0]
+    return float(w) + (0.0 if math.isinf(bulk) else _vol_energy_d(bulk, volumetric, d))
 
 
 def _vol(bulk: float, volumetric: str, J):
@@ -156,7 +188,7 @@ def principal_energy(law_name, coeffs, kappa, volumetric, l1, l2, l3):
     J = l1 * l2 * l3
     i1 = l1**2 + l2**2 + l3**2
     i2 = l1**2 * l2**2 + l2**2 * l3**2 + l3**2 * l1**2
-    w_iso = _iso(name, coeffs, J ** (-2 / 3) * i1, J ** (-4 / 3) * i2)[0]
+    w_iso = _iso(name, coeffs, J ** (-2 / 3) * i1 - 3, J ** (-4 / 3) * i2 - 3)[0]
     if math.isinf(kappa):
         return w_iso
     return w_iso + _vol(kappa, volumetric, J)[0]
@@ -168,7 +200,7 @@ def _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a):
     i1 = l1**2 + 2 * a**2
     i2 = 2 * l1**2 * a**2 + a**4
     j23, j43 = J ** (-2 / 3), J ** (-4 / 3)
-    _, w1, w2 = _iso(name, coeffs, j23 * i1, j43 * i2)
+    _, w1, w2 = _iso(name, coeffs, j23 * i1 - 3, j43 * i2 - 3)
     dvol = _vol(bulk, volumetric, J)[1]
     d_l1 = (w1 * j23 * (2 * l1 - 2 / 3 * i1 / l1) + w2 * j43 * (4 * l1 * a**2 - 4 / 3 * i2 / l1)
             + dvol * a * a)
@@ -237,12 +269,12 @@ def _fibre_scalar(name, coeffs, bulk, volumetric, E11: float) -> tuple[float, fl
         w = lam / 2 * (E11 + 2 * et) ** 2 + mu * (E11**2 + 2 * et**2)
         return w, lam * (E11 + 2 * et) + 2 * mu * E11
     if math.isinf(bulk):
-        ib1, ib2 = l1**2 + 2 / l1, 2 * l1 + 1 / l1**2
-        w, w1, w2 = _iso(name, coeffs, ib1, ib2)
+        w = _uniaxial_energy(name, coeffs, bulk, volumetric, E11, l1**-0.5)
+        _, w1, w2 = _iso(name, coeffs, l1**2 + 2 / l1 - 3, 2 * l1 + 1 / l1**2 - 3)
         dw_dl1 = w1 * (2 * l1 - 2 / l1**2) + w2 * (2 - 2 / l1**3)
-        return float(w), float(dw_dl1 / l1)
+        return w, float(dw_dl1 / l1)
     a = _lateral_scalar(name, coeffs, bulk, volumetric, E11)
-    w = principal_energy(name, coeffs, bulk, volumetric, l1, a, a)
+    w = _uniaxial_energy(name, coeffs, bulk, volumetric, E11, a)
     d_l1 = _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a)[0]
     return float(w), float(d_l1 / l1)
 

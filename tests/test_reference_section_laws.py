@@ -8,6 +8,7 @@ the non-standard energy of fe_beam.laws, and against finite differences of thems
 
 import math
 
+import mpmath
 import numpy as np
 import pytest
 import ufl
@@ -50,7 +51,7 @@ def test_svk_fibre_is_one_half_E_E11_squared():
     E11 = np.array([-0.45, -0.2, 0.0, 0.05, 0.7, 1.6, 3.0])  # 3.0 > 1/(2 nu): formal a^2 < 0
     for mu, bulk in ((1.0, 2.0), (2.5, 40.0), (1.0, 0.5)):
         E = mu * (3 * (bulk - 2 * mu / 3) + 2 * mu) / (bulk - 2 * mu / 3 + mu)
-        assert E == pytest.approx(small_strain_modulus("svk", {"mu": mu}, bulk), rel=1e-14)
+        assert E == pytest.approx(small_strain_modulus("svk", {"mu": mu}, bulk), rel=1e-14, abs=0)
         w = fibre_energy_exact("svk", {"mu": mu}, bulk, "simo_taylor", E11)
         s = fibre_stress_exact("svk", {"mu": mu}, bulk, "simo_taylor", E11)
         np.testing.assert_allclose(w, 0.5 * E * E11**2, rtol=1e-13, atol=1e-16)
@@ -116,7 +117,7 @@ def test_lateral_stretch_is_stress_free_and_minimises(name, coeffs, volumetric):
         assert abs(slope) < 1e-8 * scale
         assert W(a) < W(a * 1.01) and W(a) < W(a * 0.99)
         assert fibre_energy_exact(name, coeffs, bulk, volumetric, E11) == pytest.approx(
-            W(a), rel=1e-15)
+            W(a), rel=1e-11, abs=0)  # W here is the naive (cancelling) invariant formula
 
 
 @pytest.mark.parametrize("name, coeffs", LAWS + [("svk", {"mu": 1.0})])
@@ -139,7 +140,7 @@ def test_small_strain_modulus_is_the_3d_young_modulus(name, coeffs, volumetric):
         bulk = ratio * mu0
         E = 9 * bulk * mu0 / (3 * bulk + mu0) if ratio != math.inf else 3 * mu0
         tangent = fibre_tangent_exact(name, coeffs, bulk, volumetric, 0.0)
-        assert tangent == pytest.approx(E, rel=1e-9)
+        assert tangent == pytest.approx(E, rel=1e-9, abs=0)
         assert fibre_energy_exact(name, coeffs, bulk, volumetric, 0.0) == pytest.approx(
             0.0, abs=1e-14 * mu0)
         # and the 1/2 E E11^2 behaviour at small strain: O(E11^3) deviation
@@ -151,19 +152,19 @@ def test_small_strain_modulus_is_the_3d_young_modulus(name, coeffs, volumetric):
 @pytest.mark.parametrize("shape, dims", SECTIONS)
 def test_section_moments_match_fe_beam_sections(shape, dims):
     props = Section(shape, dims).properties(0.0)
-    assert section_area(shape, dims) == pytest.approx(props.A, rel=1e-13)
+    assert section_area(shape, dims) == pytest.approx(props.A, rel=1e-13, abs=0)
     assert section_moment_exact(shape, dims, 1) == pytest.approx(0.0, abs=1e-13 * props.h**3)
-    assert section_moment_exact(shape, dims, 2) == pytest.approx(props.I, rel=1e-13)
+    assert section_moment_exact(shape, dims, 2) == pytest.approx(props.I, rel=1e-13, abs=0)
     assert section_moment_exact(shape, dims, 3) == pytest.approx(
         props.I3, rel=1e-12, abs=1e-13 * props.h**5)
-    assert section_moment_exact(shape, dims, 4) == pytest.approx(props.I4, rel=1e-13)
+    assert section_moment_exact(shape, dims, 4) == pytest.approx(props.I4, rel=1e-13, abs=0)
 
 
 def test_t_section_has_the_third_moment_of_fe_beam():
     dims = {"b": 1.0, "h": 1.2, "tf": 0.25, "tw": 0.3}
     i3 = section_moment_exact("t-section", dims, 3)
     assert abs(i3) > 1e-3  # a real test of the eta = -y sign, not 0 = 0
-    assert i3 == pytest.approx(Section("t-section", dims).properties(0.0).I3, rel=1e-12)
+    assert i3 == pytest.approx(Section("t-section", dims).properties(0.0).I3, rel=1e-12, abs=0)
 
 
 @pytest.mark.parametrize("shape, dims", SECTIONS)
@@ -180,7 +181,7 @@ def test_svk_section_energy_is_the_nonstandard_energy(shape, dims):
         ref = nonstandard_energy(Strains(one_plus_e, g, eps, kappa), k)
         got = section_energy_exact(shape, dims, "svk", {"mu": mu}, bulk, "simo_taylor",
                                    one_plus_e, g, kappa)
-        assert got == pytest.approx(ref, rel=1e-11)
+        assert got == pytest.approx(ref, rel=1e-11, abs=0)
         # gradient by differentiation under the integral vs the non-standard energy's FD
         grad = section_gradient_exact(shape, dims, "svk", {"mu": mu}, bulk, "simo_taylor",
                                       one_plus_e, g, kappa)
@@ -209,7 +210,7 @@ def test_section_gradient_is_the_derivative_of_the_section_energy(shape, dims):
             return section_energy_exact(shape, dims, *law, *y)
 
         fd = (W(-2 * h) - 8 * W(-h) + 8 * W(h) - W(2 * h)) / (12 * h)
-        assert grad[i] == pytest.approx(fd, rel=1e-7)
+        assert grad[i] == pytest.approx(fd, rel=1e-7, abs=0)
 
 
 @pytest.mark.parametrize("shape, dims", [SECTIONS[0], SECTIONS[1], SECTIONS[3]])
@@ -220,12 +221,14 @@ def test_pure_bending_of_svk_matches_the_nonstandard_closed_form(shape, dims):
     moment = 0.5 * E * p.I / p.h  # kappa h about 0.5: far from linear
     kappa, one_plus_e = pure_bending(shape, dims, "svk", {"mu": mu}, bulk, "simo_taylor", moment)
     ref = svk_pure_bending(E * p.A, E * p.I, E * p.I3, E * p.I4, moment)
-    assert kappa == pytest.approx(ref[0], rel=1e-10)
-    assert one_plus_e == pytest.approx(ref[1], rel=1e-10)
+    assert kappa == pytest.approx(ref[0], rel=1e-10, abs=0)
+    assert one_plus_e == pytest.approx(ref[1], rel=1e-10, abs=0)
     assert abs(kappa * p.h - 0.5) > 0.01  # the nonlinearity is exercised
     if shape == "rectangle":  # MODEL facts: eps = -3/2 (I/A) kappa^2, M = EI k (1 - 0.3 h^2 k^2)
-        assert (one_plus_e**2 - 1) / 2 == pytest.approx(-1.5 * p.I / p.A * kappa**2, rel=1e-10)
-        assert E * p.I * kappa * (1 - 0.3 * p.h**2 * kappa**2) == pytest.approx(moment, rel=1e-10)
+        eps = (one_plus_e**2 - 1) / 2
+        assert eps == pytest.approx(-1.5 * p.I / p.A * kappa**2, rel=1e-10, abs=0)
+        bent = E * p.I * kappa * (1 - 0.3 * p.h**2 * kappa**2)
+        assert bent == pytest.approx(moment, rel=1e-10, abs=0)
 
 
 @pytest.mark.parametrize("name, coeffs", LAWS[:2])
@@ -245,9 +248,51 @@ def test_pure_bending_is_an_equilibrium_of_the_section_energy(name, coeffs):
     dW_dp = (W(-2 * h, 0) - 8 * W(-h, 0) + 8 * W(h, 0) - W(2 * h, 0)) / (12 * h)
     dW_dk = (W(0, -2 * h) - 8 * W(0, -h) + 8 * W(0, h) - W(0, 2 * h)) / (12 * h)
     assert abs(dW_dp) < 1e-7 * E * p.A
-    assert dW_dk == pytest.approx(moment, rel=1e-7)
+    assert dW_dk == pytest.approx(moment, rel=1e-7, abs=0)
     # small moments: the linear beam, M = EI kappa, to O(strain)
     small = 1e-4 * E * p.I / p.h
     k_small, _ = pure_bending(shape, dims, name, coeffs, bulk, "simo_taylor", small)
     assert k_small * E * p.I / small == pytest.approx(1.0, abs=1e-3)
     assert k_small * E * p.I / small != pytest.approx(1.0, abs=1e-9)  # I3: a real O(kappa) term
+
+
+def _mp_energy(name, coeffs, bulk, volumetric, E11, a):
+    """W(l1, a, a) in 40-digit arithmetic, straight from the invariants."""
+    mp = mpmath.mp
+    mp.dps = 40
+    l1, a = mpmath.sqrt(1 + 2 * mpmath.mpf(E11)), mpmath.mpf(a)
+    J = l1 * a * a
+    ib1 = J ** (-mpmath.mpf(2) / 3) * (l1**2 + 2 * a**2)
+    ib2 = J ** (-mpmath.mpf(4) / 3) * (2 * l1**2 * a**2 + a**4)
+    c = {k: mpmath.mpf(v) for k, v in coeffs.items()}
+    if name == "neo-hookean":
+        w = c["mu"] / 2 * (ib1 - 3)
+    elif name == "mooney-rivlin":
+        w = c["c10"] * (ib1 - 3) + c["c01"] * (ib2 - 3)
+    else:
+        d = ib1 - 3
+        w = c["c10"] * d + c["c20"] * d**2 + c["c30"] * d**3
+    k = mpmath.mpf(bulk)
+    if volumetric == "simo_taylor":
+        return w + k / 4 * (J**2 - 1 - 2 * mpmath.log(J))
+    return w + k / 2 * (J - 1) ** 2
+
+
+@pytest.mark.parametrize("volumetric", ["simo_taylor", "quadratic"])
+@pytest.mark.parametrize("name, coeffs", LAWS)
+def test_fibre_energy_keeps_its_digits_at_small_strain(name, coeffs, volumetric):
+    """No cancellation: 40-digit evaluation at the same lateral stretch, E11 down to 1e-5 and
+    kappa/mu0 up to 1e4 (where J - 1 ~ 1e-9 and the naive U(J) loses 6 digits)."""
+    mu0 = shear_modulus(name, coeffs)
+    for ratio in (2.0, 1e4):
+        bulk = ratio * mu0
+        for E11 in (1e-5, -3e-4, 2e-3):
+            a = float(lateral_stretch(name, coeffs, bulk, volumetric, E11))
+            ref = float(_mp_energy(name, coeffs, bulk, volumetric, E11, a))
+            got = float(fibre_energy_exact(name, coeffs, bulk, volumetric, E11))
+            assert got == pytest.approx(ref, rel=1e-11, abs=0)
+    # incompressible neo-Hookean: w = 3/2 mu E^2 - 5/2 mu E^3 + 35/8 mu E^4 + O(E^5)
+    for E11 in (1e-5, -1e-4):
+        w = fibre_energy_exact("neo-hookean", {"mu": 1.0}, math.inf, "x", E11)
+        series = 1.5 * E11**2 - 2.5 * E11**3 + 35 / 8 * E11**4
+        assert w == pytest.approx(series, rel=1e-11, abs=0)
