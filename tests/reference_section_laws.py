@@ -194,19 +194,30 @@ def principal_energy(law_name, coeffs, kappa, volumetric, l1, l2, l3):
     return w_iso + _vol(kappa, volumetric, J)[0]
 
 
-def _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a):
-    """(dW/dl1 at fixed a, dW/da at fixed l1) of W(l1, a, a) (compressible isochoric laws)."""
-    J = l1 * a * a
+def _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a, log_l1=None):
+    """(dW/dl1 at fixed a, dW/da at fixed l1) of W(l1, a, a) (compressible isochoric laws).
+
+    Written without cancellation near l1 = a = 1: the isochoric parts reduce to multiples of
+    l1^2 - a^2 and the pressure to J - 1 = expm1(ln l1 + 2 ln a) (``log_l1`` = ln l1 from
+    log1p(2 E11)/2 if given, which keeps the digits the float l1 = sqrt(1 + 2 E11) loses):
+    dW/dl1 = 4/3 (l1^2 - a^2)/l1 (W1 J^-2/3 + W2 J^-4/3 a^2) + U'(J) a^2,
+    dW/da  = 4/3 (a^2 - l1^2) (W1 J^-2/3 / a + W2 J^-4/3 a) + U'(J) 2 l1 a.
+    """
+    d = math.expm1((math.log(l1) if log_l1 is None else log_l1) + 2 * math.log(a))
+    J = 1 + d
     i1 = l1**2 + 2 * a**2
     i2 = 2 * l1**2 * a**2 + a**4
     j23, j43 = J ** (-2 / 3), J ** (-4 / 3)
     _, w1, w2 = _iso(name, coeffs, j23 * i1 - 3, j43 * i2 - 3)
-    dvol = _vol(bulk, volumetric, J)[1]
-    d_l1 = (w1 * j23 * (2 * l1 - 2 / 3 * i1 / l1) + w2 * j43 * (4 * l1 * a**2 - 4 / 3 * i2 / l1)
-            + dvol * a * a)
-    d_a = (w1 * j23 * (4 * a - 4 / 3 * i1 / a) + w2 * j43 * (4 * l1**2 * a + 4 * a**3
-                                                          - 8 / 3 * i2 / a)
-           + dvol * 2 * l1 * a)
+    if volumetric == "simo_taylor":
+        dvol = bulk / 2 * d * (2 + d) / J  # kappa/2 (J - 1/J)
+    elif volumetric == "quadratic":
+        dvol = bulk * d
+    else:
+        raise ValueError(f"unknown volumetric law {volumetric!r}")
+    diff = (l1 - a) * (l1 + a)
+    d_l1 = 4 / 3 * diff / l1 * (w1 * j23 + w2 * j43 * a**2) + dvol * a * a
+    d_a = -4 / 3 * diff * (w1 * j23 / a + w2 * j43 * a) + dvol * 2 * l1 * a
     return d_l1, d_a
 
 
@@ -233,8 +244,10 @@ def _lateral_scalar(name, coeffs, bulk, volumetric, E11: float) -> float:
     if math.isinf(bulk):
         return a0
 
+    log_l1 = 0.5 * math.log1p(2 * E11)
+
     def f(a):
-        return _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a)[1]
+        return _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a, log_l1)[1]
 
     lo, hi = a0, a0
     for _ in range(200):
@@ -275,7 +288,8 @@ def _fibre_scalar(name, coeffs, bulk, volumetric, E11: float) -> tuple[float, fl
         return w, float(dw_dl1 / l1)
     a = _lateral_scalar(name, coeffs, bulk, volumetric, E11)
     w = _uniaxial_energy(name, coeffs, bulk, volumetric, E11, a)
-    d_l1 = _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a)[0]
+    d_l1 = _uniaxial_derivatives(name, coeffs, bulk, volumetric, l1, a,
+                                 0.5 * math.log1p(2 * E11))[0]
     return float(w), float(d_l1 / l1)
 
 

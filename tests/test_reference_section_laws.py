@@ -257,9 +257,7 @@ def test_pure_bending_is_an_equilibrium_of_the_section_energy(name, coeffs):
 
 
 def _mp_energy(name, coeffs, bulk, volumetric, E11, a):
-    """W(l1, a, a) in 40-digit arithmetic, straight from the invariants."""
-    mp = mpmath.mp
-    mp.dps = 40
+    """W(l1, a, a) straight from the invariants, in mpmath (call under mpmath.workdps(40))."""
     l1, a = mpmath.sqrt(1 + 2 * mpmath.mpf(E11)), mpmath.mpf(a)
     J = l1 * a * a
     ib1 = J ** (-mpmath.mpf(2) / 3) * (l1**2 + 2 * a**2)
@@ -288,7 +286,8 @@ def test_fibre_energy_keeps_its_digits_at_small_strain(name, coeffs, volumetric)
         bulk = ratio * mu0
         for E11 in (1e-5, -3e-4, 2e-3):
             a = float(lateral_stretch(name, coeffs, bulk, volumetric, E11))
-            ref = float(_mp_energy(name, coeffs, bulk, volumetric, E11, a))
+            with mpmath.workdps(40):
+                ref = float(_mp_energy(name, coeffs, bulk, volumetric, E11, a))
             got = float(fibre_energy_exact(name, coeffs, bulk, volumetric, E11))
             assert got == pytest.approx(ref, rel=1e-11, abs=0)
     # incompressible neo-Hookean: w = 3/2 mu E^2 - 5/2 mu E^3 + 35/8 mu E^4 + O(E^5)
@@ -296,3 +295,20 @@ def test_fibre_energy_keeps_its_digits_at_small_strain(name, coeffs, volumetric)
         w = fibre_energy_exact("neo-hookean", {"mu": 1.0}, math.inf, "x", E11)
         series = 1.5 * E11**2 - 2.5 * E11**3 + 35 / 8 * E11**4
         assert w == pytest.approx(series, rel=1e-11, abs=0)
+
+
+@pytest.mark.parametrize("name, coeffs", LAWS)
+def test_fibre_stress_keeps_its_digits_at_small_strain(name, coeffs):
+    """s = dW/dE11 at the fixed lateral stretch (envelope theorem) vs a 40-digit derivative."""
+    mu0 = shear_modulus(name, coeffs)
+    for ratio, volumetric in ((2.0, "quadratic"), (1e4, "simo_taylor")):
+        bulk = ratio * mu0
+        for E11 in (1e-5, -3e-4, 0.3):
+            a = float(lateral_stretch(name, coeffs, bulk, volumetric, E11))
+            with mpmath.workdps(40):
+                ref = float(mpmath.diff(
+                    lambda e, a=a, bulk=bulk, v=volumetric: _mp_energy(name, coeffs, bulk, v, e,
+                                                                       a),
+                    mpmath.mpf(E11)))
+            got = float(fibre_stress_exact(name, coeffs, bulk, volumetric, E11))
+            assert got == pytest.approx(ref, rel=1e-10, abs=0)
