@@ -258,7 +258,7 @@ class StrainRange:
         K_red = W_kk - W_ke^2 / W_ee     (W(eps, kappa) at g = 0, the axial strain condensed)
         W = 1/2 EA eps^2 + 1/2 EI kappa^2 (1 + 3 eps) + 1/2 E I3 kappa^3 lambda + 1/8 E I4 kappa^4
 
-    (MODEL.md, with (1 + e)^2 = 1 + 2 eps = lambda^2 at g = 0). For a section with I3 = 0 and
+    (docs/theory.md, Non-standard energy; (1 + e)^2 = 1 + 2 eps at g = 0). For I3 = 0 and
     no axial force, minimising W over eps gives eps = -3/2 (I/A) kappa^2 and
 
         M(kappa) = EI kappa (1 - c kappa^2),   c = (9 I^2 / A - I4) / (2 I),

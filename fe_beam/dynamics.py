@@ -1,6 +1,6 @@
 """Nonlinear beam dynamics with the generalised-alpha method (Chung & Hulbert 1993).
 
-With rho_inf in [0, 1] (MODEL.md section 4):
+With rho_inf in [0, 1] (docs/theory.md, Time integration):
 
     alpha_m = (2 rho_inf - 1)/(rho_inf + 1),  alpha_f = rho_inf/(rho_inf + 1)
     gamma   = 1/2 - alpha_m + alpha_f,         beta  = (1 - alpha_m + alpha_f)^2 / 4

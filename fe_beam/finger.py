@@ -1,4 +1,4 @@
-"""Tendon-driven tapered soft finger (the finger chapter, MODEL.md section 2).
+"""Tendon-driven tapered soft finger (the finger chapter; docs/theory.md, Tendons).
 
 The finger is a `BeamModel` plus `[[tendons]]`; every table the user leaves out defaults to the
 chapter's finger: L = 0.1 m, B = 0.02 m, H from 0.02 to 0.01 m, one tendon from 8 mm offset at

@@ -1,6 +1,6 @@
 """Kinematics and constitutive laws of the planar beam, as pure functions returning UFL.
 
-Notation (MODEL.md section 1), with ' = d/dx along the reference axis:
+Notation (docs/theory.md, Kinematics), with ' = d/dx along the reference axis:
 
     1 + e = (1 + u') cos(theta) + v' sin(theta)      (= lambda cos gamma)
     g     = v' cos(theta) - (1 + u') sin(theta)      (= lambda sin gamma)
@@ -121,7 +121,7 @@ def constrained_strains(constraint: str) -> tuple[str, ...]:
 
 
 def resultants_from_formulas(eps, gamma, kappa, k: Stiffness):
-    """N, T, M of the source paper (eqs. 1-3, MODEL.md) as functions of (eps, gamma, kappa).
+    """N, T, M (source paper eqs. 1-3; docs/theory.md, Non-standard energy) of (eps, gamma, kappa).
 
     N = sin^2(g)/l GA + eps/l EA + (1 + 2 cos^2 g)/(2 l) kappa^2 EI + cos(g)/(2 l^2) kappa^3 EI3
     T = l sin(g) cos(g) GA - l sin(g) cos(g) kappa^2 EI - sin(g)/2 kappa^3 EI3

@@ -1,6 +1,6 @@
 """Cross-sections: area A and the 2nd, 3rd and 4th moments I, I3, I4 about the centroid.
 
-Sign convention (MODEL.md): eta is the transverse coordinate along the section director
+Sign convention (docs/theory.md, Conventions): eta is the transverse coordinate along the director
 d = (-sin theta, cos theta) with the sign that makes positive curvature stretch fibres at positive
 eta, i.e. eta = -y for y measured along d. Hence I3 = int eta^3 dA = -int y^3 dA: a T-section with
 its flange on the +d side (the side toward which positive curvature bends the beam) has I3 > 0.

@@ -1,4 +1,4 @@
-"""Frictionless tendons (MODEL.md section 2): potential tau * l with l = int |r_c'| dx.
+"""Frictionless tendons (docs/theory.md, Tendons): potential tau * l with l = int |r_c'| dx.
 
 The tendon path in the body frame is r_c = r + delta(x) d(theta), d = (-sin theta, cos theta),
 between an entry x_a and an anchor x_b; positive delta lies on the +d side, so pulling a tendon

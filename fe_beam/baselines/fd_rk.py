@@ -1,7 +1,7 @@
 """Finite differences in space + adaptive Runge-Kutta in time: the source paper's own scheme.
 
 A plain numpy/scipy reference solver for the planar large-displacement beam of
-``MODEL.md`` (eqs. 4-6 of the source paper), independent of FEniCSx. It is used to cross-validate
+docs/theory.md (eqs. 4-6 of the source paper), independent of FEniCSx. It is used to cross-validate
 and benchmark the finite-element statics and the generalised-alpha dynamics.
 
 Discretisation

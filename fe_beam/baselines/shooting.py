@@ -1,7 +1,7 @@
 """Tendon-driven tapered finger: linear Cosserat statics solved by shooting.
 
 A plain numpy/scipy reference solver, independent of FEniCSx, for the finger chapter's own model
-(chapter eqs. 3.1-3.9; ``MODEL.md`` sections 1, 2 and 5). It is used to verify the finite-element
+(chapter eqs. 3.1-3.9; docs/theory.md, Tendons). It is used to verify the finite-element
 tendon model.
 
 Model
@@ -18,7 +18,7 @@ with a tapered rectangle ``H(x) = H0 + (H1 - H0) x / L``, ``A = B H``, ``J_b = B
 (eq. 3.9). ``n`` and ``m`` are the force and moment exerted by the part beyond ``x`` on the part
 before it; equilibrium (eq. 3.4, planar) reads ``n' + f = 0``, ``m' + (r' x n)_z + l = 0``.
 
-Tendons (``MODEL.md`` section 2): path ``r_c = r + delta(x) d`` for ``x in (x_a, x_b)``, constant
+Tendons (docs/theory.md, Tendons): path ``r_c = r + delta(x) d`` for ``x in (x_a, x_b)``, constant
 tension ``tau``, potential ``tau * l`` with ``l = int |r_c'| dx``. Writing
 ``r_c' = alpha t + beta d`` with ``alpha = 1 + q - delta theta'``, ``beta = delta'`` and
 ``w = |r_c'|``, the unit tendon tangent is ``t_c = (alpha t + beta d) / w`` and the tendon angle

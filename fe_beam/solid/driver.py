@@ -8,7 +8,7 @@ small-strain limit of the 3D law, so that both results can be compared and opene
 ParaView (same coordinates: x along the finger, y up, z across; the origin is the centroid of the
 clamped face, which is where the rod's axis starts).
 
-3D set-up (MODEL.md section 3): the body 0 <= x <= L, |y| <= H(x)/2, |z| <= B/2 with
+3D set-up (docs/theory.md, 3D finger and cable): body 0 <= x <= L, |y| <= H(x)/2, |z| <= B/2, with
 H(x) = h + (h_tip - h) x / L is clamped at x = 0; ``[loads] tip_force`` is a uniform dead traction
 on the tip face; a tendon with offset delta(x) becomes the cable through (x, delta(x), z) with
 z = 0 (several branches of one tendon, e.g. a loop: z = B ((k + 1/2)/n - 1/2), k = 0 .. n-1).
