@@ -492,6 +492,11 @@ class BeamProblem:
         parts = ufl.split(self.w)
         return parts[0], parts[1], parts[2], dict(zip(self.multipliers, parts[3:], strict=True))
 
+    def energy_density(self, s):
+        """Stored energy per unit reference length of the rod law at the strains ``s`` (a
+        `fe_beam.laws.Strains`): the one entry point for schemes that need W(strains)."""
+        return strain_energy(self.model.options.law, s, self.stiffness)
+
     def stored_energy(self, parts):
         """int W dx (+ extra energy such as tendons) of the state ``parts`` = (u, v, theta)."""
         u, v, theta = parts

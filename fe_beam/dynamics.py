@@ -33,9 +33,10 @@ from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
-__all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "TimeSettings", "alpha_parameters"]
+__all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
+           "alpha_parameters"]
 
-SCHEMES = ("generalized-alpha", "fd-rk45", "fd-dop853")
+SCHEMES = ("generalized-alpha", "energy-conserving", "fd-rk45", "fd-dop853")
 
 
 class DynamicsFailed(RuntimeError):
@@ -141,7 +142,65 @@ def strain_rates(parts, rates):
     return rate(s.eps), rate(s.g), rate(s.kappa)
 
 
-class GeneralizedAlpha:
+class StepDriver:
+    """The step-size driver shared by the time integrators (`GeneralizedAlpha`,
+    `fe_beam.energy_momentum.EnergyMomentum`): cut-back on a failed step, optional local error
+    control. A subclass provides ``problem``, ``settings``, ``time`` and ``step(dt)`` (raises
+    SolveFailed), ``reject()``, ``accept()``, ``local_error()``."""
+
+    def run(self, on_output: Callable[[float, int], None] | None = None,
+            progress: bool = True) -> dict:
+        """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
+        s = self.settings
+        dt, steps, rejected, newton = s.dt, 0, 0, 0
+        length = self.problem.model.length
+        bar = ProgressBar(self.problem.comm, total=s.t_end, label="time", enabled=progress,
+                          unit="s")
+        started = time.perf_counter()
+        if on_output is not None:
+            on_output(self.time, 0)
+        try:
+            while self.time < s.t_end * (1 - 1e-12):
+                trial = min(dt, s.t_end - self.time)
+                try:
+                    iterations = self.step(trial)
+                except SolveFailed as failure:
+                    self.reject()
+                    rejected += 1
+                    dt = trial / 2
+                    if dt < s.smallest_step:
+                        raise DynamicsFailed(
+                            f"time step fell below {s.smallest_step:.3g} s at t = "
+                            f"{self.time:.6g} s ({failure}); last converged time "
+                            f"{self.time:.6g} s", self.time) from None
+                    bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({failure})")
+                    continue
+                if s.adaptive:
+                    error = self.local_error()
+                    allowed = s.tol * length
+                    factor = 0.9 * (allowed / max(error, 1e-300)) ** (1 / 3)
+                    if error > allowed and trial > s.smallest_step:
+                        self.reject()
+                        rejected += 1
+                        dt = max(trial * max(0.2, factor), s.smallest_step)
+                        continue
+                    dt = min(trial * min(2.0, max(0.2, factor)), s.largest_step)
+                elif dt < s.dt and iterations <= 4:
+                    dt = min(2 * dt, s.dt)  # grow back after a cut-back
+                self.accept()
+                steps += 1
+                newton += iterations
+                bar.update(self.time, f"t = {self.time:.4g} s, dt = {trial:.3g} s")
+                if on_output is not None and (steps % s.output_interval == 0
+                                              or self.time >= s.t_end * (1 - 1e-12)):
+                    on_output(self.time, steps)
+        finally:
+            bar.close()
+        return {"steps": steps, "rejected_steps": rejected, "newton_iterations": newton,
+                "wall_time_s": time.perf_counter() - started}
+
+
+class GeneralizedAlpha(StepDriver):
     """Generalised-alpha time integration of a `BeamProblem` (all laws and constraints).
 
     ``load_function(t)`` scales every load, ``motion_function(t)`` the prescribed end values.
@@ -392,58 +451,6 @@ class GeneralizedAlpha:
                     for i in range(3)]
             self._motion = np.concatenate(dofs)
         return self._motion
-
-    # --- driver -------------------------------------------------------------------------------
-    def run(self, on_output: Callable[[float, int], None] | None = None,
-            progress: bool = True) -> dict:
-        """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
-        s = self.settings
-        dt, steps, rejected, newton = s.dt, 0, 0, 0
-        length = self.problem.model.length
-        bar = ProgressBar(self.problem.comm, total=s.t_end, label="time", enabled=progress,
-                          unit="s")
-        started = time.perf_counter()
-        if on_output is not None:
-            on_output(self.time, 0)
-        try:
-            while self.time < s.t_end * (1 - 1e-12):
-                trial = min(dt, s.t_end - self.time)
-                try:
-                    iterations = self.step(trial)
-                except SolveFailed as failure:
-                    self.reject()
-                    rejected += 1
-                    dt = trial / 2
-                    if dt < s.smallest_step:
-                        raise DynamicsFailed(
-                            f"time step fell below {s.smallest_step:.3g} s at t = "
-                            f"{self.time:.6g} s ({failure}); last converged time "
-                            f"{self.time:.6g} s", self.time) from None
-                    bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({failure})")
-                    continue
-                if s.adaptive:
-                    error = self.local_error()
-                    allowed = s.tol * length
-                    factor = 0.9 * (allowed / max(error, 1e-300)) ** (1 / 3)
-                    if error > allowed and trial > s.smallest_step:
-                        self.reject()
-                        rejected += 1
-                        dt = max(trial * max(0.2, factor), s.smallest_step)
-                        continue
-                    dt = min(trial * min(2.0, max(0.2, factor)), s.largest_step)
-                elif dt < s.dt and iterations <= 4:
-                    dt = min(2 * dt, s.dt)  # grow back after a cut-back
-                self.accept()
-                steps += 1
-                newton += iterations
-                bar.update(self.time, f"t = {self.time:.4g} s, dt = {trial:.3g} s")
-                if on_output is not None and (steps % s.output_interval == 0
-                                              or self.time >= s.t_end * (1 - 1e-12)):
-                    on_output(self.time, steps)
-        finally:
-            bar.close()
-        return {"steps": steps, "rejected_steps": rejected, "newton_iterations": newton,
-                "wall_time_s": time.perf_counter() - started}
 
 
 def period_from_crossings(times: np.ndarray, signal: np.ndarray) -> float:

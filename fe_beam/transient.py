@@ -3,7 +3,7 @@
 Extra tables over the statics config:
 
     [time]    t_end, dt, rho_inf, adaptive, tol, min_dt, max_dt, output_every,
-              scheme = "generalized-alpha" | "fd-rk45" | "fd-dop853"
+              scheme = "generalized-alpha" | "energy-conserving" | "fd-rk45" | "fd-dop853"
     [initial] from_static (solve the static problem under [loads] first), velocity =
               ["u_t(x)", "v_t(x)", "theta_t(x)"] formulas in x, angular_velocity (rigid spin)
     [loads]   time_function = "formula in t" or time_table = [[t, f], ...] (scales every load),
@@ -25,6 +25,7 @@ from fe_beam import compat, runctl
 from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
+from fe_beam.energy_momentum import EnergyMomentum
 from fe_beam.outputs import (
     BeamXDMFWriter,
     RunOutput,
@@ -49,7 +50,8 @@ TIME_KEYS = {
     "min_dt": Key(NUMBER, None, "smallest step [s]"),
     "max_dt": Key(NUMBER, None, "largest step [s]"),
     "output_every": Key((int,), None, "write every n-th step (default: ~200 outputs)"),
-    "scheme": Key((str,), "generalized-alpha", "generalized-alpha | fd-rk45 | fd-dop853"),
+    "scheme": Key((str,), "generalized-alpha",
+                  "generalized-alpha | energy-conserving | fd-rk45 | fd-dop853"),
 }
 INITIAL_KEYS = {
     "from_static": Key((bool,), False, "start from the static solution under [loads]"),
@@ -196,7 +198,7 @@ class DynamicResult:
 
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                 progress: bool = True) -> DynamicResult:
-    if config.time.scheme != "generalized-alpha":
+    if config.time.scheme.startswith("fd-"):
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
     steps = config.time.t_end / config.time.dt
@@ -230,8 +232,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             summary = _dynamic_summary(result, config, result.info["wall_time_s"])
             files.finish(summary | {"prestate": prestate}, writer)
             return result
-    integrator = GeneralizedAlpha(problem, config.time, config.damping, config.load_function,
-                                  config.motion_function, config.static.solver)
+    scheme = EnergyMomentum if config.time.scheme == "energy-conserving" else GeneralizedAlpha
+    integrator = scheme(problem, config.time, config.damping, config.load_function,
+                        config.motion_function, config.static.solver)
     integrator.watch = watch
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
