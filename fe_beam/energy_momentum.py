@@ -34,7 +34,7 @@ momentum balances exactly. Follower loads are allowed but their work is not in t
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import basix
 import numpy as np
@@ -48,7 +48,7 @@ from fe_beam.laws import Strains
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
-__all__ = ["EnergyMomentum", "MAX_ROTATION_INCREMENT"]
+__all__ = ["EnergyMomentum", "MAX_ROTATION_INCREMENT", "tendon_length_density"]
 
 # a step whose rotation increment reaches this anywhere is rejected (cut back): the Cayley
 # parameter 2 tan(Dtheta/2) grows without bound towards pi
@@ -70,6 +70,12 @@ def _perp(vector):
     return ufl.as_vector([-vector[1], vector[0]])
 
 
+def tendon_length_density(s: Strains, delta, delta_prime):
+    """|r_c'| of a tendon at offset delta(x) in terms of the strains (the body-frame form of
+    `fe_beam.tendons.tendon_length_density`): sqrt((1 + e - delta kappa)^2 + (g + delta')^2)."""
+    return ufl.sqrt((s.one_plus_e - delta * s.kappa) ** 2 + (s.g + delta_prime) ** 2)
+
+
 class EnergyMomentum(StepDriver):
     """Energy-momentum integration of a `BeamProblem` (all laws through
     ``problem.energy_density``, all constraints, tapered sections, prescribed end motions).
@@ -81,7 +87,14 @@ class EnergyMomentum(StepDriver):
     def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),
                  load_function: Callable[[float], float] = lambda t: 1.0,
                  motion_function: Callable[[float], float] | None = None,
-                 solver_settings: SolverSettings | None = None):
+                 solver_settings: SolverSettings | None = None,
+                 potentials: Sequence[tuple[Callable, Callable[[float], float]]] = ()):
+        """``potentials``: load potentials that are functions of the strains, e.g. a tendon's
+        tau l: pairs (density, time_function) with density(strains) the potential per unit
+        length at the energy Gauss points at factor 1 (a `fe_beam.laws.Strains` of UFL
+        expressions; see `tendon_length_density`), scaled in each step by the mean of
+        time_function over the step; their work (minus the change of the potential) is part of
+        external_work."""
         if problem.model.material.rho <= 0:
             raise ValueError("dynamics needs material.rho > 0")
         if problem.extra_energy is not None:
@@ -107,6 +120,7 @@ class EnergyMomentum(StepDriver):
         self.dt = const(settings.dt)
         self.c = const(damping.c)
         self.eta = const(damping.kelvin_voigt)
+        self.potentials = [(density, timing, const(0.0)) for density, timing in potentials]
         self.bcs, self._bc_values = self._dirichlet_conditions()
         self._build_forms()
         self.solver = SNESSolver(NonlinearProblem(self.residual, self.unknown, self.bcs),
@@ -124,8 +138,14 @@ class EnergyMomentum(StepDriver):
         gamma = _rotate_back(cos_t, sin_t, tangent)
         return [gamma[0], gamma[1], (ufl.dot(tangent, tangent) - 1) / 2, kappa]
 
-    def _energy(self, pi):
-        return self.problem.energy_density(Strains(*pi))
+    def _energy(self, pi, potentials: bool = True):
+        """The energy density of the step: the rod law's W(pi) plus the load potentials at
+        their mean factors."""
+        energy = self.problem.energy_density(Strains(*pi))
+        if potentials:
+            for density, _, factor in self.potentials:
+                energy += factor * density(Strains(*pi))
+        return energy
 
     def _build_forms(self) -> None:
         p = self.problem
@@ -211,10 +231,12 @@ class EnergyMomentum(StepDriver):
         damping_work = self.c * ufl.dot(increment, increment) / dt * dx_m
         if self.damping.kelvin_voigt > 0:
             damping_work += sum(s * d for s, d in zip(kv_stress, dpi, strict=True)) * dx_e
+        self.potential_forms = [fem.form(density(Strains(*pi0)) * dx_e)
+                                for density, _, _ in self.potentials]
         self.forms = {
             "kinetic": fem.form(0.5 * (rho_area * (v[0] ** 2 + v[1] ** 2)
                                        + rho_inertia * v[2] ** 2) * dx_m),
-            "strain": fem.form(self._energy(pi0) * dx_e),
+            "strain": fem.form(self._energy(pi0, potentials=False) * dx_e),
             "load_potential": fem.form(p.dead_load_work(tuple(q[:3]))),
             "damping_work": fem.form(damping_work),
             "momentum_x": fem.form(rho_area * v[0] * dx_m),
@@ -282,6 +304,7 @@ class EnergyMomentum(StepDriver):
         self._work = 0.0
         self._dissipated = 0.0
         self._load_energy = self._unit_load_energy()
+        self._potential_values = [assemble_scalar(form) for form in self.potential_forms]
         self.energy0 = self.energies()
 
     def _initial_acceleration(self) -> np.ndarray:
@@ -328,6 +351,8 @@ class EnergyMomentum(StepDriver):
         t_old, t_new = self.time, self.time + dt
         self.dt.value = dt
         p.load_factor.value = self._load_mid(t_old, t_new)
+        for _, timing, factor in self.potentials:
+            factor.value = 0.5 * (timing(t_old) + timing(t_new))
         p.set_prescribed_factor(self.motion_function(t_new))
         self._set_boundary_values(t_new)
         unknown, old = compat.local_array(self.unknown), compat.local_array(self.q_old)
@@ -383,6 +408,10 @@ class EnergyMomentum(StepDriver):
         load_energy = self._unit_load_energy()
         self._work += load_mid * (load_energy - self._load_energy)
         self._load_energy = load_energy
+        for index, (_, _, factor) in enumerate(self.potentials):
+            value = assemble_scalar(self.potential_forms[index])
+            self._work -= float(factor.value) * (value - self._potential_values[index])
+            self._potential_values[index] = value
         self.time = t_new
         if self._trial_range is not None:
             self.watch.observe(self._trial_range)

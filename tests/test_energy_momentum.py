@@ -7,8 +7,10 @@ import math
 
 import numpy as np
 import pytest
+import ufl
 from beam_cases import NU, RHO, E, square
 from beam_cases import dynamic_rod as rod
+from dolfinx import fem
 from mpi4py import MPI
 from test_cli_dynamics import DYNAMIC, run, with_change
 
@@ -21,10 +23,13 @@ from fe_beam import (
     ModelOptions,
     Section,
     Supports,
+    tendons,
 )
 from fe_beam.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
-from fe_beam.energy_momentum import EnergyMomentum
+from fe_beam.energy_momentum import EnergyMomentum, tendon_length_density
+from fe_beam.laws import strains
 from fe_beam.modes import natural_frequencies
+from fe_beam.mpi import assemble_scalar
 
 L = 1.0
 H = 0.005  # L/h = 200
@@ -302,3 +307,42 @@ def test_energy_momentum_parallel_equals_serial():
     for key in ("momentum_x", "momentum_y", "angular_momentum"):
         assert results[0]["momenta"][key] == pytest.approx(results[1]["momenta"][key],
                                                            rel=1e-9)
+
+
+def test_tendon_like_potential_in_strain_space_is_balanced():
+    """A load potential written in the strains (a tendon at constant offset delta along the
+    whole rod, tension ramped by its own time function): its body-frame length density equals
+    fe_beam.tendons' global form on a deformed state, and the energy balance (the tendon's work
+    -tau_mid Delta l in external_work) holds to 1e-9."""
+    h, delta, tension = 0.02, 0.006, 2.0
+    problem = BeamProblem(rod(h, "nonstandard", elements=8))
+    # the same |r_c'| in both forms, on a deformed state with a varying offset
+    problem.w.sub(0).interpolate(lambda x: 0.1 * x[0] ** 2)
+    problem.w.sub(1).interpolate(lambda x: 0.3 * x[0] ** 2 - 0.05 * x[0])
+    problem.w.sub(2).interpolate(lambda x: 0.8 * x[0] + 0.2 * x[0] ** 2)
+    x = ufl.SpatialCoordinate(problem.mesh)[0]
+    offset = delta * (1 + x)
+    u, v, theta, _ = problem.fields()
+    body = tendon_length_density(strains(u, v, theta), offset, offset.dx(0))
+    space = tendons.tendon_length_density((u, v, theta), offset, offset.dx(0))
+    values = [assemble_scalar(fem.form(f * problem.dx_energy)) for f in (body, space)]
+    assert values[0] == pytest.approx(values[1], rel=1e-13)
+    assert abs(values[0] - 1.0) > 0.05  # a real stretch of the tendon
+    problem.w.x.array[:] = 0.0
+    ramp = 0.3 * first_period(h)
+    integrator = EnergyMomentum(
+        problem, TimeSettings(t_end=1.5 * first_period(h), dt=first_period(h) / 40,
+                              output_every=1),
+        load_function=lambda t: 0.0,
+        potentials=[(lambda s: tension * tendon_length_density(s, delta, 0.0),
+                     lambda t: min(t / ramp, 1.0))])
+    integrator.initialise()
+    history = []
+    integrator.run(lambda t, step: history.append({"energy": integrator.energies(),
+                                                   "tip": problem.end_values()}),
+                   progress=False)
+    integrator.solver.destroy()
+    assert balance_error(history) < 1e-9
+    assert history[-1]["energy"]["external_work"] > 0
+    # it bends toward +y (positive offset), by about the static EI kappa = tau delta
+    assert max(x["tip"]["theta"] for x in history) > 0.5 * tension * delta / (E * h**4 / 12)
