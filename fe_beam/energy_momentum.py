@@ -115,6 +115,16 @@ class EnergyMomentum(StepDriver):
         self.gauss_space = compat.function_space(mesh, quadrature)
         self._gauss_points = basix.make_quadrature(basix.CellType.interval, degree)[0]
         self.theta_q, self.kappa_q = (fem.Function(self.gauss_space) for _ in range(2))
+        # The Gauss-point terms get their own integration domain (every cell, tag 1): FFCx
+        # (0.5) merges the integrals of one domain into one kernel, and a Quadrature-element
+        # coefficient in a kernel with several rules was evaluated wrongly (degree 1: the
+        # kinetic and stored energy changes no longer matched the residual; the scheme lost its
+        # exact balance).
+        cells = np.arange(mesh.topology.index_map(1).size_local
+                          + mesh.topology.index_map(1).num_ghosts, dtype=np.int32)
+        tags = compat.meshtags(mesh, 1, cells, np.ones(len(cells), dtype=np.int32))
+        self.dx_gauss = ufl.Measure("dx", domain=mesh, subdomain_data=tags, subdomain_id=1,
+                                    metadata={"quadrature_degree": degree})
         self.q_old, self.v_old, self.unknown = (fem.Function(space) for _ in range(3))
         const = lambda value: fem.Constant(mesh, float(value))  # noqa: E731
         self.dt = const(settings.dt)
@@ -194,7 +204,7 @@ class EnergyMomentum(StepDriver):
         velocity_mid = increment / dt
         acceleration = 2 * (increment - dt * v0) / dt**2  # (v1 - v0)/dt
         angular = (2 * psi / dt - 2 * w0) / dt  # (w1 - w0)/dt
-        dx_e, dx_m = p.dx_energy, self.dx_mass
+        dx_e, dx_m = self.dx_gauss, self.dx_mass
         residual = (rho_area * ufl.dot(acceleration, dr) + rho_inertia * angular * tp[2]
                     + self.c * ufl.dot(velocity_mid, dr)) * dx_m
         if self.damping.kelvin_voigt > 0:

@@ -66,10 +66,10 @@ def balance_error(history):
     return max(abs(h["energy"]["balance_residual"]) for h in history) / scale
 
 
-def step_loaded(law="nonstandard", constraint="none", section=None, elements=8):
+def step_loaded(law="nonstandard", constraint="none", section=None, elements=8, degree=2):
     section = section or square(H)
     return BeamModel(L, section, Material(E, nu=NU, rho=RHO), ModelOptions(law, constraint),
-                     Discretisation(elements, 2), Supports(),
+                     Discretisation(elements, degree), Supports(),
                      Loads(tip_force=(0.0, -K_LOAD * EI / L**2)))
 
 
@@ -91,23 +91,43 @@ def test_energy_exact_for_a_step_loaded_cantilever_at_any_step(steps_per_period)
         -K_LOAD * EI / L**2 * final["tip"]["v"], rel=1e-12)
 
 
-@pytest.mark.parametrize(("law", "constraint", "tapered"), [
-    ("reissner", "none", False),
-    ("reissner", "inextensible-unshearable", False),
-    ("nonstandard", "unshearable", False),
-    ("nonstandard", "none", True),
+@pytest.mark.parametrize(("law", "constraint", "tapered", "degree"), [
+    ("reissner", "none", False, 2),
+    ("reissner", "inextensible-unshearable", False, 2),
+    ("nonstandard", "unshearable", False, 2),
+    ("nonstandard", "none", True, 2),
+    ("reissner", "none", False, 1),
+    ("nonstandard", "inextensible", True, 1),
 ])
-def test_energy_exact_with_constraints_laws_and_tapered_sections(law, constraint, tapered):
+def test_energy_exact_with_constraints_laws_and_tapered_sections(law, constraint, tapered,
+                                                                 degree):
     """The multipliers enforce the constrained strains at t_{n+1} and act through the strain
     variation: they do no work. A tapered T-section (I3 != 0) exercises every term of the
-    non-standard law with x-dependent stiffness."""
+    non-standard law with x-dependent stiffness; degree 1 has one Gauss point per element."""
     section = (Section("t-section", {"b": 0.012, "h": 0.01, "tf": 0.003, "tw": 0.004},
                        {"h": 0.006}) if tapered else None)
-    problem = BeamProblem(step_loaded(law, constraint, section))
+    problem = BeamProblem(step_loaded(law, constraint, section, elements=8 * (3 - degree),
+                                      degree=degree))
     history, _ = integrate(EnergyMomentum, problem, TimeSettings(t_end=T1, dt=T1 / 25,
                                                                  output_every=1))
     assert balance_error(history) < 1e-9
     assert min(h["tip"]["v"] for h in history) < -0.1 * L
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_energy_exact_under_body_loads_and_damping(degree):
+    """Gravity and a distributed load on a pinned-roller rod, viscous and Kelvin-Voigt
+    damping: kinetic + strain = work - dissipated to 1e-9."""
+    model = BeamModel(L, square(0.02), Material(E, nu=NU, rho=RHO), ModelOptions("reissner"),
+                      Discretisation(10 * (3 - degree), degree), Supports("pinned", "roller"),
+                      Loads(gravity=(0.0, -9.81), distributed=(0.1, -0.5)))
+    problem = BeamProblem(model)
+    history, _ = integrate(EnergyMomentum, problem, TimeSettings(t_end=1.0, dt=0.02,
+                                                                 output_every=1),
+                           Damping(c=0.05, kelvin_voigt=0.002))
+    assert balance_error(history) < 1e-9
+    final = history[-1]["energy"]
+    assert final["dissipated"] > 0.05 * final["external_work"] > 0
 
 
 def free_flight(scheme=EnergyMomentum, dt=0.01, comm=MPI.COMM_WORLD):
