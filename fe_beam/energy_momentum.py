@@ -43,6 +43,7 @@ from dolfinx import fem
 
 from fe_beam import compat
 from fe_beam.beam import COMPONENTS, BeamProblem, StrainWatch
+from fe_beam.config import ConfigError
 from fe_beam.dynamics import Damping, StepDriver, TimeSettings
 from fe_beam.laws import Strains
 from fe_beam.mpi import assemble_scalar, global_max
@@ -98,8 +99,8 @@ class EnergyMomentum(StepDriver):
         if problem.model.material.rho <= 0:
             raise ValueError("dynamics needs material.rho > 0")
         if problem.extra_energy is not None:
-            raise ValueError("time.scheme = energy-conserving does not take extra energies "
-                             "(tendons) yet")
+            raise ConfigError("[time] scheme = energy-conserving does not take tendons yet "
+                              "(use generalized-alpha, or pass them as potentials)")
         self.problem = problem
         self.settings = settings
         self.damping = damping

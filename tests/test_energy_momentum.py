@@ -366,3 +366,15 @@ def test_tendon_like_potential_in_strain_space_is_balanced():
     assert history[-1]["energy"]["external_work"] > 0
     # it bends toward +y (positive offset), by about the static EI kappa = tau delta
     assert max(x["tip"]["theta"] for x in history) > 0.5 * tension * delta / (E * h**4 / 12)
+
+
+def test_extra_energy_hook_is_refused_with_a_config_error():
+    """A problem with an extra_energy hook (tendons: not in strain space) is a user mistake for
+    this scheme (one-sentence ConfigError, exit 2 from the CLI), not a wrong answer."""
+    from fe_beam.config import ConfigError
+
+    tendon_set = tendons.TendonSet([tendons.Tendon.linear(0.005, 0.005, L, tension=1.0)], L)
+    problem = BeamProblem(rod(0.02, elements=4), breakpoints=tendon_set.breakpoints,
+                          extra_energy=tendon_set.energy)
+    with pytest.raises(ConfigError, match="energy-conserving"):
+        EnergyMomentum(problem, TimeSettings(t_end=0.1, dt=0.01))
