@@ -503,8 +503,8 @@ def _check_pairs(config: dict) -> None:
 COMMAND_TABLES = {
     "static": (),
     "finger": ("tendons", "inverse"),
-    "dynamic": ("time", "initial", "damping", "modes"),
-    "modes": ("time", "initial", "damping", "modes"),
+    "dynamic": ("time", "initial", "damping", "modes", "tendons"),
+    "modes": ("time", "initial", "damping", "modes", "tendons"),
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
 }
