@@ -160,7 +160,7 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
     and the pre-state's load steps, tuple of time functions)."""
     from dataclasses import replace
 
-    from fe_beam.finger import check_tendon_inside, parse_tendon
+    from fe_beam.finger import TENDON_KEYS, check_tendon_inside, parse_tendon
 
     given = config.get("tendons")
     if given is None:
@@ -173,6 +173,12 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
         if not isinstance(entry, dict):
             raise ConfigError(f"[[tendons]] #{index + 1} must be a table")
         entry = dict(entry)
+        allowed = list(TENDON_KEYS) + list(TENDON_TIME_KEYS)
+        unknown = [key for key in entry if key not in allowed]
+        if unknown:
+            label = entry.get("name") if isinstance(entry.get("name"), str) else f"#{index + 1}"
+            raise ConfigError(f"[[tendons]] {label!r}: unknown key {unknown[0]!r}; allowed: "
+                              f"{', '.join(allowed)}")
         timing = {key: entry.pop(key) for key in TENDON_TIME_KEYS if key in entry}
         tendon, tendon_steps = parse_tendon(index, entry, length)
         check_tendon_inside(tendon, static.model.section, length)
@@ -193,7 +199,10 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
             else:
                 functions.append(load_function or time_function())
         except TimeFunctionError as error:
-            raise ConfigError(f"{where} {error}") from None
+            key = "time_function" if formula is not None else "time_table"
+            text = str(error)
+            raise ConfigError(f"{where} {text}" if text.startswith(key) else
+                              f"{where} {key}: {text}") from None
         tendons.append(tendon)
     count = max(steps)
     if count < 1:

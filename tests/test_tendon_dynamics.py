@@ -1,0 +1,189 @@
+"""Tendons in ``fe-beam dynamic`` and ``fe-beam modes`` (issue 12, item 2): the static limit of
+a slow tension ramp is the finger's equilibrium, small oscillations about a tendon-loaded state
+have the prestressed modal frequency, the tendon's work closes the energy balance, and bad
+tendon input is refused with one sentence (exit 2)."""
+
+import copy
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+from test_config import dump_toml
+
+from fe_beam.cli import main
+from fe_beam.dynamics import period_from_crossings
+from fe_beam.finger import parse_finger, run_finger
+from fe_beam.transient import parse_dynamic, parse_modes, run_dynamic, run_modes
+
+LENGTH = 0.1
+# the chapter's finger (examples/finger.toml) on a coarser mesh
+FINGER = {
+    "beam": {"length": LENGTH},
+    "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
+    "material": {"E": 0.6e6, "nu": 0.45, "rho": 1070.0},
+    "model": {"law": "nonstandard"},
+    "mesh": {"elements": 10, "degree": 2},
+    "supports": {"x0": "clamped", "xL": "free"},
+    "loads": {"steps": 10},
+    "tendons": [{"name": "flexor", "offset_base": 0.008, "offset_tip": 0.004, "tension": 2.0}],
+    "output": {"xdmf": False, "plots": False},
+}
+
+
+def finger(**tables):
+    config = copy.deepcopy(FINGER)
+    for name, values in tables.items():
+        config.setdefault(name, {}).update(values)
+    return config
+
+
+def static_tip(config):
+    static, _ = parse_finger(copy.deepcopy(config))
+    result, _ = run_finger(static, None, progress=False)
+    assert result.status == "converged", result.message
+    return result.steps[-1]["tip"]
+
+
+def prestressed_frequencies(config, prestress=True):
+    config = copy.deepcopy(config)
+    config["modes"] = {"count": 2, "prestress": prestress}
+    static, modes = parse_modes(config)
+    summary = run_modes(static, modes, None, progress=False)
+    assert summary["status"] == "completed"
+    return summary["frequencies_hz"]
+
+
+def test_slow_ramp_reaches_the_finger_equilibrium():
+    """A smooth ramp of the tension to 2 N over 0.1 s, then hold, with near-critical viscous
+    damping of the first mode (f1 = 8.1 Hz): the transient decays by ~5.7x every 0.05 s, so
+    after 0.4 s of hold the tip is the static finger's (fe-beam finger) to < 1e-6 L (measured
+    6e-8 L). Half-way (t = 0.1) it is far from it: the run is dynamic."""
+    expected = static_tip(FINGER)
+    config = finger(damping={"c": 28.0}, time={"t_end": 0.5, "dt": 0.005, "rho_inf": 0.5})
+    config["tendons"][0]["time_function"] = "0.5*(1 - cos(pi*t/0.1)) if t < 0.1 else 1"
+    result = run_dynamic(parse_dynamic(config), None, progress=False)
+    assert result.status == "completed", result.message
+    final = result.history[-1]
+    assert final["t"] == pytest.approx(0.5)
+    assert final["tendons"]["tensions"] == [pytest.approx(2.0, rel=1e-14)]
+    error = max(abs(final["tip"]["u"] - expected["u"]), abs(final["tip"]["v"] - expected["v"]),
+                LENGTH * abs(final["tip"]["theta"] - expected["theta"]))
+    assert error < 1e-6 * LENGTH
+    middle = min(result.history, key=lambda h: abs(h["t"] - 0.1))
+    assert abs(middle["tip"]["v"] - expected["v"]) > 1e-3 * LENGTH
+    assert expected["theta"] > 0.3  # a large bend, not a linear case
+
+
+def test_small_oscillations_have_the_prestressed_frequency():
+    """Reissner law, tension 8 N (tip angle ~ 1 rad): prestress raises f1 from 8.12 to 8.89 Hz.
+    Start from the static state at 8 N, step the tension to 7.96 N: the tip oscillates about
+    the 7.96 N state at the first frequency of fe-beam modes (prestress) at 7.96 N, to 0.5%
+    (measured 0.02%)."""
+    base = finger(model={"law": "reissner"})
+    base["tendons"][0]["tension"] = 8.0
+    at_rest = prestressed_frequencies(base, prestress=False)[0]
+    reference = copy.deepcopy(base)
+    reference["tendons"][0]["tension"] = 7.96
+    expected = prestressed_frequencies(reference)[0]
+    assert abs(expected / at_rest - 1) > 0.05  # the prestress matters: the test can tell
+    period = 1 / expected
+    config = copy.deepcopy(base)
+    config["initial"] = {"from_static": True}
+    config["time"] = {"t_end": 4.2 * period, "dt": period / 60, "rho_inf": 1.0,
+                      "output_every": 1}
+    config["tendons"][0]["time_table"] = [[0.0, 0.995], [1.0, 0.995]]  # 7.96 N from t = 0
+    result = run_dynamic(parse_dynamic(config), None, progress=False)
+    assert result.status == "completed", result.message
+    t = np.array([h["t"] for h in result.history])
+    theta = np.array([h["tip"]["theta"] for h in result.history])
+    assert 0.5 < theta[0] and np.ptp(theta) < 0.05 * theta[0]  # small oscillations, bent state
+    # the tip's v: its first-mode content dominates (theta carries much of mode 2)
+    v = np.array([h["tip"]["v"] for h in result.history])
+    measured = 1 / period_from_crossings(t, v)
+    assert measured == pytest.approx(expected, rel=5e-3)
+
+
+def test_tendon_work_closes_the_energy_balance():
+    """Tension stepped 0 -> 0.5 -> 1 N (a uniform rod, straight tendon), no damping,
+    rho_inf = 1: the balance residual (kinetic + strain - tendon work) is a small fraction of
+    the work and falls faster than dt^1.5 (measured 2.3e-3 -> 3e-4 of the work from dt = 2 ms
+    to 1 ms; a dead tip moment of the same size: 2.5e-4 -> 5e-5)."""
+    config = {
+        "beam": {"length": LENGTH},
+        "section": {"shape": "rectangle", "b": 0.02, "h": 0.01},
+        "material": {"E": 0.6e6, "nu": 0.45, "rho": 1070.0},
+        "model": {"law": "nonstandard"},
+        "mesh": {"elements": 8, "degree": 2},
+        "supports": {"x0": "clamped", "xL": "free"},
+        "loads": {"time_function": "0.5*step(t - 0.01) + 0.5*step(t - 0.1)"},
+        "tendons": [{"offset_base": 0.003, "offset_tip": 0.003, "tension": 1.0}],
+    }
+    residuals = []
+    for dt in (0.002, 0.001):
+        run = copy.deepcopy(config)
+        run["time"] = {"t_end": 0.2, "dt": dt, "rho_inf": 1.0}
+        result = run_dynamic(parse_dynamic(run), None, progress=False)
+        assert result.status == "completed", result.message
+        final = result.history[-1]
+        energies = final["energies"]
+        work = energies["external_work"]
+        assert energies["tendon_work"] == work  # the only load
+        assert energies["dissipated"] == 0.0
+        # the work is of the size tau * pull-in (the tendon shortened by the pull-in)
+        assert 0.3 * final["tendons"]["pull_ins"][0] < work < 1.5 * final["tendons"]["pull_ins"][0]
+        residuals.append(max(abs(h["energies"]["balance_residual"]) for h in result.history)
+                         / work)
+    assert residuals[1] < 1e-3
+    assert residuals[0] / residuals[1] > 2**1.5
+
+
+def run_cli(tmp_path, command, config, capsys):
+    path = tmp_path / "c.toml"
+    path.write_text(dump_toml(config))
+    out = tmp_path / "out"
+    capsys.readouterr()
+    code = main([command, str(path), "--out", str(out), "--quiet"])
+    return code, capsys.readouterr().err, out
+
+
+def test_cli_dynamic_with_tendons_writes_tensions(tmp_path, capsys):
+    config = finger(time={"t_end": 0.02, "dt": 0.005}, initial={"from_static": True})
+    config["tendons"][0]["time_function"] = "1 + 0.5*t/0.02"
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    first, last = summary["history"][0], summary["history"][-1]
+    assert first["tip"] == pytest.approx(static_tip(FINGER), rel=1e-8, abs=1e-12)
+    assert last["tendons"]["tensions"] == [pytest.approx(3.0)]
+    rows = list(csv.DictReader((out / "history.csv").open()))
+    assert float(rows[-1]["tension_0"]) == pytest.approx(3.0)
+    assert float(rows[0]["pull_in_0"]) > 0  # the pre-state is already pulled in
+    assert math.isclose(float(rows[-1]["pull_in_0"]), last["tendons"]["pull_ins"][0])
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"time_function": "sin(t"}, ["'flexor'", "time_function", "never closed"]),
+    ({"time_function": "x + 1"}, ["'flexor'", "time_function", "unknown name 'x'"]),
+    ({"time_table": [[0, 1], [0, 2]]}, ["'flexor'", "time_table", "increasing"]),
+    ({"tensoin": 2.0}, ["'flexor'", "unknown key 'tensoin'", "time_function"]),
+    ({"pull_in": 0.001, "tension": None}, ["'flexor'", "pull_in", "not supported"]),
+])
+@pytest.mark.parametrize("command", ["dynamic", "modes"])
+def test_bad_tendon_input_exits_2_with_one_sentence(tmp_path, capsys, change, words, command):
+    config = finger(time={"t_end": 0.02, "dt": 0.005})
+    config["tendons"][0].update(change)
+    config["tendons"][0] = {k: v for k, v in config["tendons"][0].items() if v is not None}
+    code, err, _ = run_cli(tmp_path, command, config, capsys)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1, err
+    for word in words:
+        assert word in err, err
+    assert "Traceback" not in err
+
+
+def test_fd_scheme_refuses_tendons(tmp_path, capsys):
+    config = finger(time={"t_end": 0.02, "dt": 0.005, "scheme": "fd-rk45"})
+    code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 2 and "[[tendons]]" in err and "fd-rk45" in err, err
