@@ -189,3 +189,17 @@ def test_fd_scheme_refuses_tendons(tmp_path, capsys):
     config = finger(time={"t_end": 0.02, "dt": 0.005, "scheme": "fd-rk45"})
     code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
     assert code == 2 and "[[tendons]]" in err and "fd-rk45" in err, err
+
+
+def test_generalized_alpha_refuses_tendons_with_constraints(tmp_path, capsys):
+    """Constraints hold at t_{n+1}, the tendon's axial pull acts at t_{n+1-alpha_f}: measured
+    first-order errors (balance residual 15-80% of the work), so the combination is refused;
+    fe-beam modes (no time stepping) takes it."""
+    config = finger(time={"t_end": 0.02, "dt": 0.005},
+                    model={"constraint": "inextensible-unshearable"})
+    code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "constraint" in err and "[[tendons]]" in err, err
+    config["modes"] = {"count": 2, "prestress": True}
+    code, err, out = run_cli(tmp_path, "modes", config, capsys)
+    assert code == 0, err
