@@ -161,9 +161,6 @@ class GeneralizedAlpha:
         self.load_function = load_function
         self.motion_function = motion_function or load_function
         self.tendons = tendons
-        if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
-            raise ValueError("dynamics: tendons with pull_in (displacement control) are not "
-                             "supported; give their tension")
         space, mesh = problem.space, problem.mesh
         self.q_old, self.v_old, self.a_old = (fem.Function(space) for _ in range(3))
         params = alpha_parameters(settings.rho_inf)
@@ -203,6 +200,12 @@ class GeneralizedAlpha:
                                      problem.saddle_point, problem.comm),
                                  prefix="fe_beam_dynamic_",
                                  state_scale=problem.model.length)
+        if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
+            # pull-in control: the tensions (applied at t_{n+1-alpha_f}) are unknowns that make
+            # the tendon lengths at t_{n+1} the prescribed ones (Newton with the dynamic tangent)
+            from fe_beam.tendons import PullInSolver
+
+            self.solver = PullInSolver(self.solver, tendons)
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
@@ -312,6 +315,8 @@ class GeneralizedAlpha:
                                + alpha_f * self.load_function(t_old))
         if self.tendons is not None:  # tensions at t_{n+1-alpha_f}, like the loads
             self.tendons.set_time(t_new, t_old, alpha_f)
+            if hasattr(self.solver, "targets"):  # pull-ins at t_{n+1}, like prescribed values
+                self.solver.set_load_factor(self.tendons.pull_in_factors(t_new))
 
     def _unit_load_energy(self) -> float:
         """Dead-load work at load factor 1 on the state q_old."""

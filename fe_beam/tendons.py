@@ -240,6 +240,22 @@ class TendonSet:
                 constant.value = float(value)
         return values
 
+    def pull_in_factors(self, t: float) -> np.ndarray:
+        """f_i(t) of the pull-in controlled tendons (in order): their pull-in is pull_in_i f_i(t)
+        (`PullInSolver.set_load_factor` takes the array)."""
+        functions = getattr(self, "time_functions", None) or (lambda t: 1.0,) * len(self.tendons)
+        return np.array([float(f(t)) for tendon, f in zip(self.tendons, functions, strict=True)
+                         if tendon.controlled_by_pull_in])
+
+    def applied_tensions(self, t: float) -> np.ndarray:
+        """Tensions to report at time t: tau_i(t) of the tension-controlled tendons, the current
+        (solved) tension of the pull-in controlled ones."""
+        values = self.tension_at(t)
+        for i, tendon in enumerate(self.tendons):
+            if tendon.controlled_by_pull_in:
+                values[i] = float(self.tensions[i].value)
+        return values
+
     def step_work(self, lengths_old: np.ndarray, lengths_new: np.ndarray) -> float:
         """Work the tendons do on the rod over a step: -sum_i tau_i (l_i,new - l_i,old), tau_i the
         tension constants the step applied (the tendon potential tau l is conservative at fixed
@@ -295,10 +311,14 @@ class PullInSolver:
     def residual_norm(self) -> float:
         return self.solver.residual_norm()
 
+    def destroy(self) -> None:
+        self.solver.destroy()
+
     def set_reference_residual(self, value: float | None) -> None:
         self.solver.set_reference_residual(value)
 
-    def set_load_factor(self, value: float) -> None:
+    def set_load_factor(self, value) -> None:
+        """Pull-ins are value * pull_in: one factor, or an array (one per controlled tendon)."""
         self.load_factor = value
 
     def targets(self) -> np.ndarray:

@@ -10,9 +10,10 @@ Extra tables over the statics config:
               motion_function = "formula in t" (scales prescribed end values; default: same)
     [damping] c, kelvin_voigt
     [modes]   count, prestress (linearise about the static state under [loads])
-    [[tendons]] as for fe-beam finger (tension control), plus time_function = "formula in t"
-              or time_table = [[t, f], ...] scaling the tension (default: the [loads] one);
-              the static pre-state (from_static, prestress) applies the tensions in full
+    [[tendons]] as for fe-beam finger, plus time_function = "formula in t" or time_table =
+              [[t, f], ...] scaling the tension or pull-in (default: the [loads] one); the
+              static pre-state (from_static, prestress) applies them in full; pull_in only in
+              dynamics (the tension is then an unknown of each step)
 """
 
 from __future__ import annotations
@@ -165,9 +166,9 @@ TENDON_TIME_KEYS = ("time_function", "time_table")
 
 
 def _parse_tendons(config: dict, static: StaticConfig, command: str, load_function=None):
-    """[[tendons]] as fe-beam finger reads them (tension control only), each with an optional
-    time_function / time_table (default ``load_function``): (static config with the tendons
-    and the pre-state's load steps, tuple of time functions)."""
+    """[[tendons]] as fe-beam finger reads them (pull_in only for ``command`` "dynamic"), each
+    with an optional time_function / time_table (default ``load_function``): (static config
+    with the tendons and the pre-state's load steps, tuple of time functions)."""
     from dataclasses import replace
 
     from fe_beam.finger import TENDON_KEYS, check_tendon_inside, parse_tendon
@@ -193,7 +194,7 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
         tendon, tendon_steps = parse_tendon(index, entry, length)
         check_tendon_inside(tendon, static.model.section, length)
         where = f"[[tendons]] {tendon.name!r}"
-        if tendon.controlled_by_pull_in:
+        if tendon.controlled_by_pull_in and command != "dynamic":
             raise ConfigError(
                 f"{where}: pull_in (displacement control) is not supported by fe-beam {command}; "
                 "give its tension (fe-beam finger solves pull-in control in statics)")
@@ -348,7 +349,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
-            result.history[-1]["tendons"] = {"tensions": tendons.tension_at(t).tolist(),
+            result.history[-1]["tendons"] = {"tensions": tendons.applied_tensions(t).tolist(),
                                              "pull_ins": tendons.pull_ins().tolist()}
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.step([_history_row(result.history[-1])],
