@@ -265,3 +265,15 @@ def test_generalized_alpha_refuses_tendons_with_constraints(tmp_path, capsys):
     config["modes"] = {"count": 2, "prestress": True}
     code, err, out = run_cli(tmp_path, "modes", config, capsys)
     assert code == 0, err
+
+
+def test_finger_notes_a_tendon_time_function(tmp_path, capsys):
+    """fe-beam finger on a dynamics config: the tension applies in full, the time function is
+    noted as read by fe-beam dynamic only (not refused, not silently dropped)."""
+    config = finger()
+    config["tendons"][0]["time_function"] = "min(t, 1)"
+    code, err, out = run_cli(tmp_path, "finger", config, capsys)
+    assert code == 0, err
+    assert "[[tendons]] time_function is read by fe-beam dynamic only" in err, err
+    tip = json.loads((out / "summary.json").read_text())["steps"][-1]["tip"]
+    assert tip == pytest.approx(static_tip(FINGER), rel=1e-10, abs=1e-14)
