@@ -32,6 +32,7 @@ from fe_beam.laws import axis_tangent, strains_from_gradient
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
+from fe_beam.tendons import PullInSolver
 
 __all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "TimeSettings", "alpha_parameters"]
 
@@ -203,8 +204,6 @@ class GeneralizedAlpha:
         if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
             # pull-in control: the tensions (applied at t_{n+1-alpha_f}) are unknowns that make
             # the tendon lengths at t_{n+1} the prescribed ones (Newton with the dynamic tangent)
-            from fe_beam.tendons import PullInSolver
-
             self.solver = PullInSolver(self.solver, tendons)
         self._energy_forms()
 
@@ -315,7 +314,7 @@ class GeneralizedAlpha:
                                + alpha_f * self.load_function(t_old))
         if self.tendons is not None:  # tensions at t_{n+1-alpha_f}, like the loads
             self.tendons.set_time(t_new, t_old, alpha_f)
-            if hasattr(self.solver, "targets"):  # pull-ins at t_{n+1}, like prescribed values
+            if isinstance(self.solver, PullInSolver):  # pull-ins at t_{n+1}, like motions
                 self.solver.set_load_factor(self.tendons.pull_in_factors(t_new))
 
     def _unit_load_energy(self) -> float:
