@@ -310,3 +310,23 @@ def test_constrained_tendon_is_the_equivalent_tip_moment():
         for key in ("external_work", "balance_residual", "kinetic", "strain"):
             assert a["energies"][key] == pytest.approx(b["energies"][key], rel=1e-7,
                                                        abs=1e-12), key
+
+
+@pytest.mark.mpi
+def test_tendon_dynamics_parallel_equals_serial():
+    """A pull-in and a tension-controlled tendon, from the static pre-state: the same history
+    on all ranks (COMM_WORLD) as on one (COMM_SELF)."""
+    from mpi4py import MPI
+
+    config = finger(time={"t_end": 0.03, "dt": 0.005}, initial={"from_static": True})
+    config["tendons"][0].update({"tension": 1.0, "time_function": "1 + 10*t"})
+    config["tendons"].append({"name": "extensor", "offset_base": -0.008, "offset_tip": -0.004,
+                              "pull_in": 0.0005, "time_function": "1 - 20*t"})
+    runs = [run_dynamic(parse_dynamic(copy.deepcopy(config)), None, comm, progress=False)
+            for comm in (MPI.COMM_WORLD, MPI.COMM_SELF)]
+    for a, b in zip(runs[0].history, runs[1].history, strict=True):
+        for key in ("u", "v", "theta"):
+            assert a["tip"][key] == pytest.approx(b["tip"][key], rel=1e-9, abs=1e-14)
+        assert a["tendons"]["tensions"] == pytest.approx(b["tendons"]["tensions"], rel=1e-8)
+        assert a["energies"]["external_work"] == pytest.approx(b["energies"]["external_work"],
+                                                               rel=1e-8, abs=1e-16)
