@@ -503,8 +503,8 @@ def _check_pairs(config: dict) -> None:
 COMMAND_TABLES = {
     "static": (),
     "finger": ("tendons", "inverse"),
-    "dynamic": ("time", "initial", "damping", "modes"),
-    "modes": ("time", "initial", "damping", "modes"),
+    "dynamic": ("time", "initial", "damping", "modes", "tendons"),
+    "modes": ("time", "initial", "damping", "modes", "tendons"),
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
 }
@@ -553,6 +553,13 @@ def check_command_tables(command: str, config: dict) -> list[str]:
         if timed:
             notes.append(f"[loads] {timed[0]} is read by fe-beam dynamic only; fe-beam {command} "
                          "applies the loads in full")
+    tendons = config.get("tendons")
+    if command not in ("dynamic", "modes") and isinstance(tendons, list):
+        timed = [key for t in tendons if isinstance(t, dict)
+                 for key in ("time_function", "time_table") if key in t]
+        if timed:
+            notes.append(f"[[tendons]] {timed[0]} is read by fe-beam dynamic only; fe-beam "
+                         f"{command} applies the tensions in full")
     return notes
 
 

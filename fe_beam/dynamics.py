@@ -32,6 +32,7 @@ from fe_beam.laws import axis_tangent, strains_from_gradient
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
+from fe_beam.tendons import PullInSolver
 
 __all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
            "alpha_parameters"]
@@ -209,7 +210,9 @@ class GeneralizedAlpha(StepDriver):
     def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),
                  load_function: Callable[[float], float] = lambda t: 1.0,
                  motion_function: Callable[[float], float] | None = None,
-                 solver_settings: SolverSettings | None = None):
+                 solver_settings: SolverSettings | None = None, tendons=None):
+        """``tendons``: the problem's `fe_beam.tendons.TendonSet` (its energy hook is in the
+        problem's stored energy), tensions tension_i f_i(t) (``set_time_functions``)."""
         if problem.model.material.rho <= 0:
             raise ValueError("dynamics needs material.rho > 0")
         self.problem = problem
@@ -217,6 +220,7 @@ class GeneralizedAlpha(StepDriver):
         self.damping = damping
         self.load_function = load_function
         self.motion_function = motion_function or load_function
+        self.tendons = tendons
         space, mesh = problem.space, problem.mesh
         self.q_old, self.v_old, self.a_old = (fem.Function(space) for _ in range(3))
         params = alpha_parameters(settings.rho_inf)
@@ -256,6 +260,10 @@ class GeneralizedAlpha(StepDriver):
                                      problem.saddle_point, problem.comm),
                                  prefix="fe_beam_dynamic_",
                                  state_scale=problem.model.length)
+        if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
+            # pull-in control: the tensions (applied at t_{n+1-alpha_f}) are unknowns that make
+            # the tendon lengths at t_{n+1} the prescribed ones (Newton with the dynamic tangent)
+            self.solver = PullInSolver(self.solver, tendons)
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
@@ -333,6 +341,8 @@ class GeneralizedAlpha(StepDriver):
         self._work = 0.0
         self._dissipated = 0.0
         self._load_energy = self._unit_load_energy()
+        self._tendon_work = 0.0
+        self._tendon_lengths = self.tendons.lengths() if self.tendons is not None else None
         self.energy0 = self.energies()
 
     def _initial_acceleration(self) -> None:
@@ -361,6 +371,10 @@ class GeneralizedAlpha(StepDriver):
         alpha_f = self.params["alpha_f"]
         p.load_factor.value = ((1 - alpha_f) * self.load_function(t_new)
                                + alpha_f * self.load_function(t_old))
+        if self.tendons is not None:  # tensions at t_{n+1-alpha_f}, like the loads
+            self.tendons.set_time(t_new, t_old, alpha_f)
+            if isinstance(self.solver, PullInSolver):  # pull-ins at t_{n+1}, like motions
+                self.solver.set_load_factor(self.tendons.pull_in_factors(t_new))
 
     def _unit_load_energy(self) -> float:
         """Dead-load work at load factor 1 on the state q_old."""
@@ -417,6 +431,12 @@ class GeneralizedAlpha(StepDriver):
         load_energy = self._unit_load_energy()
         self._work += load_mid * (load_energy - self._load_energy)
         self._load_energy = load_energy
+        if self.tendons is not None:  # problem.w is the accepted state; tensions of the step
+            lengths = self.tendons.lengths()
+            step = self.tendons.step_work(self._tendon_lengths, lengths)
+            self._tendon_work += step
+            self._work += step
+            self._tendon_lengths = lengths
         self.time = t_new
         if self._trial_range is not None:
             self.watch.observe(self._trial_range)
@@ -427,9 +447,15 @@ class GeneralizedAlpha(StepDriver):
 
     def energies(self) -> dict:
         kinetic = assemble_scalar(self.forms["kinetic"])
-        strain = assemble_scalar(self.forms["strain"])
+        if self.tendons is not None:  # the rod's energy: the tendon potential is work
+            with self.tendons.slack():
+                strain = assemble_scalar(self.forms["strain"])
+        else:
+            strain = assemble_scalar(self.forms["strain"])
         values = {"kinetic": kinetic, "strain": strain, "external_work": self._work,
                   "dissipated": self._dissipated}
+        if self.tendons is not None:
+            values["tendon_work"] = self._tendon_work
         start = getattr(self, "energy0", None)
         initial = start["kinetic"] + start["strain"] if start else kinetic + strain
         values["balance_residual"] = (kinetic + strain + self._dissipated - self._work - initial)

@@ -147,6 +147,10 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     if not isinstance(tendons_given, list) or not tendons_given:
         raise ConfigError("[[tendons]] must list at least one tendon")
     static = parse_static(config)
+    # a tendon's time_function / time_table is read by fe-beam dynamic (noted, not used here)
+    timed = ("time_function", "time_table")
+    tendons_given = [{k: v for k, v in t.items() if k not in timed} if isinstance(t, dict) else t
+                     for t in tendons_given]
     parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
     for tendon, _ in parsed:
         check_tendon_inside(tendon, static.model.section, static.model.length)

@@ -79,13 +79,16 @@ class StaticContinuation:
     inverse problems and parameter sweeps, where each new equilibrium starts from the last."""
 
     def __init__(self, config: StaticConfig, comm=MPI.COMM_WORLD,
-                 problem: BeamProblem | None = None, prefix: str = "fe_beam_static_"):
+                 problem: BeamProblem | None = None, prefix: str = "fe_beam_static_",
+                 tendons: TendonSet | None = None):
         """``problem``: an existing problem of ``config.model`` to load (e.g. the static
-        pre-state of a dynamic run); built from ``config`` when None."""
-        if problem is not None and config.tendons:
-            raise ValueError("StaticContinuation: a given problem cannot take tendons")
+        pre-state of a dynamic run); built from ``config`` when None. With tendons, a given
+        problem needs its `TendonSet` (``tendons``: the one whose energy it holds)."""
+        if problem is not None and config.tendons and tendons is None:
+            raise ValueError("StaticContinuation: a given problem with tendons needs its tendons")
         self.config = config
-        self.tendons = TendonSet(config.tendons, config.model.length) if config.tendons else None
+        self.tendons = tendons or (TendonSet(config.tendons, config.model.length)
+                                   if config.tendons else None)
         self.problem = problem or BeamProblem(
             config.model,
             comm,

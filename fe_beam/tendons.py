@@ -214,6 +214,73 @@ class TendonSet:
             if not tendon.controlled_by_pull_in:
                 constant.value = load_factor * tendon.tension
 
+    # --- time-dependent tensions (dynamics; scheme-agnostic) ---------------------------------
+    def set_time_functions(self, functions: Sequence[Callable[[float], float]]) -> None:
+        """f_i(t) scaling tendon i's tension in time (one per tendon)."""
+        if len(functions) != len(self.tendons):
+            raise ValueError(f"need {len(self.tendons)} time functions, got {len(functions)}")
+        self.time_functions = tuple(functions)
+
+    def tension_at(self, t: float) -> np.ndarray:
+        """tau_i(t) = tension_i f_i(t) of the tension-controlled tendons (0 for pull-in ones)."""
+        functions = getattr(self, "time_functions", None) or (lambda t: 1.0,) * len(self.tendons)
+        return np.array([0.0 if tendon.controlled_by_pull_in else tendon.tension * float(f(t))
+                         for tendon, f in zip(self.tendons, functions, strict=True)])
+
+    def set_time(self, t_new: float, t_old: float | None = None, alpha: float = 0.0) -> np.ndarray:
+        """Set the tension constants of the tension-controlled tendons to the weighted value
+        (1 - alpha) tau(t_new) + alpha tau(t_old) that a step from t_old to t_new applies
+        (generalised-alpha: alpha = alpha_f; the midpoint rule: 1/2; t_old None: tau(t_new)).
+        Returns the tensions set."""
+        values = self.tension_at(t_new)
+        if t_old is not None and alpha:
+            values = (1 - alpha) * values + alpha * self.tension_at(t_old)
+        for tendon, constant, value in zip(self.tendons, self.tensions, values, strict=True):
+            if not tendon.controlled_by_pull_in:
+                constant.value = float(value)
+        return values
+
+    def pull_in_factors(self, t: float) -> np.ndarray:
+        """f_i(t) of the pull-in controlled tendons (in order): their pull-in is pull_in_i f_i(t)
+        (`PullInSolver.set_load_factor` takes the array)."""
+        functions = getattr(self, "time_functions", None) or (lambda t: 1.0,) * len(self.tendons)
+        return np.array([float(f(t)) for tendon, f in zip(self.tendons, functions, strict=True)
+                         if tendon.controlled_by_pull_in])
+
+    def applied_tensions(self, t: float) -> np.ndarray:
+        """Tensions to report at time t: tau_i(t) of the tension-controlled tendons, the current
+        (solved) tension of the pull-in controlled ones."""
+        values = self.tension_at(t)
+        for i, tendon in enumerate(self.tendons):
+            if tendon.controlled_by_pull_in:
+                values[i] = float(self.tensions[i].value)
+        return values
+
+    def step_work(self, lengths_old: np.ndarray, lengths_new: np.ndarray) -> float:
+        """Work the tendons do on the rod over a step: -sum_i tau_i (l_i,new - l_i,old), tau_i the
+        tension constants the step applied (the tendon potential tau l is conservative at fixed
+        tau, so this is exact for a constant tension and second order otherwise)."""
+        change = np.asarray(lengths_new) - np.asarray(lengths_old)
+        return float(-np.dot(self.tension_values(), change))
+
+    def slack(self):
+        """Context manager: all tensions 0 inside (the rod's own energy from a form that
+        includes the tendon potential, which is linear in the tensions); restored after."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def zero():
+            saved = self.tension_values()
+            for constant in self.tensions:
+                constant.value = 0.0
+            try:
+                yield
+            finally:
+                for constant, value in zip(self.tensions, saved, strict=True):
+                    constant.value = float(value)
+
+        return zero()
+
     def gradient(self, index: int, bcs) -> PETSc.Vec:
         """g_i = dl_i/dw with Dirichlet rows zeroed."""
         vector = compat.create_vector(self.gradient_forms[index])
@@ -244,10 +311,14 @@ class PullInSolver:
     def residual_norm(self) -> float:
         return self.solver.residual_norm()
 
+    def destroy(self) -> None:
+        self.solver.destroy()
+
     def set_reference_residual(self, value: float | None) -> None:
         self.solver.set_reference_residual(value)
 
-    def set_load_factor(self, value: float) -> None:
+    def set_load_factor(self, value) -> None:
+        """Pull-ins are value * pull_in: one factor, or an array (one per controlled tendon)."""
         self.load_factor = value
 
     def targets(self) -> np.ndarray:

@@ -10,6 +10,10 @@ Extra tables over the statics config:
               motion_function = "formula in t" (scales prescribed end values; default: same)
     [damping] c, kelvin_voigt
     [modes]   count, prestress (linearise about the static state under [loads])
+    [[tendons]] as for fe-beam finger, plus time_function = "formula in t" or time_table =
+              [[t, f], ...] scaling the tension or pull-in (default: the [loads] one); the
+              static pre-state (from_static, prestress) applies them in full; pull_in only in
+              dynamics (the tension is then an unknown of each step)
 """
 
 from __future__ import annotations
@@ -78,6 +82,7 @@ class DynamicConfig:
     velocity: tuple | None = None
     load_function: object = None
     motion_function: object = None
+    tendon_functions: tuple = ()  # f_i(t) scaling tendon i's tension (static.tendons)
 
 
 def _split_time_loads(config: dict) -> tuple[dict, dict]:
@@ -141,8 +146,97 @@ def parse_dynamic(config: dict) -> DynamicConfig:
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for dynamics")
     load, motion = _functions(timing)
+    static, tendon_functions = _parse_tendons(config, static, "dynamic", load)
+    if static.tendons and (settings.scheme.startswith("fd-")
+                           or settings.scheme == "energy-conserving"):
+        raise ConfigError(f"[time] scheme = {settings.scheme}: no [[tendons]] (use "
+                          "scheme = \"generalized-alpha\")")
+    constraint = static.model.options.constraint
+    if (static.tendons and settings.scheme == "generalized-alpha" and constraint != "none"
+            and settings.rho_inf > 0):
+        # measured: tip errors and balance residuals that fall only like dt (15% of the work
+        # at dt = T1/400), because the multipliers act at t_{n+1} while the tendon's axial pull
+        # acts at t_{n+1-alpha_f}
+        raise ConfigError(
+            f"[[tendons]] with [model] constraint = \"{constraint}\" are not supported by "
+            "fe-beam dynamic with scheme = \"generalized-alpha\" (its constraints hold at "
+            "t_{n+1} but the tendon pulls at t_{n+1-alpha_f}: first-order errors); use "
+            "constraint = \"none\", or rho_inf = 0 (alpha_f = 0: both at t_{n+1})")
     return DynamicConfig(static, settings, damping, initial["from_static"], _velocity(initial),
-                         load, motion)
+                         load, motion, tendon_functions)
+
+
+TENDON_TIME_KEYS = ("time_function", "time_table")
+
+
+def _parse_tendons(config: dict, static: StaticConfig, command: str, load_function=None):
+    """[[tendons]] as fe-beam finger reads them (pull_in only for ``command`` "dynamic"), each
+    with an optional time_function / time_table (default ``load_function``): (static config
+    with the tendons and the pre-state's load steps, tuple of time functions)."""
+    from dataclasses import replace
+
+    from fe_beam.finger import TENDON_KEYS, check_tendon_inside, parse_tendon
+
+    given = config.get("tendons")
+    if given is None:
+        return static, ()
+    if not isinstance(given, list) or not given:
+        raise ConfigError("[[tendons]] must list at least one tendon (write each as [[tendons]])")
+    length = static.model.length
+    tendons, functions, steps = [], [], [static.stepping.steps]
+    for index, entry in enumerate(given):
+        if not isinstance(entry, dict):
+            raise ConfigError(f"[[tendons]] #{index + 1} must be a table")
+        entry = dict(entry)
+        allowed = list(TENDON_KEYS) + list(TENDON_TIME_KEYS)
+        unknown = [key for key in entry if key not in allowed]
+        if unknown:
+            label = entry.get("name") if isinstance(entry.get("name"), str) else f"#{index + 1}"
+            raise ConfigError(f"[[tendons]] {label!r}: unknown key {unknown[0]!r}; allowed: "
+                              f"{', '.join(allowed)}")
+        timing = {key: entry.pop(key) for key in TENDON_TIME_KEYS if key in entry}
+        tendon, tendon_steps = parse_tendon(index, entry, length)
+        check_tendon_inside(tendon, static.model.section, length)
+        where = f"[[tendons]] {tendon.name!r}"
+        if tendon.controlled_by_pull_in and command != "dynamic":
+            raise ConfigError(
+                f"{where}: pull_in (displacement control) is not supported by fe-beam {command}; "
+                "give its tension (fe-beam finger solves pull-in control in statics)")
+        if tendon_steps is not None:
+            steps.append(tendon_steps)
+        formula = timing.get("time_function")
+        try:
+            if formula is not None and not isinstance(formula, str):
+                raise TimeFunctionError(
+                    f"time_function must be a string formula in t, got {formula!r}")
+            if timing:
+                functions.append(time_function(formula, timing.get("time_table")))
+            else:
+                functions.append(load_function or time_function())
+        except TimeFunctionError as error:
+            key = "time_function" if formula is not None else "time_table"
+            text = str(error)
+            raise ConfigError(f"{where} {text}" if text.startswith(key) else
+                              f"{where} {key}: {text}") from None
+        tendons.append(tendon)
+    count = max(steps)
+    if count < 1:
+        raise ConfigError(f"[[tendons]] steps must be >= 1, got {count}")
+    stepping = replace(static.stepping, steps=count, max_increment=1.0 / count,
+                       min_increment=min(static.stepping.min_increment, 1.0 / count))
+    return replace(static, tendons=tuple(tendons), stepping=stepping), tuple(functions)
+
+
+def _tendon_problem(static: StaticConfig, comm):
+    """(BeamProblem, TendonSet or None) of a configuration: the tendons' breakpoints are mesh
+    vertices and their potential is part of the stored energy."""
+    from fe_beam.tendons import TendonSet
+
+    tendons = TendonSet(static.tendons, static.model.length) if static.tendons else None
+    problem = BeamProblem(static.model, comm,
+                          breakpoints=tendons.breakpoints if tendons else (),
+                          extra_energy=tendons.energy if tendons else None)
+    return problem, tendons
 
 
 def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
@@ -151,16 +245,20 @@ def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
     if modes["count"] < 1:
         raise ConfigError(f"[modes] count must be >= 1, got {modes['count']}")
     static = parse_static(config, rigid_motion_allowed=not modes["prestress"])
+    # tendons pull on the pre-state (prestress = true) at their full tension; a tendon's time
+    # function is irrelevant here (checked all the same)
+    static, _ = _parse_tendons(config, static, "modes")
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for a modal analysis")
     return static, modes
 
 
 def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
-                     watch=None) -> None:
+                     watch=None, tendons=None) -> None:
     """Load the problem to the static state of ``static``; ``watch`` (a StrainWatch) sees
-    the strains of its converged steps."""
-    run = StaticContinuation(static, problem=problem, prefix="fe_beam_prestate_")
+    the strains of its converged steps; ``tendons``: the problem's TendonSet (full tension)."""
+    run = StaticContinuation(static, problem=problem, prefix="fe_beam_prestate_",
+                             tendons=tendons)
     if watch is not None:
         run.watch = watch
     try:
@@ -209,11 +307,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     if config.from_static:  # the load steps of the static pre-state count too
         notes += check_beam_work(config.static, config.static.stepping.steps, comm,
                                  " of load stepping (static pre-state)", quiet=out is None)
-    problem = BeamProblem(config.static.model, comm)
+    problem, tendons = _tendon_problem(config.static, comm)
+    header = _history_header(len(config.static.tendons))
     watch = StrainWatch()
     if config.from_static:
         try:
-            _static_prestate(problem, config.static, progress, watch)
+            _static_prestate(problem, config.static, progress, watch, tendons)
         except runctl.Interrupted as stop:
             stop.where = "the static pre-state (before the time stepping)"
             raise
@@ -224,7 +323,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                    dofs=problem.global_dofs, notes=notes + watch.notes(),
                                    strain_range=watch.summary())
             prestate = _prestate_record(problem, failure)
-            files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+            files = RunOutput(out, "history.csv", header, comm)
             writer = BeamXDMFWriter(problem, out / "beam.xdmf"
                                     if out is not None and config.static.output.xdmf else None)
             writer.write(0.0)
@@ -232,9 +331,15 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             summary = _dynamic_summary(result, config, result.info["wall_time_s"])
             files.finish(summary | {"prestate": prestate}, writer)
             return result
-    scheme = EnergyMomentum if config.time.scheme == "energy-conserving" else GeneralizedAlpha
-    integrator = scheme(problem, config.time, config.damping, config.load_function,
-                        config.motion_function, config.static.solver)
+    if tendons is not None:
+        tendons.set_time_functions(config.tendon_functions)
+    if config.time.scheme == "energy-conserving":  # no tendons (parse_dynamic refuses them)
+        integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,
+                                    config.motion_function, config.static.solver)
+    else:
+        integrator = GeneralizedAlpha(problem, config.time, config.damping,
+                                      config.load_function, config.motion_function,
+                                      config.static.solver, tendons=tendons)
     integrator.watch = watch
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
@@ -242,7 +347,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    files = RunOutput(out, "history.csv", HISTORY_HEADER, comm)
+    files = RunOutput(out, "history.csv", header, comm)
     files.write_summary(_dynamic_summary(result, config, 0.0))  # status "running"
     xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
@@ -252,6 +357,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
+        if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
+            result.history[-1]["tendons"] = {"tensions": tendons.applied_tensions(t).tolist(),
+                                             "pull_ins": tendons.pull_ins().tolist()}
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.step([_history_row(result.history[-1])],
                    lambda: _dynamic_summary(result, config, time.perf_counter() - started),
@@ -415,9 +523,18 @@ HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "exte
                   "dissipated"]
 
 
+def _history_header(tendons: int) -> list[str]:
+    """HISTORY_HEADER, then tension_i and pull_in_i of each tendon."""
+    return HISTORY_HEADER + [f"tension_{i}" for i in range(tendons)] + [
+        f"pull_in_{i}" for i in range(tendons)]
+
+
 def _history_row(h: dict) -> list:
-    return [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
-            *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
+    row = [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
+           *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
+    if "tendons" in h:
+        row += h["tendons"]["tensions"] + h["tendons"]["pull_ins"]
+    return row
 
 
 def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
@@ -498,13 +615,13 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
 
     started = time.perf_counter()
     check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)
-    problem = BeamProblem(static.model, comm)
+    problem, tendons = _tendon_problem(static, comm)
     if out is not None and comm.rank == 0:
         atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
     watch = StrainWatch()
     if modes["prestress"]:
         try:
-            _static_prestate(problem, static, progress, watch)
+            _static_prestate(problem, static, progress, watch, tendons)
         except PrestateFailed as failure:
             # no equilibrium (or only inadmissible ones) beyond the last converged factor:
             # the analysis failed (exit 3), no modes of a state that is not an equilibrium

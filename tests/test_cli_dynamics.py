@@ -112,7 +112,8 @@ def test_modes_count_mistakes_exit_2(tmp_path, capsys, count):
     assert code == 2 and re.search(r"modes\]? ?\.?count", err) and "Traceback" not in err, err
 
 
-@pytest.mark.parametrize("example", ["release.toml", "spin_up.toml"])
+@pytest.mark.parametrize("example", ["release.toml", "spin_up.toml", "finger_dynamics.toml",
+                                     "flying_spaghetti.toml"])
 def test_examples_run(tmp_path, capsys, example):
     path = Path(__file__).parents[1] / "examples" / example
     out = tmp_path / "out"

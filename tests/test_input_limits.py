@@ -189,8 +189,6 @@ def test_paired_time_keys_in_the_wrong_order_exit_2(tmp_path, capsys, changes, w
 
 @pytest.mark.parametrize("command, config, table", [
     ("static", FINGER, "[[tendons]]"),
-    ("dynamic", {**DYNAMIC, "tendons": FINGER["tendons"]}, "[[tendons]]"),
-    ("modes", {**DYNAMIC, "tendons": FINGER["tendons"]}, "[[tendons]]"),
     ("static", {**BASE, "inverse": {"tip_angle": 0.2}}, "[inverse]"),
 ])
 def test_table_the_command_would_ignore_is_refused(tmp_path, capsys, command, config, table):
@@ -214,6 +212,8 @@ def test_unused_tables_are_noted_not_silently_ignored():
     ("finger.toml", ("finger",)),
     ("release.toml", ("dynamic", "modes")),
     ("spin_up.toml", ("dynamic",)),
+    ("finger_dynamics.toml", ("dynamic", "modes")),
+    ("flying_spaghetti.toml", ("dynamic",)),
     ("finger_solid.toml", ("solid", "compare")),
 ])
 def test_examples_pass_the_new_checks_silently(example, commands):
@@ -273,7 +273,7 @@ def test_huge_formula_is_not_echoed_back(tmp_path, capsys):
     assert len(one_sentence(code, err, "dynamic")) < 700
 
 
-@pytest.mark.parametrize("command", ["finger", "static", "solid"])
+@pytest.mark.parametrize("command", ["finger", "static", "solid", "dynamic"])
 def test_single_tendons_table_says_to_write_an_array_of_tables(tmp_path, capsys, command):
     text = dump_toml(BASE) + "\n[tendons]\noffset_base = 0.003\noffset_tip = 0.003\ntension = 1.0\n"
     code, err, _ = run(tmp_path, command, text, capsys)
