@@ -224,6 +224,23 @@ class FibreLaw:
         return self._psi(v, a)[0] + self._volumetric(v, d)[0]
 
 
+    def tangent(self, E11, step: float = 1e-4):
+        """d2w/dE11^2 (floats or numpy arrays; central differences, ~1e-9 E accurate)."""
+        E11 = np.asarray(E11, dtype=float)
+        energy = lambda x: np.asarray(self.energy(x), dtype=float)  # noqa: E731
+        return (energy(E11 + step) - 2 * energy(E11) + energy(E11 - step)) / step**2
+
+    def min_tangent(self, low: float, high: float, samples: int = 65) -> float | None:
+        """min d2w/dE11^2 / E over E11 in [low, high] (None if the range is not one of real
+        fibres: 1 + 2 E11 <= 0 or not finite)."""
+        if not (math.isfinite(low) and math.isfinite(high) and 1 + 2 * low > 4e-4):
+            return None
+        grid = np.linspace(low, max(low, high), samples)
+        with np.errstate(all="ignore"):
+            values = self.tangent(grid) / self.young_modulus
+        return float(np.min(values)) if np.all(np.isfinite(values)) else None
+
+
 @dataclass(frozen=True)
 class SectionRule:
     """Fibre positions eta_j (about the centroid, eta = -y) and weights W_j (area elements)."""
