@@ -90,11 +90,6 @@ class ModelOptions:
                                    or not 1 <= points <= MAX_SECTION_POINTS):
             raise ValueError(f"[model] section_points must be an integer from 1 to "
                              f"{MAX_SECTION_POINTS}; got {points!r}")
-
-    @property
-    def points(self) -> int:
-        """Gauss points per section part of the hyperelastic law (the default if not given)."""
-        return self.section_points or DEFAULT_SECTION_POINTS
         if self.constraint not in CONSTRAINTS:
             raise ValueError(
                 f"model.constraint must be one of {', '.join(CONSTRAINTS)}; got {self.constraint!r}"
@@ -103,6 +98,11 @@ class ModelOptions:
             raise ValueError(
                 f"model.shear_correction must be a number in (0, 2], got {self.shear_correction!r}"
             )
+
+    @property
+    def points(self) -> int:
+        """Gauss points per section part of the hyperelastic law (the default if not given)."""
+        return self.section_points or DEFAULT_SECTION_POINTS
 
 
 @dataclass(frozen=True)

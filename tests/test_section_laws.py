@@ -26,7 +26,6 @@ from fe_beam.section_laws import (
     DEFAULT_SECTION_POINTS,
     FibreLaw,
     HyperelasticSectionLaw,
-    fibre_strain,
     section_rule,
 )
 from fe_beam.sections import Section
@@ -414,3 +413,15 @@ def test_svk_cantilever_on_two_ranks_equals_the_non_standard_rod():
     a, b = (tip(config(loads=loads, model=m), comm).steps[-1]["tip"]
             for m in ({"law": "nonstandard"}, SVK))
     assert all(abs(a[k] - b[k]) < 1e-10 for k in ("u", "v", "theta"))
+
+
+def test_a_folded_extreme_fibre_is_inadmissible():
+    """1 + e + eta kappa <= 0 at an extreme fibre: rejected like 1 + e <= 0, even though the
+    fibre energy (a function of the stretch squared) is finite there."""
+    state = StrainRange(0.9, 0.05, 0.0, None, -0.02, -0.1, 0.3, 0.5)
+    assert "folded" in state.inadmissible()
+    assert StrainRange(0.9, 0.05, 0.0, None, 0.02, -0.1, 0.3, 0.5).inadmissible() is None
+    assert StrainRange(0.9, 0.05, 0.0).inadmissible() is None  # closed-form laws: no fibres
+    law = fibre("neo-hookean", {"mu": 1.0}, 0.45)
+    stretch = 0.3  # the same fibre energy on both sides of the fold: the energy cannot tell
+    assert law.energy(((-stretch) ** 2 - 1) / 2) == law.energy((stretch**2 - 1) / 2)
