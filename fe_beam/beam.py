@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import ufl
@@ -22,6 +23,7 @@ from fe_beam import compat
 from fe_beam.laws import (
     CONSTRAINTS,
     LAWS,
+    ClosedFormLaw,
     Stiffness,
     axis_tangent,
     constrained_strains,
@@ -33,6 +35,13 @@ from fe_beam.laws import (
 )
 from fe_beam.materials import Material
 from fe_beam.mpi import global_sum
+from fe_beam.section_laws import (
+    DEFAULT_SECTION_POINTS,
+    MAX_SECTION_POINTS,
+    FibreLaw,
+    HyperelasticSectionLaw,
+    section_rule,
+)
 from fe_beam.sections import Section
 
 __all__ = [
@@ -57,15 +66,30 @@ SUPPORT_KINDS = {
 
 @dataclass(frozen=True)
 class ModelOptions:
-    """Constitutive law, kinematic constraint and (Reissner law only) shear correction k."""
+    """Constitutive law, kinematic constraint and (Reissner law only) shear correction k.
+
+    ``law = "hyperelastic"``: ``hyperelastic`` is the 3D law (a
+    `fe_beam.solid.materials.HyperelasticLaw`) whose uniaxial fibre energy is integrated over
+    the section with ``section_points`` Gauss points per section part (None: the default,
+    `fe_beam.section_laws.DEFAULT_SECTION_POINTS`); both are ignored by the other laws.
+    """
 
     law: str = "nonstandard"
     constraint: str = "none"
     shear_correction: float = 1.0
+    hyperelastic: Any = None
+    section_points: int | None = None
 
     def __post_init__(self):
         if self.law not in LAWS:
             raise ValueError(f"model.law must be one of {', '.join(LAWS)}; got {self.law!r}")
+        if self.law == "hyperelastic" and self.hyperelastic is None:
+            raise ValueError("model.law = \"hyperelastic\" needs its 3D material law")
+        points = self.section_points
+        if points is not None and (not isinstance(points, int) or isinstance(points, bool)
+                                   or not 1 <= points <= MAX_SECTION_POINTS):
+            raise ValueError(f"[model] section_points must be an integer from 1 to "
+                             f"{MAX_SECTION_POINTS}; got {points!r}")
         if self.constraint not in CONSTRAINTS:
             raise ValueError(
                 f"model.constraint must be one of {', '.join(CONSTRAINTS)}; got {self.constraint!r}"
@@ -74,6 +98,11 @@ class ModelOptions:
             raise ValueError(
                 f"model.shear_correction must be a number in (0, 2], got {self.shear_correction!r}"
             )
+
+    @property
+    def points(self) -> int:
+        """Gauss points per section part of the hyperelastic law (the default if not given)."""
+        return self.section_points or DEFAULT_SECTION_POINTS
 
 
 @dataclass(frozen=True)
@@ -220,6 +249,24 @@ class BeamModel:
             raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
         if self.material.rho == 0 and any(self.loads.gravity):
             raise ValueError("loads.gravity needs material.rho > 0")
+        if self.options.law == "hyperelastic":
+            self._check_hyperelastic()
+
+    def _check_hyperelastic(self) -> None:
+        """The section law needs the profile (custom sections: svk only), and the rod's E and G
+        are the 3D law's small-strain ones (every other output uses them)."""
+        fibre = FibreLaw.from_solid(self.options.hyperelastic)
+        if self.section.shape == "custom" and fibre.material != "svk":
+            raise ValueError(
+                f"[model] material = \"{fibre.material}\" needs the section's profile: a custom "
+                "section (only A, I, I3, I4 known) supports material = \"svk\" alone")
+        pairs = (("E", self.material.E, fibre.young_modulus),
+                 ("G", self.material.shear_modulus, fibre.shear_modulus))
+        for name, rod, law in pairs:
+            if not abs(rod - law) <= 1e-9 * abs(law):
+                raise ValueError(
+                    f"material.{name} = {rod!r} differs from the small-strain {name} = {law!r} of "
+                    "the hyperelastic law: the rod's E and G must be the law's")
 
     def stiffness_at(self, s: float = 0.0) -> dict:
         """Section stiffnesses (floats) at s = x / L."""
@@ -268,18 +315,34 @@ class StrainRange:
     K_red = dM/dkappa = EI (1 - (kappa / kappa*)^2): K_red / EI < 1 - 0.8^2 = 0.36 is exactly
     |kappa| > 0.8 kappa*. With I3 != 0 or an axial force the same test measures how much bending
     stiffness is left before the limit point (K_red = 0), where there is no equilibrium beyond.
+
+    Laws that integrate a fibre energy over the section profile (``law = "hyperelastic"``, else
+    None): ``min_fibre_stretch`` = min (1 + e + eta kappa) over the two extreme fibres of the
+    section (<= 0: a fibre folded onto itself, inadmissible like 1 + e <= 0: the fibre energy, a
+    function of the stretch squared, cannot see it); ``min_fibre_strain``, ``max_fibre_strain``:
+    the extreme fibres' Green strains E11; ``min_fibre_tangent``: the smallest d2w/dE11^2 / E of
+    the fibre law over the reached E11 range (<= 0: the fibre law is not convex there, e.g.
+    a Mooney-Rivlin fit with C01 < 0 used beyond its range).
     """
 
     min_stretch: float
     max_abs_eps: float
     max_abs_gamma: float
     min_bending_tangent: float | None = None
+    min_fibre_stretch: float | None = None
+    min_fibre_strain: float | None = None
+    max_fibre_strain: float | None = None
+    min_fibre_tangent: float | None = None
 
     def inadmissible(self) -> str | None:
         """Why the state is not admissible, or None."""
         if not self.min_stretch > 0:
             return (f"inadmissible state: axial stretch 1 + e = {self.min_stretch:.3g} <= 0 "
                     "(the beam would be turned inside out)")
+        if self.min_fibre_stretch is not None and not self.min_fibre_stretch > 0:
+            return (f"inadmissible state: the extreme fibre's axial stretch 1 + e + eta kappa = "
+                    f"{self.min_fibre_stretch:.3g} <= 0 (a fibre of the section would be folded "
+                    "onto itself)")
         return None
 
     def warnings(self) -> list[str]:
@@ -299,6 +362,11 @@ class StrainRange:
                          f"curvature beyond {BENDING_FRACTION:.0%} of the law's limit curvature, "
                          "or strong axial compression): near the limit point of the law, "
                          "beyond which there is no equilibrium")
+        if self.min_fibre_tangent is not None and not self.min_fibre_tangent > 0:
+            notes.append("the hyperelastic fibre law is not convex (d2w/dE11^2 <= 0) inside the "
+                         f"reached fibre strain range E11 = {self.min_fibre_strain:.3g} .. "
+                         f"{self.max_fibre_strain:.3g}: the material fit is used beyond the "
+                         "range where it is stable, and the answer may not be unique")
         return notes
 
 
@@ -313,17 +381,30 @@ class StrainWatch:
             self.worst = value
             return
         w = self.worst
-        tangents = [t for t in (w.min_bending_tangent, value.min_bending_tangent) if t is not None]
+
+        def extreme(name, pick):
+            known = [x for x in (getattr(w, name), getattr(value, name)) if x is not None]
+            return pick(known) if known else None
+
         self.worst = StrainRange(min(w.min_stretch, value.min_stretch),
                                  max(w.max_abs_eps, value.max_abs_eps),
                                  max(w.max_abs_gamma, value.max_abs_gamma),
-                                 min(tangents) if tangents else None)
+                                 extreme("min_bending_tangent", min),
+                                 extreme("min_fibre_stretch", min),
+                                 extreme("min_fibre_strain", min),
+                                 extreme("max_fibre_strain", max),
+                                 extreme("min_fibre_tangent", min))
 
     def notes(self) -> list[str]:
         return self.worst.warnings() if self.worst is not None else []
 
     def summary(self) -> dict | None:
-        return dataclasses.asdict(self.worst) if self.worst is not None else None
+        """The extremes as a dict (the fibre keys only for laws that integrate a profile)."""
+        if self.worst is None:
+            return None
+        data = dataclasses.asdict(self.worst)
+        fibre = ("min_fibre_stretch", "min_fibre_strain", "max_fibre_strain", "min_fibre_tangent")
+        return {k: v for k, v in data.items() if k not in fibre or v is not None}
 
 
 def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
@@ -410,10 +491,27 @@ class BeamProblem:
             EI4=self.E * p.I4,
             shear_correction=self.k_shear,
         )
+        self.law = self._make_law(x / m.length, dims, dims_tip)
         self.tip_force = fem.Constant(self.mesh, np.array(m.loads.tip_force, dtype=float))
         self.tip_moment = const(m.loads.tip_moment)
         self.distributed = fem.Constant(self.mesh, np.array(m.loads.distributed, dtype=float))
         self.gravity = fem.Constant(self.mesh, np.array(m.loads.gravity, dtype=float))
+
+    def _make_law(self, s, dims: dict, dims_tip: dict):
+        """The constitutive law object: ``energy(strains)`` and ``fibre_stretches(strains)``."""
+        options = self.model.options
+        if options.law != "hyperelastic":
+            return ClosedFormLaw(options.law, self.stiffness)
+        fibre = FibreLaw.from_solid(options.hyperelastic)
+        constants = {name: fem.Constant(self.mesh, float(value))
+                     for name, value in fibre.coefficients.items() if np.isfinite(value)}
+        rule = section_rule(self.model.section, options.points, s, dims, dims_tip)
+        return HyperelasticSectionLaw(fibre, rule, self.G * self.section_props.A,
+                                      self.stiffness, constants)
+
+    def law_energy(self, s):
+        """The law's energy density (per unit reference length) of the strains ``s``."""
+        return self.law.energy(s)
 
     def _mark_ends(self) -> None:
         """End markers, the tip measure, and the tolerance every point is located with.
@@ -500,8 +598,7 @@ class BeamProblem:
     def stored_energy(self, parts):
         """int W dx (+ extra energy such as tendons) of the state ``parts`` = (u, v, theta)."""
         u, v, theta = parts
-        law = self.model.options.law
-        total = strain_energy(law, strains(u, v, theta), self.stiffness) * self.dx_energy
+        total = self.law_energy(strains(u, v, theta)) * self.dx_energy
         if self.extra_energy is not None:
             total += self.extra_energy(self, parts)
         return total
@@ -610,7 +707,7 @@ class BeamProblem:
         tangent = ufl.variable(axis_tangent(u, v))
         kappa = ufl.variable(theta.dx(0))
         s = strains_from_gradient(tangent, theta, kappa)
-        energy = strain_energy(self.model.options.law, s, self.stiffness)
+        energy = self.law_energy(s)
         energy += sum((value * getattr(s, n) for n, value in multipliers.items()), ufl.zero())
         normal, shear, moment, axial = section_resultants(energy, tangent, kappa)
         plain = strains(u, v, theta)
@@ -632,27 +729,42 @@ class BeamProblem:
         compiled, count = self._strain_expression
         cells = np.arange(self.mesh.topology.index_map(1).size_local, dtype=np.int32)
         values = compat.evaluate_expression(compiled, self.mesh, cells).reshape(-1, count)
-        local = np.full(4, np.inf)
+        fibres = count > 4
+        local = np.full(7 if fibres else 4, np.inf)
+
+        def smallest(column):
+            return np.min(np.where(np.isfinite(column), column, -np.inf))
+
         if len(values):
             with np.errstate(invalid="ignore"):
-                stretch = values[:, 0]
-                local[0] = np.min(np.where(np.isfinite(stretch), stretch, -np.inf))
+                local[0] = smallest(values[:, 0])
                 local[1] = -np.max(np.abs(values[:, 1]))
                 local[2] = -np.max(np.abs(values[:, 2]))
-                tangent = values[:, 3]
-                local[3] = np.min(np.where(np.isfinite(tangent), tangent, -np.inf))
+                local[3] = smallest(values[:, 3])
+                if fibres:
+                    local[4] = smallest(values[:, 4:6])
+                    local[5] = smallest(values[:, 6:8])
+                    local[6] = smallest(-values[:, 6:8])
         reduced = np.empty_like(local)
         self.comm.Allreduce(local, reduced, op=MPI.MIN)
         reduced = np.where(np.isnan(reduced), -np.inf, reduced)
         bending = None if not self._bending_limit_applies() else float(reduced[3])
-        return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), bending)
+        fibre = {}
+        if fibres:
+            low, high = float(reduced[5]), float(-reduced[6])
+            fibre = {"min_fibre_stretch": float(reduced[4]), "min_fibre_strain": low,
+                     "max_fibre_strain": high,
+                     "min_fibre_tangent": self.law.fibre.min_tangent(low, high)}
+        return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), bending,
+                           **fibre)
 
     def _bending_limit_applies(self) -> bool:
         return (self.model.options.law == "nonstandard"
                 and "eps" not in constrained_strains(self.model.options.constraint))
 
     def _compile_strain_expression(self):
-        """[1 + e, eps, gamma, K_red / EI] at the Gauss points of the energy rule."""
+        """[1 + e, eps, gamma, K_red / EI (, the two extreme fibres' 1 + e + eta kappa, their
+        two E11)] at the Gauss points of the energy rule."""
         u, v, theta, _ = self.fields()
         s = strains(u, v, theta)
         gamma = ufl.atan_2(s.g, s.one_plus_e)
@@ -668,13 +780,15 @@ class BeamProblem:
             tangent = ufl.as_ufl(1.0) + 0 * s.eps
         points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)
         reference = ((points + 1) / 2).reshape(-1, 1)
-        expression = ufl.as_vector([s.one_plus_e, s.eps, gamma, tangent])
-        return compat.expression(expression, reference), 4
+        columns = [s.one_plus_e, s.eps, gamma, tangent]
+        stretches = self.law.fibre_stretches(s)
+        if stretches:  # the extreme fibres' 1 + e + eta kappa and E11
+            columns += stretches + [(x**2 + s.g**2 - 1) / 2 for x in stretches]
+        return compat.expression(ufl.as_vector(columns), reference), len(columns)
 
     def strain_energy_form(self) -> fem.Form:
         u, v, theta, _ = self.fields()
-        law = self.model.options.law
-        return fem.form(strain_energy(law, strains(u, v, theta), self.stiffness) * self.dx_energy)
+        return fem.form(self.law_energy(strains(u, v, theta)) * self.dx_energy)
 
     def rotation_dofs(self) -> np.ndarray:
         return self.component_dofs("theta")

@@ -58,11 +58,25 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rho": Key(NUMBER, 0.0, "density [kg/m^3]"),
     },
     "model": {
-        "law": Key((str,), "nonstandard", "nonstandard | reissner"),
+        "law": Key((str,), "nonstandard", "nonstandard | reissner | hyperelastic"),
         "constraint": Key(
             (str,), "none", "none | inextensible | unshearable | inextensible-unshearable"
         ),
         "shear_correction": Key(NUMBER, 1.0, "k of the Reissner law"),
+        # law = "hyperelastic" only: the 3D law (same keys, meaning and defaults as [solid])
+        "material": Key((str,), None, "hyperelastic: neo-hookean (default) | mooney-rivlin | "
+                        "yeoh | svk"),
+        "preset": Key((str,), None, "hyperelastic: silicone preset (sets the constants)"),
+        "mu": Key(NUMBER, None, "hyperelastic: shear modulus [Pa] (neo-hookean, svk)"),
+        "c10": Key(NUMBER, None, "hyperelastic: C10 [Pa] (mooney-rivlin, yeoh)"),
+        "c01": Key(NUMBER, None, "hyperelastic: C01 [Pa] (mooney-rivlin)"),
+        "c20": Key(NUMBER, None, "hyperelastic: C20 [Pa] (yeoh)"),
+        "c30": Key(NUMBER, None, "hyperelastic: C30 [Pa] (yeoh)"),
+        "kappa": Key(NUMBER, None, "hyperelastic: bulk modulus [Pa] (default from [material] "
+                     "nu)"),
+        "volumetric": Key((str,), None, "hyperelastic: simo_taylor (default) | quadratic"),
+        "section_points": Key((int,), None, "hyperelastic: Gauss points per section part "
+                              "(default 8)"),
     },
     "mesh": {
         "elements": Key((int,), 50, "number of elements"),
@@ -317,10 +331,38 @@ def parse_section(config: dict) -> Section:
     return _wrap(Section, shape, dims, dims_tip)
 
 
+#: [model] keys of law = "hyperelastic" (the 3D law, and the section quadrature)
+HYPERELASTIC_KEYS = ("material", "preset", "mu", "c10", "c01", "c20", "c30", "kappa",
+                     "volumetric", "section_points")
+
+
+def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
+    """The rod's Material and the ModelOptions keywords of the law; with law = "hyperelastic"
+    the 3D law of [model] (`fe_beam.material_laws.hyperelastic_law`) and E, G its small-strain
+    ones (E derived from a preset)."""
+    law_keys = {key: model.pop(key) for key in HYPERELASTIC_KEYS}
+    if model["law"] != "hyperelastic":
+        given = [key for key, value in law_keys.items() if value is not None]
+        if given:
+            raise ConfigError(f"[model] {given[0]} applies to law = \"hyperelastic\" only; got "
+                              f"law = {shown(model['law'])}")
+        return _wrap(Material, **table(config, "material")), {}
+    from fe_beam.material_laws import MATERIAL_KEYS, hyperelastic_law
+
+    values = dict(law_keys)
+    values["material"] = values["material"] or "neo-hookean"
+    values["volumetric"] = values["volumetric"] or "simo_taylor"
+    points = values.pop("section_points")
+    law = hyperelastic_law(config, values, "model", "law = \"hyperelastic\"")
+    rho = table(config, "material", MATERIAL_KEYS)["rho"]
+    material = _wrap(Material, E=law.young_modulus, G=law.shear_modulus, rho=rho)
+    return material, {"hyperelastic": law, "section_points": points}
+
+
 def parse_model(config: dict) -> BeamModel:
     beam = table(config, "beam")
-    material = table(config, "material")
     model = table(config, "model")
+    material, law_options = _rod_material(config, model)
     mesh = table(config, "mesh")
     supports = table(config, "supports")
     loads = table(config, "loads")
@@ -329,8 +371,8 @@ def parse_model(config: dict) -> BeamModel:
         BeamModel,
         length=beam["length"],
         section=section,
-        material=_wrap(Material, **material),
-        options=_wrap(ModelOptions, **model),
+        material=material,
+        options=_wrap(ModelOptions, **model, **law_options),
         mesh=_wrap(Discretisation, **mesh),
         supports=_wrap(
             Supports,

@@ -21,6 +21,7 @@ import ufl
 
 __all__ = [
     "CONSTRAINTS",
+    "ClosedFormLaw",
     "LAWS",
     "Stiffness",
     "Strains",
@@ -32,7 +33,7 @@ __all__ = [
     "strains_from_gradient",
 ]
 
-LAWS = ("nonstandard", "reissner")
+LAWS = ("nonstandard", "reissner", "hyperelastic")
 CONSTRAINTS = ("none", "inextensible", "unshearable", "inextensible-unshearable")
 
 
@@ -102,12 +103,32 @@ def reissner_energy(s: Strains, k: Stiffness):
 
 
 def strain_energy(law: str, s: Strains, k: Stiffness):
-    """Energy density of the named law ("nonstandard" or "reissner")."""
+    """Energy density of the named law ("nonstandard" or "reissner"; the "hyperelastic" law
+    needs its material and section: `fe_beam.section_laws.HyperelasticSectionLaw`)."""
     if law == "nonstandard":
         return nonstandard_energy(s, k)
     if law == "reissner":
         return reissner_energy(s, k)
+    if law == "hyperelastic":
+        raise ValueError("law = \"hyperelastic\" has no closed form in the section stiffnesses: "
+                         "use fe_beam.section_laws.HyperelasticSectionLaw")
     raise ValueError(f"model.law must be one of {', '.join(LAWS)}; got {law!r}")
+
+
+@dataclass(frozen=True)
+class ClosedFormLaw:
+    """A law whose energy is a closed form in the section stiffnesses ("nonstandard",
+    "reissner"): ``energy(strains)`` = strain_energy(name, strains, stiffness)."""
+
+    name: str
+    stiffness: Stiffness
+
+    def energy(self, s: Strains):
+        return strain_energy(self.name, s, self.stiffness)
+
+    def fibre_stretches(self, s: Strains) -> list:
+        """The extreme fibres' axial stretches (none: the law does not integrate a profile)."""
+        return []
 
 
 def constrained_strains(constraint: str) -> tuple[str, ...]:

@@ -312,8 +312,25 @@ def check_beam_work(config: StaticConfig, steps: float, comm, what: str = " of l
     return notes
 
 
+def hyperelastic_summary(options) -> dict:
+    """The hyperelastic law's material, constants, small-strain moduli and section points."""
+    from fe_beam.section_laws import SOLID_NAMES
+
+    law = options.hyperelastic
+    return {
+        "material": SOLID_NAMES[law.name],
+        "coefficients": law.coefficients(),
+        "volumetric": law.volumetric,
+        "small_strain": {"E": law.young_modulus, "nu": law.poisson_ratio,
+                         "G": law.shear_modulus, "kappa": law.bulk_modulus},
+        "section_points": options.points,
+    }
+
+
 def _model_summary(config: StaticConfig) -> dict:
     m = config.model
+    law = {"hyperelastic": hyperelastic_summary(m.options)} if m.options.law == "hyperelastic" \
+        else {}
     return {
         "length": m.length,
         "law": m.options.law,
@@ -325,7 +342,7 @@ def _model_summary(config: StaticConfig) -> dict:
             **m.section.dims,
             **{f"{k}_tip": v for k, v in m.section.dims_tip.items()},
         },
-    }
+    } | law
 
 
 CSV_HEADER = ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"]

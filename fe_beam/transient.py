@@ -397,6 +397,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     from fe_beam.baselines import fd_rk
 
     model = config.static.model
+    if model.options.law == "hyperelastic":
+        raise ConfigError("[time] scheme = fd-* has the non-standard and Reissner laws only, not "
+                          "[model] law = \"hyperelastic\"; use scheme = \"generalized-alpha\"")
     if model.section.tapered or model.options.constraint != "none":
         raise ConfigError("[time] scheme = fd-*: only uniform sections without constraints")
     supports = {("clamped", "free"): "clamped-free", ("pinned", "roller"): "pinned-roller"}
