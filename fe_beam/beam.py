@@ -593,7 +593,7 @@ class BeamProblem:
     def energy_density(self, s):
         """Stored energy per unit reference length of the rod law at the strains ``s`` (a
         `fe_beam.laws.Strains`): the one entry point for schemes that need W(strains)."""
-        return strain_energy(self.model.options.law, s, self.stiffness)
+        return self.law_energy(s)
 
     def stored_energy(self, parts):
         """int W dx (+ extra energy such as tendons) of the state ``parts`` = (u, v, theta)."""

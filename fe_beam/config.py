@@ -76,7 +76,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
                      "nu)"),
         "volumetric": Key((str,), None, "hyperelastic: simo_taylor (default) | quadratic"),
         "section_points": Key((int,), None, "hyperelastic: Gauss points per section part "
-                              "(default 8)"),
+                              "(default 6)"),
     },
     "mesh": {
         "elements": Key((int,), 50, "number of elements"),
