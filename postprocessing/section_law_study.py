@@ -1,7 +1,7 @@
 """Section-law study: the tendon-driven finger as a 3D hyperelastic solid against the rod with the
 section law of the same material, the non-standard law and the Reissner law (issue 15).
 
-    FE_BEAM_PROGRESS=0 .venv/bin/python postprocessing/section_law_study.py --out results/section_laws
+    FE_BEAM_PROGRESS=0 .venv/bin/python postprocessing/section_law_study.py --out results/laws
     FE_BEAM_PROGRESS=0 mpirun -n 2 .venv/bin/python postprocessing/section_law_study.py --out ...
 
 Each case is one `fe-beam compare` run (``examples/section_laws/*.toml`` with overrides): the 3D
@@ -67,7 +67,8 @@ def add_missing_rods(summary: dict, config: cmp.CompareConfig, out: Path, comm) 
         for law in config.laws:
             if law in row["rod"]:
                 continue
-            rod = run_rod(cmp.rod_at(solid.rod, law, row["load_factor"]), solid.stations, comm)
+            rod = run_rod(cmp.rod_at(solid.rod, law, row["load_factor"], solid), solid.stations,
+                          comm)
             entry = {"status": rod["status"], "message": rod["message"]}
             if rod["status"] == "converged" and rod["backbone"] is not None:
                 distance = backbone_distance(rod["backbone"], row["solid"]["backbone"])
