@@ -143,9 +143,10 @@ def rod_at(static: StaticConfig, law: str, factor: float, solid: SolidConfig | N
     ``hyperelastic`` law is the section law of ``solid``'s material (`matched_law`)."""
     model = static.model
     loads = replace(model.loads, tip_force=tuple(factor * f for f in model.loads.tip_force))
-    options = replace(model.options, law=law)
     if law == "hyperelastic" and solid is not None:
-        options = replace(options, hyperelastic=matched_law(solid))
+        options = replace(model.options, law=law, hyperelastic=matched_law(solid))
+    else:
+        options = replace(model.options, law=law)
     model = replace(model, options=options, loads=loads)
     tendons = tuple(
         replace(t, pull_in=factor * t.pull_in) if t.controlled_by_pull_in
