@@ -1,5 +1,8 @@
-"""``fe-beam compare``: the 3D solid against the 1D rod (non-standard and Reissner laws) over a
-load or tendon-tension sweep, on the same geometry and material.
+"""``fe-beam compare``: the 3D solid against the 1D rod over a load or tendon-tension sweep, on the
+same geometry and material. The rod laws (``[compare] laws``) default to all three: the section law
+of the solid's own material (``hyperelastic``: the uniaxial fibre energy of the 3D law integrated
+over the section, `fe_beam.section_laws`; with the u-p formulation the volumetric energy is the
+quadratic one that formulation uses), the non-standard law and the Reissner law.
 
 The configuration is the one of ``fe-beam solid`` (`fe_beam.solid.driver`) plus ``[compare]``
 (`COMPARE_KEYS`): the sweep is given as ``tensions`` (of the one tension-controlled tendon; the
@@ -42,12 +45,13 @@ from fe_beam.solver import LoadSteppingFailed
 
 __all__ = ["COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
 
-RODS = ("nonstandard", "reissner")
+RODS = ("hyperelastic", "nonstandard", "reissner")
 COMPARE_KEYS = {
     "tensions": Key((list,), None, "increasing tensions [N] of the one tension-controlled tendon"),
     "load_factors": Key((list,), None, "increasing load factors in (0, 1]"),
     "steps": Key((int,), None, "n: the load factors k / n, k = 1 .. n (default 5)"),
-    "laws": Key((list,), list(RODS), "rod laws compared with the solid: nonstandard, reissner"),
+    "laws": Key((list,), list(RODS), "rod laws compared with the solid: hyperelastic (the section "
+                "law of the solid's material), nonstandard, reissner"),
 }
 THRESHOLDS = (0.01, 0.05)
 MEASURE = (
@@ -124,11 +128,26 @@ def parse_compare(raw: dict) -> CompareConfig:
     return CompareConfig(solid, factors, tuple(laws), tension_axis)
 
 
-def rod_at(static: StaticConfig, law: str, factor: float) -> StaticConfig:
-    """The rod configuration with the given law and all loads scaled by ``factor``."""
+def matched_law(solid: SolidConfig):
+    """The 3D law of the solid as the rod's hyperelastic section law: the same constants, and
+    the volumetric energy the solid's formulation uses (the u-p formulation's is quadratic)."""
+    law = solid.material
+    if solid.formulation_name == "mixed-up" and law.volumetric != "quadratic":
+        law = replace(law, volumetric="quadratic")
+    return law
+
+
+def rod_at(static: StaticConfig, law: str, factor: float, solid: SolidConfig | None = None
+           ) -> StaticConfig:
+    """The rod configuration with the given law and all loads scaled by ``factor``; the
+    ``hyperelastic`` law is the section law of ``solid``'s material (`matched_law`)."""
     model = static.model
     loads = replace(model.loads, tip_force=tuple(factor * f for f in model.loads.tip_force))
-    model = replace(model, options=replace(model.options, law=law), loads=loads)
+    if law == "hyperelastic" and solid is not None:
+        options = replace(model.options, law=law, hyperelastic=matched_law(solid))
+    else:
+        options = replace(model.options, law=law)
+    model = replace(model, options=options, loads=loads)
     tendons = tuple(
         replace(t, pull_in=factor * t.pull_in) if t.controlled_by_pull_in
         else replace(t, tension=factor * t.tension)
@@ -186,6 +205,11 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
                     "elements": solid.rod.model.mesh.elements,
                     "degree": solid.rod.model.mesh.degree}},
     }
+    if "hyperelastic" in config.laws:
+        law = matched_law(solid)
+        summary["model"]["rod"]["hyperelastic"] = {
+            "material": solid.material_name, "coefficients": law.coefficients(),
+            "volumetric": law.volumetric}
 
     def save() -> None:
         summary["wall_time_s"] = time.perf_counter() - started
@@ -218,7 +242,7 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
                                                  "max_principal_stretch_bulk")}
             row["rod"] = {}
             for law in config.laws:
-                rod = run_rod(rod_at(solid.rod, law, factor), solid.stations, comm)
+                rod = run_rod(rod_at(solid.rod, law, factor, solid), solid.stations, comm)
                 summary["rod_dofs"] = rod["dofs"]
                 entry = {"status": rod["status"], "message": rod["message"]}
                 reached = rod["status"] == "converged" and rod["backbone"] is not None
@@ -316,8 +340,10 @@ def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
 
 
 STYLES = {"solid": ("-", "3D solid"), "nonstandard": ("--", "rod, non-standard law"),
-          "reissner": (":", "rod, Reissner law")}
-COLOURS = {"solid": "tab:blue", "nonstandard": "tab:orange", "reissner": "tab:green"}
+          "reissner": (":", "rod, Reissner law"),
+          "hyperelastic": ("-.", "rod, section law of the 3D material")}
+COLOURS = {"solid": "tab:blue", "nonstandard": "tab:orange", "reissner": "tab:green",
+           "hyperelastic": "tab:red"}
 
 
 def sweep_label(value: float, tension_axis: bool) -> str:
