@@ -13,7 +13,8 @@ Extra tables over the statics config:
     [[tendons]] as for fe-beam finger, plus time_function = "formula in t" or time_table =
               [[t, f], ...] scaling the tension or pull-in (default: the [loads] one); the
               static pre-state (from_static, prestress) applies them in full; pull_in only in
-              dynamics (the tension is then an unknown of each step)
+              dynamics with generalized-alpha (the tension is then an unknown of each step);
+              energy-conserving takes tension-controlled tendons as strain potentials
 """
 
 from __future__ import annotations
