@@ -320,6 +320,9 @@ class GeneralizedAlpha(StepDriver):
             "angular_momentum": fem.form((rho_area * ((x + q[0]) * v[1] - q[1] * v[0])
                                           + rho_inertia * v[2]) * dx),
         }
+        if p.model.loads.follower:  # the follower force the step applied times the increment
+            self.forms["follower_work"] = fem.form(p.follower_virtual_work(
+                tuple(ufl.split(self._step_state)[:3]), self._step_increment))
 
     # --- state --------------------------------------------------------------------------------
     def initialise(self, velocity: Callable | None = None) -> None:
@@ -423,6 +426,8 @@ class GeneralizedAlpha(StepDriver):
         compat.local_array(self._step_velocity)[:] = (1 - alpha_f) * v_new + alpha_f * v_old
         compat.local_array(self._step_increment)[:] = w - q_old
         self._dissipated += assemble_scalar(self.forms["damping_work"])
+        if "follower_work" in self.forms:  # at the step's load factor (still set)
+            self._work += assemble_scalar(self.forms["follower_work"])
         load_mid = ((1 - alpha_f) * self.load_function(t_new)
                     + alpha_f * self.load_function(t_old))
         compat.local_array(self.q_old)[:] = w

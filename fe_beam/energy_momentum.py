@@ -27,8 +27,10 @@ W(pi_n)), S_v the Kelvin-Voigt stress eta (0, GA, EA, EI) Delta pi / dt, the con
 enforced at t_{n+1}, phi = 2 atan(psi/2) (the tip moment does the work M Delta theta). Testing
 with (Delta r, psi) gives kinetic + stored energy change = work of the dead loads - dissipated
 work exactly; testing with translations and with (J r_m, 1) gives the linear and angular
-momentum balances exactly. Follower loads are allowed but their work is not in the balance
-(as for generalised-alpha). rho_inf is not used.
+momentum balances exactly. A follower tip force is applied at the midpoint state (its direction
+at theta_{n+1/2}); its work over a step, f(theta_{n+1/2}) . Delta r, is in external_work, so the
+balance stays exact with follower loads too. Tendons (tension control) are load potentials in
+the strains (``tendons``: `fe_beam.tendons.TendonSet.strain_potentials`). rho_inf is not used.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from fe_beam import compat
 from fe_beam.beam import COMPONENTS, BeamProblem, StrainWatch
 from fe_beam.config import ConfigError
 from fe_beam.dynamics import Damping, StepDriver, TimeSettings
-from fe_beam.laws import Strains
+from fe_beam.laws import Strains, strains
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
@@ -89,18 +91,35 @@ class EnergyMomentum(StepDriver):
                  load_function: Callable[[float], float] = lambda t: 1.0,
                  motion_function: Callable[[float], float] | None = None,
                  solver_settings: SolverSettings | None = None,
-                 potentials: Sequence[tuple[Callable, Callable[[float], float]]] = ()):
+                 potentials: Sequence[tuple[Callable, Callable[[float], float]]] = (),
+                 tendons=None):
         """``potentials``: load potentials that are functions of the strains, e.g. a tendon's
         tau l: pairs (density, time_function) with density(strains) the potential per unit
         length at the energy Gauss points at factor 1 (a `fe_beam.laws.Strains` of UFL
         expressions; see `tendon_length_density`), scaled in each step by the mean of
         time_function over the step; their work (minus the change of the potential) is part of
-        external_work."""
+        external_work.
+
+        ``tendons``: a `fe_beam.tendons.TendonSet` (tension control only) on ``problem``, whose
+        energy must not be the problem's extra_energy: each tendon is a potential tau_i(t) l_i
+        in the strains (`TendonSet.strain_potentials`, its own time function), its work is
+        also reported as ``tendon_work`` and its length of the state by `tendon_lengths`."""
         if problem.model.material.rho <= 0:
             raise ValueError("dynamics needs material.rho > 0")
         if problem.extra_energy is not None:
-            raise ConfigError("[time] scheme = energy-conserving does not take tendons yet "
-                              "(use generalized-alpha, or pass them as potentials)")
+            raise ConfigError("[time] scheme = energy-conserving takes tendons as potentials in "
+                              "the strains, not as the problem's extra_energy (pass tendons=)")
+        if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
+            raise ConfigError("[time] scheme = energy-conserving: [[tendons]] take a tension, "
+                              "not a pull_in (use scheme = \"generalized-alpha\" for pull-in "
+                              "control)")
+        self.tendons = tendons
+        potentials = list(potentials)
+        self._tendon_indices = []
+        if tendons is not None:
+            start = len(potentials)
+            potentials += tendons.strain_potentials(problem)
+            self._tendon_indices = list(range(start, len(potentials)))
         self.problem = problem
         self.settings = settings
         self.damping = damping
@@ -224,10 +243,16 @@ class EnergyMomentum(StepDriver):
         ratio = ufl.conditional(ufl.lt(abs(psi), SERIES), 1 - psi**2 / 12 + psi**4 / 80,
                                 2 * ufl.atan(safe / 2) / safe)
         residual -= lam * p.tip_moment * ratio * tp[2] * p.ds_tip
+        self._follower_work = None
         if p.model.loads.follower:
+            # theta_n + atan(psi/2) = (theta_n + theta_{n+1}) / 2 exactly (|Dtheta| < pi)
             theta_mid = old[2] + ufl.atan(psi / 2)
             mid = ((old[0] + new[0]) / 2, (old[1] + new[1]) / 2, theta_mid)
             residual -= p.follower_virtual_work(mid, test)
+            # its work over an accepted step: the same force times (Delta u, Delta v)
+            self._step_state, self._step_increment = (fem.Function(p.space) for _ in range(2))
+            self._follower_work = fem.form(p.follower_virtual_work(
+                tuple(ufl.split(self._step_state)[:3]), self._step_increment))
         else:
             residual -= lam * ufl.dot(p.tip_force, dr) * p.ds_tip
         self.residual = residual
@@ -316,6 +341,7 @@ class EnergyMomentum(StepDriver):
         self._dissipated = 0.0
         self._load_energy = self._unit_load_energy()
         self._potential_values = [assemble_scalar(form) for form in self.potential_forms]
+        self._potential_work = [0.0] * len(self.potentials)
         self.energy0 = self.energies()
 
     def _initial_acceleration(self) -> np.ndarray:
@@ -335,6 +361,9 @@ class EnergyMomentum(StepDriver):
         force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
         vel = ufl.split(self.v_old)
         force += self.c * (vel[0] * t[0] + vel[1] * t[1]) * self.dx_mass
+        for density, timing, _ in self.potentials:  # at the Gauss points: theta_q = theta
+            force += timing(0.0) * ufl.derivative(density(strains(*state)) * self.dx_gauss,
+                                                  p.w, test)
         if p.model.loads.follower:
             force -= p.follower_virtual_work(state, test)
         target = fem.Function(p.space)
@@ -413,6 +442,11 @@ class EnergyMomentum(StepDriver):
         self._dissipated += assemble_scalar(self.forms["damping_work"])
         gauss = [self._gauss_values(c) for c in self._update]  # before the state moves on
         load_mid = self._load_mid(t_old, t_new)
+        if self._follower_work is not None:  # at the step's load factor (still set)
+            old = compat.local_array(self.q_old)
+            compat.local_array(self._step_state)[:] = (old + state) / 2
+            compat.local_array(self._step_increment)[:] = state - old
+            self._work += assemble_scalar(self._follower_work)
         compat.local_array(self.q_old)[:] = state
         compat.local_array(self.v_old)[:] = velocity
         self._set_gauss(gauss)
@@ -421,7 +455,9 @@ class EnergyMomentum(StepDriver):
         self._load_energy = load_energy
         for index, (_, _, factor) in enumerate(self.potentials):
             value = assemble_scalar(self.potential_forms[index])
-            self._work -= float(factor.value) * (value - self._potential_values[index])
+            work = -float(factor.value) * (value - self._potential_values[index])
+            self._work += work
+            self._potential_work[index] += work
             self._potential_values[index] = value
         self.time = t_new
         if self._trial_range is not None:
@@ -438,10 +474,17 @@ class EnergyMomentum(StepDriver):
         strain = assemble_scalar(self.forms["strain"])
         values = {"kinetic": kinetic, "strain": strain, "external_work": self._work,
                   "dissipated": self._dissipated}
+        if self.tendons is not None:
+            values["tendon_work"] = sum(self._potential_work[i] for i in self._tendon_indices)
         start = getattr(self, "energy0", None)
         initial = start["kinetic"] + start["strain"] if start else kinetic + strain
         values["balance_residual"] = kinetic + strain + self._dissipated - self._work - initial
         return values
+
+    def tendon_lengths(self) -> np.ndarray:
+        """l_i of the tendons on the accepted state (its Gauss-point rotation and curvature:
+        the lengths whose changes give tendon_work)."""
+        return np.array([self._potential_values[i] for i in self._tendon_indices])
 
     def momenta(self) -> dict:
         return {name: assemble_scalar(self.forms[name])

@@ -200,6 +200,25 @@ class TendonSet:
             self.gradient_forms.append(fem.form(ufl.derivative(length, problem.w, test)))
         self.rest_lengths = self.lengths()
 
+    def strain_potentials(self, problem) -> list[tuple[Callable, Callable[[float], float]]]:
+        """The tendons as load potentials in the strains, for
+        `fe_beam.energy_momentum.EnergyMomentum` (``potentials``): one pair (density, tension)
+        per tendon, density(strains) = inside * sum over its branches of the body-frame length
+        density (the same offsets and entry/anchor indicator as `lengths`; its integral over the
+        energy rule is l_i) and tension(t) = tau_i(t) (`tension_at`; 0 for pull-in control)."""
+        from fe_beam.energy_momentum import tendon_length_density as body_density
+
+        if self._problem is not problem:
+            self._attach(problem)
+        pairs = []
+        for index, (inside, deltas) in enumerate(self._geometry):
+            def density(s, inside=inside, deltas=deltas):
+                return inside * sum((body_density(s, delta, delta.dx(0)) for delta in deltas),
+                                    ufl.zero())
+
+            pairs.append((density, lambda t, i=index: float(self.tension_at(t)[i])))
+        return pairs
+
     def lengths(self) -> np.ndarray:
         return np.array([assemble_scalar(form) for form in self.length_forms])
 

@@ -13,7 +13,8 @@ Extra tables over the statics config:
     [[tendons]] as for fe-beam finger, plus time_function = "formula in t" or time_table =
               [[t, f], ...] scaling the tension or pull-in (default: the [loads] one); the
               static pre-state (from_static, prestress) applies them in full; pull_in only in
-              dynamics (the tension is then an unknown of each step)
+              dynamics with generalized-alpha (the tension is then an unknown of each step);
+              energy-conserving takes tension-controlled tendons as strain potentials
 """
 
 from __future__ import annotations
@@ -147,10 +148,14 @@ def parse_dynamic(config: dict) -> DynamicConfig:
         raise ConfigError("[material] rho must be > 0 for dynamics")
     load, motion = _functions(timing)
     static, tendon_functions = _parse_tendons(config, static, "dynamic", load)
-    if static.tendons and (settings.scheme.startswith("fd-")
-                           or settings.scheme == "energy-conserving"):
+    if static.tendons and settings.scheme.startswith("fd-"):
         raise ConfigError(f"[time] scheme = {settings.scheme}: no [[tendons]] (use "
-                          "scheme = \"generalized-alpha\")")
+                          "scheme = \"generalized-alpha\" or \"energy-conserving\")")
+    pulled = [t.name for t in static.tendons if t.controlled_by_pull_in]
+    if pulled and settings.scheme == "energy-conserving":
+        raise ConfigError(f"[[tendons]] {pulled[0]!r}: pull_in (displacement control) is not "
+                          "supported with [time] scheme = \"energy-conserving\"; give its "
+                          "tension, or use scheme = \"generalized-alpha\"")
     constraint = static.model.options.constraint
     if (static.tendons and settings.scheme == "generalized-alpha" and constraint != "none"
             and settings.rho_inf > 0):
@@ -237,6 +242,17 @@ def _tendon_problem(static: StaticConfig, comm):
                           breakpoints=tendons.breakpoints if tendons else (),
                           extra_energy=tendons.energy if tendons else None)
     return problem, tendons
+
+
+def _detach_tendon_energy(problem: BeamProblem) -> None:
+    """After the static pre-state (solved with the tendon potential as the problem's
+    extra_energy): the energy-conserving scheme takes the tendons as potentials in the strains
+    (`TendonSet.strain_potentials`, the same offsets, indicators and Gauss rule, so the
+    pre-state is its equilibrium too), and the problem's stored energy becomes the rod's alone;
+    its static residual, built with the tendon energy, is dropped (no solver of the scheme
+    uses it)."""
+    problem.extra_energy = None
+    problem.residual = None
 
 
 def parse_modes(config: dict) -> tuple[StaticConfig, dict]:
@@ -333,9 +349,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
-    if config.time.scheme == "energy-conserving":  # no tendons (parse_dynamic refuses them)
+    if config.time.scheme == "energy-conserving":
+        if tendons is not None:
+            _detach_tendon_energy(problem)
         integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,
-                                    config.motion_function, config.static.solver)
+                                    config.motion_function, config.static.solver,
+                                    tendons=tendons)
     else:
         integrator = GeneralizedAlpha(problem, config.time, config.damping,
                                       config.load_function, config.motion_function,
@@ -358,8 +377,10 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
+            pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
+                        if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
             result.history[-1]["tendons"] = {"tensions": tendons.applied_tensions(t).tolist(),
-                                             "pull_ins": tendons.pull_ins().tolist()}
+                                             "pull_ins": pull_ins.tolist()}
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.step([_history_row(result.history[-1])],
                    lambda: _dynamic_summary(result, config, time.perf_counter() - started),
@@ -544,7 +565,9 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
     return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
-        "scheme": config.time.scheme, "rho_inf": config.time.rho_inf,
+        # rho_inf only parametrises generalized-alpha: null for the other schemes
+        "scheme": config.time.scheme,
+        "rho_inf": config.time.rho_inf if config.time.scheme == "generalized-alpha" else None,
         "notes": list(result.notes),
     } | ({"strain_range": result.strain_range} if result.strain_range else {})
 

@@ -330,3 +330,144 @@ def test_tendon_dynamics_parallel_equals_serial():
         assert a["tendons"]["tensions"] == pytest.approx(b["tendons"]["tensions"], rel=1e-8)
         assert a["energies"]["external_work"] == pytest.approx(b["energies"]["external_work"],
                                                                rel=1e-8, abs=1e-16)
+
+
+# --- [time] scheme = "energy-conserving": each tendon a potential tau_i(t) l_i in the strains ---
+EC = {"scheme": "energy-conserving"}
+
+
+@pytest.mark.parametrize("constraint", ["none", "inextensible-unshearable"])
+def test_energy_conserving_slow_ramp_reaches_the_finger_equilibrium(constraint):
+    """As for generalised-alpha: a smooth ramp to 2 N over 0.1 s, then hold, near-critical
+    viscous damping of the first mode, and a little Kelvin-Voigt damping for the high modes
+    (the scheme has no numerical damping; c does not damp rotary inertia): at t = 0.6 the tip is
+    fe-beam finger's (same constraint) to < 1e-6 L (measured 4e-8 L); constraints with tendons
+    need no restriction here (forces and constraints at the same step states)."""
+    static = finger(model={"constraint": constraint})
+    expected = static_tip(static)
+    config = finger(damping={"c": 28.0, "kelvin_voigt": 1e-4},
+                    time={"t_end": 0.6, "dt": 0.005, **EC},
+                    model={"constraint": constraint})
+    config["tendons"][0]["time_function"] = "0.5*(1 - cos(pi*t/0.1)) if t < 0.1 else 1"
+    result = run_dynamic(parse_dynamic(config), None, progress=False)
+    assert result.status == "completed", result.message
+    final = result.history[-1]
+    assert final["tendons"]["tensions"] == [pytest.approx(2.0, rel=1e-14)]
+    error = max(abs(final["tip"]["u"] - expected["u"]), abs(final["tip"]["v"] - expected["v"]),
+                LENGTH * abs(final["tip"]["theta"] - expected["theta"]))
+    assert error < 1e-6 * LENGTH
+    assert expected["theta"] > 0.3
+    middle = min(result.history, key=lambda h: abs(h["t"] - 0.1))
+    assert abs(middle["tip"]["v"] - expected["v"]) > 1e-3 * LENGTH
+    # damped: the energy lost is the dissipated work (exact balance)
+    energies = final["energies"]
+    assert energies["tendon_work"] == energies["external_work"] > 0
+    assert abs(energies["balance_residual"]) < 1e-9 * energies["external_work"]
+
+
+@pytest.mark.parametrize("constraint", ["none", "inextensible"])
+def test_energy_conserving_tendon_work_balances_to_round_off(constraint):
+    """No damping. Constant tension from rest (a conservative load): kinetic + strain
+    + tau l stays its initial value to 1e-9 (l from the history's pull-ins); a tension stepped
+    0 -> 1 -> 2 N at two step sizes: the balance residual is < 1e-9 of the tendon's work
+    (generalised-alpha: 1e-3 at best, second order). Under a ramped tension the tip follows
+    generalised-alpha's (rho_inf = 1, dt = 0.25 ms) to 1e-3 L at dt = 0.5 ms."""
+    model = {"constraint": constraint}
+    constant = finger(time={"t_end": 0.15, "dt": 0.003, **EC}, model=model)
+    result = run_dynamic(parse_dynamic(constant), None, progress=False)
+    assert result.status == "completed", result.message
+    tau = constant["tendons"][0]["tension"]
+    start = result.history[0]["energies"]
+    assert start["kinetic"] == start["strain"] == 0.0
+    scale = max(h["energies"]["kinetic"] for h in result.history)
+    assert scale > 1e-4  # it swings
+    for h in result.history:  # kinetic + strain + tau (l - l0), l0 - l = pull-in
+        total = h["energies"]["kinetic"] + h["energies"]["strain"] - tau * h["tendons"][
+            "pull_ins"][0]
+        assert abs(total) < 1e-9 * scale
+        assert h["energies"]["tendon_work"] == pytest.approx(
+            tau * h["tendons"]["pull_ins"][0], rel=1e-9, abs=1e-12 * scale)
+    for dt in (0.002, 0.001):
+        config = finger(time={"t_end": 0.06, "dt": dt, **EC}, model=model)
+        config["tendons"][0]["time_function"] = "0.5*step(t - 0.005) + 0.5*step(t - 0.03)"
+        result = run_dynamic(parse_dynamic(config), None, progress=False)
+        assert result.status == "completed", result.message
+        work = result.history[-1]["energies"]["external_work"]
+        assert work > 0 and result.history[-1]["tendons"]["tensions"] == [pytest.approx(2.0)]
+        assert max(abs(h["energies"]["balance_residual"]) for h in result.history) < 1e-9 * work
+    if constraint != "none":
+        return
+    # the motion itself: a ramped tension, against generalised-alpha at half the step
+    # (measured 4.7e-4 L; the scheme's own error at dt/2 is 1.1e-4 L: second order)
+    tips = []
+    for time_settings in ({"dt": 0.0005, **EC}, {"dt": 0.00025, "rho_inf": 1.0}):
+        config = finger(time={"t_end": 0.06, "output_every": 1, **time_settings}, model=model)
+        config["tendons"][0]["time_function"] = "min(t/0.01, 1)"
+        result = run_dynamic(parse_dynamic(config), None, progress=False)
+        assert result.status == "completed", result.message
+        tips.append({round(h["t"], 9): h["tip"] for h in result.history})
+    common = [t for t in tips[0] if t in tips[1]]
+    assert len(common) > 100
+    worst = max(max(abs(tips[0][t][k] - tips[1][t][k]) for k in "uv") for t in common)
+    assert worst < 1e-3 * LENGTH
+    assert max(abs(tips[0][t]["v"]) for t in common) > 0.1 * LENGTH
+
+
+def test_energy_conserving_cli_from_static_with_tendons(tmp_path, capsys):
+    """fe-beam dynamic, energy-conserving, from the static pre-state (solved with the tendon
+    energy; the scheme then takes the tendons as strain potentials): the pre-state is the
+    scheme's equilibrium (the tip stays the finger's to round-off at constant tension); a
+    later rise of the tension moves it; summary.json has rho_inf null (generalised-alpha only)."""
+    config = finger(time={"t_end": 0.03, "dt": 0.005, **EC}, initial={"from_static": True})
+    config["tendons"][0]["time_function"] = "1 if t < 0.0125 else 1.5"
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scheme"] == "energy-conserving" and summary["rho_inf"] is None
+    expected = static_tip(FINGER)
+    history = summary["history"]
+    for h in history:
+        if h["t"] < 0.0125:
+            assert h["tip"] == pytest.approx(expected, rel=1e-10, abs=1e-14)
+            assert h["energies"]["kinetic"] < 1e-20
+    assert abs(history[-1]["tip"]["v"] - expected["v"]) > 1e-4 * LENGTH
+    assert history[-1]["tendons"]["tensions"] == [pytest.approx(3.0)]
+    assert history[0]["tendons"]["pull_ins"][0] > 0  # the pre-state is already pulled in
+    rows = list(csv.DictReader((out / "history.csv").open()))
+    assert float(rows[-1]["pull_in_0"]) == pytest.approx(history[-1]["tendons"]["pull_ins"][0])
+    config["time"] = {"t_end": 0.01, "dt": 0.005}
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    assert json.loads((out / "summary.json").read_text())["rho_inf"] == 0.9
+
+
+def test_energy_conserving_refuses_pull_in(tmp_path, capsys):
+    config = pull_in_finger()
+    config["time"] = {"t_end": 0.02, "dt": 0.005, **EC}
+    code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "'flexor'" in err and "pull_in" in err and "energy-conserving" in err, err
+    assert "Traceback" not in err
+
+
+@pytest.mark.mpi
+def test_energy_conserving_tendons_parallel_equals_serial():
+    """Two tension-controlled tendons with their own time functions, from the static
+    pre-state, energy-conserving: the same history on all ranks as on one."""
+    from mpi4py import MPI
+
+    config = finger(time={"t_end": 0.03, "dt": 0.005, **EC}, initial={"from_static": True})
+    config["tendons"][0].update({"tension": 1.0, "time_function": "1 + 10*t"})
+    config["tendons"].append({"name": "extensor", "offset_base": -0.008, "offset_tip": -0.004,
+                              "tension": 0.5, "time_function": "1 - 20*t"})
+    runs = [run_dynamic(parse_dynamic(copy.deepcopy(config)), None, comm, progress=False)
+            for comm in (MPI.COMM_WORLD, MPI.COMM_SELF)]
+    assert all(r.status == "completed" for r in runs)
+    for a, b in zip(runs[0].history, runs[1].history, strict=True):
+        for key in ("u", "v", "theta"):
+            assert a["tip"][key] == pytest.approx(b["tip"][key], rel=1e-9, abs=1e-14)
+        assert a["tendons"]["pull_ins"] == pytest.approx(b["tendons"]["pull_ins"], rel=1e-9)
+        for key in ("external_work", "tendon_work", "balance_residual"):
+            assert a["energies"][key] == pytest.approx(b["energies"][key], rel=1e-8, abs=1e-16)
+    work = runs[0].history[-1]["energies"]["external_work"]
+    assert abs(runs[0].history[-1]["energies"]["balance_residual"]) < 1e-9 * abs(work)
