@@ -7,7 +7,7 @@ import json
 import pytest
 from test_solid_driver import DROP, FINGER, assert_usage_error, edited, run_cli, shared_folder
 
-from fe_beam.compare import crossing, parse_compare, rod_at
+from fe_beam.compare import RODS, crossing, matched_law, parse_compare, rod_at
 
 SWEEP = edited(FINGER, {"compare": {"tensions": [1.0, 2.0]}})
 
@@ -53,6 +53,43 @@ def test_sweep_definitions():
     assert scaled.model.options.law == "reissner" and scaled.tendons[0].tension == 0.5
 
 
+@pytest.mark.parametrize("formulation, volumetric", [("displacement", "simo_taylor"),
+                                                     ("mixed-up", "quadratic")])
+def test_hyperelastic_rod_is_the_solid_material(formulation, volumetric):
+    """By default the rods include the section law of the solid's own material: the same law
+    and constants, and the volumetric energy of the solid's formulation (u-p: quadratic)."""
+    config = parse_compare(edited(SWEEP, {"solid.formulation": formulation,
+                                          "solid.material": "yeoh", "solid.c20": 2e4}))
+    assert config.laws == RODS == ("hyperelastic", "nonstandard", "reissner")
+    solid_law = config.solid.material
+    rod = rod_at(config.solid.rod, "hyperelastic", 0.5, config.solid)
+    law = rod.model.options.hyperelastic
+    assert rod.model.options.law == "hyperelastic" and law == matched_law(config.solid)
+    assert law.name == solid_law.name == "yeoh" and law.volumetric == volumetric
+    assert law.coefficients() == solid_law.coefficients()
+    assert law.coefficients()["c20"] == 2e4
+    # the rod's E and G are the law's small-strain ones (BeamModel refuses anything else)
+    assert rod.model.material.E == pytest.approx(law.young_modulus, rel=1e-12)
+    assert rod.tendons[0].tension == pytest.approx(1.0)
+
+
+def test_svk_solid_hyperelastic_rod_equals_the_non_standard_rod(tmp_path):
+    """The section law of an SVK solid is the non-standard law: identical rods in compare."""
+    config = edited(SWEEP, {"solid.material": "svk", "compare.tensions": [2.0],
+                            "compare.laws": ["hyperelastic", "nonstandard"],
+                            "output.xdmf": False, "output.plots": False})
+    code, _, stderr, out = run_cli("compare", shared_folder(tmp_path), config)
+    assert code == 0, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["model"]["rod"]["hyperelastic"]["material"] == "svk"
+    row = summary["table"][-1]["rod"]
+    for key in ("u", "v", "theta"):
+        a, b = row["hyperelastic"]["tip"][key], row["nonstandard"]["tip"][key]
+        assert abs(a - b) <= 1e-10 * 0.1, (key, a, b)
+    assert row["hyperelastic"]["distance_over_L"] == pytest.approx(
+        row["nonstandard"]["distance_over_L"], rel=1e-8)
+
+
 def test_crossing_interpolates_from_the_unloaded_state():
     assert crossing([0.5, 1.0], [0.004, 0.02], 0.01) == {
         "load_factor": pytest.approx(0.5 + 0.5 * 0.006 / 0.016), "first_sweep_point_above": 1.0}
@@ -95,6 +132,15 @@ def test_table_and_departures(sweep_run):
             assert above is None
         assert entry["above_5_percent"] is None  # max d < 5 % (checked above)
         assert law in entry["statement"]
+    # the default rods include the section law of the solid's material (neo-Hookean, u-p not
+    # given: displacement formulation, simo_taylor)
+    assert summary["laws"] == ["hyperelastic", "nonstandard", "reissner"]
+    hyper = summary["model"]["rod"]["hyperelastic"]
+    assert hyper["material"] == "neo-hookean" and hyper["volumetric"] == "simo_taylor"
+    assert hyper["coefficients"]["mu"] == pytest.approx(0.6e6 / 2.9, rel=1e-12)
+    for row in rows:
+        rod = row["rod"]["hyperelastic"]
+        assert rod["status"] == "converged" and 0 < rod["distance_over_L"] < 0.05
     # the two rod laws are different models (O((h/L)^2) apart)
     a, b = (rows[-1]["rod"][law]["tip"]["theta"] for law in ("nonstandard", "reissner"))
     assert a != pytest.approx(b, rel=1e-6)
