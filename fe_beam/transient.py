@@ -156,6 +156,7 @@ def parse_dynamic(config: dict) -> DynamicConfig:
         raise ConfigError(f"[[tendons]] {pulled[0]!r}: pull_in (displacement control) is not "
                           "supported with [time] scheme = \"energy-conserving\"; give its "
                           "tension, or use scheme = \"generalized-alpha\"")
+    _check_tendons_pull(static.tendons, tendon_functions, settings)
     constraint = static.model.options.constraint
     if (static.tendons and settings.scheme == "generalized-alpha" and constraint != "none"
             and settings.rho_inf > 0):
@@ -172,6 +173,28 @@ def parse_dynamic(config: dict) -> DynamicConfig:
 
 
 TENDON_TIME_KEYS = ("time_function", "time_table")
+TENDON_SAMPLES = 20001  # times in [0, t_end] at which a tendon's time function is checked
+
+
+def _check_tendons_pull(tendons, functions, settings) -> None:
+    """A cable cannot push: refuse a tendon whose tension (or pull-in) times its time function
+    is negative somewhere in [0, t_end] (sampled finely and at the steps of a fixed dt), as
+    fe-beam finger refuses a negative tension or pull_in."""
+    t_end, dt = float(settings.t_end), float(settings.dt)
+    times = np.linspace(0.0, t_end, TENDON_SAMPLES)
+    if dt > 0 and t_end / dt < 1e6:
+        times = np.union1d(times, np.arange(0.0, t_end + dt / 2, dt))
+    for tendon, function in zip(tendons, functions, strict=True):
+        value = tendon.pull_in if tendon.controlled_by_pull_in else tendon.tension
+        if not value:
+            continue
+        for t in times:
+            if float(function(t)) < 0:
+                key = "pull_in" if tendon.controlled_by_pull_in else "tension"
+                raise ConfigError(
+                    f"[[tendons]] {tendon.name!r}: {key} x time_function/time_table is negative "
+                    f"at t = {t:.4g} s (a tendon can only pull: keep the time function >= 0 on "
+                    f"[0, t_end])")
 
 
 def _parse_tendons(config: dict, static: StaticConfig, command: str, load_function=None):

@@ -471,3 +471,23 @@ def test_energy_conserving_tendons_parallel_equals_serial():
             assert a["energies"][key] == pytest.approx(b["energies"][key], rel=1e-8, abs=1e-16)
     work = runs[0].history[-1]["energies"]["external_work"]
     assert abs(runs[0].history[-1]["energies"]["balance_residual"]) < 1e-9 * abs(work)
+
+
+@pytest.mark.parametrize("timing, when", [
+    ({"time_function": "sin(40*t)"}, "0.0785"),  # negative from pi/40 on
+    ({"time_table": [[0, 1], [0.01, 1], [0.02, -0.5]]}, "0.01"),
+])
+@pytest.mark.parametrize("scheme", ["generalized-alpha", "energy-conserving"])
+def test_tendon_time_function_that_pushes_is_refused(tmp_path, capsys, timing, when, scheme):
+    """A cable cannot push: tension * f(t) < 0 inside [0, t_end] is refused up front (exit 2,
+    one sentence naming the tendon and the key), as a negative tension is in fe-beam finger
+    (it used to run silently as a compressed tendon)."""
+    config = finger(time={"t_end": 0.1, "dt": 0.005, "scheme": scheme})
+    config["tendons"][0].update(timing)
+    code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
+    key = next(iter(timing))
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert "'flexor'" in err and key in err and "negative" in err, err
+    assert f"t = {when}" in err, err
+    assert "Traceback" not in err
