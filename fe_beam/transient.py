@@ -176,6 +176,20 @@ TENDON_TIME_KEYS = ("time_function", "time_table")
 TENDON_SAMPLES = 20001  # times in [0, t_end] at which a tendon's time function is checked
 
 
+def _note_pushing_tendons(tendons, tensions, t: float, notes: list, comm) -> None:
+    """Note (once per tendon, also a warning on stderr) a pull-in controlled tendon whose
+    solved tension is negative at time t: the model then lets the cable push."""
+    for tendon, tension in zip(tendons.tendons, tensions, strict=True):
+        start = f"[[tendons]] {tendon.name!r} (pull_in control): its tension"
+        if (tendon.controlled_by_pull_in and tension < 0
+                and not any(note.startswith(start) for note in notes)):
+            note = (f"{start} is {tension:.4g} N < 0 at t = {t:.4g} s: a cable cannot push, "
+                    "so from then on the results are of a tendon that pushes (ramp the pull-in "
+                    "more slowly or add damping)")
+            notes.append(note)
+            runctl.warn(comm, [note])
+
+
 def _check_tendons_pull(tendons, functions, settings) -> None:
     """A cable cannot push: refuse a tendon whose tension (or pull-in) times its time function
     is negative somewhere in [0, t_end] (sampled finely and at the steps of a fixed dt), as
@@ -402,8 +416,10 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
-            result.history[-1]["tendons"] = {"tensions": tendons.applied_tensions(t).tolist(),
+            tensions = tendons.applied_tensions(t)
+            result.history[-1]["tendons"] = {"tensions": tensions.tolist(),
                                              "pull_ins": pull_ins.tolist()}
+            _note_pushing_tendons(tendons, tensions, t, notes, comm)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.step([_history_row(result.history[-1])],
                    lambda: _dynamic_summary(result, config, time.perf_counter() - started),

@@ -491,3 +491,29 @@ def test_tendon_time_function_that_pushes_is_refused(tmp_path, capsys, timing, w
     assert "'flexor'" in err and key in err and "negative" in err, err
     assert f"t = {when}" in err, err
     assert "Traceback" not in err
+
+
+def test_pull_in_step_that_makes_the_tendon_push_is_noted(tmp_path, capsys):
+    """A pull-in stepped to 2 mm without damping overshoots: the solved tension becomes
+    negative (the cable would have to push). The run completes but says so, once, in the
+    summary notes and on stderr; a slow, damped ramp (tension > 0 throughout) has no such note."""
+    config = pull_in_finger(0.002)
+    config["mesh"]["elements"] = 6
+    config["tendons"][0]["time_function"] = "1"
+    config["time"] = {"t_end": 0.06, "dt": 0.002, "rho_inf": 0.9}
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    tensions = [h["tendons"]["tensions"][0] for h in summary["history"]]
+    first = next(h["t"] for h, v in zip(summary["history"], tensions, strict=True) if v < 0)
+    assert min(tensions) < -0.1  # independently: the cable really pushes in this run
+    notes = [n for n in summary["notes"] if "'flexor'" in n and "cannot push" in n]
+    assert len(notes) == 1, summary["notes"]
+    assert f"t = {first:.4g} s" in notes[0]
+    assert err.count("cannot push") == 1, err
+    config["tendons"][0]["time_function"] = "0.5*(1 - cos(pi*t/0.06))"
+    config["damping"] = {"c": 28.0}
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    summary = json.loads((out / "summary.json").read_text())
+    assert code == 0 and min(h["tendons"]["tensions"][0] for h in summary["history"]) >= 0
+    assert not any("cannot push" in n for n in summary["notes"]) and "cannot push" not in err
