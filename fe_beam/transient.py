@@ -604,9 +604,10 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
     return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
-        # rho_inf only parametrises generalized-alpha: null for the other schemes
+        # rho_inf parametrises generalized-alpha only: null for energy-conserving (new); the
+        # fd-* schemes keep the number they always reported (public interface)
         "scheme": config.time.scheme,
-        "rho_inf": config.time.rho_inf if config.time.scheme == "generalized-alpha" else None,
+        "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
         "notes": list(result.notes),
     } | ({"strain_range": result.strain_range} if result.strain_range else {})
 

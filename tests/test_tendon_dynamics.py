@@ -517,3 +517,16 @@ def test_pull_in_step_that_makes_the_tendon_push_is_noted(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert code == 0 and min(h["tendons"]["tensions"][0] for h in summary["history"]) >= 0
     assert not any("cannot push" in n for n in summary["notes"]) and "cannot push" not in err
+
+
+@pytest.mark.parametrize("scheme, expected", [
+    ("generalized-alpha", 0.7), ("fd-rk45", 0.7), ("fd-dop853", 0.7), ("energy-conserving", None)])
+def test_summary_rho_inf_of_every_scheme(scheme, expected):
+    """summary.json "rho_inf" is a public key: the fd-* schemes report the configured number as
+    they did before the energy-conserving scheme (null only for that new scheme)."""
+    from fe_beam.transient import DynamicResult, _dynamic_summary
+    raw = finger(time={"t_end": 0.01, "dt": 0.005, "scheme": scheme, "rho_inf": 0.7})
+    config = parse_dynamic({k: v for k, v in raw.items() if k != "tendons"})
+    summary = _dynamic_summary(DynamicResult([], {}), config, 0.0)
+    assert summary["scheme"] == scheme
+    assert summary["rho_inf"] == expected
