@@ -156,6 +156,7 @@ def parse_dynamic(config: dict) -> DynamicConfig:
         raise ConfigError(f"[[tendons]] {pulled[0]!r}: pull_in (displacement control) is not "
                           "supported with [time] scheme = \"energy-conserving\"; give its "
                           "tension, or use scheme = \"generalized-alpha\"")
+    _check_tendons_pull(static.tendons, tendon_functions, settings)
     constraint = static.model.options.constraint
     if (static.tendons and settings.scheme == "generalized-alpha" and constraint != "none"
             and settings.rho_inf > 0):
@@ -172,6 +173,42 @@ def parse_dynamic(config: dict) -> DynamicConfig:
 
 
 TENDON_TIME_KEYS = ("time_function", "time_table")
+TENDON_SAMPLES = 20001  # times in [0, t_end] at which a tendon's time function is checked
+
+
+def _note_pushing_tendons(tendons, tensions, t: float, notes: list, comm) -> None:
+    """Note (once per tendon, also a warning on stderr) a pull-in controlled tendon whose
+    solved tension is negative at time t: the model then lets the cable push."""
+    for tendon, tension in zip(tendons.tendons, tensions, strict=True):
+        start = f"[[tendons]] {tendon.name!r} (pull_in control): its tension"
+        if (tendon.controlled_by_pull_in and tension < 0
+                and not any(note.startswith(start) for note in notes)):
+            note = (f"{start} is {tension:.4g} N < 0 at t = {t:.4g} s: a cable cannot push, "
+                    "so from then on the results are of a tendon that pushes (ramp the pull-in "
+                    "more slowly or add damping)")
+            notes.append(note)
+            runctl.warn(comm, [note])
+
+
+def _check_tendons_pull(tendons, functions, settings) -> None:
+    """A cable cannot push: refuse a tendon whose tension (or pull-in) times its time function
+    is negative somewhere in [0, t_end] (sampled finely and at the steps of a fixed dt), as
+    fe-beam finger refuses a negative tension or pull_in."""
+    t_end, dt = float(settings.t_end), float(settings.dt)
+    times = np.linspace(0.0, t_end, TENDON_SAMPLES)
+    if dt > 0 and t_end / dt < 1e6:
+        times = np.union1d(times, np.arange(0.0, t_end + dt / 2, dt))
+    for tendon, function in zip(tendons, functions, strict=True):
+        value = tendon.pull_in if tendon.controlled_by_pull_in else tendon.tension
+        if not value:
+            continue
+        for t in times:
+            if float(function(t)) < 0:
+                key = "pull_in" if tendon.controlled_by_pull_in else "tension"
+                raise ConfigError(
+                    f"[[tendons]] {tendon.name!r}: {key} x time_function/time_table is negative "
+                    f"at t = {t:.4g} s (a tendon can only pull: keep the time function >= 0 on "
+                    f"[0, t_end])")
 
 
 def _parse_tendons(config: dict, static: StaticConfig, command: str, load_function=None):
@@ -379,8 +416,10 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
-            result.history[-1]["tendons"] = {"tensions": tendons.applied_tensions(t).tolist(),
+            tensions = tendons.applied_tensions(t)
+            result.history[-1]["tendons"] = {"tensions": tensions.tolist(),
                                              "pull_ins": pull_ins.tolist()}
+            _note_pushing_tendons(tendons, tensions, t, notes, comm)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.step([_history_row(result.history[-1])],
                    lambda: _dynamic_summary(result, config, time.perf_counter() - started),
@@ -565,9 +604,10 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
     return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
-        # rho_inf only parametrises generalized-alpha: null for the other schemes
+        # rho_inf parametrises generalized-alpha only: null for energy-conserving (new); the
+        # fd-* schemes keep the number they always reported (public interface)
         "scheme": config.time.scheme,
-        "rho_inf": config.time.rho_inf if config.time.scheme == "generalized-alpha" else None,
+        "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
         "notes": list(result.notes),
     } | ({"strain_range": result.strain_range} if result.strain_range else {})
 

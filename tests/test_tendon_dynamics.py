@@ -471,3 +471,62 @@ def test_energy_conserving_tendons_parallel_equals_serial():
             assert a["energies"][key] == pytest.approx(b["energies"][key], rel=1e-8, abs=1e-16)
     work = runs[0].history[-1]["energies"]["external_work"]
     assert abs(runs[0].history[-1]["energies"]["balance_residual"]) < 1e-9 * abs(work)
+
+
+@pytest.mark.parametrize("timing, when", [
+    ({"time_function": "sin(40*t)"}, "0.0785"),  # negative from pi/40 on
+    ({"time_table": [[0, 1], [0.01, 1], [0.02, -0.5]]}, "0.01"),
+])
+@pytest.mark.parametrize("scheme", ["generalized-alpha", "energy-conserving"])
+def test_tendon_time_function_that_pushes_is_refused(tmp_path, capsys, timing, when, scheme):
+    """A cable cannot push: tension * f(t) < 0 inside [0, t_end] is refused up front (exit 2,
+    one sentence naming the tendon and the key), as a negative tension is in fe-beam finger
+    (it used to run silently as a compressed tendon)."""
+    config = finger(time={"t_end": 0.1, "dt": 0.005, "scheme": scheme})
+    config["tendons"][0].update(timing)
+    code, err, _ = run_cli(tmp_path, "dynamic", config, capsys)
+    key = next(iter(timing))
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1, err
+    assert "'flexor'" in err and key in err and "negative" in err, err
+    assert f"t = {when}" in err, err
+    assert "Traceback" not in err
+
+
+def test_pull_in_step_that_makes_the_tendon_push_is_noted(tmp_path, capsys):
+    """A pull-in stepped to 2 mm without damping overshoots: the solved tension becomes
+    negative (the cable would have to push). The run completes but says so, once, in the
+    summary notes and on stderr; a slow, damped ramp (tension > 0 throughout) has no such note."""
+    config = pull_in_finger(0.002)
+    config["mesh"]["elements"] = 6
+    config["tendons"][0]["time_function"] = "1"
+    config["time"] = {"t_end": 0.06, "dt": 0.002, "rho_inf": 0.9}
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    tensions = [h["tendons"]["tensions"][0] for h in summary["history"]]
+    first = next(h["t"] for h, v in zip(summary["history"], tensions, strict=True) if v < 0)
+    assert min(tensions) < -0.1  # independently: the cable really pushes in this run
+    notes = [n for n in summary["notes"] if "'flexor'" in n and "cannot push" in n]
+    assert len(notes) == 1, summary["notes"]
+    assert f"t = {first:.4g} s" in notes[0]
+    assert err.count("cannot push") == 1, err
+    config["tendons"][0]["time_function"] = "0.5*(1 - cos(pi*t/0.06))"
+    config["damping"] = {"c": 28.0}
+    code, err, out = run_cli(tmp_path, "dynamic", config, capsys)
+    summary = json.loads((out / "summary.json").read_text())
+    assert code == 0 and min(h["tendons"]["tensions"][0] for h in summary["history"]) >= 0
+    assert not any("cannot push" in n for n in summary["notes"]) and "cannot push" not in err
+
+
+@pytest.mark.parametrize("scheme, expected", [
+    ("generalized-alpha", 0.7), ("fd-rk45", 0.7), ("fd-dop853", 0.7), ("energy-conserving", None)])
+def test_summary_rho_inf_of_every_scheme(scheme, expected):
+    """summary.json "rho_inf" is a public key: the fd-* schemes report the configured number as
+    they did before the energy-conserving scheme (null only for that new scheme)."""
+    from fe_beam.transient import DynamicResult, _dynamic_summary
+    raw = finger(time={"t_end": 0.01, "dt": 0.005, "scheme": scheme, "rho_inf": 0.7})
+    config = parse_dynamic({k: v for k, v in raw.items() if k != "tendons"})
+    summary = _dynamic_summary(DynamicResult([], {}), config, 0.0)
+    assert summary["scheme"] == scheme
+    assert summary["rho_inf"] == expected
