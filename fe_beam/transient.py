@@ -357,6 +357,15 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
     notes = check_beam_work(config.static, steps, comm, " of time stepping",
                             quiet=out is None)
+    if config.time.scheme == "energy-conserving" and config.time.adaptive:
+        # measured: a step load on an 8-element cantilever took 59k steps to t = 0.09 s
+        note = ("[time] adaptive = true with scheme = \"energy-conserving\": the local error "
+                "estimate follows the undamped high-frequency content, so the step can shrink to "
+                "the mesh's highest period and the run become very long; the scheme is stable "
+                "at any step: prefer a fixed dt (adaptive = false)")
+        notes.append(note)
+        if out is not None:
+            runctl.warn(comm, [note])
     if config.from_static:  # the load steps of the static pre-state count too
         notes += check_beam_work(config.static, config.static.stepping.steps, comm,
                                  " of load stepping (static pre-state)", quiet=out is None)

@@ -303,6 +303,19 @@ def test_cli_energy_conserving_run_writes_the_balance(tmp_path, capsys):
     assert (out / "history.csv").read_text().count("\n") == len(history) + 1
 
 
+def test_cli_adaptive_energy_conserving_is_warned(tmp_path, capsys):
+    """adaptive = true with the energy-conserving scheme: a note (summary and stderr) that the
+    step follows the undamped high frequencies; the run itself is unchanged."""
+    config = with_change("time", "scheme", "energy-conserving")
+    config["time"] = dict(config["time"], adaptive=True,
+                          t_end=4 * config["time"]["dt"])
+    code, err, out, _ = run(tmp_path, "dynamic", config, capsys)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert any("adaptive = true" in note for note in summary["notes"]), summary["notes"]
+    assert "adaptive = true" in err
+
+
 def test_cli_unknown_scheme_exit_2(tmp_path, capsys):
     code, err, _, path = run(tmp_path, "dynamic", with_change("time", "scheme",
                                                               "energy-conserving-x"), capsys)
