@@ -11,6 +11,7 @@ discontinuous Lagrange of degree p - 1, which enforces the constraints at the Ga
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,6 +39,7 @@ from fe_beam.mpi import global_sum
 from fe_beam.section_laws import (
     DEFAULT_SECTION_POINTS,
     MAX_SECTION_POINTS,
+    RESOLVED_STRETCHES,
     FibreLaw,
     HyperelasticSectionLaw,
     section_rule,
@@ -260,6 +262,9 @@ class BeamModel:
             raise ValueError(
                 f"[model] material = \"{fibre.material}\" needs the section's profile: a custom "
                 "section (only A, I, I3, I4 known) supports material = \"svk\" alone")
+        reason = fibre.unresolved()
+        if reason:
+            raise ValueError(f"[model] {reason}: use a material with a larger Poisson's ratio")
         pairs = (("E", self.material.E, fibre.young_modulus),
                  ("G", self.material.shear_modulus, fibre.shear_modulus))
         for name, rod, law in pairs:
@@ -333,6 +338,8 @@ class StrainRange:
     min_fibre_strain: float | None = None
     max_fibre_strain: float | None = None
     min_fibre_tangent: float | None = None
+    #: the fibre law uses fixed Newton steps (split laws): its stretch range is limited
+    fibre_newton: bool = False
 
     def inadmissible(self) -> str | None:
         """Why the state is not admissible, or None."""
@@ -343,6 +350,14 @@ class StrainRange:
             return (f"inadmissible state: the extreme fibre's axial stretch 1 + e + eta kappa = "
                     f"{self.min_fibre_stretch:.3g} <= 0 (a fibre of the section would be folded "
                     "onto itself)")
+        if self.min_fibre_strain is not None and self.fibre_newton:
+            low, high = RESOLVED_STRETCHES
+            stretches = [math.sqrt(max(1 + 2 * e, 0.0)) if math.isfinite(e) else math.nan
+                         for e in (self.min_fibre_strain, self.max_fibre_strain)]
+            if not (low <= stretches[0] and stretches[1] <= high):
+                return (f"state outside the range of the hyperelastic fibre law: the extreme "
+                        f"fibres' stretch reaches {stretches[0]:.3g} .. {stretches[1]:.3g}, "
+                        f"beyond {low:g} .. {high:g} where its Newton steps are resolved")
         return None
 
     def warnings(self) -> list[str]:
@@ -393,7 +408,8 @@ class StrainWatch:
                                  extreme("min_fibre_stretch", min),
                                  extreme("min_fibre_strain", min),
                                  extreme("max_fibre_strain", max),
-                                 extreme("min_fibre_tangent", min))
+                                 extreme("min_fibre_tangent", min),
+                                 w.fibre_newton or value.fibre_newton)
 
     def notes(self) -> list[str]:
         return self.worst.warnings() if self.worst is not None else []
@@ -403,6 +419,7 @@ class StrainWatch:
         if self.worst is None:
             return None
         data = dataclasses.asdict(self.worst)
+        data.pop("fibre_newton")
         fibre = ("min_fibre_stretch", "min_fibre_strain", "max_fibre_strain", "min_fibre_tangent")
         return {k: v for k, v in data.items() if k not in fibre or v is not None}
 
@@ -754,7 +771,9 @@ class BeamProblem:
             low, high = float(reduced[5]), float(-reduced[6])
             fibre = {"min_fibre_stretch": float(reduced[4]), "min_fibre_strain": low,
                      "max_fibre_strain": high,
-                     "min_fibre_tangent": self.law.fibre.min_tangent(low, high)}
+                     "min_fibre_tangent": self.law.fibre.min_tangent(low, high),
+                     "fibre_newton": (self.law.fibre.material != "svk"
+                                      and math.isfinite(self.law.fibre.kappa))}
         return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), bending,
                            **fibre)
 
