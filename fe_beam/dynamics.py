@@ -149,6 +149,26 @@ class StepDriver:
     control. A subclass provides ``problem``, ``settings``, ``time`` and ``step(dt)`` (raises
     SolveFailed), ``reject()``, ``accept()``, ``local_error()``."""
 
+
+    def momenta(self) -> dict:
+        """Linear and angular momentum of the current state (the schemes' ``forms``)."""
+        return {name: assemble_scalar(self.forms[name])
+                for name in ("momentum_x", "momentum_y", "angular_momentum")}
+
+    def _theta_dofs(self) -> np.ndarray:
+        """Local dofs (ghosts included) of theta in the state."""
+        if not hasattr(self, "_theta"):
+            _, dofs = compat.sub_space_collapsed(self.problem.space, 2)
+            self._theta = np.asarray(dofs)
+        return self._theta
+
+    def _motion_dofs(self) -> np.ndarray:
+        """Local dofs of u, v and theta (not the multipliers)."""
+        if not hasattr(self, "_motion"):
+            dofs = [np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
+                    for i in range(3)]
+            self._motion = np.concatenate(dofs)
+        return self._motion
     def run(self, on_output: Callable[[float, int], None] | None = None,
             progress: bool = True) -> dict:
         """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
@@ -466,22 +486,6 @@ class GeneralizedAlpha(StepDriver):
         values["balance_residual"] = (kinetic + strain + self._dissipated - self._work - initial)
         return values
 
-    def momenta(self) -> dict:
-        return {name: assemble_scalar(self.forms[name])
-                for name in ("momentum_x", "momentum_y", "angular_momentum")}
-
-    def _theta_dofs(self) -> np.ndarray:
-        if not hasattr(self, "_theta"):
-            _, dofs = compat.sub_space_collapsed(self.problem.space, 2)
-            self._theta = np.asarray(dofs)
-        return self._theta
-
-    def _motion_dofs(self) -> np.ndarray:
-        if not hasattr(self, "_motion"):
-            dofs = [np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
-                    for i in range(3)]
-            self._motion = np.concatenate(dofs)
-        return self._motion
 
 
 def period_from_crossings(times: np.ndarray, signal: np.ndarray) -> float:

@@ -397,16 +397,16 @@ class EnergyMomentum(StepDriver):
         self._set_boundary_values(t_new)
         unknown, old = compat.local_array(self.unknown), compat.local_array(self.q_old)
         unknown[:] = old
-        unknown[self._theta_dofs(ghosts=True)] = 0.0  # psi: same-displacement predictor
+        unknown[self._theta_dofs()] = 0.0  # psi: same-displacement predictor
         iterations = self.solver.solve()
-        psi = unknown[self._theta_dofs(ghosts=True)]
+        psi = unknown[self._theta_dofs()]
         largest = global_max(p.comm, float(np.max(np.abs(psi), initial=0.0)))
         limit = 2 * math.tan(MAX_ROTATION_INCREMENT / 2)
         if not largest < limit:
             raise SolveFailed(f"rotation increment {2 * math.atan(largest / 2):.3g} rad >= "
                               f"{MAX_ROTATION_INCREMENT:g} rad in one step")
         state = unknown.copy()
-        theta = self._theta_dofs(ghosts=True)
+        theta = self._theta_dofs()
         state[theta] = old[theta] + 2 * np.arctan(psi / 2)
         compat.local_array(p.w)[:] = state
         self._trial_range = p.strain_range()  # collective
@@ -486,19 +486,3 @@ class EnergyMomentum(StepDriver):
         the lengths whose changes give tendon_work)."""
         return np.array([self._potential_values[i] for i in self._tendon_indices])
 
-    def momenta(self) -> dict:
-        return {name: assemble_scalar(self.forms[name])
-                for name in ("momentum_x", "momentum_y", "angular_momentum")}
-
-    def _theta_dofs(self, ghosts: bool = True) -> np.ndarray:
-        if not hasattr(self, "_theta"):
-            _, dofs = compat.sub_space_collapsed(self.problem.space, 2)
-            self._theta = np.asarray(dofs)
-        return self._theta
-
-    def _motion_dofs(self) -> np.ndarray:
-        if not hasattr(self, "_motion"):
-            dofs = [np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
-                    for i in range(3)]
-            self._motion = np.concatenate(dofs)
-        return self._motion

@@ -46,7 +46,12 @@ from fe_beam.config import (
     parse_static,
     table,
 )
-from fe_beam.material_laws import LAW_CONSTANTS, MATERIALS, hyperelastic_law  # noqa: F401
+from fe_beam.material_laws import (  # noqa: F401
+    LAW_CONSTANTS,
+    MATERIALS,
+    _positive,
+    hyperelastic_law,
+)
 from fe_beam.outputs import _pyplot, atomic_write_json, atomic_write_text, write_csv
 from fe_beam.solid.export import DisplacementXDMF
 from fe_beam.solid.geometry import FingerGeometry, MeshSizes, TendonPath, create_finger_mesh
@@ -192,12 +197,6 @@ class SolidConfig:
 # --- parsing ------------------------------------------------------------------------------------
 
 
-def _positive(where: str, value, minimum: float = 0.0, strict: bool = True) -> float:
-    ok = value > minimum if strict else value >= minimum
-    if not ok:
-        relation = ">" if strict else ">="
-        raise ConfigError(f"{where} must be {relation} {minimum:g}; got {value!r}")
-    return float(value)
 
 
 def solid_law(raw: dict, solid: dict | None = None) -> HyperelasticLaw:
