@@ -165,7 +165,9 @@ def plot(results: dict, path: Path) -> None:
     for column, group in enumerate(groups):
         top, bottom = axes[0, column], axes[1, column]
         cases = [case for case in CASES if case[1] == group and case[0] in results]
-        finest = min(cases, key=lambda c: results[c[0]]["model"]["mesh"]["size"])
+        # the rods against the 3D sweep with the most points, the finest mesh among those
+        finest = min(cases, key=lambda c: (-len(results[c[0]]["table"]),
+                                           results[c[0]]["model"]["mesh"]["size"]))
         for case in cases:
             summary = results[case[0]]
             rows = rows_of(summary)
