@@ -155,6 +155,15 @@ class StepDriver:
         return {name: assemble_scalar(self.forms[name])
                 for name in ("momentum_x", "momentum_y", "angular_momentum")}
 
+    def _unit_load_energy(self) -> float:
+        """Dead-load work at load factor 1 on the last accepted state (the
+        schemes' ``forms["load_potential"]``)."""
+        saved = float(self.problem.load_factor.value)
+        self.problem.load_factor.value = 1.0
+        value = assemble_scalar(self.forms["load_potential"])
+        self.problem.load_factor.value = saved
+        return value
+
     def _theta_dofs(self) -> np.ndarray:
         """Local dofs (ghosts included) of theta in the state."""
         if not hasattr(self, "_theta"):
@@ -398,14 +407,6 @@ class GeneralizedAlpha(StepDriver):
             self.tendons.set_time(t_new, t_old, alpha_f)
             if isinstance(self.solver, PullInSolver):  # pull-ins at t_{n+1}, like motions
                 self.solver.set_load_factor(self.tendons.pull_in_factors(t_new))
-
-    def _unit_load_energy(self) -> float:
-        """Dead-load work at load factor 1 on the state q_old."""
-        saved = float(self.problem.load_factor.value)
-        self.problem.load_factor.value = 1.0
-        value = assemble_scalar(self.forms["load_potential"])
-        self.problem.load_factor.value = saved
-        return value
 
     def step(self, dt: float) -> int:
         """Advance by dt (raises SolveFailed, state unchanged in q_old/v_old/a_old)."""

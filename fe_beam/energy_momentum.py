@@ -375,13 +375,6 @@ class EnergyMomentum(StepDriver):
         values[p.multiplier_dofs()] = 0.0
         return values
 
-    def _unit_load_energy(self) -> float:
-        saved = float(self.problem.load_factor.value)
-        self.problem.load_factor.value = 1.0
-        value = assemble_scalar(self.forms["load_potential"])
-        self.problem.load_factor.value = saved
-        return value
-
     def _load_mid(self, t_old: float, t_new: float) -> float:
         return 0.5 * (self.load_function(t_old) + self.load_function(t_new))
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["Material"]
+__all__ = ["Material", "small_strain_poisson", "small_strain_young"]
 
 
 def _number(name: str, value) -> float:
@@ -51,3 +51,14 @@ class Material:
         if self.nu is not None:
             return float(self.nu)
         return self.E / (2 * self.shear_modulus) - 1
+
+
+def small_strain_young(mu: float, kappa: float) -> float:
+    """Young's modulus of shear modulus mu and bulk modulus kappa: 9 kappa mu / (3 kappa + mu)
+    (3 mu when kappa = inf)."""
+    return 3 * mu if math.isinf(kappa) else 9 * kappa * mu / (3 * kappa + mu)
+
+
+def small_strain_poisson(mu: float, kappa: float) -> float:
+    """Poisson's ratio (3 kappa - 2 mu) / (2 (3 kappa + mu)) (1/2 when kappa = inf)."""
+    return 0.5 if math.isinf(kappa) else (3 * kappa - 2 * mu) / (2 * (3 * kappa + mu))

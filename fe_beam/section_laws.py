@@ -41,6 +41,8 @@ from typing import Any
 import numpy as np
 import ufl
 
+from fe_beam.materials import small_strain_poisson, small_strain_young
+
 __all__ = [
     "DEFAULT_SECTION_POINTS",
     "FIBRE_MATERIALS",
@@ -163,13 +165,11 @@ class FibreLaw:
     def young_modulus(self) -> float:
         """E = 9 kappa mu0 / (3 kappa + mu0) (3 mu0 when kappa = inf): the fibre's modulus at
         E11 = 0 (for svk exactly mu (3 lambda + 2 mu) / (lambda + mu), the same number)."""
-        mu, k = self.shear_modulus, self.kappa
-        return 3 * mu if math.isinf(k) else 9 * k * mu / (3 * k + mu)
+        return small_strain_young(self.shear_modulus, self.kappa)
 
     @property
     def poisson_ratio(self) -> float:
-        mu, k = self.shear_modulus, self.kappa
-        return 0.5 if math.isinf(k) else (3 * k - 2 * mu) / (2 * (3 * k + mu))
+        return small_strain_poisson(self.shear_modulus, self.kappa)
 
     # --- energy -------------------------------------------------------------------------------
     def _values(self, c: dict | None) -> dict:

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 
 import ufl
 
+from fe_beam.materials import small_strain_poisson, small_strain_young
+
 __all__ = [
     "LAWS",
     "HyperelasticLaw",
@@ -157,14 +159,12 @@ class HyperelasticLaw:
     @property
     def young_modulus(self) -> float:
         """E = 9 kappa mu / (3 kappa + mu) (= 3 mu when kappa = inf)."""
-        mu, k = self.shear_modulus, self.kappa
-        return 3 * mu if math.isinf(k) else 9 * k * mu / (3 * k + mu)
+        return small_strain_young(self.shear_modulus, self.kappa)
 
     @property
     def poisson_ratio(self) -> float:
         """nu = (3 kappa - 2 mu) / (2 (3 kappa + mu)) (= 1/2 when kappa = inf)."""
-        mu, k = self.shear_modulus, self.kappa
-        return 0.5 if math.isinf(k) else (3 * k - 2 * mu) / (2 * (3 * k + mu))
+        return small_strain_poisson(self.shear_modulus, self.kappa)
 
     def strain_energy(self, F, c: dict | None = None):
         """W(F) = W_iso(F) + U(J); ``c`` maps coefficient names to UFL values (default: floats)."""
