@@ -43,6 +43,8 @@ COMMANDS = {
     "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
     "compare": "tension sweep: 3D solid vs the rod with the non-standard and Reissner laws",
     "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
+    "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
+                 "points (--data DATA.csv), with standard errors",
 }
 
 
@@ -85,6 +87,8 @@ def _parser() -> argparse.ArgumentParser:
     from fe_beam.refine import add_refine_arguments
 
     add_refine_arguments(sub.choices["refine"])
+    sub.choices["calibrate"].add_argument("--data", required=True, metavar="DATA.csv",
+                                          help="measurements (fe_beam.calibrate: columns)")
     return parser
 
 
@@ -298,6 +302,29 @@ def run_compare_command(args, config: dict, comm) -> int:
 
 RUNNERS["solid"] = run_solid_command
 RUNNERS["compare"] = run_compare_command
+
+
+def run_calibrate_command(args, config: dict, comm) -> int:
+    from fe_beam.calibrate import run_calibrate
+    from fe_beam.solver import LoadSteppingFailed
+
+    try:
+        summary = run_calibrate(config, args.data, args.out, comm, quiet=args.quiet)
+    except LoadSteppingFailed as failure:
+        _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
+             sys.stderr)
+        return EXIT_FAILED
+    fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
+    _say(comm, f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
+               f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; results in "
+               f"{args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam calibrate: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS["calibrate"] = run_calibrate_command
 
 
 def _check_output_folder(out: Path, comm) -> None:

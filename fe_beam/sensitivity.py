@@ -52,6 +52,7 @@ from petsc4py import PETSc
 from ufl.algorithms import replace
 
 from fe_beam import compat
+from fe_beam.calibrate import parameter_kind
 from fe_beam.config import ConfigError
 from fe_beam.mpi import assemble_scalar, global_sum
 from fe_beam.solver import SADDLE_POINT_WORKSPACE, LoadStepping, SolveFailed
@@ -60,35 +61,6 @@ __all__ = ["OUTPUT_KEYS", "RodSensitivity", "parameter_kind", "parse_output", "s
 
 OUTPUT_KEYS = ("tip_u", "tip_v", "tip_theta", "x@S", "y@S", "pull_in.<i>", "tension.<i>")
 LOAD_VECTORS = {"tip_force": "tip_force", "distributed": "distributed", "gravity": "gravity"}
-SECTION_DIMS = ("b", "h", "d", "t", "tf", "tw", "A", "I", "I3", "I4")
-
-
-def parameter_kind(key: str) -> str:
-    """The kind of a parameter key (material, section, load, tension, pull_in, offset) or a
-    `ConfigError` naming what is allowed (FE-free: no dolfinx)."""
-    if not isinstance(key, str):
-        raise ConfigError(f"[calibrate] parameters must be strings (config keys), got {key!r}")
-    if key in ("material.E", "material.nu", "material.G"):
-        return "material"
-    m = re.fullmatch(r"section\.([A-Za-z0-9]+?)(_tip)?", key)
-    if m and m.group(1) in SECTION_DIMS:
-        return "section"
-    if key == "loads.tip_moment" or re.fullmatch(r"loads\.(tip_force|distributed|gravity)\.[01]",
-                                                 key):
-        return "load"
-    m = re.fullmatch(r"tendons\.(\d+)\.(.+)", key)
-    if m:
-        rest = m.group(2)
-        if rest in ("tension", "pull_in"):
-            return rest
-        if rest in ("offset_base", "offset_tip") or re.fullmatch(r"path\.\d+\.1", rest) \
-                or re.fullmatch(r"paths\.\d+\.\d+\.1", rest):
-            return "offset"
-    raise ConfigError(
-        f"unknown parameter {key!r}: parameters are material.E|nu|G, section.<dim>[_tip], "
-        "loads.tip_force.0|1, loads.tip_moment, loads.distributed.0|1, loads.gravity.0|1, "
-        "tendons.<i>.tension|pull_in|offset_base|offset_tip, tendons.<i>.path.<k>.1 or "
-        "tendons.<i>.paths.<b>.<k>.1")
 
 
 def parse_output(name: str, length: float | None = None) -> tuple:
