@@ -408,6 +408,10 @@ def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = Fa
 
     spec = parse_calibrate(raw)
     data = read_data(data_path)
+    if data.count() < len(spec.parameters):
+        raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
+                          f"{data.count()} measured values in {data_path} (give at least as "
+                          "many data as parameters)")
     summary = calibrate(raw, data, spec, comm)
     curves, factors = summary.pop("_model")
     summary["data"] = str(data_path)

@@ -154,6 +154,9 @@ class RodSensitivity:
         self.run = StaticContinuation(config, comm, prefix=f"fe_beam_sens{id(self)}_")
         self.problem = self.run.problem
         self.tendons = self.run.tendons
+        if self.tendons:
+            # pull-in control: tendon lengths to round-off (gradients are of the exact solution)
+            self.run.solver.tolerance = 1e-13 * config.model.length
         self._paths = ([[np.array(p, dtype=float) for p in t.paths] for t in self.tendons.tendons]
                        if self.tendons else [])
         self._params = [self._make_parameter(key, k) for key, k in zip(self.parameters, kinds,
