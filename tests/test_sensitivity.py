@@ -12,7 +12,8 @@ TOLERANCE = 1e-6
 
 
 def finite_differences(model, outputs, step=1e-3):
-    """4th-order central differences (steps +-h, +-2h, h = step |p|; 1e-3: truncation ~1e-12, solver round-off / h well below 1e-6) of the outputs at load
+    """4th-order central differences (steps +-h, +-2h, h = step |p|; at 1e-3 the truncation
+    is ~1e-12 and the solver's round-off over h well below 1e-6) of the outputs at load
     factor 1, each parameter in turn; the model is left at its original parameters."""
     start = model.values()
     columns = []
