@@ -704,3 +704,235 @@ def sensitivities(raw: dict, outputs: Sequence[str], parameters: Sequence[str],
     return {"values": dict(zip(outputs, values.tolist(), strict=True)),
             "gradient": {o: dict(zip(parameters, row.tolist(), strict=True))
                          for o, row in zip(outputs, grad, strict=True)}}
+
+
+# --- the 3D solid -------------------------------------------------------------------------------
+SOLID_PARAMETERS = ("material.E", "material.nu", "loads.tip_force.0", "loads.tip_force.1",
+                    "loads.tip_force.2", "tendons.<i>.tension")
+SOLID_OUTPUTS = ("tip_u", "tip_v", "tip_w")
+
+
+class SolidSensitivity:
+    """Adjoint sensitivities of the 3D finger (``fe-beam solid``) tip displacement (the tip
+    face's area average, outputs ``tip_u``, ``tip_v``, ``tip_w``) with respect to
+    ``material.E`` and ``material.nu`` (neo-Hookean law, displacement formulation: mu and
+    kappa are the small-strain ones of E, nu), ``loads.tip_force.0|1|2`` and
+    ``tendons.<i>.tension`` (tension control). The tendon cables are not UFL forms: their
+    residual is tau dl/du (`fe_beam.solid.cable.TendonCable`), linear in the tension, so
+    dR/dtau is the cable's own residual at unit tension times the load factor.
+
+    Same interface as `RodSensitivity`: ``values``, ``set_values``, ``solve``, ``outputs``,
+    ``gradient``, ``destroy``.
+    """
+
+    def __init__(self, raw: dict, parameters: Sequence[str] = (), comm=MPI.COMM_WORLD):
+        from fe_beam.solid.driver import SolidRun, parse_solid
+        from fe_beam.solid.materials import NeoHookean
+
+        config = parse_solid({k: v for k, v in raw.items() if k != "calibrate"})
+        self.config, self.comm = config, comm
+        self.parameters = list(parameters)
+        for key in self.parameters:
+            if not (key in ("material.E", "material.nu")
+                    or re.fullmatch(r"loads\.tip_force\.[012]|tendons\.\d+\.tension", str(key))):
+                raise ConfigError(f"parameter {key!r} is not a 3D-solid parameter (allowed: "
+                                  f"{', '.join(SOLID_PARAMETERS)})")
+        law = config.material
+        if not isinstance(law, NeoHookean) or config.discretization.formulation == "mixed":
+            if any(k.startswith("material.") for k in self.parameters):
+                raise ConfigError("3D sensitivities by material.E / material.nu need the "
+                                  "neo-hookean law in the displacement formulation")
+        self.run = SolidRun(config, comm)
+        self.problem = self.run.problem
+        self._moduli = {"E": float(law.young_modulus), "nu": float(law.poisson_ratio)}
+        self._tensions = [float(t.tension or 0.0) for t in self.problem.tendon_loads]
+        self._params = [self._make(key) for key in self.parameters]
+        self._selectors = [fem.Constant(self.problem.mesh, 0.0) for _ in self._params]
+        self._build_forms()
+        self._dirty = True
+        self._A = self._ksp = None
+
+    def _make(self, key: str) -> _Parameter:
+        p = self.problem
+        if key in ("material.E", "material.nu"):
+            name = key.split(".")[1]
+            factors = {"mu": fem.Constant(p.mesh, 0.0), "kappa": fem.Constant(p.mesh, 0.0)}
+            par = _Parameter(key, "material", lambda n=name: self._moduli[n],
+                             lambda v, n=name: self._set_modulus(n, v),
+                             [(p.coefficients["mu"], factors["mu"]),
+                              (p.coefficients["kappa"], factors["kappa"])])
+            par.factors = factors
+            return par
+        m = re.fullmatch(r"loads\.tip_force\.([012])", key)
+        if m:
+            index = int(m.group(1))
+            unit = np.zeros(3)
+            unit[index] = 1.0
+            scale = fem.Constant(p.mesh, 0.0)  # load factor / tip area
+            par = _Parameter(key, "load", lambda: float(p.tip_force[index]),
+                             lambda v: self._set_force(index, v),
+                             [(p.traction, scale * ufl.as_vector(unit.tolist()))])
+            par.scale = scale
+            return par
+        m = re.fullmatch(r"tendons\.(\d+)\.tension", key)
+        if m:
+            index = int(m.group(1))
+            if index >= len(p.cables) or p.tendon_loads[index].controlled_by_pull_in:
+                raise ConfigError(f"parameter {key!r}: no tension-controlled tendon {index} in "
+                                  "the 3D finger")
+            par = _Parameter(key, "tension", lambda: self._tensions[index],
+                             lambda v: self._set_tension(index, v), [], tendon=index)
+            return par
+        raise ConfigError(f"parameter {key!r} is not a 3D-solid parameter (allowed: "
+                          f"{', '.join(SOLID_PARAMETERS)})")
+
+    # parameter changes -------------------------------------------------------------------
+    def _set_modulus(self, name, value) -> None:
+        self._moduli[name] = float(value)
+        E, nu = self._moduli["E"], self._moduli["nu"]
+        self.problem.coefficients["mu"].value = E / (2 * (1 + nu))
+        self.problem.coefficients["kappa"].value = E / (3 * (1 - 2 * nu))
+
+    def _set_force(self, index, value) -> None:
+        self.problem.tip_force = np.array(self.problem.tip_force, dtype=float)
+        self.problem.tip_force[index] = float(value)
+        self.problem.set_load_factor(self.problem.load_factor)
+
+    def _set_tension(self, index, value) -> None:
+        import dataclasses as dc
+
+        self._tensions[index] = float(value)
+        loads = self.problem.tendon_loads
+        loads[index] = dc.replace(loads[index], tension=float(value))
+        self.problem.set_load_factor(self.problem.load_factor)
+
+    def values(self) -> np.ndarray:
+        return np.array([p.get() for p in self._params], dtype=float)
+
+    def set_values(self, values) -> None:
+        values = np.asarray(values, dtype=float).ravel()
+        for par, value in zip(self._params, values, strict=True):
+            if par.get() != value:
+                par.put(value)
+                self._dirty = True
+
+    def _update_direction_constants(self) -> None:
+        E, nu = self._moduli["E"], self._moduli["nu"]
+        lam = float(self.problem.load_factor)
+        for par in self._params:
+            if par.key == "material.E":
+                par.factors["mu"].value = 1 / (2 * (1 + nu))
+                par.factors["kappa"].value = 1 / (3 * (1 - 2 * nu))
+            elif par.key == "material.nu":
+                par.factors["mu"].value = -E / (2 * (1 + nu) ** 2)
+                par.factors["kappa"].value = 2 * E / (3 * (1 - 2 * nu) ** 2)
+            elif par.kind == "load":
+                par.scale.value = lam / self.problem.tip_area
+
+    def _build_forms(self) -> None:
+        form = RodSensitivity._derivative_form(self, self.problem.residual)
+        self._dR = fem.form(form) if form is not None and form.integrals() else None
+        self._vector = self.problem.problem.b.duplicate()
+        ds_tip = self.problem.ds(_tip_tag())
+        test = ufl.TestFunction(self.problem.W)
+        v = test if self.problem.p is None else ufl.split(test)[0]
+        self._tip_forms = [fem.form(v[i] * ds_tip) for i in range(3)]
+
+    def _select(self, k: int) -> None:
+        for j, selector in enumerate(self._selectors):
+            selector.value = 1.0 if j == k else 0.0
+
+    # solving ---------------------------------------------------------------------------
+    def solve(self, load_factor: float = 1.0) -> None:
+        """Equilibrium at ``load_factor``: Newton from the last equilibrium at the same load
+        factor after a parameter change, load stepping otherwise."""
+        load_factor = float(load_factor)
+        if not self._dirty and load_factor == self.run.load_factor:
+            return
+        if self._dirty and self.run.load_factor == load_factor and load_factor > 0:
+            self.problem.set_load_factor(load_factor)
+            self.problem.solver.solve()
+        else:
+            if load_factor < self.run.load_factor:
+                compat.local_array(self.problem.w)[:] = 0.0
+                self.run.load_factor = 0.0
+            self.problem.set_load_factor(self.run.load_factor)
+            if load_factor > self.run.load_factor:
+                self.run.advance(load_factor, self.config.stepping)
+        self._dirty = False
+
+    def outputs(self, names: Sequence[str]) -> np.ndarray:
+        tip = self.problem.tip_displacement()
+        index = {"tip_u": 0, "tip_v": 1, "tip_w": 2}
+        for name in names:
+            if name not in index:
+                raise ConfigError(f"unknown 3D output {name!r}: outputs are "
+                                  f"{', '.join(SOLID_OUTPUTS)}")
+        return np.array([tip[index[n]] for n in names])
+
+    def gradient(self, names: Sequence[str]) -> np.ndarray:
+        self.outputs(names)
+        index = {"tip_u": 0, "tip_v": 1, "tip_w": 2}
+        self._update_direction_constants()
+        nonlinear = self.problem.problem
+        if self._A is None:
+            self._A = nonlinear.A.duplicate()
+            self._A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+            self._ksp = PETSc.KSP().create(self.comm)
+            self._ksp.setType("preonly")
+            self._ksp.getPC().setType("lu")
+            self._ksp.getPC().setFactorSolverType("mumps")
+        x = compat.vector_of(self.problem.w).copy()
+        nonlinear.jacobian(None, x, self._A, self._A)
+        self._ksp.setOperators(self._A)
+        self._ksp.setUp()
+        bcs = self.problem.bcs
+        r_p = []
+        lam = float(self.problem.load_factor)
+        for k, par in enumerate(self._params):
+            vec = self._vector.duplicate()
+            with vec.localForm() as local:
+                local.set(0.0)
+            if par.kind == "tension":
+                cable = self.problem.cables[par.tendon]
+                saved, cable.tension = cable.tension, lam
+                try:
+                    cable.add_to_residual(x, vec)
+                finally:
+                    cable.tension = saved
+                vec.assemble()
+            elif self._dR is not None:
+                self._select(k)
+                compat.assemble_vector(vec, self._dR)
+                vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            compat.set_bc(vec, bcs, scale=0.0)
+            r_p.append(vec)
+        result = np.zeros((len(names), len(self._params)))
+        adjoint = self._vector.duplicate()
+        for j, name in enumerate(names):
+            rhs = self._vector.duplicate()
+            with rhs.localForm() as local:
+                local.set(0.0)
+            compat.assemble_vector(rhs, self._tip_forms[index[name]])
+            rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            rhs.scale(1.0 / self.problem.tip_area)
+            compat.set_bc(rhs, bcs, scale=0.0)
+            self._ksp.solveTranspose(rhs, adjoint)
+            result[j] = [-adjoint.dot(r) for r in r_p]
+            rhs.destroy()
+        for vec in r_p + [adjoint, x]:
+            vec.destroy()
+        return result
+
+    def destroy(self) -> None:
+        if self._ksp is not None:
+            self._ksp.destroy()
+            self._A.destroy()
+        self._vector.destroy()
+        self.run.destroy()
+
+
+def _tip_tag() -> int:
+    from fe_beam.solid.geometry import TIP_TAG
+
+    return TIP_TAG
