@@ -237,3 +237,21 @@ def test_missing_calibrate_table_and_data_file(tmp_path, capfd):
     assert main(["calibrate", str(config), "--data", str(tmp_path / "none.csv"), "--out",
                  str(tmp_path / "o"), "--quiet"]) == 2
     assert "does not exist" in capfd.readouterr().err
+
+
+def test_calibration_demo_fits_rod_to_3d_backbone(tmp_path):
+    """demos/demo_calibrate.py: real `fe-beam solid` output as data; the fitted rod's backbone
+    misfit is several times smaller than the nominal rod's, with finite standard errors."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "demos" / "demo_calibrate.py"
+    spec = importlib.util.spec_from_file_location("demo_calibrate", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    result = module.main(tmp_path)
+    assert result["rms_after_m"] < result["rms_before_m"] / 3
+    for key, value in result["fitted"].items():
+        assert 0.5 < value / result["nominal"][key] < 2.0
+        assert 0 < result["standard_errors"][key] < 0.2 * abs(value)
+    assert (tmp_path / "calibration" / "calibration.png").stat().st_size > 10_000
