@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam.cli import main as fe_beam, quiet_jit_logging
+from fe_beam.cli import main as fe_beam
+from fe_beam.cli import quiet_jit_logging
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "finger_solid.toml"
 PARAMETERS = ["material.E", "tendons.0.offset_tip"]
