@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from fe_beam.config import ConfigError
 
@@ -297,7 +298,6 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     cached equilibria); its parameters are set to the configuration's start values first
     unless ``raw`` is None."""
     from mpi4py import MPI
-    from scipy.optimize import least_squares
 
     from fe_beam.sensitivity import RodSensitivity
 

@@ -164,8 +164,12 @@ class RodSensitivity:
         self.controlled = ([i for i, t in enumerate(self.tendons.tendons)
                             if t.controlled_by_pull_in] if self.tendons else [])
         self._build_forms()
-        self._dirty = True  # parameters changed since the last converged state
+        self._dirty = True  # w is not an equilibrium of the current parameters
+        self._version = 0  # counts parameter changes
+        # converged equilibria per load factor, with their parameter version (continuation)
         self._states: dict[float, np.ndarray] = {}
+        self._versions: dict[float, int] = {}
+        self._tension_states: dict[float, np.ndarray] = {}
         self._ksp = None
         self._A = None
         self.stepping = config.stepping
@@ -315,10 +319,14 @@ class RodSensitivity:
         values = np.asarray(values, dtype=float).ravel()
         if values.shape != (len(self._params),):
             raise ValueError(f"need {len(self._params)} parameter values, got {values.shape}")
+        changed = False
         for par, value in zip(self._params, values, strict=True):
             if par.get() != value:
                 par.put(value)
-                self._dirty = True
+                changed = True
+        if changed:
+            self._dirty = True
+            self._version += 1
 
     def _update_direction_constants(self) -> None:
         mod = getattr(self, "_moduli", None)
@@ -371,14 +379,24 @@ class RodSensitivity:
         self._vector = compat.create_vector(nonlinear.residual_form)
 
     def _select(self, k: int) -> None:
-        for j, selector in enumerate(self._selectors):
-            selector.value = 1.0 if j == k else 0.0
+        """Selector k on, the others off (only the two that change are set)."""
+        current = getattr(self, "_selected", None)
+        if current == k:
+            return
+        if current is None:
+            for selector in self._selectors:
+                selector.value = 0.0
+        else:
+            self._selectors[current].value = 0.0
+        self._selectors[k].value = 1.0
+        self._selected = k
 
     def _residual_derivatives(self) -> list[PETSc.Vec]:
-        """dR/dp_k (Dirichlet rows zero), one vector per parameter."""
-        vectors = []
-        for k in range(len(self._params)):
-            vec = self._vector.duplicate()
+        """dR/dp_k (Dirichlet rows zero), one vector per parameter (reused between calls)."""
+        if getattr(self, "_rp", None) is None:
+            self._rp = [self._vector.duplicate() for _ in self._params]
+        vectors = self._rp
+        for k, vec in enumerate(vectors):
             with vec.localForm() as local:
                 local.set(0.0)
             if self._dR is not None:
@@ -386,7 +404,6 @@ class RodSensitivity:
                 compat.assemble_vector(vec, self._dR)
                 vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             compat.set_bc(vec, self.problem.bcs, scale=0.0)
-            vectors.append(vec)
         return vectors
 
     def _length_derivatives(self, index: int) -> np.ndarray:
@@ -427,28 +444,30 @@ class RodSensitivity:
 
         load_factor = float(load_factor)
         stepping = stepping or self.stepping
-        state = compat.local_array(self.problem.w)
-        if not self._dirty and abs(load_factor - self.load_factor) == 0.0:
+        self._update_direction_constants()
+        if not self._dirty and load_factor == self.load_factor:
             return
+        failed = None
+        if load_factor in self._states:
+            # a cached equilibrium at this load factor: the answer if it is of the current
+            # parameters, else the start of Newton's method (continuation)
+            self._restore(load_factor)
+            if self._versions[load_factor] == self._version:
+                self._dirty = False
+                return
+            try:
+                self._newton()
+                self._converged(load_factor)
+                return
+            except SolveFailed:
+                failed, self._dirty = load_factor, True
         if self._dirty:
-            self._update_direction_constants()
-            start = self._states.get(load_factor)
-            if start is not None:
-                state[:] = start
-                self._set_factor(load_factor)
-                self._restore_tensions(load_factor)
-                try:
-                    self._newton()
-                    self._converged(load_factor)
-                    return
-                except SolveFailed:
-                    pass
-            # continuation: the nearest cached state, else the reference state
-            if self._states:
-                nearest = min(self._states, key=lambda lf: abs(lf - load_factor))
-                state[:] = self._states[nearest]
-                self._set_factor(nearest)
-                self._restore_tensions(nearest)
+            # w is no equilibrium of the current parameters: make one at the nearest cached
+            # load factor, else start from the reference state
+            levels = [lf for lf in self._states if lf != failed]
+            if levels:
+                nearest = min(levels, key=lambda lf: abs(lf - load_factor))
+                self._restore(nearest)
                 try:
                     self._newton()
                     self._converged(nearest)
@@ -467,8 +486,11 @@ class RodSensitivity:
             self.run.advance(load_factor, self._segment(stepping, load_factor), progress=False)
         self._converged(load_factor)
 
-    def _restore_tensions(self, load_factor: float) -> None:
-        saved = getattr(self, "_tension_states", {}).get(load_factor)
+    def _restore(self, load_factor: float) -> None:
+        """The cached equilibrium at ``load_factor`` (state and solved tensions) into w."""
+        compat.local_array(self.problem.w)[:] = self._states[load_factor]
+        self._set_factor(load_factor)
+        saved = self._tension_states.get(load_factor)
         if saved is not None:
             for i in self.controlled:
                 self.tendons.tensions[i].value = float(saved[i])
@@ -503,13 +525,15 @@ class RodSensitivity:
         self._dirty = False
         self.run.load_factor = load_factor
         self._states[load_factor] = compat.local_array(self.problem.w).copy()
-        self._tension_states = getattr(self, "_tension_states", {})
+        self._versions[load_factor] = self._version
         if self.tendons:
             self._tension_states[load_factor] = self.tendons.tension_values()
 
     def forget_states(self) -> None:
         """Drop the cached equilibria (continuation then starts from the reference state)."""
         self._states.clear()
+        self._versions.clear()
+        self._tension_states.clear()
 
     # --- outputs ------------------------------------------------------------------------------
     def outputs(self, names: Sequence[str]) -> np.ndarray:
@@ -577,8 +601,10 @@ class RodSensitivity:
         with vec.localForm() as local:
             local.set(0.0)
             if spec[0] == "tip":
-                dofs = self.problem.component_dofs(spec[1], "xL")
-                local.array[dofs] += 1.0
+                cache = self.__dict__.setdefault("_tip_dofs", {})
+                if spec[1] not in cache:
+                    cache[spec[1]] = self.problem.component_dofs(spec[1], "xL")
+                local.array[cache[spec[1]]] += 1.0
             elif spec[0] == "point":
                 dofs, weights = self._point_weights(spec[1], spec[2])
                 np.add.at(local.array, dofs, weights)
@@ -655,8 +681,6 @@ class RodSensitivity:
                 rhs.destroy()
         finally:
             adjoint.destroy()
-            for vec in r_p:
-                vec.destroy()
             if bordered is not None:
                 for vec in bordered[0] + self._gradients:
                     vec.destroy()
@@ -687,6 +711,9 @@ class RodSensitivity:
             self._ksp.destroy()
             self._A.destroy()
             self._ksp = self._A = None
+        for vec in getattr(self, "_rp", None) or []:
+            vec.destroy()
+        self._rp = None
         self._vector.destroy()
         self.run.destroy()
 
