@@ -53,7 +53,7 @@ def parameter_kind(key) -> str:
     `ConfigError` naming what is allowed."""
     if not isinstance(key, str):
         raise ConfigError(f"[calibrate] parameters must be config keys (strings), got {key!r}")
-    if key in ("material.E", "material.nu", "material.G"):
+    if key in ("material.E", "material.nu", "material.G", "material.rho"):
         return "material"
     m = re.fullmatch(r"section\.([A-Za-z0-9]+?)(_tip)?", key)
     if m and m.group(1) in SECTION_DIMS:
@@ -70,7 +70,7 @@ def parameter_kind(key) -> str:
                 or re.fullmatch(r"paths\.\d+\.\d+\.1", rest):
             return "offset"
     raise ConfigError(
-        f"unknown parameter {key!r}: parameters are material.E|nu|G, section.<dim>[_tip], "
+        f"unknown parameter {key!r}: parameters are material.E|nu|G|rho, section.<dim>[_tip], "
         "loads.tip_force.0|1, loads.tip_moment, loads.distributed.0|1, loads.gravity.0|1, "
         "tendons.<i>.tension|pull_in|offset_base|offset_tip, tendons.<i>.path.<k>.1 or "
         "tendons.<i>.paths.<b>.<k>.1")

@@ -16,7 +16,7 @@ the tensions, one extra transposed solve per controlled tendon).
 
 Parameters are named by their configuration keys:
 
-    material.E, material.nu, material.G
+    material.E, material.nu, material.G, material.rho (through gravity loads)
     section.<dim>, section.<dim>_tip          (b, h, d, t, tf, tw; custom: A, I, I3, I4)
     loads.tip_force.0, loads.tip_force.1, loads.tip_moment, loads.distributed.0|1,
     loads.gravity.0|1
@@ -183,6 +183,10 @@ class RodSensitivity:
         p = self.problem
         mesh = p.mesh
         const = lambda v: fem.Constant(mesh, float(v))  # noqa: E731
+        if key == "material.rho":
+            c = p.rho
+            return _Parameter(key, kind, lambda: float(c.value),
+                              lambda v: self._set_constant(c, v), [(c, 1.0)])
         if kind == "material":
             name = key.split(".")[1]
             m = self.config.model.material
@@ -331,7 +335,7 @@ class RodSensitivity:
     def _update_direction_constants(self) -> None:
         mod = getattr(self, "_moduli", None)
         for par in self._params:
-            if par.kind != "material":
+            if par.kind != "material" or par.key == "material.rho":
                 continue
             name = par.key.split(".")[1]
             if name == "E":

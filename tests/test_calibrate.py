@@ -66,6 +66,7 @@ def finger_model():
     model.destroy()
 
 
+@pytest.mark.mpi
 def test_recovers_parameters_without_noise(finger_model):
     stations = (0.03, 0.07)
     data = data_of(synthetic(finger_model, TRUTH, TENSIONS, stations), stations)
@@ -79,6 +80,7 @@ def test_recovers_parameters_without_noise(finger_model):
     assert summary["iterations"] >= 2
 
 
+@pytest.mark.mpi
 def test_rod_taper_and_modulus_from_backbone_points():
     """A rod (load_factor data, backbone points only): E and the tip height."""
     raw = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.01, "h": 0.01},

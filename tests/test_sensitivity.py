@@ -105,6 +105,20 @@ def test_rod_custom_section_and_unshearable():
                          "section.A_tip"], ROD_OUTPUTS)
 
 
+@pytest.mark.mpi
+def test_t_section_roller_with_prescribed_rotation():
+    """A T-section (I3 != 0), clamped with a prescribed end rotation (a Dirichlet value scaled
+    by the load factor) and on a roller at x = L, degree 1, distributed load and gravity."""
+    raw = rod(supports__x0="clamped", supports__xL="roller")
+    raw["section"] = {"shape": "t-section", "b": 0.03, "h": 0.02, "tf": 0.004, "tw": 0.005}
+    raw["loads"] = {"distributed": [0.0, -2000.0], "gravity": [0.0, -9.81], "tip_moment": 40.0,
+                    "prescribed_x0": {"theta": 0.05}, "steps": 4}
+    raw["mesh"] |= {"degree": 1, "elements": 12}
+    check_gradient(raw, ["section.b", "section.h", "section.tf", "section.tw_tip", "material.E",
+                         "material.rho", "loads.distributed.1", "loads.tip_moment"],
+                   ["tip_u", "tip_theta", "x@0.4", "y@0.4", "y@0.77"])
+
+
 def finger(control="tension"):
     first = {"name": "a", "path": [[0.0, 0.006], [0.04, 0.0055], [0.1, 0.003]]}
     first |= {"pull_in": 0.004} if control == "pull_in" else {"tension": 1.5}
