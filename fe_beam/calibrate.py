@@ -291,12 +291,13 @@ class _Residuals:
 
 
 def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None,
-              model=None, tolerance: float = 1e-12) -> dict:
+              model=None, tolerance: float = 1e-12, curves: bool = False) -> dict:
     """Fit ``spec.parameters`` to ``data`` (collective). Returns the summary dict (parameters,
     standard_errors, correlation, residual_norm, iterations, history, ...). ``model``: an
-    existing `RodSensitivity` of the same configuration and parameters to reuse (its forms and
-    cached equilibria); its parameters are set to the configuration's start values first
-    unless ``raw`` is None."""
+    existing `RodSensitivity` with ``spec.parameters`` to reuse (its forms and cached
+    equilibria; ``raw`` is then not used): the fit starts from its current parameter values,
+    else from the configuration's. ``curves``: also the fitted model's backbone and tip at
+    every load level (key ``_model``, for the plot)."""
     from mpi4py import MPI
 
     from fe_beam.sensitivity import RodSensitivity
@@ -347,7 +348,8 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "history": residuals.history,
             "wall_time_s": time.perf_counter() - started,
         }
-        summary["_model"] = (_fitted_curves(model, residuals), factors)
+        if curves:
+            summary["_model"] = (_fitted_curves(model, residuals), factors)
         return summary
     finally:
         if own:
@@ -412,7 +414,7 @@ def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = Fa
         raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
                           f"{data.count()} measured values in {data_path} (give at least as "
                           "many data as parameters)")
-    summary = calibrate(raw, data, spec, comm)
+    summary = calibrate(raw, data, spec, comm, curves=True)
     curves, factors = summary.pop("_model")
     summary["data"] = str(data_path)
     if out is not None and comm.rank == 0:

@@ -542,11 +542,12 @@ class RodSensitivity:
     # --- outputs ------------------------------------------------------------------------------
     def outputs(self, names: Sequence[str]) -> np.ndarray:
         """Values of the outputs at the current state (collective)."""
-        values = []
+        values, tip = [], None
         for name in names:
             spec = parse_output(name, self.config.model.length)
             if spec[0] == "tip":
-                values.append(self.problem.end_values("xL")[spec[1]])
+                tip = tip or self.problem.end_values("xL")
+                values.append(tip[spec[1]])
             elif spec[0] == "point":
                 dofs, weights = self._point_weights(spec[1], spec[2])
                 local = compat.local_array(self.problem.w)
