@@ -7,7 +7,8 @@ Configuration::
 
     [calibrate]
     parameters = ["material.E", "tendons.0.offset_tip"]   # config keys (fe_beam.sensitivity)
-    bounds = {"material.E" = [1e5, 1e7]}                  # optional, per parameter
+    bounds = {"material.E" = [1e5, 1e7]}   # optional, per parameter (default: positive for
+                                           # moduli, dimensions, tensions; nu in (-1, 0.5))
     weights = {tip_theta = 1.0, x = 10.0, y = 10.0}       # optional, per data column
 
 DATA.csv: a header line, then one row per measurement. One load column, ``tension`` (N, the
@@ -38,8 +39,8 @@ from scipy.optimize import least_squares
 
 from fe_beam.config import ConfigError
 
-__all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "parse_calibrate",
-           "parameter_kind", "read_data", "run_calibrate"]
+__all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
+           "parse_calibrate", "parameter_kind", "read_data", "run_calibrate"]
 
 SECTION_DIMS = ("b", "h", "d", "t", "tf", "tw", "A", "I", "I3", "I4")
 DATA_COLUMNS = ("tension", "load_factor", "tip_u", "tip_v", "tip_theta", "s", "x", "y")
@@ -312,11 +313,14 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         if count < size:
             raise ConfigError(f"{size} parameters cannot be fitted to {count} measured values "
                               "(give at least as many data as parameters)")
+        if list(model.parameters) != list(spec.parameters):
+            raise ValueError("calibrate: the model's parameters differ from spec.parameters")
         factors = _load_factors(model, data, spec)
         start = model.values()
         scale = np.where(start != 0, np.abs(start), 1.0)
-        low = np.array([spec.bounds.get(k, (-np.inf, np.inf))[0] for k in spec.parameters])
-        high = np.array([spec.bounds.get(k, (-np.inf, np.inf))[1] for k in spec.parameters])
+        limits = [spec.bounds.get(k, default_bounds(k)) for k in spec.parameters]
+        low = np.array([lo for lo, _ in limits])
+        high = np.array([hi for _, hi in limits])
         if np.any(start < low) or np.any(start > high):
             bad = spec.parameters[int(np.flatnonzero((start < low) | (start > high))[0])]
             raise ConfigError(f"[calibrate] the start value of {bad!r} lies outside its bounds")
@@ -347,6 +351,9 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "function_evaluations": int(fit.nfev),
             "history": residuals.history,
             "wall_time_s": time.perf_counter() - started,
+            "notes": ([] if errors is not None else [
+                "no standard errors: as many data as parameters, or parameters the data cannot "
+                "tell apart (J^T J singular)"]),
         }
         if curves:
             summary["_model"] = (_fitted_curves(model, residuals), factors)
@@ -354,6 +361,19 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     finally:
         if own:
             model.destroy()
+
+
+def default_bounds(key: str) -> tuple[float, float]:
+    """Physical limits of a parameter when [calibrate] bounds does not give any: moduli,
+    density, section dimensions (except the signed I3), tensions and pull-ins are positive
+    (the trust-region iterates stay strictly inside), Poisson's ratio in (-1, 0.5)."""
+    if key == "material.nu":
+        return (-1.0, 0.5)
+    kind = parameter_kind(key)
+    if kind in ("material", "tension", "pull_in") or (kind == "section"
+                                                       and not key.startswith("section.I3")):
+        return (0.0, np.inf)
+    return (-np.inf, np.inf)
 
 
 def _uncertainty(r: np.ndarray, jac: np.ndarray):

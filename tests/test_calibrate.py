@@ -257,3 +257,15 @@ def test_calibration_demo_fits_rod_to_3d_backbone(tmp_path):
         assert 0.5 < value / result["nominal"][key] < 2.0
         assert 0 < result["standard_errors"][key] < 0.2 * abs(value)
     assert (tmp_path / "calibration" / "calibration.png").stat().st_size > 10_000
+
+
+def test_default_bounds_keep_physical_parameters_positive():
+    from fe_beam.calibrate import default_bounds
+
+    assert default_bounds("material.E") == (0.0, np.inf)
+    assert default_bounds("material.nu") == (-1.0, 0.5)
+    assert default_bounds("section.h_tip") == (0.0, np.inf)
+    assert default_bounds("section.I3") == (-np.inf, np.inf)
+    assert default_bounds("tendons.0.tension") == (0.0, np.inf)
+    assert default_bounds("tendons.0.offset_tip") == (-np.inf, np.inf)
+    assert default_bounds("loads.tip_force.1") == (-np.inf, np.inf)
