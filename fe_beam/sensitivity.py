@@ -126,26 +126,21 @@ class RodSensitivity:
     unusable parameters.
     """
 
-    def __init__(self, raw: dict, parameters: Sequence[str] = (), comm=MPI.COMM_WORLD,
-                 kind: str | None = None):
+    def __init__(self, raw: dict | None, parameters: Sequence[str] = (), comm=MPI.COMM_WORLD,
+                 kind: str | None = None, config=None):
+        """``config``: an already parsed `fe_beam.config.StaticConfig` (with its tendons)
+        instead of ``raw`` (a tapered dimension's ``_tip`` parameter then needs the taper given
+        in the section: ``dims_tip``)."""
         from fe_beam.static import StaticContinuation
 
         self.parameters = list(parameters)
         if len(set(self.parameters)) != len(self.parameters):
             raise ConfigError("[calibrate] parameters: a parameter is listed twice")
         kinds = [parameter_kind(k) for k in self.parameters]
-        kind = kind or ("finger" if raw.get("tendons") else "static")
-        raw = _prepare_raw(raw, self.parameters)
-        if kind == "finger":
-            from fe_beam.finger import parse_finger
-
-            config, _ = parse_finger({k: v for k, v in raw.items() if k != "calibrate"})
-        else:
-            from fe_beam.config import parse_static
-
-            if any(k in ("tension", "pull_in", "offset") for k in kinds):
-                raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
-            config = parse_static(raw)
+        if config is None:
+            config = self._parse(raw, kinds, kind)
+        elif not config.tendons and any(k in ("tension", "pull_in", "offset") for k in kinds):
+            raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
         if config.model.options.law == "hyperelastic":
             raise ConfigError("sensitivities support model.law = \"nonstandard\" and "
                               "\"reissner\" (not \"hyperelastic\")")
@@ -174,10 +169,26 @@ class RodSensitivity:
         self._A = None
         self.stepping = config.stepping
 
+    @classmethod
+    def from_config(cls, config, parameters: Sequence[str] = (), comm=MPI.COMM_WORLD):
+        """From a parsed `fe_beam.config.StaticConfig` (e.g. of `fe_beam.finger.parse_finger`)."""
+        return cls(None, parameters, comm, config=config)
+
+    def _parse(self, raw: dict, kinds: list, kind: str | None):
+        kind = kind or ("finger" if raw.get("tendons") else "static")
+        raw = _prepare_raw(raw, self.parameters)
+        if kind == "finger":
+            from fe_beam.finger import parse_finger
+
+            config, _ = parse_finger({k: v for k, v in raw.items() if k != "calibrate"})
+            return config
+        from fe_beam.config import parse_static
+
+        if any(k in ("tension", "pull_in", "offset") for k in kinds):
+            raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
+        return parse_static(raw)
+
     # --- parameters --------------------------------------------------------------------------
-    def _material(self):
-        m = self.config.model.material
-        return m
 
     def _make_parameter(self, key: str, kind: str) -> _Parameter:
         p = self.problem

@@ -244,3 +244,20 @@ def test_solid_refuses_other_parameters():
 
     with pytest.raises(ConfigError, match="not a 3D-solid parameter"):
         SolidSensitivity(coarse_solid(), ["section.h"])
+
+
+def test_from_parsed_config_matches_raw():
+    from fe_beam.finger import parse_finger
+
+    raw = finger()
+    parsed, _ = parse_finger(raw)
+    values = []
+    for model in (RodSensitivity(raw, ["material.E", "tendons.1.offset_tip"]),
+                  RodSensitivity.from_config(parsed, ["material.E", "tendons.1.offset_tip"])):
+        try:
+            model.solve(1.0)
+            values.append(model.gradient(["tip_theta", "y@0.05"]))
+        finally:
+            model.destroy()
+    np.testing.assert_allclose(values[1], values[0], rtol=1e-12)
+    assert np.all(np.abs(values[0]) > 0)
