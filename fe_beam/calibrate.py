@@ -14,9 +14,11 @@ Configuration::
 DATA.csv: a header line, then one row per measurement. One load column, ``tension`` (N, the
 tension of tendon 0; load factor = tension / tendons.0.tension) or ``load_factor``; and any of
 ``tip_u``, ``tip_v``, ``tip_theta`` (tip displacement [m], rotation [rad]) and ``x``, ``y``
-(deformed position [m] of the backbone point at reference coordinate ``s`` [m], which must then
-be given as well; several rows per load). An empty cell is "not measured"; any other cell must
-be a finite number.
+(deformed positions [m] of backbone points; several rows per load). With a column ``s``, each
+point is the material point at reference coordinate s [m]: two residuals, x(s) - x and
+y(s) - y. Without it, the point is compared with the nearest point of the deformed backbone:
+one residual, its signed distance to the backbone (weight: ``weights.x``). An empty cell is
+"not measured"; any other cell must be a finite number.
 
 The residuals are weight * (model - data); with m residuals and n parameters the reported
 standard errors are sqrt(diag(s^2 (J^T J)^-1)), s^2 = |r|^2 / (m - n) (J the weighted
@@ -170,8 +172,12 @@ class CalibrationData:
     s: np.ndarray | None = None
 
     def count(self) -> int:
-        """Number of measured values (residuals)."""
-        return int(sum(np.count_nonzero(np.isfinite(v)) for v in self.columns.values()))
+        """Number of residuals: measured values; a backbone point without ``s`` is one (its
+        distance to the backbone)."""
+        total = sum(np.count_nonzero(np.isfinite(v)) for v in self.columns.values())
+        if self.s is None and "y" in self.columns:
+            total -= np.count_nonzero(np.isfinite(self.columns["y"]))
+        return int(total)
 
 
 def read_data(path) -> CalibrationData:
@@ -204,9 +210,9 @@ def read_data(path) -> CalibrationData:
     if not measured:
         raise ConfigError(f"data file {name} has no measured column (any of "
                           f"{', '.join(MEASURED)})")
-    if ("x" in header) != ("y" in header) or (("x" in header) != ("s" in header)):
-        raise ConfigError(f"data file {name}: backbone points need the three columns s "
-                          "(reference coordinate), x and y")
+    if ("x" in header) != ("y" in header) or ("s" in header and "x" not in header):
+        raise ConfigError(f"data file {name}: backbone points need both columns x and y (and "
+                          "optionally s, their reference coordinate)")
     table = {c: [] for c in header}
     for number, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
@@ -228,12 +234,12 @@ def read_data(path) -> CalibrationData:
     if len(rows) < 2:
         raise ConfigError(f"data file {name} has a header but no data rows")
     s = np.array(table["s"]) if "s" in table else None
-    if s is not None:
-        given = np.isfinite(s)
+    given = np.isfinite(s) if s is not None else np.isfinite(np.array(table.get("x", [])))
+    if "x" in table:
         for column in ("x", "y"):
             if np.any(np.isfinite(np.array(table[column])) != given):
-                raise ConfigError(f"data file {name}: s, x and y of a backbone point must be "
-                                  "given together (a row has one of them empty)")
+                raise ConfigError(f"data file {name}: x and y (and s) of a backbone point must "
+                                  "be given together (a row has one of them empty)")
     load = loads[0]
     values = np.array(table[load])
     if load == "load_factor" and np.any(values < 0) or load == "tension" and np.any(values < 0):
@@ -254,12 +260,17 @@ class _Residuals:
         self._cache: dict = {}
         # per level: output names and (row index, column, output index, data value, weight)
         self.plan = {}
+        self.points = {}  # per level: backbone points without s (distance residuals)
         for level in self.levels:
-            names, entries = [], []
+            names, entries, points = [], [], []
             for row in np.flatnonzero(load_factors == level):
                 for column, values in data.columns.items():
                     value = values[row]
                     if not np.isfinite(value):
+                        continue
+                    if data.s is None and column in ("x", "y"):
+                        if column == "x":
+                            points.append((value, data.columns["y"][row]))
                         continue
                     name = (column if column.startswith("tip_")
                             else f"{column}@{float(data.s[row])!r}")
@@ -268,6 +279,7 @@ class _Residuals:
                     entries.append((names.index(name), value,
                                     spec.weights.get(column, 1.0)))
             self.plan[level] = (names, entries)
+            self.points[level] = np.array(points).reshape(-1, 2)
 
     def evaluate(self, q: np.ndarray):
         key = tuple(np.asarray(q, dtype=float).tolist())
@@ -283,6 +295,11 @@ class _Residuals:
             for index, value, weight in entries:
                 residuals.append(weight * (values[index] - value))
                 jacobian.append(weight * grad[index] * self.scale)
+            if len(self.points[level]):
+                weight = self.spec.weights.get("x", self.spec.weights.get("y", 1.0))
+                distances, rows = self.model.backbone_distances(self.points[level])
+                residuals.extend(weight * distances)
+                jacobian.extend(weight * rows * self.scale)
         r, jac = np.array(residuals), np.array(jacobian)
         self._cache = {key: (r, jac)}
         self.history.append({"parameters": dict(zip(self.spec.parameters,
@@ -455,7 +472,7 @@ def _plot(path: Path, data: CalibrationData, curves: dict, row_factors: np.ndarr
     for level in levels:
         axes[0].plot(curves[level]["x"], curves[level]["y"], "-", lw=1,
                      label=f"model, load {level:.3g}")
-    if data.s is not None:
+    if "x" in data.columns:
         axes[0].plot(data.columns["x"], data.columns["y"], "k.", label="data")
     axes[0].set_xlabel("x [m]")
     axes[0].set_ylabel("y [m]")

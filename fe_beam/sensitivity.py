@@ -641,6 +641,114 @@ class RodSensitivity:
         return (self._at_rest(lambda: self._length_derivatives(index))
                 - self._length_derivatives(index))
 
+    # --- distance of measured points to the deformed backbone -------------------------------
+    def _curve(self):
+        """(x0, x1, U, V): per cell of the whole mesh (gathered on every rank, sorted by x0) the
+        end coordinates and the u and v dof values (basis order of `_point_weights`)."""
+        mesh = self.problem.mesh
+        owned = mesh.topology.index_map(1).size_local
+        x = compat.cell_vertex_x(mesh)[:owned]
+        local = compat.local_array(self.problem.w)
+        parts = []
+        for index in (0, 1):
+            dofmap = self.problem.space.sub(index).dofmap
+            cells = np.array([dofmap.cell_dofs(c) for c in range(owned)]).reshape(owned, -1)
+            parts.append(local[cells])
+        gathered = self.comm.allgather((x, parts[0], parts[1]))
+        x = np.concatenate([g[0] for g in gathered])
+        U = np.concatenate([g[1] for g in gathered])
+        V = np.concatenate([g[2] for g in gathered])
+        order = np.argsort(np.minimum(x[:, 0], x[:, 1]))
+        return x[order], U[order], V[order]
+
+    def _basis(self, ref):
+        ref = np.asarray(ref, dtype=float)
+        if self.config.model.mesh.degree == 1:
+            return (np.stack([1 - ref, ref], -1), np.stack([-np.ones_like(ref),
+                                                            np.ones_like(ref)], -1))
+        return (np.stack([(1 - ref) * (1 - 2 * ref), ref * (2 * ref - 1), 4 * ref * (1 - ref)],
+                         -1),
+                np.stack([4 * ref - 3, 4 * ref - 1, 4 - 8 * ref], -1))
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Closest points of the deformed backbone r(S) = (S + u(S), v(S)) to ``points``
+        (n, 2) (collective; the same answer on every rank): (S*, r(S*), unit tangent r'/|r'|
+        at S*), S* in [0, L]."""
+        from scipy.optimize import minimize_scalar
+
+        x, U, V = self._curve()
+        length = x[:, 1] - x[:, 0]
+
+        def evaluate(cell, ref):
+            phi, dphi = self._basis(ref)
+            S = x[cell, 0] + ref * length[cell]
+            r = np.array([S + phi @ U[cell], phi @ V[cell]])
+            dr = np.array([1 + dphi @ U[cell] / length[cell], dphi @ V[cell] / length[cell]])
+            return r, dr
+
+        samples = np.linspace(0.0, 1.0, 9)
+        phi, _ = self._basis(samples)
+        Sx = x[:, :1] + samples[None, :] * length[:, None]
+        X = Sx + U @ phi.T
+        Y = V @ phi.T
+        results = []
+        for p in np.asarray(points, dtype=float).reshape(-1, 2):
+            distance = (X - p[0]) ** 2 + (Y - p[1]) ** 2
+            best = int(np.argmin(distance.min(axis=1)))
+            candidates = []
+            for cell in {max(best - 1, 0), best, min(best + 1, len(x) - 1)}:
+                found = minimize_scalar(
+                    lambda ref, c=cell, p=p: float(np.sum((evaluate(c, ref)[0] - p) ** 2)),
+                    bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-13})
+                candidates.append((found.fun, cell, float(found.x)))
+            _, cell, ref = min(candidates)
+            # polish with Newton on (r - p) . r' = 0 (the bounded search stops near 1e-13)
+            for _ in range(3):
+                r, dr = evaluate(cell, ref)
+                h = 1e-6
+                r2, dr2 = evaluate(cell, ref + h)
+                ddr = (dr2 - dr) / h * length[cell]
+                f = (r - p) @ dr
+                df = (dr @ dr + (r - p) @ ddr) * length[cell]
+                if df <= 0:
+                    break
+                ref = float(np.clip(ref - f / df, 0.0, 1.0))
+            r, dr = evaluate(cell, ref)
+            S = float(x[cell, 0] + ref * length[cell])
+            results.append((S, r, dr / np.linalg.norm(dr)))
+        S = np.array([item[0] for item in results])
+        return S, np.array([item[1] for item in results]), np.array([item[2] for item in results])
+
+    def backbone_distances(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """Signed distances of ``points`` (n, 2) to the deformed backbone and their exact
+        gradients (n, parameters) (collective). Interior closest point S*: d = n . (r(S*) - p),
+        n = (-t_y, t_x) the unit normal; its derivative is n . dr/dp at fixed S (the
+        tangential motion of S* and of n do not change d to first order, r - p being parallel
+        to n). Closest point at an end: d = sign(n . (r - p)) |r - p| with derivative
+        sign (r - p) / |r - p| . dr/dp (exact for |r - p| > 0)."""
+        S, r, t = self.project(points)
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        normal = np.stack([-t[:, 1], t[:, 0]], axis=1)
+        names = [f"{c}@{float(s)!r}" for s in S for c in ("x", "y")]
+        grad = self.gradient(names).reshape(len(S), 2, -1) if len(S) else np.zeros((0, 2, 0))
+        length = self.config.model.length
+        values, rows = [], []
+        for i, (s, point) in enumerate(zip(S, points, strict=True)):
+            gap = r[i] - point
+            side = float(normal[i] @ gap)
+            if 1e-12 * length < s < length * (1 - 1e-12):
+                values.append(side)
+                rows.append(normal[i] @ grad[i])
+            else:
+                size = float(np.linalg.norm(gap))
+                sign = 1.0 if side >= 0 else -1.0
+                values.append(sign * size)
+                rows.append(sign * (gap / size) @ grad[i] if size > 0 else normal[i] @ grad[i])
+        cache = self.__dict__.get("_point_cache", {})
+        if len(cache) > 20000:
+            cache.clear()
+        return np.array(values), np.array(rows).reshape(len(S), len(self._params))
+
     # --- the adjoint --------------------------------------------------------------------------
     def _factor(self) -> PETSc.KSP:
         nonlinear = self.run.snes.problem

@@ -81,6 +81,23 @@ def test_recovers_parameters_without_noise(finger_model):
 
 
 @pytest.mark.mpi
+def test_recovers_parameters_from_unlabelled_backbone_points(finger_model):
+    """Points x, y without s (e.g. from a camera): distances to the deformed backbone."""
+    rows = synthetic(finger_model, TRUTH, TENSIONS, (0.025, 0.06, 0.1))
+    loads, xs, ys = [], [], []
+    for tension, _, points in rows:
+        for x, y in points:
+            loads.append(tension), xs.append(x), ys.append(y)
+    data = CalibrationData("tension", np.array(loads), {"x": np.array(xs), "y": np.array(ys)})
+    assert data.count() == 12
+    finger_model.set_values(TRUTH * [1.2, 0.85])
+    summary = calibrate(None, data, CalibrationSpec(PARAMETERS), model=finger_model)
+    np.testing.assert_allclose([summary["parameters"][k] for k in PARAMETERS], TRUTH,
+                               rtol=1e-6)
+    assert summary["residuals"] == 12
+
+
+@pytest.mark.mpi
 def test_rod_taper_and_modulus_from_backbone_points():
     """A rod (load_factor data, backbone points only): E and the tip height."""
     raw = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.01, "h": 0.01},
@@ -208,7 +225,8 @@ def test_command_writes_summary_and_plot(tmp_path, finger_model):
     ({"header": ("tip_u", "tip_v", "tip_theta"), "rows": [[0.1, 0.2, 0.3]]},
      "exactly one of the columns tension or load_factor"),
     ({"header": ("tension",), "rows": [[1.0]]}, "has no measured column"),
-    ({"header": ("tension", "x", "y"), "rows": [[1.0, 0.1, 0.01]]}, "s (reference coordinate)"),
+    ({"header": ("tension", "s", "x"), "rows": [[1.0, 0.05, 0.05]]}, "both columns x and y"),
+    ({"header": ("tension", "x", "y"), "rows": [[1.0, 0.1, ""]]}, "given together"),
     ({"rows": [[1.0, -0.001, "nan", 0.2]]}, "tip_v = 'nan' is not a finite number"),
     ({"rows": [[1.0, -0.001, "abc", 0.2]]}, "tip_v = 'abc' is not a finite number"),
     ({"header": ("tension", "tip_theta"), "rows": [[1.0, 0.2]]},

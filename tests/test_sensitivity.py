@@ -261,3 +261,37 @@ def test_from_parsed_config_matches_raw():
             model.destroy()
     np.testing.assert_allclose(values[1], values[0], rtol=1e-12)
     assert np.all(np.abs(values[0]) > 0)
+
+
+@pytest.mark.mpi
+def test_backbone_distances_of_unlabelled_points():
+    """Signed distances of points to the deformed backbone (nearest point inside the rod and
+    at its tip) against finite differences, and the projection's own consistency."""
+    params = ["material.E", "tendons.0.path.1.1", "tendons.1.tension", "section.h_tip"]
+    model = RodSensitivity(finger(), params)
+    try:
+        model.solve(1.0)
+        on = model.outputs(["x@0.03", "y@0.03", "x@0.081", "y@0.081", "x@0.1", "y@0.1"])
+        on = on.reshape(-1, 2)
+        points = on + np.array([[0.001, -0.002], [-0.0005, 0.003], [0.002, 0.001]])
+        S, r, t = model.project(on)
+        np.testing.assert_allclose(S, [0.03, 0.081, 0.1], atol=1e-9)
+        distances, adjoint = model.backbone_distances(points)
+        S, r, t = model.project(points)
+        assert S[-1] == pytest.approx(0.1)  # beyond the tip: the tip is the nearest point
+        np.testing.assert_allclose(np.abs(distances), np.linalg.norm(r - points, axis=1),
+                                   rtol=1e-12)
+        start, fd = model.values(), []
+        for k in range(len(start)):
+            h, values = 1e-3 * abs(start[k]), []
+            for multiple in (2, 1, -1, -2):
+                p = start.copy()
+                p[k] += multiple * h
+                model.set_values(p)
+                model.solve(1.0)
+                values.append(model.backbone_distances(points)[0])
+            fd.append((-values[0] + 8 * values[1] - 8 * values[2] + values[3]) / (12 * h))
+        fd = np.array(fd).T
+    finally:
+        model.destroy()
+    assert np.all(np.abs(fd - adjoint) <= TOLERANCE * np.abs(adjoint)), fd / adjoint - 1
