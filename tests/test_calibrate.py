@@ -143,6 +143,7 @@ def test_standard_errors_cover_the_truth(finger_model):
         z = np.abs(fitted - TRUTH) / errors
         covered += bool(np.all(z <= 3))
         close += bool(np.all(z <= 0.5))
+    print(f"truth within 3 standard errors in {covered} of 50 trials, within 0.5 in {close}")
     assert covered >= 45, covered
     assert close >= 1, close
     assert time.perf_counter() - started < 120
