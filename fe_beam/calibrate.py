@@ -350,7 +350,7 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         r, jac = residuals.evaluate(fit.x)
         values = fit.x * scale
         jac_p = jac / scale  # d r / d p
-        errors, correlation = _uncertainty(r, jac_p)
+        errors, correlation = _uncertainty(r, jac_p, scale)
         names = list(spec.parameters)
         summary = {
             "status": "converged" if fit.success else "not converged",
@@ -393,20 +393,24 @@ def default_bounds(key: str) -> tuple[float, float]:
     return (-np.inf, np.inf)
 
 
-def _uncertainty(r: np.ndarray, jac: np.ndarray):
-    """Standard errors and correlation of least squares (None when m == n: no redundancy)."""
+def _uncertainty(r: np.ndarray, jac: np.ndarray, scale: np.ndarray):
+    """Standard errors and correlation of least squares: covariance s^2 (J^T J)^-1 with
+    s^2 = |r|^2 / (m - n), by the SVD of the Jacobian in the scaled parameters p / scale (well
+    conditioned whatever the parameters' units). None when m == n (no redundancy) or when the
+    data cannot tell the parameters apart (smallest singular value below 1e-12 of the
+    largest)."""
     m, n = jac.shape
     if m <= n:
         return None, None
-    sigma2 = float(r @ r) / (m - n)
-    normal = jac.T @ jac
-    try:
-        covariance = sigma2 * np.linalg.inv(normal)
-    except np.linalg.LinAlgError:
+    scaled = jac * scale[None, :]
+    _, singular, vt = np.linalg.svd(scaled, full_matrices=False)
+    if not singular[-1] > 1e-12 * singular[0]:
         return None, None
-    errors = np.sqrt(np.abs(np.diag(covariance)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        correlation = covariance / np.outer(errors, errors)
+    sigma2 = float(r @ r) / (m - n)
+    covariance = sigma2 * (vt.T / singular**2) @ vt  # of p / scale
+    covariance = covariance * np.outer(scale, scale)
+    errors = np.sqrt(np.diag(covariance))
+    correlation = covariance / np.outer(errors, errors) if np.all(errors > 0) else None
     return errors, correlation
 
 

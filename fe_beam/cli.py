@@ -314,6 +314,8 @@ def run_calibrate_command(args, config: dict, comm) -> int:
         _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
              sys.stderr)
         return EXIT_FAILED
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam calibrate: note: {note}", sys.stderr)
     fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
     _say(comm, f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
                f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; results in "

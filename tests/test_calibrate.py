@@ -288,3 +288,27 @@ def test_default_bounds_keep_physical_parameters_positive():
     assert default_bounds("tendons.0.tension") == (0.0, np.inf)
     assert default_bounds("tendons.0.offset_tip") == (-np.inf, np.inf)
     assert default_bounds("loads.tip_force.1") == (-np.inf, np.inf)
+
+
+def test_parameters_the_data_cannot_tell_apart_have_no_standard_errors():
+    """A rod's state depends on tip force / E only: E and the force together are not
+    identifiable, and no standard errors are reported (not huge or negative variances)."""
+    raw = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.01, "h": 0.01},
+           "material": {"E": 2e11, "nu": 0.3}, "mesh": {"elements": 4, "degree": 2},
+           "loads": {"tip_force": [0.0, -300.0], "steps": 4}}
+    params = ("material.E", "loads.tip_force.1")
+    model = RodSensitivity(raw, params)
+    try:
+        loads, columns = [], {"tip_u": [], "tip_v": [], "tip_theta": []}
+        for factor in (0.5, 1.0):
+            model.solve(factor)
+            for key, value in zip(columns, model.outputs(list(columns)), strict=True):
+                columns[key].append(value + 1e-4 * factor)  # not exactly the model
+            loads.append(factor)
+        data = CalibrationData("load_factor", np.array(loads),
+                               {k: np.array(v) for k, v in columns.items()})
+        summary = calibrate(None, data, CalibrationSpec(params), model=model)
+    finally:
+        model.destroy()
+    assert summary["standard_errors"] is None and summary["correlation"] is None
+    assert "cannot tell apart" in summary["notes"][0]
