@@ -893,6 +893,9 @@ class SolidSensitivity:
             if any(k.startswith("material.") for k in self.parameters):
                 raise ConfigError("3D sensitivities by material.E / material.nu need the "
                                   "neo-hookean law in the displacement formulation")
+        if any(t.controlled_by_pull_in for t in config.tendon_loads):
+            raise ConfigError("3D sensitivities need tension-controlled tendons (a pull-in "
+                              "controlled cable's tension is an unknown: not supported)")
         self.run = SolidRun(config, comm)
         self.problem = self.run.problem
         self._moduli = {"E": float(law.young_modulus), "nu": float(law.poisson_ratio)}
