@@ -244,6 +244,11 @@ def test_solid_refuses_other_parameters():
 
     with pytest.raises(ConfigError, match="not a 3D-solid parameter"):
         SolidSensitivity(coarse_solid(), ["section.h"])
+    raw = coarse_solid()
+    raw["tendons"][0].pop("tension")
+    raw["tendons"][0]["pull_in"] = 0.002
+    with pytest.raises(ConfigError, match="tension-controlled"):
+        SolidSensitivity(raw, ["material.E"])
 
 
 def test_from_parsed_config_matches_raw():
