@@ -13,10 +13,10 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fe_beam.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
 from fe_beam.materials import Material
+from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
+from fe_beam.model.settings import LoadStepping, SolverSettings
 from fe_beam.sections import SHAPES, Section
-from fe_beam.solver import LoadStepping, SolverSettings
 from fe_beam.timefunctions import shown
 
 __all__ = [
