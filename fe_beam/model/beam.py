@@ -1,16 +1,15 @@
 """The planar beam as data: the model options (law, constraint), discretisation, supports,
 loads and the `BeamModel` that holds them with the section and the material.
 
-Pure Python (numpy for a rank test): no finite-element code. `fe_beam.beam.BeamProblem` turns a
+Pure Python: no numpy, no finite-element code. `fe_beam.beam.BeamProblem` turns a
 `BeamModel` into forms.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from fe_beam.materials import Material
 from fe_beam.model.laws import CONSTRAINTS, DEFAULT_SECTION_POINTS, LAWS, MAX_SECTION_POINTS
@@ -155,16 +154,37 @@ class Supports:
                 "theta": lambda x: (0.0, 0.0, 1.0)}
         equations = [rows[c](x) for end, x in (("x0", 0.0), ("xL", 1.0))
                      for c in self.fixed(end)]
-        matrix = np.array(equations, dtype=float).reshape(-1, 3)
-        if matrix.shape[0] and np.linalg.matrix_rank(matrix) == 3:
+        if equations and _rank(equations) == 3:
             return []
         free = []
-        if not matrix.shape[0] or not np.any(matrix[:, 0]):
+        if not any(row[0] for row in equations):
             free.append("translation along x (fix u at one end)")
-        if not matrix.shape[0] or np.linalg.matrix_rank(matrix[:, 1:]) < 2:
+        if _rank([row[1:] for row in equations]) < 2:
             free.append("translation along y or rotation (fix v at both ends, or v and theta "
                         "at one end)")
         return free
+
+
+def _rank(rows) -> int:
+    """Rank of a small matrix (a list of equal-length rows) by Gaussian elimination with
+    partial pivoting (the rows of `Supports.rigid_motions` hold 0, 1 and x in [0, 1])."""
+    rows = [list(map(float, row)) for row in rows]
+    rank, columns = 0, len(rows[0]) if rows else 0
+    for column in range(columns):
+        pivot = max(range(rank, len(rows)), key=lambda i: abs(rows[i][column]), default=None)
+        if pivot is None or abs(rows[pivot][column]) <= 1e-12:
+            continue
+        rows[rank], rows[pivot] = rows[pivot], rows[rank]
+        for i in range(rank + 1, len(rows)):
+            factor = rows[i][column] / rows[rank][column]
+            rows[i] = [a - factor * b for a, b in zip(rows[i], rows[rank], strict=True)]
+        rank += 1
+    return rank
+
+
+def _finite(value) -> bool:
+    """A finite number (Python ints always are; math.isfinite would overflow on huge ones)."""
+    return isinstance(value, int) or math.isfinite(value)
 
 
 def _pair(name: str, value) -> tuple[float, float]:
@@ -173,7 +193,7 @@ def _pair(name: str, value) -> tuple[float, float]:
         and len(value) == 2
         and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
     )
-    if not ok or not all(np.isfinite(value)):
+    if not ok or not all(_finite(c) for c in value):
         raise ValueError(f"loads.{name} must be a pair of numbers [x, y], got {value!r}")
     return float(value[0]), float(value[1])
 
@@ -217,7 +237,7 @@ class BeamModel:
 
     def __post_init__(self):
         ok = isinstance(self.length, (int, float)) and not isinstance(self.length, bool)
-        if not ok or not np.isfinite(self.length) or self.length <= 0:
+        if not ok or not _finite(self.length) or self.length <= 0:
             raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
         if self.material.rho == 0 and any(self.loads.gravity):
             raise ValueError("loads.gravity needs material.rho > 0")
