@@ -18,9 +18,9 @@ HEAVY = ("dolfinx", "petsc4py", "mpi4py", "slepc4py", "basix", "ffcx", "gmsh")
 #: the commands each example is meant for (its header says which)
 EXAMPLES = {
     "cantilever.toml": ("static", "refine"),
-    "finger.toml": ("finger",),
+    "finger.toml": ("finger", "refine"),
     "finger_dynamics.toml": ("dynamic", "modes"),
-    "finger_solid.toml": ("solid", "compare"),
+    "finger_solid.toml": ("solid", "compare", "refine"),
     "flying_spaghetti.toml": ("dynamic",),
     "release.toml": ("dynamic", "modes"),
     "spin_up.toml": ("dynamic",),
