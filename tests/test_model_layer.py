@@ -32,8 +32,9 @@ EXAMPLES = {
 def run_python(code: str) -> dict:
     """Run ``code`` in a fresh interpreter (no MPI launcher in its environment) and return the
     JSON it prints on its last line."""
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("OMPI_", "PMI_", "PMIX_", "HYDRA_"))}
+    from fe_beam.cli import MPI_LAUNCHER_PREFIXES
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith(MPI_LAUNCHER_PREFIXES)}
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env=env, cwd=ROOT, timeout=120)
