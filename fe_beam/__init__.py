@@ -8,25 +8,39 @@ if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "fe-beam":
     from fe_beam import runctl as _runctl
 
     _runctl.defer_signals()
-from fe_beam.beam import (
+from fe_beam.materials import Material
+from fe_beam.model import (
     BeamModel,
-    BeamProblem,
     Discretisation,
     Loads,
+    LoadStepping,
     ModelOptions,
+    SolverSettings,
     Supports,
 )
-from fe_beam.materials import Material
 from fe_beam.sections import Section, SectionProperties
-from fe_beam.solver import (
-    LoadStepping,
-    LoadSteppingFailed,
-    NonlinearProblem,
-    SNESSolver,
-    SolveFailed,
-    SolverSettings,
-    run_load_stepping,
-)
+
+# the finite-element names load dolfinx and PETSc: imported when first used (PEP 562), so that
+# `import fe_beam.config` (validation, `fe-beam --help`) does not load the FE stack
+_LAZY = {
+    "BeamProblem": "fe_beam.beam",
+    "LoadSteppingFailed": "fe_beam.solver",
+    "NonlinearProblem": "fe_beam.solver",
+    "SNESSolver": "fe_beam.solver",
+    "SolveFailed": "fe_beam.solver",
+    "run_load_stepping": "fe_beam.solver",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'fe_beam' has no attribute {name!r}")
+
 
 __version__ = "0.1.0"
 

@@ -28,6 +28,7 @@ from fe_beam.config import (
     check_partition,
     check_values,
     load_config,
+    validate,
 )
 from fe_beam.timefunctions import TimeFunctionError
 
@@ -505,12 +506,56 @@ def main(argv: list[str] | None = None) -> int:
         return _main(argv)
 
 
-def _main(argv: list[str] | None = None) -> int:
+# Environment variables set by MPI launchers (Open MPI, MPICH/Hydra, PMIx, Slurm): with none of
+# them the process is a serial run, and MPI (with dolfinx and PETSc) is loaded only to run
+MPI_LAUNCHER_PREFIXES = ("OMPI_COMM_WORLD_", "PMI_", "PMIX_", "HYDRA_", "MPIEXEC_", "MPI_LOCAL",
+                         "SLURM_STEP_", "PALS_", "MV2_COMM_WORLD_", "I_MPI_")
+
+
+class SerialComm:
+    """The one-process communicator of a serial run before MPI is loaded: parsing the command
+    line, checking the output folder and validating the configuration need nothing more, so
+    ``fe-beam --help`` and a configuration mistake answer without loading mpi4py, dolfinx or
+    PETSc."""
+
+    rank = 0
+    size = 1
+
+    def bcast(self, value, root: int = 0):
+        return value
+
+    def allreduce(self, value, op=None):
+        return value
+
+    def barrier(self) -> None:
+        return None
+
+
+def launched_by_mpi() -> bool:
+    """Whether an MPI launcher started this process (then MPI is loaded at once: every rank
+    must take part in the collective checks)."""
+    return any(name.startswith(MPI_LAUNCHER_PREFIXES) for name in os.environ)
+
+
+def _world():
     from mpi4py import MPI
 
-    comm = MPI.COMM_WORLD
+    return MPI.COMM_WORLD
+
+
+def check_solver_options(validated) -> None:
+    """PETSc's verdict on the configuration's PETSc options (ConfigError naming the first one
+    it rejects), before the run starts: the finite-element stack is loaded by now."""
+    if validated.petsc_options:
+        from fe_beam.solver import check_petsc_options
+
+        for options in validated.petsc_options:
+            check_petsc_options(options)
+
+
+def _main(argv: list[str] | None = None) -> int:
+    comm = _world() if launched_by_mpi() else SerialComm()
     args = _parse_arguments(argv, comm)
-    quiet_jit_logging()
     if args.out is None:
         args.out = Path("results") / Path(args.config).stem
     if comm.size > 1:
@@ -523,7 +568,13 @@ def _main(argv: list[str] | None = None) -> int:
         check_values(config)
         notes.extend(check_command_tables(args.command, config))
         check_partition(config, comm.size, args.command)
-        code = _run_locked(args, config, comm)
+        refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
+                  "quantities": getattr(args, "quantity", None)}
+        validated = validate(args.command, config, refine)
+        world = _world() if isinstance(comm, SerialComm) else comm
+        quiet_jit_logging()
+        check_solver_options(validated)
+        code = _run_locked(args, config, world)
         for note in notes if code != EXIT_USAGE else []:  # a usage error is one sentence
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
         return code

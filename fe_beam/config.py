@@ -13,10 +13,10 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fe_beam.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
 from fe_beam.materials import Material
+from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
+from fe_beam.model.settings import LoadStepping, SolverSettings
 from fe_beam.sections import SHAPES, Section
-from fe_beam.solver import LoadStepping, SolverSettings
 from fe_beam.timefunctions import shown
 
 __all__ = [
@@ -28,6 +28,7 @@ __all__ = [
     "check_values",
     "load_config",
     "parse_static",
+    "validate",
 ]
 
 
@@ -634,3 +635,76 @@ def _check_solid_partition(config: dict, ranks: int) -> None:
         f"[solid] mesh_size = {size:g} m is larger than the cross-section ({max(dimensions):g} m):"
         f" such a coarse 3D mesh does not run on {ranks} MPI ranks; use mesh_size <= "
         f"{max(dimensions):g} m, or run on one rank")
+
+
+# --- one entry point: a whole configuration of any command, without the finite-element stack ----
+@dataclass(frozen=True)
+class Validated:
+    """A configuration validated for ``command``: ``parsed`` is what the command's parser
+    returns (`StaticConfig`; finger: (StaticConfig, InverseTarget | None); dynamic:
+    `fe_beam.model.transient.DynamicConfig`; modes: (StaticConfig, [modes] table); solid:
+    `fe_beam.solid.config.SolidConfig`; compare: `fe_beam.model.compare.CompareConfig`; refine:
+    `fe_beam.refine.RefinementPlan`). ``petsc_options`` lists the solver settings whose PETSc
+    options PETSc itself still has to accept (`fe_beam.solver.check_petsc_options`, where the
+    solver is built: the CLI checks them before the run starts)."""
+
+    command: str
+    parsed: object
+    petsc_options: tuple[dict, ...] = ()
+
+
+COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine")
+
+
+def _solver_settings(parsed) -> list:
+    """The SolverSettings inside a parsed configuration (duck-typed: no imports)."""
+    if isinstance(parsed, tuple):
+        return [s for part in parsed for s in _solver_settings(part)]
+    found = []
+    for name in ("solver", "static", "rod", "solid", "parsed"):
+        value = getattr(parsed, name, None)
+        if isinstance(value, SolverSettings):
+            found.append(value)
+        elif value is not None and not isinstance(value, (dict, str, int, float)):
+            found.extend(_solver_settings(value))
+    return found
+
+
+def validate(command: str, config: dict, refine: dict | None = None) -> Validated:
+    """Validate the whole configuration ``config`` (the parsed TOML, after ``--set``) for
+    ``command`` as the command's own parser does, raising ConfigError (one sentence naming the
+    key) for the first mistake. Imports no dolfinx, PETSc or mpi4py: `fe-beam` answers a
+    mistake before loading them. ``refine``: the refine command's --levels, --ratio, --quantity
+    (strings or None)."""
+    if command not in COMMANDS:
+        raise ConfigError(f"unknown command {command!r}; one of {', '.join(COMMANDS)}")
+    check_values(config)
+    if command == "static":
+        parsed = parse_static(config)
+    elif command == "finger":
+        from fe_beam.model.finger import parse_finger
+
+        parsed = parse_finger(config)
+    elif command in ("dynamic", "modes"):
+        from fe_beam.model.transient import parse_dynamic, parse_modes
+
+        parsed = parse_dynamic(config) if command == "dynamic" else parse_modes(config)
+    elif command == "solid":
+        from fe_beam.solid.config import parse_solid
+
+        parsed = parse_solid(config)
+    elif command == "compare":
+        from fe_beam.model.compare import parse_compare
+
+        parsed = parse_compare(config)
+    else:
+        from fe_beam.refine import plan_refinement
+
+        refine = refine or {}
+        parsed = plan_refinement(config, refine.get("levels"), refine.get("ratio"),
+                                 refine.get("quantities"))
+    options = []
+    for settings in _solver_settings(parsed):
+        if settings.petsc_options and settings.petsc_options not in options:
+            options.append(dict(settings.petsc_options))
+    return Validated(command, parsed, tuple(options))

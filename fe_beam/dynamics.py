@@ -19,8 +19,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from numbers import Integral
 
 import numpy as np
 import ufl
@@ -29,6 +27,7 @@ from dolfinx import fem
 from fe_beam import compat
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.laws import axis_tangent, strains_from_gradient
+from fe_beam.model.settings import SCHEMES, Damping, TimeSettings  # noqa: F401
 from fe_beam.mpi import assemble_scalar, global_max
 from fe_beam.progress import ProgressBar
 from fe_beam.solver import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
@@ -36,9 +35,6 @@ from fe_beam.tendons import PullInSolver
 
 __all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
            "alpha_parameters"]
-
-SCHEMES = ("generalized-alpha", "energy-conserving", "fd-rk45", "fd-dop853")
-
 
 class DynamicsFailed(RuntimeError):
     """Time stepping gave up (the state of ``last_time`` is kept)."""
@@ -55,76 +51,6 @@ def alpha_parameters(rho_inf: float) -> dict:
     gamma = 0.5 - alpha_m + alpha_f
     beta = 0.25 * (1 - alpha_m + alpha_f) ** 2
     return {"alpha_m": alpha_m, "alpha_f": alpha_f, "gamma": gamma, "beta": beta}
-
-
-@dataclass(frozen=True)
-class TimeSettings:
-    """Time stepping: end time, (initial) step, rho_inf, optional adaptive error control."""
-
-    t_end: float
-    dt: float
-    rho_inf: float = 0.9
-    adaptive: bool = False
-    tol: float = 1e-4
-    min_dt: float | None = None
-    max_dt: float | None = None
-    output_every: int | None = None
-    scheme: str = "generalized-alpha"
-
-    def __post_init__(self):
-        for name in ("t_end", "dt"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-                raise ValueError(f"time.{name} must be a number > 0, got {value!r}")
-        if self.dt > self.t_end:
-            raise ValueError(f"time.dt ({self.dt:g}) must not exceed time.t_end ({self.t_end:g})")
-        if not (isinstance(self.rho_inf, (int, float)) and 0 <= self.rho_inf <= 1):
-            raise ValueError(f"time.rho_inf must be in [0, 1], got {self.rho_inf!r}")
-        if not (isinstance(self.tol, (int, float)) and self.tol > 0):
-            raise ValueError(f"time.tol must be > 0, got {self.tol!r}")
-        every = self.output_every
-        if every is not None and (isinstance(every, bool) or not isinstance(every, Integral)
-                                  or every < 1):
-            raise ValueError(f"time.output_every must be an integer >= 1, got {every!r}")
-        if self.scheme not in SCHEMES:
-            allowed = ", ".join(SCHEMES)
-            raise ValueError(f"time.scheme must be one of {allowed}; got {self.scheme!r}")
-        for name in ("min_dt", "max_dt"):
-            value = getattr(self, name)
-            if value is not None and not (isinstance(value, (int, float)) and value > 0):
-                raise ValueError(f"time.{name} must be > 0, got {value!r}")
-
-    @property
-    def output_interval(self) -> int:
-        """Steps between outputs: as given, else about 200 outputs over the run."""
-        if self.output_every is not None:
-            return int(self.output_every)
-        return max(1, math.ceil(self.t_end / self.dt / 200))
-
-    @property
-    def smallest_step(self) -> float:
-        return self.min_dt if self.min_dt is not None else self.dt * 1e-4
-
-    @property
-    def largest_step(self) -> float:
-        if self.max_dt is not None:
-            return self.max_dt
-        return self.dt * 10 if self.adaptive else self.dt
-
-
-@dataclass(frozen=True)
-class Damping:
-    """Viscous damping c (per unit length, on u_t and v_t as in the paper's eqs. 4-5) and a
-    Kelvin-Voigt retardation time eta [s]: stresses eta (EA eps_t, GA g_t, EI kappa_t)."""
-
-    c: float = 0.0
-    kelvin_voigt: float = 0.0
-
-    def __post_init__(self):
-        for name in ("c", "kelvin_voigt"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
-                raise ValueError(f"damping.{name} must be a number >= 0, got {value!r}")
 
 
 def strain_rates(parts, rates):
@@ -236,7 +162,7 @@ class GeneralizedAlpha(StepDriver):
     ``load_function(t)`` scales every load, ``motion_function(t)`` the prescribed end values.
     """
 
-    def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),
+    def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),  # noqa: B008
                  load_function: Callable[[float], float] = lambda t: 1.0,
                  motion_function: Callable[[float], float] | None = None,
                  solver_settings: SolverSettings | None = None, tendons=None):

@@ -7,6 +7,9 @@ Notation (docs/theory.md, Kinematics), with ' = d/dx along the reference axis:
     eps   = ((1 + u')^2 + v'^2 - 1) / 2              (Green-Lagrange axial strain)
     kappa = theta'
 
+The laws themselves (`NonStandard`, `Reissner`: dataclasses with the energy as a method) live in
+`fe_beam.model.laws` and are re-exported here with the kinematics.
+
 Only polynomial and trigonometric functions of the unknowns enter the solved forms: no sqrt or
 atan2, which would be singular or branch-cut sensitive. Output-only quantities (gamma, N, T) use
 them.
@@ -14,15 +17,32 @@ them.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 import ufl
+
+from fe_beam.model.laws import (
+    CONSTRAINTS,
+    LAWS,
+    ROD_LAWS,
+    NonStandard,
+    Reissner,
+    Stiffness,
+    Strains,
+    closed_form_law,
+    constrained_strains,
+    nonstandard_energy,
+    reissner_energy,
+    strain_energy,
+)
 
 __all__ = [
     "CONSTRAINTS",
     "ClosedFormLaw",
     "LAWS",
+    "ROD_LAWS",
+    "NonStandard",
+    "Reissner",
+    "closed_form_law",
+    "constrained_strains",
     "Stiffness",
     "Strains",
     "nonstandard_energy",
@@ -32,35 +52,6 @@ __all__ = [
     "strains",
     "strains_from_gradient",
 ]
-
-LAWS = ("nonstandard", "reissner", "hyperelastic")
-CONSTRAINTS = ("none", "inextensible", "unshearable", "inextensible-unshearable")
-
-
-@dataclass(frozen=True)
-class Strains:
-    """Generalised strains at a point.
-
-    ``one_plus_e`` = lambda cos(gamma), ``g`` = lambda sin(gamma), ``eps``, ``kappa``.
-    """
-
-    one_plus_e: Any
-    g: Any
-    eps: Any
-    kappa: Any
-
-
-@dataclass(frozen=True)
-class Stiffness:
-    """Section stiffnesses (UFL or floats): EA, GA, EI, E*I3, E*I4; k = shear correction."""
-
-    EA: Any
-    GA: Any
-    EI: Any
-    EI3: Any
-    EI4: Any
-    shear_correction: Any = 1.0
-
 
 def strains_from_gradient(axis_tangent, theta, kappa) -> Strains:
     """Strains from r' = (1 + u', v') (a UFL 2-vector), the rotation theta and kappa = theta'."""
@@ -84,61 +75,8 @@ def strains(u, v, theta) -> Strains:
     return strains_from_gradient(axis_tangent(u, v), theta, theta.dx(0))
 
 
-def nonstandard_energy(s: Strains, k: Stiffness):
-    """W = 1/2 EA eps^2 + 1/2 GA g^2 + 1/2 EI kappa^2 ((1+e)^2 + eps)
-    + 1/2 E I3 kappa^3 (1+e) + 1/8 E I4 kappa^4  (per unit reference length)."""
-    return (
-        k.EA * s.eps**2 / 2
-        + k.GA * s.g**2 / 2
-        + k.EI * s.kappa**2 * (s.one_plus_e**2 + s.eps) / 2
-        + k.EI3 * s.kappa**3 * s.one_plus_e / 2
-        + k.EI4 * s.kappa**4 / 8
-    )
-
-
-def reissner_energy(s: Strains, k: Stiffness):
-    """W_R = 1/2 EA e^2 + 1/2 k GA g^2 + 1/2 EI kappa^2."""
-    e = s.one_plus_e - 1
-    return k.EA * e**2 / 2 + k.shear_correction * k.GA * s.g**2 / 2 + k.EI * s.kappa**2 / 2
-
-
-def strain_energy(law: str, s: Strains, k: Stiffness):
-    """Energy density of the named law ("nonstandard" or "reissner"; the "hyperelastic" law
-    needs its material and section: `fe_beam.section_laws.HyperelasticSectionLaw`)."""
-    if law == "nonstandard":
-        return nonstandard_energy(s, k)
-    if law == "reissner":
-        return reissner_energy(s, k)
-    if law == "hyperelastic":
-        raise ValueError("law = \"hyperelastic\" has no closed form in the section stiffnesses: "
-                         "use fe_beam.section_laws.HyperelasticSectionLaw")
-    raise ValueError(f"model.law must be one of {', '.join(LAWS)}; got {law!r}")
-
-
-@dataclass(frozen=True)
-class ClosedFormLaw:
-    """A law whose energy is a closed form in the section stiffnesses ("nonstandard",
-    "reissner"): ``energy(strains)`` = strain_energy(name, strains, stiffness)."""
-
-    name: str
-    stiffness: Stiffness
-
-    def energy(self, s: Strains):
-        return strain_energy(self.name, s, self.stiffness)
-
-    def fibre_stretches(self, s: Strains) -> list:
-        """The extreme fibres' axial stretches (none: the law does not integrate a profile)."""
-        return []
-
-
-def constrained_strains(constraint: str) -> tuple[str, ...]:
-    """Strain measures a constraint sets to zero: 'eps' (lambda = 1), 'g' (gamma = 0)."""
-    return {
-        "none": (),
-        "inextensible": ("eps",),
-        "unshearable": ("g",),
-        "inextensible-unshearable": ("eps", "g"),
-    }[constraint]
+#: the laws of a closed form, by name (was a class; `closed_form_law` returns the law object)
+ClosedFormLaw = closed_form_law
 
 
 def resultants_from_formulas(eps, gamma, kappa, k: Stiffness):

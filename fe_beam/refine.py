@@ -308,7 +308,7 @@ def plan_refinement(config: dict, levels=None, ratio=None, quantities=None) -> R
         )
     notes = ()
     if "tendons" in config:
-        from fe_beam.finger import parse_finger
+        from fe_beam.model.finger import parse_finger
 
         parsed, target = parse_finger(config)
         kind = "finger"

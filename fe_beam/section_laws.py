@@ -42,6 +42,7 @@ import numpy as np
 import ufl
 
 from fe_beam.materials import small_strain_poisson, small_strain_young
+from fe_beam.model.laws import DEFAULT_SECTION_POINTS, MAX_SECTION_POINTS
 
 __all__ = [
     "DEFAULT_SECTION_POINTS",
@@ -60,10 +61,6 @@ __all__ = [
 #: ~1e-14 over 0.7 .. 1.4; 4 steps 4e-15, but the compiled forms' size and compile time grow
 #: with every step, differentiated twice by UFL)
 NEWTON_STEPS = 3
-#: default Gauss points per section part (rectangle, circle; tube and T: twice as many points):
-#: measured quadrature error ~5e-10 at fibre strains of +-26%, far less at moderate strains
-DEFAULT_SECTION_POINTS = 6
-MAX_SECTION_POINTS = 64
 #: fibre stretches over which the fixed Newton steps are checked (`FibreLaw.unresolved`) and
 #: outside which a state is refused (`fe_beam.beam.StrainRange.inadmissible`): beyond them the
 #: steps are not converged (measured: 60 % energy error at stretch 0.1 for nu = 0.45)
@@ -374,9 +371,9 @@ class HyperelasticSectionLaw:
     def energy(self, s):
         """Energy density of the strains ``s`` (`fe_beam.laws.Strains`)."""
         if self.rule is None:
-            from fe_beam.laws import nonstandard_energy
+            from fe_beam.model.laws import NonStandard
 
-            return nonstandard_energy(s, self.stiffness)
+            return NonStandard(self.stiffness).energy(s)
         fibres = self.rule.integrate(
             lambda eta: self.fibre.energy(fibre_strain(s, eta), self.constants))
         return fibres + self.GA * s.g**2 / 2

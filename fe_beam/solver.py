@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -20,6 +20,15 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from fe_beam import compat
+from fe_beam.config import ConfigError
+from fe_beam.model.settings import (  # noqa: F401  (their home; re-exported)
+    LINE_SEARCHES,
+    LINEAR_SOLVERS,
+    SADDLE_POINT_WORKSPACE,
+    LoadStepping,
+    SolverSettings,
+    check_option_names,
+)
 from fe_beam.progress import ProgressBar
 
 __all__ = [
@@ -32,10 +41,6 @@ __all__ = [
     "StepResult",
     "run_load_stepping",
 ]
-
-LINEAR_SOLVERS = ("auto", "mumps", "lu", "gamg", "gmres-ilu")
-LINE_SEARCHES = ("bt", "basic", "l2", "cp")
-
 
 class SolveFailed(RuntimeError):
     """SNES did not converge (the iterate is left as SNES left it)."""
@@ -50,104 +55,30 @@ class LoadSteppingFailed(RuntimeError):
         self.results = results
 
 
-@dataclass
-class SolverSettings:
-    """Newton (SNES) and linear-solver settings; ``petsc_options`` are merged over the defaults."""
-
-    rtol: float = 1e-9
-    # Residuals carry the problem's units (N, N m): any fixed absolute tolerance is wrong for
-    # someone (a 1e-15 N load on a hair-thin beam). Convergence is relative (rtol, stol).
-    atol: float = 1e-300
-    stol: float = 1e-11
-    max_it: int = 25
-    # Plain Newton: ||F||-based line searches reject good steps of saddle-point (multiplier)
-    # problems; globalisation comes from load-step cut-back instead.
-    line_search: str = "basic"
-    # "auto": PETSc's LU for a serial problem without multipliers (2.5-3x faster than MUMPS on
-    # the small 1D systems), MUMPS otherwise (pivoting for saddle points; parallel); resolved
-    # by `for_problem`, MUMPS where nothing resolved it
-    linear_solver: str = "auto"
-    petsc_options: dict = field(default_factory=dict)
-
-    def __post_init__(self):
-        for name in ("rtol", "atol", "stol"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, float)) or not (0 <= value < 1):
-                raise ValueError(f"solver.{name} must be a number in [0, 1), got {value!r}")
-        if not isinstance(self.max_it, int) or self.max_it < 1:
-            raise ValueError(f"solver.max_it must be an integer >= 1, got {self.max_it!r}")
-        if self.line_search not in LINE_SEARCHES:
-            raise ValueError(
-                f"solver.line_search must be one of {', '.join(LINE_SEARCHES)}; "
-                f"got {self.line_search!r}"
-            )
-        if self.linear_solver not in LINEAR_SOLVERS:
-            raise ValueError(
-                f"solver.linear_solver must be one of {', '.join(LINEAR_SOLVERS)}; "
-                f"got {self.linear_solver!r}"
-            )
-        if not isinstance(self.petsc_options, dict):
-            raise ValueError("solver.petsc_options must be a table of PETSc option = value")
-        check_petsc_options(self.petsc_options)
-
-    def for_problem(self, saddle_point: bool, comm) -> SolverSettings:
-        """These settings with "auto" resolved for a problem: PETSc's LU (no pivoting) only
-        for a serial system without multiplier rows (zero diagonal), MUMPS otherwise."""
-        settings = self
-        if self.linear_solver == "auto":
-            serial_spd_like = comm.size == 1 and not saddle_point
-            settings = replace(self, linear_solver="lu" if serial_spd_like else "mumps")
-        if saddle_point and settings.linear_solver in ("auto", "mumps"):
-            # the pivoting that the zero diagonal of the multiplier rows needs overruns MUMPS's
-            # default workspace estimate (+20%) on fine meshes (degree 1, inextensible-
-            # unshearable, from ~1000 elements: INFOG(1) = -9, "DIVERGED_LINEAR_SOLVE")
-            options = {SADDLE_POINT_WORKSPACE[0]: SADDLE_POINT_WORKSPACE[1]}
-            settings = replace(settings, petsc_options=options | dict(settings.petsc_options))
-        return settings
-
-    def options(self) -> dict:
-        """PETSc options (without prefix): defaults first, the user's options over them."""
-        opts = {
-            "snes_type": "newtonls",
-            "snes_linesearch_type": self.line_search,
-            "snes_rtol": self.rtol,
-            "snes_atol": self.atol,
-            "snes_stol": self.stol,
-            "snes_max_it": self.max_it,
-            "snes_divergence_tolerance": 1e12,
-        }
-        if self.linear_solver in ("auto", "mumps", "lu"):
-            opts |= {"ksp_type": "preonly", "pc_type": "lu"}
-            if self.linear_solver in ("auto", "mumps"):
-                opts["pc_factor_mat_solver_type"] = "mumps"
-        elif self.linear_solver == "gamg":
-            opts |= {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 1000}
-        else:
-            # block Jacobi: ILU on each rank's block (plain ILU in serial; PETSc's ILU
-            # would refuse a parallel matrix); ILU(0) breaks down on beam matrices, ILU(2) holds
-            opts |= {"ksp_type": "gmres", "pc_type": "bjacobi", "sub_pc_type": "ilu",
-                     "sub_pc_factor_levels": 2, "ksp_gmres_restart": 100, "ksp_max_it": 2000,
-                     "ksp_rtol": 1e-12}
-        opts |= {str(k): v for k, v in self.petsc_options.items()}
-        return opts
-
-
-# MUMPS ICNTL(14): percentage by which the factorisation workspace may exceed its estimate
-SADDLE_POINT_WORKSPACE = ("mat_mumps_icntl_14", 100)
-
 _PETSC_ERRORS = {56: "not supported", 62: "invalid argument", 63: "out of range or not a "
                  "number", 86: "unknown type"}
 
 
 def check_petsc_options(options: dict, where: str = "solver.petsc_options") -> None:
-    """Raise ValueError naming the first option PETSc rejects (an unknown solver type, a value
-    that is not a number, ...), by configuring a throw-away SNES on this process with it.
-    PETSc ignores unknown option names, so misspelt names cannot be detected here."""
-    for key, value in options.items():
-        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-            raise ValueError(f"{where}.{key} must be a string or a number, got {value!r}")
-        if not isinstance(key, str) or key.startswith("-"):
-            raise ValueError(f"{where}: give option names without the leading '-', got {key!r}")
+    """Raise ConfigError (a ValueError) naming the first option PETSc rejects (an unknown solver
+    type, a value that is not a number, ...), by configuring a throw-away SNES on this process
+    with it. PETSc ignores unknown option names, so misspelt names cannot be detected here.
+    Options already accepted are not checked again."""
+    try:
+        check_option_names(options, where)
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    key = (where, tuple(sorted((str(k), repr(v)) for k, v in options.items())))
+    if key in _ACCEPTED:
+        return
+    _check_with_petsc(options, where)
+    _ACCEPTED.add(key)
+
+
+_ACCEPTED: set = set()
+
+
+def _check_with_petsc(options: dict, where: str) -> None:
     database = PETSc.Options()
     prefix = "fe_beam_option_check_"
     snes = PETSc.SNES().create(PETSc.COMM_SELF)
@@ -161,7 +92,7 @@ def check_petsc_options(options: dict, where: str = "solver.petsc_options") -> N
                 snes.getKSP().setFromOptions()
             except PETSc.Error as error:
                 reason = _PETSC_ERRORS.get(error.ierr, f"PETSc error code {error.ierr}")
-                raise ValueError(
+                raise ConfigError(
                     f"{where}.{key} = {value!r}: PETSc rejects it ({reason})"
                 ) from None
             finally:
@@ -268,6 +199,7 @@ class SNESSolver:
         self.problem = problem
         self.state_scale = float(state_scale)
         self.settings = settings or SolverSettings()
+        check_petsc_options(self.settings.petsc_options)  # ConfigError before any solve
         if prefix is None:
             SNESSolver._instances += 1
             prefix = f"fe_beam_{SNESSolver._instances}_"
@@ -380,38 +312,6 @@ def _reason_name(reason: int) -> str:
         if isinstance(value, int)
     }
     return f"{names.get(reason, 'UNKNOWN')} = {reason}"
-
-
-@dataclass
-class LoadStepping:
-    """Load-factor ramp 0 -> 1: ``steps`` equal increments to start with, adapted on the way.
-
-    A step that diverges, or whose solution is rejected by the branch check, is retried with
-    the increment multiplied by ``cut_factor``; after ``easy_iterations`` or fewer Newton
-    iterations the increment grows by ``grow_factor`` (never beyond ``max_increment``).
-    """
-
-    steps: int = 10
-    min_increment: float = 1e-5
-    max_increment: float | None = None
-    cut_factor: float = 0.5
-    grow_factor: float = 1.5
-    easy_iterations: int = 4
-    adaptive: bool = True
-
-    def __post_init__(self):
-        if not isinstance(self.steps, int) or self.steps < 1:
-            raise ValueError(f"loads.steps must be an integer >= 1, got {self.steps!r}")
-        if not (0 < self.min_increment <= 1.0 / self.steps):
-            raise ValueError(f"min_increment must be in (0, 1/steps], got {self.min_increment!r}")
-        if not (0 < self.cut_factor < 1):
-            raise ValueError(f"cut_factor must be in (0, 1), got {self.cut_factor!r}")
-        if self.grow_factor < 1:
-            raise ValueError(f"grow_factor must be >= 1, got {self.grow_factor!r}")
-        if self.max_increment is None:
-            self.max_increment = 1.0 / self.steps
-        if not (0 < self.max_increment <= 1):
-            raise ValueError(f"max_increment must be in (0, 1], got {self.max_increment!r}")
 
 
 @dataclass

@@ -13,8 +13,6 @@ import operator
 import warnings
 from collections.abc import Callable
 
-import numpy as np
-
 __all__ = ["TimeFunctionError", "parse_formula", "table_function", "time_function"]
 
 
@@ -162,6 +160,8 @@ def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
 
 def table_function(table) -> Callable[[float], float]:
     """Piecewise-linear f(t) through [[t0, f0], [t1, f1], ...], constant beyond the ends."""
+    import numpy as np  # here: fe_beam.config (and `fe-beam --help`) load this module
+
     try:
         points = np.array(table, dtype=float)
     except (TypeError, ValueError, OverflowError):

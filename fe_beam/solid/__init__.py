@@ -7,37 +7,48 @@
     solid.write_xdmf(problem, "out.xdmf")
 """
 
-from fe_beam.solid.cable import TendonCable, locate_vertex_dofs
-from fe_beam.solid.export import DisplacementXDMF, write_xdmf
-from fe_beam.solid.geometry import (
-    CLAMP_TAG,
-    TENDON_TAG0,
-    TIP_TAG,
-    VOLUME_TAG,
-    FingerGeometry,
-    FingerMesh,
-    MeshSizes,
-    TendonPath,
-    create_finger_mesh,
-    write_msh,
-)
-from fe_beam.solid.materials import (
-    LAWS,
-    SILICONE_PRESETS,
-    MooneyRivlin,
-    NeoHookean,
-    SaintVenantKirchhoff,
-    SiliconePreset,
-    Yeoh,
-    silicone,
-)
-from fe_beam.solid.problem import (
-    Discretization,
-    SolidFingerProblem,
-    TendonLoad,
-    evaluate_at_points,
-    rigid_body_modes,
-)
+# every name loads dolfinx (or gmsh) with its module: imported when first used (PEP 562), so that
+# the FE-free parts (`fe_beam.solid.config`, `fe_beam.solid.materials`) import without them
+_LAZY = {
+    "TendonCable": "fe_beam.solid.cable",
+    "locate_vertex_dofs": "fe_beam.solid.cable",
+    "DisplacementXDMF": "fe_beam.solid.export",
+    "write_xdmf": "fe_beam.solid.export",
+    "CLAMP_TAG": "fe_beam.solid.geometry",
+    "TENDON_TAG0": "fe_beam.solid.geometry",
+    "TIP_TAG": "fe_beam.solid.geometry",
+    "VOLUME_TAG": "fe_beam.solid.geometry",
+    "FingerGeometry": "fe_beam.solid.geometry",
+    "FingerMesh": "fe_beam.solid.geometry",
+    "MeshSizes": "fe_beam.solid.geometry",
+    "TendonPath": "fe_beam.solid.geometry",
+    "create_finger_mesh": "fe_beam.solid.geometry",
+    "write_msh": "fe_beam.solid.geometry",
+    "LAWS": "fe_beam.solid.materials",
+    "SILICONE_PRESETS": "fe_beam.solid.materials",
+    "MooneyRivlin": "fe_beam.solid.materials",
+    "NeoHookean": "fe_beam.solid.materials",
+    "SaintVenantKirchhoff": "fe_beam.solid.materials",
+    "SiliconePreset": "fe_beam.solid.materials",
+    "Yeoh": "fe_beam.solid.materials",
+    "silicone": "fe_beam.solid.materials",
+    "Discretization": "fe_beam.solid.problem",
+    "SolidFingerProblem": "fe_beam.solid.problem",
+    "TendonLoad": "fe_beam.solid.problem",
+    "evaluate_at_points": "fe_beam.solid.problem",
+    "rigid_body_modes": "fe_beam.solid.problem",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'fe_beam.solid' has no attribute {name!r}")
+
 
 __all__ = [
     "CLAMP_TAG",

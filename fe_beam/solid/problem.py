@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import ufl
@@ -39,6 +38,12 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import compat
+from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
+    ANCHORS,
+    FORMULATIONS,
+    Discretization,
+    TendonLoad,
+)
 from fe_beam.mpi import assemble_scalar, global_max, global_sum
 from fe_beam.solid.cable import TendonCable
 from fe_beam.solid.geometry import CLAMP_TAG, TIP_TAG, FingerMesh
@@ -60,68 +65,6 @@ __all__ = [
     "evaluate_at_points",
     "rigid_body_modes",
 ]
-
-FORMULATIONS = ("displacement", "mixed")
-# where a tendon ending on the tip face pulls: its last mesh vertex, or the whole face as a plate
-ANCHORS = ("point", "face")
-
-
-@dataclass(frozen=True)
-class TendonLoad:
-    """Tension control (``tension`` T: tau = lambda T) or pull-in control (``pull_in`` d:
-    l^0 - l = lambda d, the tension is then an unknown). Give one of them."""
-
-    tension: float = 0.0
-    pull_in: float | None = None
-
-    def __post_init__(self):
-        t = self.tension
-        if isinstance(t, bool) or not isinstance(t, (int, float)) or not (0 <= t < math.inf):
-            raise ValueError(f"tendon.tension must be a finite number >= 0, got {t!r}")
-        if self.pull_in is not None:
-            d = self.pull_in
-            if isinstance(d, bool) or not isinstance(d, (int, float)) or not (0 <= d < math.inf):
-                raise ValueError(f"tendon.pull_in must be a finite number >= 0, got {d!r}")
-            if t != 0:
-                raise ValueError(
-                    f"tendon: give tension or pull_in, not both (tension={t!r}, pull_in={d!r})"
-                )
-
-    @property
-    def controlled_by_pull_in(self) -> bool:
-        return self.pull_in is not None
-
-
-@dataclass(frozen=True)
-class Discretization:
-    """``formulation``: "displacement" (P``degree`` Lagrange) or "mixed" (Taylor-Hood P2-P1).
-
-    ``quadrature_degree`` defaults to 2 * degree.
-    """
-
-    formulation: str = "displacement"
-    degree: int = 2
-    quadrature_degree: int | None = None
-
-    def __post_init__(self):
-        if self.formulation not in FORMULATIONS:
-            raise ValueError(
-                f"discretization.formulation must be one of {', '.join(FORMULATIONS)}, "
-                f"got {self.formulation!r}"
-            )
-        if self.degree not in (1, 2, 3):
-            raise ValueError(f"discretization.degree must be 1, 2 or 3, got {self.degree!r}")
-        if self.formulation == "mixed" and self.degree != 2:
-            raise ValueError(
-                f"discretization.degree must be 2 for the mixed (P2-P1) formulation, "
-                f"got {self.degree!r}"
-            )
-        q = self.quadrature_degree
-        if q is None:
-            object.__setattr__(self, "quadrature_degree", 2 * self.degree)
-        elif isinstance(q, bool) or not isinstance(q, int) or q < 1:
-            raise ValueError(f"discretization.quadrature_degree must be an integer >= 1, got {q!r}")
-
 
 class SolidFingerProblem:
     """Clamped hyperelastic finger with tendons and a dead tip force.

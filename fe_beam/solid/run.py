@@ -1,0 +1,351 @@
+"""``fe-beam solid``: the run. `run_solid` validates the configuration
+(`fe_beam.solid.config.parse_solid`), runs the rod companion (`fe_beam.solid.rod`) and the 3D load
+stepping (`SolidRun`), and writes the summary, the tables, the XDMF files and the plots.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import runctl
+from fe_beam.outputs import _pyplot, atomic_write_json, write_csv
+from fe_beam.solid.config import SolidConfig, parse_solid, solid_dofs_estimate
+from fe_beam.solid.export import DisplacementXDMF
+from fe_beam.solid.geometry import create_finger_mesh
+from fe_beam.solid.problem import SolidFingerProblem, stretch_keys
+from fe_beam.solid.rod import backbone_distance, run_rod, write_rod_xdmf
+from fe_beam.solver import LoadStepping, LoadSteppingFailed, run_load_stepping
+from fe_beam.static import beam_dofs_estimate
+
+
+def _import_gmsh() -> None:
+    """gmsh (4.8) resets SIGINT to its default action when first imported: import it now, then
+    put the deferring handlers of fe_beam.runctl back, so Ctrl-C while meshing ends cleanly."""
+    import gmsh  # noqa: F401
+
+    runctl.reassert()
+
+
+_import_gmsh()
+
+__all__ = ["SolidRun", "check_solid_work", "run_solid"]
+
+# --- the 3D run ---------------------------------------------------------------------------------
+
+_RUNS = itertools.count(1)
+
+
+class SolidRun:
+    """The meshed 3D finger and its problem, advanced along the load factor in segments.
+
+    ``advance(target)`` ramps the load factor from its current value to ``target`` with
+    `fe_beam.solver.run_load_stepping` (cut-back on divergence) and calls ``on_step(record)``
+    after each converged step with the plain-data `record`.
+    """
+
+    def __init__(self, config: SolidConfig, comm: MPI.Comm = MPI.COMM_WORLD):
+        self.config = config
+        self.comm = comm
+        self.finger = create_finger_mesh(config.geometry, config.sizes, comm)
+        self.problem = SolidFingerProblem(
+            self.finger,
+            config.material,
+            tendons=config.tendon_loads,
+            tip_force=config.tip_force,
+            discretization=config.discretization,
+            solver=config.solver,
+            prefix=f"fe_beam_solid{next(_RUNS)}_",
+            anchor=config.anchor,
+        )
+        self.load_factor = 0.0
+        self._theta = 0.0
+
+    @property
+    def dofs(self) -> int:
+        dofmap = self.problem.W.dofmap
+        return int(dofmap.index_map.size_global * dofmap.index_map_bs)
+
+    @property
+    def cells(self) -> int:
+        imap = self.finger.mesh.topology.index_map(3)
+        return int(imap.size_global)
+
+    def advance(self, target: float, stepping: LoadStepping, on_step=None,
+                progress: bool = False, label: str = "solid") -> None:
+        """Load factor from its current value to ``target`` (raises LoadSteppingFailed with the
+        last converged state restored)."""
+        start = self.load_factor
+        span = float(target) - start
+        if not span > 0:
+            raise ValueError(f"advance: target {target!r} must exceed {start!r}")
+        steps = max(1, math.ceil(stepping.steps * span - 1e-9))
+        segment = LoadStepping(
+            steps=steps,
+            min_increment=min(stepping.min_increment / span, 1.0 / steps),
+            cut_factor=stepping.cut_factor,
+            grow_factor=stepping.grow_factor,
+            easy_iterations=stepping.easy_iterations,
+            adaptive=stepping.adaptive,
+        )
+
+        attempted = [start]
+
+        def set_factor(s: float) -> None:
+            value = start + s * span
+            if value > self.load_factor:
+                attempted[0] = value
+            self.problem.set_load_factor(value)
+
+        def converged(step) -> None:
+            self.load_factor = float(target) if step.load_factor == 1.0 else (
+                start + step.load_factor * span
+            )
+            record = self.record(step.iterations, step.linear_iterations)
+            if on_step is not None:
+                on_step(record)
+
+        try:
+            run_load_stepping(self.problem.solver, set_factor, segment, on_converged=converged,
+                              progress=progress, label=label)
+        except LoadSteppingFailed as failure:
+            self.problem.set_load_factor(self.load_factor)
+            found = re.search(r"\((.*)\); last converged", str(failure))
+            reason = found.group(1) if found else str(failure)
+            raise LoadSteppingFailed(
+                f"load stepping stopped at load factor {attempted[0]:.6g} ({reason}); "
+                f"last converged load factor {self.load_factor:.6g}",
+                self.load_factor, failure.results,
+            ) from None
+
+    def tip(self) -> dict:
+        """Tip-face centroid displacement (u, v) and rotation theta (continuous along the path)."""
+        d = self.problem.tip_displacement()
+        angle = self.problem.tip_rotation()["angle"]
+        self._theta += (angle - self._theta + math.pi) % (2 * math.pi) - math.pi
+        return {"u": float(d[0]), "v": float(d[1]), "theta": float(self._theta)}
+
+    def backbone(self) -> dict:
+        data = self.problem.backbone(self.config.stations)
+        u = np.asarray(data["displacement"])
+        return {"x": list(data["x"]), "u": u[:, 0].tolist(), "v": u[:, 1].tolist()}
+
+    def tendon_values(self) -> dict:
+        owners = self.config.branch_owner
+        if not owners:
+            return {}
+        count = max(owners) + 1
+        tensions = self.problem.tensions()
+        lengths = self.problem.tendon_lengths()
+        rest = [c.reference_length for c in self.problem.cables]
+        per_tendon = [0.0] * count
+        pulls = [0.0] * count
+        for i, owner in enumerate(owners):
+            per_tendon[owner] = float(tensions[i])
+            pulls[owner] += float(rest[i] - lengths[i])
+        values = {"tensions": per_tendon, "pull_ins": pulls}
+        if count == 1:
+            values["tension"] = per_tendon[0]
+        return values
+
+    def record(self, newton_iterations: int = 0, linear_iterations: int = 0) -> dict:
+        """Plain data of the current state (collective)."""
+        return {
+            "load_factor": self.load_factor,
+            **self.tendon_values(),
+            "tip": self.tip(),
+            "backbone": self.backbone(),
+            "newton_iterations": int(newton_iterations),
+            "linear_iterations": int(linear_iterations),
+            **stretch_keys(self.problem.max_principal_stretches()),
+        }
+
+    def destroy(self) -> None:
+        self.problem.snes_solver.destroy()
+
+
+# --- the command -------------------------------------------------------------------------------
+
+
+def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """Validate ``raw`` (the parsed TOML), run the rod companion and the 3D load stepping, write
+    results into ``out`` (if not None) and return the summary dict.
+
+    Raises ConfigError for a mistake in ``raw``; an analysis that stops early returns (and
+    writes) the converged steps with ``status = "failed"`` and a ``message``. Collective on
+    ``comm``; files are written by its rank 0. ``out`` receives ``summary.json``,
+    ``load_displacement.csv``, ``solid.xdmf``/``.h5`` (3D displacement per load factor),
+    ``rod.xdmf`` (the rod in the same coordinates) and, with ``[output] plots``, ``backbone.png``
+    and ``load_displacement.png``.
+    """
+    started = time.perf_counter()
+    config = parse_solid(raw)
+    notes = check_solid_work(config, comm, quiet=out is None)
+    out = None if out is None else Path(out)
+    root = comm.rank == 0
+    if out is not None and root:
+        out.mkdir(parents=True, exist_ok=True)
+    summary = {
+        "status": "running",
+        "message": "",
+        "steps": [],
+        "dofs": 0,
+        "cells": 0,
+        "wall_time_s": 0.0,
+        "model": config.model_summary(),
+        "rod": None,
+        "notes": list(config.notes) + notes,
+    }
+
+    def save() -> None:
+        summary["wall_time_s"] = time.perf_counter() - started
+        if out is not None and root:
+            _write_tables(out, summary)
+
+    save()  # status "running" from the start
+    try:
+        return _run_solid(config, out, comm, progress, summary, save)
+    except runctl.Interrupted as stop:
+        last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
+        summary |= stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+        save()
+        raise
+
+
+def check_solid_work(config: SolidConfig, comm, quiet: bool = False) -> list[str]:
+    """Up-front limits of `fe_beam.runctl.check_work` for the 3D solid (and its rod)."""
+    allow = bool((config.raw.get("solver") or {}).get("allow_large", False))
+    notes = runctl.check_work(config.stepping.steps, solid_dofs_estimate(config), allow,
+                              " of load stepping", kind="solid")
+    if config.rod is not None:
+        notes += runctl.check_work(None, beam_dofs_estimate(config.rod), allow)
+    if not quiet:
+        runctl.warn(comm, notes)
+    return notes
+
+
+def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summary: dict,
+               save) -> dict:
+    root = comm.rank == 0
+    rod = None
+    if config.rod is not None:
+        rod = run_rod(config.rod, config.stations, comm, progress=progress)
+        if out is not None and root and config.output.xdmf:
+            write_rod_xdmf(out / "rod.xdmf", rod["frames"])
+        summary["rod"] = {k: v for k, v in rod.items() if k != "frames"}
+    else:
+        summary["rod"] = {"status": "skipped", "message": config.rod_note}
+
+    try:
+        run = SolidRun(config, comm)
+    except RuntimeError as error:  # gmsh could not mesh (e.g. a tendon not on tet edges)
+        summary |= {"status": "failed", "message": str(error)}
+        save()
+        if out is not None:
+            comm.barrier()
+        return summary
+    summary |= {"dofs": run.dofs, "cells": run.cells}
+    writer = None
+    if out is not None and config.output.xdmf:
+        writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
+        writer.write(0.0)
+
+    def on_step(record: dict) -> None:
+        summary["steps"].append(record)
+        if writer is not None:
+            writer.write(record["load_factor"])
+        save()
+
+    try:
+        run.advance(1.0, config.stepping, on_step, progress=progress, label="solid")
+        summary["status"] = "converged"
+    except LoadSteppingFailed as failure:
+        summary |= {"status": "failed", "message": str(failure)}
+    finally:
+        if writer is not None:
+            writer.close()
+        run.destroy()
+    if rod is not None and rod["backbone"] is not None and summary["steps"]:
+        last_rod = rod["steps"][-1]["load_factor"] if rod["steps"] else 0.0
+        last = summary["steps"][-1]
+        if abs(last_rod - last["load_factor"]) < 1e-12:
+            distance = backbone_distance(rod["backbone"], last["backbone"])
+            summary["rod"]["distance_to_solid"] = {
+                "load_factor": last["load_factor"],
+                "max_over_L": distance["max"] / config.length,
+                "x": distance["x"],
+                "measure": "max over x of |r_rod(x) - r_solid(x)| / L (deformed centroids)",
+            }
+    save()
+    if out is not None and root and config.output.plots and summary["steps"]:
+        _plot_solid(out, summary, config)
+    if out is not None:
+        comm.barrier()  # the files are complete on return, whichever rank looks
+    return summary
+
+
+def _write_tables(out: Path, summary: dict) -> None:
+    atomic_write_json(out / "summary.json", summary)
+    steps = summary["steps"]
+    count = len(steps[0].get("tensions", [])) if steps else 0
+    header = ["load_factor", *[f"tension_{i}" for i in range(count)], "tip_u", "tip_v",
+              "tip_theta", "newton_iterations", "linear_iterations", "max_principal_stretch",
+              "max_principal_stretch_bulk"]
+    rows = [
+        [s["load_factor"], *s.get("tensions", []), s["tip"]["u"], s["tip"]["v"],
+         s["tip"]["theta"], s["newton_iterations"], s["linear_iterations"],
+         s["max_principal_stretch"], s["max_principal_stretch_bulk"]]
+        for s in steps
+    ]
+    write_csv(out / "load_displacement.csv", header, rows)
+
+
+def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
+    plt = _pyplot()
+    steps = summary["steps"]
+    rod = summary.get("rod") or {}
+    figure, axis = plt.subplots(figsize=(9, 4.5))
+    every = max(1, len(steps) // 8)
+    chosen = steps[every - 1 :: every]
+    if chosen[-1] is not steps[-1]:
+        chosen.append(steps[-1])
+    colours = plt.cm.viridis(np.linspace(0, 0.9, len(chosen)))
+    axis.plot([0, config.length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+    for step, colour in zip(chosen, colours, strict=True):
+        b = step["backbone"]
+        axis.plot(np.add(b["x"], b["u"]), b["v"], color=colour, lw=1.8,
+                  label=f"3D, load factor {step['load_factor']:.3g}")
+    if rod.get("backbone") and rod.get("steps"):
+        b = rod["backbone"]
+        axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
+                  label=f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.3g}")
+    axis.set_xlabel("x + u [m]")
+    axis.set_ylabel("y + v [m]")
+    axis.set_title(f"Backbone: 3D {config.material_name} vs rod")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    figure.tight_layout()
+    figure.savefig(out / "backbone.png", dpi=130)
+    plt.close(figure)
+
+    figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
+    factors = [s["load_factor"] for s in steps]
+    rod_steps = rod.get("steps") or []
+    for axis, key, unit in zip(axes, ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+        axis.plot(factors, [s["tip"][key] for s in steps], "o-", ms=3, label="3D")
+        if rod_steps:
+            axis.plot([s["load_factor"] for s in rod_steps], [s["tip"][key] for s in rod_steps],
+                      "s--", ms=3, label=f"rod ({rod['law']})")
+        axis.set_xlabel("load factor")
+        axis.set_ylabel(f"tip {key} [{unit}]")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7)
+    figure.tight_layout()
+    figure.savefig(out / "load_displacement.png", dpi=130)
+    plt.close(figure)
