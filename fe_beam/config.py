@@ -653,7 +653,7 @@ class Validated:
     petsc_options: tuple[dict, ...] = ()
 
 
-COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine")
+COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate")
 
 
 def _solver_settings(parsed) -> list:
@@ -697,6 +697,12 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         from fe_beam.model.compare import parse_compare
 
         parsed = parse_compare(config)
+    elif command == "calibrate":
+        from fe_beam.calibrate import parse_calibrate
+        from fe_beam.model.finger import parse_finger
+
+        parsed = parse_finger(config)[0] if config.get("tendons") else parse_static(config)
+        parse_calibrate(config)
     else:
         from fe_beam.refine import plan_refinement
 
