@@ -234,7 +234,9 @@ def solve_static(
     """
     started = time.perf_counter()
     notes = check_beam_work(config, config.stepping.steps, comm, quiet=out is None)
-    run = StaticContinuation(config, comm)
+    from fe_beam import realtime  # a problem of this kind built before is reused (no JIT)
+
+    run = realtime.acquire(config, comm)
     problem, tendons = run.problem, run.tendons
     result = StaticResult(dofs=problem.global_dofs)
     root = comm.rank == 0
@@ -281,7 +283,7 @@ def solve_static(
         result.status, result.message = status["status"], status["message"]
         raise
     finally:
-        run.destroy()
+        realtime.release(run)
         result.notes = run.watch.notes()
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
