@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from beam_cases import E, NU
+from beam_cases import NU, E
 from mpi4py import MPI
 
 from fe_beam import (
@@ -18,8 +18,8 @@ from fe_beam import (
     Section,
     SolverSettings,
     Supports,
+    realtime,
 )
-from fe_beam import realtime
 from fe_beam.config import StaticConfig
 from fe_beam.finger import parse_finger
 from fe_beam.realtime import RealtimeSolver, UpdateFailed, set_parameters
