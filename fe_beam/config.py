@@ -130,6 +130,7 @@ OTHER_TABLES = (
     "finger",
     "compare",
     "refine",
+    "design",
 )
 
 
@@ -549,6 +550,7 @@ COMMAND_TABLES = {
     "modes": ("time", "initial", "damping", "modes", "tendons"),
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
+    "design": ("tendons", "design", "inverse"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
