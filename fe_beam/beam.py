@@ -497,7 +497,8 @@ class BeamProblem:
         self.k_shear = const(m.options.shear_correction)
         dims = {n: const(v) for n, v in sec.dims.items()}
         dims_tip = {n: const(v) for n, v in sec.dims_tip.items()}
-        self.dims, self.dims_tip = dims, dims_tip  # changed in place by fe_beam.realtime
+        # the section's dimension constants (sensitivities differentiate the forms by them)
+        self.section_dims, self.section_dims_tip = dims, dims_tip
         x = ufl.SpatialCoordinate(self.mesh)[0]
         self.section_props = sec.properties(x / m.length, dims, dims_tip)
         p = self.section_props

@@ -38,12 +38,12 @@ EXIT_FAILED = 3
 COMMANDS = {
     "static": "large-deflection statics of a planar beam (load stepping, SNES)",
     "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
+    "design": "optimise section sizes, tendon offsets, tensions or loads for a target ([design])",
     "dynamic": "nonlinear dynamics (generalised-alpha, or the paper's FD + Runge-Kutta)",
     "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
     "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
     "compare": "tension sweep: 3D solid vs the rod with the non-standard and Reissner laws",
     "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
-    "design": "optimise section sizes, tendon offsets, tensions or loads for a target ([design])",
 }
 
 

@@ -121,6 +121,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
 }
 # Tables owned by other commands (validated by them).
 OTHER_TABLES = (
+    "design",
     "time",
     "initial",
     "damping",
@@ -130,7 +131,6 @@ OTHER_TABLES = (
     "finger",
     "compare",
     "refine",
-    "design",
 )
 
 
@@ -544,13 +544,13 @@ def _check_pairs(config: dict) -> None:
 # when ignoring it would change the answer (tendons pull on the beam; [inverse] asks a question
 # the command does not answer) and noted otherwise. refine sorts its configurations itself.
 COMMAND_TABLES = {
+    "design": ("tendons", "design", "inverse"),
     "static": (),
     "finger": ("tendons", "inverse"),
     "dynamic": ("time", "initial", "damping", "modes", "tendons"),
     "modes": ("time", "initial", "damping", "modes", "tendons"),
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
-    "design": ("tendons", "design", "inverse"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")

@@ -261,7 +261,10 @@ class Evaluator:
     """Objective and constraints of a design at scaled variables t in [0, 1]^n, from one
     `RealtimeSolver` (each evaluation warm-started from the last equilibrium)."""
 
-    def __init__(self, design: DesignProblem, config, comm):
+    def __init__(self, design: DesignProblem, config, comm, raw: dict | None = None):
+        """``raw``: the configuration's TOML tables (without [design]): with it, gradients
+        come from the adjoint sensitivities (`fe_beam.sensitivity`) when that module is
+        installed and supports the variables and outputs."""
         from dataclasses import replace
 
         from fe_beam.realtime import RealtimeSolver
@@ -274,6 +277,7 @@ class Evaluator:
         self.solver = RealtimeSolver(self.config, comm)
         self.evaluations = 0
         self._cache: dict = {}
+        self.adjoint = _adjoint_model(design, raw, comm) if raw is not None else None
         if design.objective == "backbone":
             for s, _, _ in design.points:
                 try:
@@ -325,12 +329,76 @@ class Evaluator:
 
     def close(self) -> None:
         self.solver.close()
+        if self.adjoint is not None:
+            self.adjoint.destroy()
+            self.adjoint = None
+
+
+def _adjoint_key(key: str) -> str:
+    """A design variable's name among the sensitivity module's parameters."""
+    parts = key.split(".")
+    if parts[0] == "tendons" and len(parts) == 4 and parts[2] == "path":
+        return f"{key}.1"  # the offset (second coordinate) of path point j
+    return key
+
+
+def _adjoint_model(design: DesignProblem, raw: dict, comm):
+    """A `fe_beam.sensitivity.RodSensitivity` for the design's variables, or None (module not
+    installed, or it refuses a variable): the gradients are then finite differences. The
+    fibre-strain constraint is not one of its outputs: None too."""
+    if design.max_fibre_strain is not None:
+        return None
+    try:
+        from fe_beam.sensitivity import RodSensitivity
+    except ImportError:
+        return None
+    try:
+        return RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
+    except (ConfigError, ValueError, KeyError):
+        return None
+
+
+def _adjoint_gradients(evaluator: Evaluator, t: np.ndarray) -> dict:
+    """d(objective, equality)/dt from adjoint gradients of the outputs the objective uses."""
+    design, model = evaluator.design, evaluator.adjoint
+    x = evaluator.x(t)
+    model.set_values(x)
+    model.solve(1.0)
+    scale_t = design.bounds[:, 1] - design.bounds[:, 0]  # dx/dt
+    n = len(t)
+    grads = {"objective": np.zeros(n), "inequality": np.zeros((0, n)),
+             "equality": np.zeros((0, n))}
+    if design.objective == "tip_pose":
+        names = [f"tip_{k}" for k in design.target]
+        values, jac = model.outputs(names), model.gradient(names)
+        scale = {"u": evaluator.length, "v": evaluator.length, "theta": 1.0}
+        for (k, target), value, row in zip(design.target.items(), values, jac, strict=True):
+            grads["objective"] += 2 * (value - target) / scale[k] ** 2 * row
+    elif design.objective == "backbone":
+        names = [f"{c}@{s!r}" for s, _, _ in design.points for c in ("x", "y")]
+        values, jac = model.outputs(names), model.gradient(names)
+        targets = [v for _, x_t, y_t in design.points for v in (x_t, y_t)]
+        for value, target, row in zip(values, targets, jac, strict=True):
+            grads["objective"] += 2 * (value - target) / evaluator.length**2 * row
+        grads["objective"] /= len(design.points)
+    else:
+        i = design.force_variable
+        grads["objective"][i] = np.sign(x[i]) / np.max(np.abs(design.bounds[i]))
+        grads["equality"] = model.gradient(["tip_theta"])
+    # d/dx -> d/dt
+    grads["objective"] = grads["objective"] * scale_t
+    grads["equality"] = grads["equality"] * scale_t[None, :]
+    return grads
 
 
 def gradients(evaluator: Evaluator, t: np.ndarray) -> tuple[dict, str]:
-    """d(objective, constraints)/dt at t, and how they were computed ("finite-difference":
-    central differences, step FD_STEP of each variable's range, inside [0, 1])."""
+    """d(objective, constraints)/dt at t, and how they were computed: "adjoint" (the
+    sensitivity module's exact gradients of the outputs, when available: `_adjoint_model`)
+    or "finite-difference" (central differences, step FD_STEP of each variable's range,
+    inside [0, 1])."""
     t = np.asarray(t, dtype=float)
+    if evaluator.adjoint is not None:
+        return _adjoint_gradients(evaluator, t), "adjoint"
     base = evaluator.evaluate(t)
     n = len(t)
     grads = {"objective": np.zeros(n),
@@ -404,12 +472,12 @@ def kkt(evaluator: Evaluator, t: np.ndarray, active_tol: float = 1e-7) -> dict:
     }
 
 
-def optimise(design: DesignProblem, config, comm) -> dict:
+def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> dict:
     """SLSQP on the scaled variables; the summary's content (see the module docstring)."""
     from scipy.optimize import minimize
 
     started = time.perf_counter()
-    evaluator = Evaluator(design, config, comm)
+    evaluator = Evaluator(design, config, comm, raw)
     low, high = design.bounds.T
     t0 = (design.initial - low) / (high - low)
     history = []
@@ -551,7 +619,11 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)
-    summary = optimise(design, parsed, comm)
+    if "tendons" in rest:  # the finger's defaults written out (every table explicit)
+        from fe_beam.finger import with_defaults
+
+        rest = with_defaults(rest)
+    summary = optimise(design, parsed, comm, rest)
     shapes = summary.pop("_shapes")
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)

@@ -112,9 +112,9 @@ def apply_config(run, config: StaticConfig) -> None:
     problem.rho.value = float(model.material.rho)
     problem.k_shear.value = float(model.options.shear_correction)
     for name, value in model.section.dims.items():
-        problem.dims[name].value = float(value)
+        problem.section_dims[name].value = float(value)
     for name, value in model.section.dims_tip.items():
-        problem.dims_tip[name].value = float(value)
+        problem.section_dims_tip[name].value = float(value)
     loads = model.loads
     problem.tip_force.value[:] = np.asarray(loads.tip_force, dtype=float)
     problem.tip_moment.value = float(loads.tip_moment)
@@ -546,9 +546,10 @@ class RealtimeSolver:
         problem.G.value = float(mix(a.material.shear_modulus, b.material.shear_modulus))
         problem.rho.value = float(mix(a.material.rho, b.material.rho))
         for name in a.section.dims:
-            problem.dims[name].value = float(mix(a.section.dims[name], b.section.dims[name]))
+            problem.section_dims[name].value = float(mix(a.section.dims[name],
+                                                         b.section.dims[name]))
         for name in a.section.dims_tip:
-            problem.dims_tip[name].value = float(mix(a.section.dims_tip[name],
+            problem.section_dims_tip[name].value = float(mix(a.section.dims_tip[name],
                                                      b.section.dims_tip[name]))
         problem.tip_force.value[:] = mix(a.loads.tip_force, b.loads.tip_force)
         problem.tip_moment.value = float(mix(a.loads.tip_moment, b.loads.tip_moment))
