@@ -382,6 +382,18 @@ class RealtimeSolver:
                                failure.last_load_factor) from None
         self._checker = self.run._step_check()
         self.last_iterations = 0
+        # Updates converge to the accuracy of the load stepping: ||F|| <= rtol x the largest
+        # load-step residual seen (solve_static's steps stop at rtol x their own first
+        # residual, at most that). Relative to an update's own, often tiny, first residual
+        # rtol would ask for more than the equilibrium is known to; a change within the
+        # tolerance needs no iteration at all.
+        snes = self.run.snes
+        self._saved_tolerances = snes.snes.getTolerances()
+        rtol, atol, stol, max_it = self._saved_tolerances
+        scale = snes._largest_fnorm
+        if scale > 0 and math.isfinite(scale):
+            snes.snes.setTolerances(rtol=rtol, atol=max(atol, rtol * scale), stol=stol,
+                                    max_it=max_it)
 
     # --- state ---------------------------------------------------------------------------------
     @property
@@ -588,6 +600,8 @@ class RealtimeSolver:
     def close(self) -> None:
         """Give the problem back to the cache (`release`)."""
         if self.run is not None:
+            rtol, atol, stol, max_it = self._saved_tolerances
+            self.run.snes.snes.setTolerances(rtol=rtol, atol=atol, stol=stol, max_it=max_it)
             release(self.run)
             self.run = None
 
