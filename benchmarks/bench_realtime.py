@@ -41,7 +41,7 @@ import sys
 import time
 
 import numpy as np
-from common import cantilever, static_config, stats, table, timed, write_results
+from common import cantilever, static_config, stats, table, timed, write_results  # noqa: F401
 
 from fe_beam import realtime
 from fe_beam.baselines import shooting
@@ -49,6 +49,13 @@ from fe_beam.static import solve_static
 
 TRAJECTORY = 1.5 + 0.5 * np.sin(2 * np.pi * np.arange(1000) / 1000.0)
 SHOOTING_TRAJECTORY = 100
+
+
+def cpu_timed(function):
+    """(wall s, CPU s of this process, value)."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    value = function()
+    return time.perf_counter() - t0, time.process_time() - c0, value
 
 
 def finger_part(repeats: int) -> dict:
@@ -63,12 +70,13 @@ def finger_part(repeats: int) -> dict:
 
     def shooting_run(tensions) -> float:
         guess = None
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for tension in tensions:
             s = shooting.solve_finger(bf.shooting_finger(float(tension)), n_points=2, rtol=rtol,
                                       initial_guess=guess)
             guess = (*s.base_force, s.base_moment)
-        return (time.perf_counter() - t0) / len(tensions)
+        return ((time.perf_counter() - t0) / len(tensions),
+                (time.process_time() - c0) / len(tensions))
 
     solvers = {check: realtime.RealtimeSolver(config, check=check) for check in (True, False)}
     # accuracy of the updates along the sweep (vs the converged shooting reference)
@@ -80,10 +88,11 @@ def finger_part(repeats: int) -> dict:
 
     def fe_run(solver, tensions) -> float:
         solver.update(tensions=[float(tensions[-1])])
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         for tension in tensions:
             solver.update(tensions=[float(tension)])
-        return (time.perf_counter() - t0) / len(tensions)
+        return ((time.perf_counter() - t0) / len(tensions),
+                (time.process_time() - c0) / len(tensions))
 
     sequences = {"sweep": (bf.TENSIONS, bf.TENSIONS),
                  "trajectory": (TRAJECTORY, TRAJECTORY[:SHOOTING_TRAJECTORY])}
@@ -103,25 +112,32 @@ def finger_part(repeats: int) -> dict:
     dense = solvers[True].dense
     for s in solvers.values():
         s.close()
-    ratios = {}
+    ratios, cpu_ratios = {}, {}
     rows = []
     for key, values in times.items():
         name = key.split(" ")[0]
+        wall, cpu = [v[0] for v in values], [v[1] for v in values]
         ratio = ""
         if "fe_beam" in key:
+            reference = times[f"{name} shooting"]
             ratios[key] = statistics.median(
-                s / f for s, f in zip(times[f"{name} shooting"], values, strict=True))
-            ratio = f"{ratios[key]:.0f}x"
-        median = statistics.median(values)
-        rows.append([key, median * 1e3, 1.0 / median, ratio])
+                s[0] / f for s, f in zip(reference, wall, strict=True))
+            cpu_ratios[key] = statistics.median(
+                s[1] / f for s, f in zip(reference, cpu, strict=True))
+            ratio = f"{ratios[key]:.0f}x (CPU {cpu_ratios[key]:.0f}x)"
+        rows.append([key, statistics.median(wall) * 1e3, min(wall) * 1e3,
+                     statistics.median(cpu) * 1e3, 1.0 / statistics.median(wall), ratio])
     print(f"finger updates ({repeats} alternating repeats; fe_beam dense LU: {dense}; "
           f"Newton iterations per update {iterations[True]:.2f}; fallbacks {fallbacks[True]}; "
           f"max tip error of the sweep's updates {update_error:.1e} L)")
-    print(table(["", "ms per update", "updates/s", "shooting / this"], rows))
+    print(table(["", "wall ms/update", "min wall ms", "CPU ms/update", "updates/s",
+                 "shooting / this"], rows))
     return {"elements": elements, "shooting_rtol": rtol, "fe_sweep_error": fe_errors[elements],
             "update_tip_error": update_error, "dense_lu": dense,
             "newton_iterations_per_update": iterations[True], "fallbacks": fallbacks[True],
-            "times_per_update": {k: stats(v) for k, v in times.items()}, "ratios": ratios}
+            "wall_per_update": {k: stats([v[0] for v in t]) for k, t in times.items()},
+            "cpu_per_update": {k: stats([v[1] for v in t]) for k, t in times.items()},
+            "ratios": ratios, "cpu_ratios": cpu_ratios}
 
 
 def cantilever_part(repeats: int, tolerances) -> dict:
@@ -142,40 +158,50 @@ def cantilever_part(repeats: int, tolerances) -> dict:
 
         def first_of_kind(config=config):
             realtime.clear_cache()
-            return timed(lambda: solve_static(config, None, progress=False,
-                                              record_shapes=False))
+            return cpu_timed(lambda: solve_static(config, None, progress=False,
+                                                  record_shapes=False))
 
         def cached(config=config):
-            return timed(lambda: solve_static(config, None, progress=False,
-                                              record_shapes=False))
+            return cpu_timed(lambda: solve_static(config, None, progress=False,
+                                                  record_shapes=False))
 
         first_of_kind()
         cached()
         times = {"PyElastica build + integrate": [], "fe_beam solve_static, first of its kind":
                  [], "fe_beam solve_static, cached forms": []}
         rod_error = None
+        cpu = {k: [] for k in times}
         for _ in range(repeats):
+            c0 = time.process_time()
             rod = bp.run_rod(chosen)
+            cpu["PyElastica build + integrate"].append(time.process_time() - c0)
             rod_error = rod["errors"]["position"]
             times["PyElastica build + integrate"].append(rod["wall_s"])
-            seconds, result = first_of_kind()
-            assert result.status == "converged"
-            times["fe_beam solve_static, first of its kind"].append(seconds)
-            seconds, result = cached()
-            assert result.status == "converged"
-            times["fe_beam solve_static, cached forms"].append(seconds)
+            for name, run in (("fe_beam solve_static, first of its kind", first_of_kind),
+                              ("fe_beam solve_static, cached forms", cached)):
+                seconds, used, result = run()
+                assert result.status == "converged"
+                times[name].append(seconds)
+                cpu[name].append(used)
         reference = times["PyElastica build + integrate"]
         ratios = {k: statistics.median(p / f for p, f in zip(reference, v, strict=True))
                   for k, v in times.items() if k.startswith("fe_beam")}
-        rows = [[k, statistics.median(v), min(v), f"{ratios[k]:.1f}x" if k in ratios else ""]
+        cpu_ratios = {k: statistics.median(
+            p / f for p, f in zip(cpu["PyElastica build + integrate"], v, strict=True))
+            for k, v in cpu.items() if k.startswith("fe_beam")}
+        rows = [[k, statistics.median(v), min(v), statistics.median(cpu[k]),
+                 f"{ratios[k]:.1f}x (CPU {cpu_ratios[k]:.1f}x)" if k in ratios else ""]
                 for k, v in times.items()]
         print(f"\ncantilever k = {bp.K:g}, tip within {tol:g} L: PyElastica {chosen.elements} "
               f"el., {chosen.steps} steps, error {rod_error:.1e} L; fe_beam {n} degree-2 el., "
               f"error {fe_errors['position']:.1e} L")
-        print(table(["", "median s", "min s", "PyElastica / this"], rows))
+        print(table(["", "median wall s", "min wall s", "median CPU s", "PyElastica / this"],
+                    rows))
         results[label] = {"fe_elements": n, "fe_error": fe_errors["position"],
                           "pyelastica": {"settings": chosen.__dict__, "error": rod_error},
-                          "times": {k: stats(v) for k, v in times.items()}, "ratios": ratios}
+                          "times": {k: stats(v) for k, v in times.items()},
+                          "cpu_times": {k: stats(v) for k, v in cpu.items()},
+                          "ratios": ratios, "cpu_ratios": cpu_ratios}
     return results
 
 
