@@ -337,13 +337,15 @@ class DenseLU:
         y.array[:] = solution
 
 
-def use_dense_lu(snes) -> None:
+def use_dense_lu(snes) -> DenseLU:
     """Solve the Newton systems of ``snes`` (a `fe_beam.solver.SNESSolver`) by `DenseLU`."""
     ksp = snes.snes.getKSP()
     ksp.setType("preonly")
     pc = ksp.getPC()
     pc.setType("python")
-    pc.setPythonContext(DenseLU())
+    context = DenseLU()
+    pc.setPythonContext(context)
+    return context
 
 
 def _skip_zero_lifting(snes) -> bool:
@@ -384,9 +386,11 @@ class RealtimeSolver:
     """
 
     def __init__(self, config: StaticConfig, comm=MPI.COMM_WORLD, check: bool = True,
-                 progress: bool = False, dense: bool | None = None):
+                 progress: bool = False, dense: bool | None = None,
+                 predictor: bool | None = None):
         """``dense``: Newton systems by dense LU (`DenseLU`); default: serial problems up to
-        DENSE_MAX_DOFS dofs."""
+        DENSE_MAX_DOFS dofs. ``predictor``: a chord step with the last tangent before Newton
+        (dense only; default on there)."""
         self.comm = comm
         self._config, self._tensions = config, None
         self._tip_dofs = None
@@ -396,9 +400,13 @@ class RealtimeSolver:
             dense = comm.size == 1 and self.run.problem.global_dofs <= DENSE_MAX_DOFS
         if dense and comm.size > 1:
             raise ValueError("dense LU is for serial problems")
-        if dense:
-            use_dense_lu(self.run.snes)
+        self._dense_context = use_dense_lu(self.run.snes) if dense else None
         self.run.snes._beam_problem = self.run.problem
+        # serial dense problems: chord predictor before Newton (`_chord_step`)
+        self.predictor = bool(dense) if predictor is None else bool(predictor and dense)
+        if self.predictor:
+            self._work_x = self.run.snes.problem.b.duplicate()
+            self._work_f = self.run.snes.problem.b.duplicate()
         self.dense = dense
         self.statistics = {"updates": 0, "newton_iterations": 0, "fallbacks": 0}
         try:
@@ -531,6 +539,8 @@ class RealtimeSolver:
             self._apply(self.config, config, 1.0)
         self.statistics["updates"] += 1
         failure = None
+        if self.predictor:
+            self._chord_step(state)
         try:
             iterations = self.run.solver.solve()
         except SolveFailed as error:
@@ -575,6 +585,23 @@ class RealtimeSolver:
         self.config = config
         self.last_iterations = 0
         return self.tip()
+
+    def _chord_step(self, state) -> None:
+        """Predictor: one Newton step at the new values with the last factorised tangent (the
+        dense LU of the previous update's last iteration, at a nearly converged state): the
+        Newton iterations then start O(change^2) from the answer and one usually suffices. A
+        predictor that is not finite is dropped."""
+        context = self._dense_context
+        if getattr(context, "factors", None) is None:
+            return
+        from scipy.linalg import lapack
+
+        x = self._work_x
+        x.array[:] = state
+        self.run.snes.snes.computeFunction(x, self._work_f)
+        step, info = lapack.dgetrs(*context.factors, self._work_f.array)
+        if info == 0 and np.all(np.isfinite(step)):
+            state -= step
 
     def _check(self, previous, current):
         reason = self._checker(previous, current)
