@@ -178,6 +178,7 @@ def acquire(config: StaticConfig, comm=MPI.COMM_WORLD, prefix: str = "fe_beam_st
     entry = _CACHE.pop(key, None) if _enabled() else None
     if entry is not None and entry.comm is comm:
         _STATS["hits"] += 1
+        _options(entry.run, present=True)
         apply_config(entry.run, config)
         entry.run._cache_key = key
         return entry.run
@@ -200,10 +201,26 @@ def release(run) -> None:
     old = _CACHE.pop(key, None)
     if old is not None and old.run is not run:
         old.run.destroy()
+    _options(run, present=False)
     _CACHE[key] = _Entry(run, run._cache_comm)
     while len(_CACHE) > CACHE_SIZE:
         _, evicted = _CACHE.popitem(last=False)
         evicted.run.destroy()
+
+
+def _options(run, present: bool) -> None:
+    """A cached solver's PETSc options leave the global database while it waits (a new solver
+    with the same prefix and other settings, e.g. PETSc's LU after MUMPS, must not inherit
+    them) and come back while it is used (a factorisation set up later reads them)."""
+    from petsc4py import PETSc
+
+    snes = run.snes
+    database = PETSc.Options()
+    for key, value in snes.settings.options().items():
+        if present:
+            database[snes.prefix + key] = value
+        else:
+            database.delValue(snes.prefix + key)
 
 
 def clear_cache() -> None:

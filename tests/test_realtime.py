@@ -183,3 +183,21 @@ def test_realtime_updates_on_two_ranks():
             alone, _ = fresh(target, MPI.COMM_SELF)
             for key in ("u", "v", "theta"):
                 assert abs(tip[key] - alone[key]) <= TOL * 0.1
+
+
+def test_cached_solvers_leave_no_options_behind():
+    """A cached MUMPS solver's options must not leak into a later solver of the same prefix
+    (a serial unconstrained rod resolves "auto" to PETSc's own LU)."""
+    realtime.clear_cache()
+    solve_static(rod(law="reissner", constraint="inextensible"), None, progress=False,
+                 record_shapes=False)
+    plain = rod(elements=5)
+    solve_static(plain, None, progress=False, record_shapes=False)
+    run = realtime.acquire(plain, MPI.COMM_WORLD)
+    try:
+        pc = run.snes.snes.getKSP().getPC()
+        assert pc.getType() == "lu"
+        if MPI.COMM_WORLD.size == 1:
+            assert pc.getFactorSolverType() == "petsc"
+    finally:
+        realtime.release(run)
