@@ -8,7 +8,9 @@ Every number of a `fe_beam.beam.BeamProblem` that may change between solves is a
 
 * `RealtimeSolver`: built once from a `StaticConfig` (rod or finger), solved to its load factor
   1, then ``update(tensions=..., loads=..., parameters=...)`` sets the new values and runs
-  Newton from the last equilibrium (warm start). When Newton fails, or the step check rejects
+  Newton from the last equilibrium (warm start; small serial systems: a dense LU and a chord
+  predictor with the last tangent, so that a control-rate update is one Newton iteration;
+  converged to rtol x the load steps' residual). When Newton fails, or the step check rejects
   the result (rotation jump, inadmissible state), the update falls back to load stepping from
   the last equilibrium to the new values (the values move linearly, with cut-back); when that
   fails too, `UpdateFailed` is raised with the last equilibrium and its values restored.

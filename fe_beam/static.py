@@ -231,6 +231,9 @@ def solve_static(
     is rewritten at a bounded share of the wall time). On failure the last converged state is
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
     it is written with status "interrupted" and the exception is re-raised.
+
+    The problem and solver come from `fe_beam.realtime.acquire`: a second solve of the same
+    kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
     """
     started = time.perf_counter()
     notes = check_beam_work(config, config.stepping.steps, comm, quiet=out is None)
