@@ -613,16 +613,24 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
     design, rest = parse_design(config)
     rest = copy.deepcopy(rest)
     rest.pop("inverse", None)
+    if "tendons" in rest:  # the finger's defaults written out (every table explicit)
+        from fe_beam.finger import with_defaults
+
+        rest = with_defaults(rest)
+    section = rest.get("section")
+    for key in design.variables:
+        # a tip value of an untapered dimension: the taper starts from the uniform value (so
+        # that the built model has a constant for it)
+        match = re.fullmatch(r"section\.(\w+)_tip", key)
+        if match and isinstance(section, dict) and key[len("section."):] not in section \
+                and match.group(1) in section:
+            section[key[len("section."):]] = section[match.group(1)]
     if "tendons" in rest:
         from fe_beam.finger import parse_finger
 
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)
-    if "tendons" in rest:  # the finger's defaults written out (every table explicit)
-        from fe_beam.finger import with_defaults
-
-        rest = with_defaults(rest)
     summary = optimise(design, parsed, comm, rest)
     shapes = summary.pop("_shapes")
     if out is not None and comm.rank == 0:

@@ -173,3 +173,21 @@ def test_design_on_two_ranks():
     assert summary["kkt_residual"] < 1e-6
     values = MPI.COMM_WORLD.allgather(summary["variables"]["section.h"])
     assert all(v == values[0] for v in values)
+
+
+def test_taper_of_an_untapered_rod():
+    """section.h_tip of a uniform rod: the taper starts from h. Pure moment on a linear taper
+    h0 -> h1: theta = 6 M L (h0 + h1) / (E b h0^2 h1^2); the optimum h1 for a target angle
+    (the FE answer converges to it with the mesh: 12 degree-2 elements, 1e-5)."""
+    from scipy.optimize import brentq
+
+    moment, h0, target = 0.01, 0.01, 0.8
+    config = rod(moment, h=h0, variables=["section.h_tip"], bounds=[[0.005, 0.02]],
+                 objective="tip_pose", target={"theta": target})
+    config["mesh"]["elements"] = 12
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    exact = brentq(lambda h1: 6 * moment * L * (h0 + h1) / (E * B * h0**2 * h1**2) - target,
+                   0.005, 0.02)
+    assert summary["variables"]["section.h_tip"] == pytest.approx(exact, rel=1e-5)
+    assert summary["tip"]["theta"] == pytest.approx(target, rel=1e-8)
+    assert summary["kkt_residual"] < 1e-6
