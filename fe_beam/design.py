@@ -7,6 +7,7 @@ The configuration is a rod's (`fe-beam static`) or, with ``[[tendons]]``, a fing
     [design]
     variables = ["section.h_tip", "tendons.0.offset_tip"]   # fe_beam.realtime.PARAMETER_KEYS
     bounds = [[0.005, 0.02], [0.0, 0.008]]                  # one [low, high] per variable
+    # (or a table: bounds = {"section.h_tip" = [0.005, 0.02], ...})
     objective = "tip_pose"        # "tip_pose" | "backbone" | "tension"
     target = {theta = 0.8}        # tip_pose: any of u, v [m], theta [rad]
     # backbone: points = [[s, x, y], ...]: the point at reference arclength s (a mesh vertex)
@@ -194,6 +195,14 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
                               f"{value!r}): design variables must be numbers")
         initial.append(float(value))
     bounds = given.get("bounds")
+    if isinstance(bounds, dict):  # {variable = [low, high], ...}
+        missing = [v for v in variables if v not in bounds]
+        extra = [k for k in bounds if k not in variables]
+        if missing or extra:
+            what = f"missing {missing[0]!r}" if missing else f"{extra[0]!r} is not a variable"
+            raise ConfigError(f"[design] bounds: give one [low, high] for each variable "
+                              f"({what})")
+        bounds = [bounds[v] for v in variables]
     ok = (isinstance(bounds, list) and len(bounds) == len(variables)
           and all(isinstance(b, list) and len(b) == 2 and all(_is_number(x) for x in b)
                   for b in bounds))

@@ -131,7 +131,19 @@ BAD = [
       "target": {"phi": 1}}, "needs target"),
     ({"variables": ["section.h"], "bounds": [[0.005, 0.02]], "objective": "tip_pose",
       "target": {"theta": 1}, "step": 3}, "unknown key"),
+    ({"variables": ["section.h"], "bounds": {"section.b": [0.005, 0.02]},
+      "objective": "tip_pose", "target": {"theta": 1}}, "missing 'section.h'"),
+    ({"variables": ["section.h"], "bounds": [[0.005, "big"]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "one [low, high] pair"),
 ]
+
+
+def test_bounds_as_a_table():
+    design, _ = parse_design(rod(variables=["section.h", "loads.tip_moment"],
+                                 bounds={"loads.tip_moment": [0.0, 0.1],
+                                         "section.h": [0.005, 0.02]},
+                                 objective="tip_pose", target={"theta": 1.0}))
+    assert design.bounds.tolist() == [[0.005, 0.02], [0.0, 0.1]]
 
 
 @pytest.mark.parametrize("design, words", BAD)
