@@ -356,6 +356,16 @@ class DenseLU:
         y.array[:] = solution
 
 
+class _OperatorPC:
+    """The one method of a PC that `DenseLU.setUp` calls."""
+
+    def __init__(self, matrix):
+        self.matrix = matrix
+
+    def getOperators(self):
+        return self.matrix, self.matrix
+
+
 def use_dense_lu(snes) -> DenseLU:
     """Solve the Newton systems of ``snes`` (a `fe_beam.solver.SNESSolver`) by `DenseLU`."""
     ksp = snes.snes.getKSP()
@@ -426,6 +436,8 @@ class RealtimeSolver:
         if self.predictor:
             self._work_x = self.run.snes.problem.b.duplicate()
             self._work_f = self.run.snes.problem.b.duplicate()
+        self.tendons_pull_in = bool(self.tendons) and any(
+            t.controlled_by_pull_in for t in self.tendons.tendons)
         self.dense = dense
         self.statistics = {"updates": 0, "newton_iterations": 0, "fallbacks": 0}
         try:
@@ -444,6 +456,7 @@ class RealtimeSolver:
         # tolerance needs no iteration at all.
         snes = self.run.snes
         self._lifting_skipped = _skip_zero_lifting(snes)
+        self._residual_function = snes.snes.getFunction()[1][0]
         self._saved_tolerances = snes.snes.getTolerances()
         rtol, atol, stol, max_it = self._saved_tolerances
         scale = snes._largest_fnorm
@@ -561,7 +574,8 @@ class RealtimeSolver:
         if self.predictor:
             self._chord_step(state)
         try:
-            iterations = self.run.solver.solve()
+            iterations = (self._dense_newton(state) if self.predictor and not self.tendons_pull_in
+                          else self.run.solver.solve())
         except SolveFailed as error:
             failure = str(error)
         if failure is None and self.check:
@@ -604,6 +618,47 @@ class RealtimeSolver:
         self.config = config
         self.last_iterations = 0
         return self.tip()
+
+    def _dense_newton(self, state) -> int:
+        """Newton's method of `fe_beam.solver.SNESSolver` (full steps, its convergence test
+        `SNESSolver._converged` with this solver's tolerances) written out for the small
+        dense serial case: the same iterates without PETSc's SNES/KSP/PC dispatch. Raises
+        SolveFailed like SNESSolver.solve; the state is only changed on success."""
+        from petsc4py import PETSc
+        from scipy.linalg import lapack
+
+        solver = self.run.snes
+        nonlinear, snes = solver.problem, solver.snes
+        x, f = self._work_x, self._work_f
+        x.array[:] = state
+        residual = self._residual_function
+        residual(snes, x, f)
+        fnorm = f.norm()
+        iteration, step_norm = 0, 0.0
+        reason = solver._converged(snes, 0, (x.norm(), 0.0, fnorm))
+        context = self._dense_context
+        matrix = nonlinear.A
+        try:
+            while reason == 0:
+                nonlinear.jacobian(snes, x, matrix, matrix)
+                context.setUp(_OperatorPC(matrix))
+                step, info = lapack.dgetrs(*context.factors, f.array)
+                if info != 0:
+                    raise SolveFailed("dense LU solve failed")
+                x.array[:] -= step
+                step_norm = float(np.linalg.norm(step))
+                residual(snes, x, f)
+                fnorm = f.norm()
+                iteration += 1
+                reason = solver._converged(snes, iteration, (x.norm(), step_norm, fnorm))
+        except PETSc.Error:
+            raise SolveFailed("zero pivot in the dense LU") from None
+        finally:
+            solver._reference_fnorm = None
+        if reason < 0:
+            raise SolveFailed(f"Newton diverged (reason {reason})")
+        state[:] = x.array
+        return iteration
 
     def _chord_step(self, state) -> None:
         """Predictor: one Newton step at the new values with the last factorised tangent (the
