@@ -39,6 +39,7 @@ EXIT_FAILED = 3
 COMMANDS = {
     "static": "large-deflection statics of a planar beam (load stepping, SNES)",
     "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
+    "design": "optimise section sizes, tendon offsets, tensions or loads for a target ([design])",
     "dynamic": "nonlinear dynamics (generalised-alpha, or the paper's FD + Runge-Kutta)",
     "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
     "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
@@ -247,6 +248,24 @@ def run_refine(args, config: dict, comm) -> int:
 
 
 RUNNERS["refine"] = run_refine
+
+
+def run_design_command(args, config: dict, comm) -> int:
+    from fe_beam.design import run_design
+
+    summary = run_design(config, args.out, comm, progress=not args.quiet)
+    values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
+    objective = summary["objective"]["value"]
+    _say(comm, f"design {summary['status']}: {values}; objective {objective:.6g}"
+               f", KKT residual {summary['kkt_residual']:.2g}, {summary['iterations']} iterations "
+               f"({summary['gradient']} gradients); results in {args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam design: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS["design"] = run_design_command
 
 
 def run_solid_command(args, config: dict, comm) -> int:

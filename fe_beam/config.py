@@ -122,6 +122,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
 }
 # Tables owned by other commands (validated by them).
 OTHER_TABLES = (
+    "design",
     "time",
     "initial",
     "damping",
@@ -545,6 +546,7 @@ def _check_pairs(config: dict) -> None:
 # when ignoring it would change the answer (tendons pull on the beam; [inverse] asks a question
 # the command does not answer) and noted otherwise. refine sorts its configurations itself.
 COMMAND_TABLES = {
+    "design": ("tendons", "design", "inverse"),
     "static": (),
     "finger": ("tendons", "inverse"),
     "dynamic": ("time", "initial", "damping", "modes", "tendons"),
@@ -653,7 +655,7 @@ class Validated:
     petsc_options: tuple[dict, ...] = ()
 
 
-COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate")
+COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate", "design")
 
 
 def _solver_settings(parsed) -> list:
@@ -703,6 +705,12 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
 
         parsed = parse_finger(config)[0] if config.get("tendons") else parse_static(config)
         parse_calibrate(config)
+    elif command == "design":
+        from fe_beam.design import parse_design
+        from fe_beam.model.finger import parse_finger
+
+        rest = parse_design(config)[1]
+        parsed = parse_finger(rest)[0] if rest.get("tendons") else parse_static(rest)
     else:
         from fe_beam.refine import plan_refinement
 

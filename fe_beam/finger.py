@@ -34,7 +34,7 @@ from fe_beam.model.finger import (  # noqa: F401  (their home; re-exported)
 )
 from fe_beam.outputs import _pyplot, atomic_write_json, virtual_display, write_csv
 from fe_beam.solver import LoadSteppingFailed
-from fe_beam.static import StaticContinuation, StaticResult, solve_static
+from fe_beam.static import StaticResult, solve_static
 from fe_beam.tendons import tension_for_target
 
 __all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
@@ -71,7 +71,9 @@ def solve_inverse(
     # reached by continuation from the previous equilibrium (a few Newton iterations instead of
     # a full load ramp); from the unloaded state again only if that fails.
     reference = abs(getattr(tendon, control)) or 1.0
-    run = StaticContinuation(
+    from fe_beam import realtime  # the sweep's built problem is reused (no form building)
+
+    run = realtime.acquire(
         replace(config, tendons=(replace(tendon, **{control: reference}),)), comm
     )
 
@@ -107,7 +109,7 @@ def solve_inverse(
         value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
         final = solve(value)
     finally:
-        run.destroy()
+        realtime.release(run)
     answer = {
         "target": target.key,
         "target_value": target.value,

@@ -231,10 +231,15 @@ def solve_static(
     is rewritten at a bounded share of the wall time). On failure the last converged state is
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
     it is written with status "interrupted" and the exception is re-raised.
+
+    The problem and solver come from `fe_beam.realtime.acquire`: a second solve of the same
+    kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
     """
     started = time.perf_counter()
     notes = check_beam_work(config, config.stepping.steps, comm, quiet=out is None)
-    run = StaticContinuation(config, comm)
+    from fe_beam import realtime  # a problem of this kind built before is reused (no JIT)
+
+    run = realtime.acquire(config, comm)
     problem, tendons = run.problem, run.tendons
     result = StaticResult(dofs=problem.global_dofs)
     root = comm.rank == 0
@@ -281,7 +286,7 @@ def solve_static(
         result.status, result.message = status["status"], status["message"]
         raise
     finally:
-        run.destroy()
+        realtime.release(run)
         result.notes = run.watch.notes()
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started

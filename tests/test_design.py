@@ -1,0 +1,205 @@
+"""fe-beam design: known optima (Reissner rod under a tip moment: theta_tip = M L / (E I)
+exactly), the KKT conditions at the optimum, and bad [design] tables (exit 2, one sentence)."""
+
+import copy
+import json
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from tomlio import dump_toml
+
+from fe_beam.cli import main
+from fe_beam.config import ConfigError
+from fe_beam.design import parse_design, run_design
+
+E, B, L = 1.0e7, 0.02, 1.0
+
+
+def rod(moment=0.01, h=0.01, **design) -> dict:
+    return {
+        "beam": {"length": L},
+        "section": {"shape": "rectangle", "b": B, "h": h},
+        "material": {"E": E, "nu": 0.3},
+        "model": {"law": "reissner"},
+        "mesh": {"elements": 3, "degree": 2},
+        "loads": {"tip_moment": moment, "steps": 4},
+        "output": {"plots": False, "xdmf": False},
+        "design": design,
+    }
+
+
+def tip_angle(moment, h):
+    return moment * L / (E * B * h**3 / 12)
+
+
+def test_height_for_a_target_tip_angle():
+    """min (theta - theta*)^2 over h: h* = (12 M L / (E b theta*))^(1/3)."""
+    moment, target = 0.013, 1.1
+    summary = run_design(rod(moment, variables=["section.h"], bounds=[[0.005, 0.02]],
+                             objective="tip_pose", target={"theta": target}), None,
+                         MPI.COMM_WORLD)
+    exact = (12 * moment * L / (E * B * target)) ** (1 / 3)
+    assert summary["status"] == "converged"
+    assert summary["variables"]["section.h"] == pytest.approx(exact, rel=1e-7)
+    assert summary["kkt_residual"] < 1e-6
+    assert summary["gradient"] in ("adjoint", "finite-difference")
+    assert summary["tip"]["theta"] == pytest.approx(target, rel=1e-8)
+
+
+def test_least_moment_for_a_tip_angle_sits_on_a_bound():
+    """min M subject to theta_tip = theta*, h in [h_lo, h_hi]: M = theta* E b h^3 / (12 L) is
+    smallest at h = h_lo (an active bound and an active equality: nonzero multipliers)."""
+    target, h_lo = 0.9, 0.008
+    config = rod(0.02, h=0.01, variables=["loads.tip_moment", "section.h"],
+                 bounds=[[0.001, 0.05], [h_lo, 0.012]], objective="tension", tip_angle=target)
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged"
+    assert summary["variables"]["section.h"] == pytest.approx(h_lo, rel=1e-9)
+    exact = target * E * B * h_lo**3 / (12 * L)
+    assert summary["variables"]["loads.tip_moment"] == pytest.approx(exact, rel=1e-7)
+    assert abs(summary["constraints"]["tip_angle"]["residual"]) < 1e-8
+    kkt = summary["kkt"]
+    assert kkt["kkt_residual"] < 1e-6
+    assert "lower section.h" in kkt["active"]
+    assert all(abs(m) > 1e-6 for m in kkt["multipliers"])
+
+
+def test_fibre_strain_limit_is_active():
+    """Target theta* = 1.2 needs h* (unconstrained); the extreme fibre strain h theta / (2 L)
+    must stay below a limit that h* breaks: the optimum is where the limit holds with
+    equality, h_c = sqrt(6 M / (E b limit))."""
+    moment, target, limit = 0.01, 1.2, 0.003
+    summary = run_design(rod(moment, variables=["section.h"], bounds=[[0.005, 0.02]],
+                             objective="tip_pose", target={"theta": target},
+                             max_fibre_strain=limit), None, MPI.COMM_WORLD)
+    free = (12 * moment * L / (E * B * target)) ** (1 / 3)
+    assert free * tip_angle(moment, free) / (2 * L) > limit  # the limit binds
+    critical = np.sqrt(6 * moment / (E * B * limit))
+    assert summary["variables"]["section.h"] == pytest.approx(critical, rel=1e-6)
+    assert summary["constraints"]["max_fibre_strain"]["value"] == pytest.approx(limit, rel=1e-6)
+    assert summary["kkt_residual"] < 1e-6
+    assert summary["kkt"]["multipliers"][0] > 0
+
+
+def test_finger_offset_for_a_tip_pose(tmp_path):
+    """A finger: the tip offset of the tendon that puts the tip at the angle that a known
+    offset gives (computed independently by solve_static)."""
+    from fe_beam.finger import parse_finger
+    from fe_beam.static import solve_static
+
+    finger = {"mesh": {"elements": 4, "degree": 2}, "output": {"plots": True, "xdmf": False},
+              "model": {"law": "reissner", "constraint": "unshearable"},
+              "tendons": [{"name": "flexor", "offset_base": 0.008, "offset_tip": 0.003,
+                           "tension": 1.5}]}
+    truth = copy.deepcopy(finger)
+    truth["tendons"][0]["offset_tip"] = 0.0045
+    parsed, _ = parse_finger(truth)
+    theta = solve_static(parsed, None, progress=False, record_shapes=False).steps[-1]["tip"][
+        "theta"]
+    config = finger | {"design": {"variables": ["tendons.0.offset_tip"],
+                                  "bounds": [[0.0, 0.0049]], "objective": "tip_pose",
+                                  "target": {"theta": theta}}}
+    summary = run_design(config, tmp_path, MPI.COMM_WORLD)
+    assert summary["variables"]["tendons.0.offset_tip"] == pytest.approx(0.0045, rel=1e-6)
+    assert summary["kkt_residual"] < 1e-6
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert written["variables"] == summary["variables"]
+    assert (tmp_path / "design.png").is_file()
+
+
+BAD = [
+    ({"variables": ["section.q"], "bounds": [[0.1, 1]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "not a dimension"),
+    ({"variables": ["wing.span"], "bounds": [[0.1, 1]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "not a design variable"),
+    ({"variables": ["section.shape"], "bounds": [[0.1, 1]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "not numeric"),
+    ({"variables": ["model.law"], "bounds": [[0.1, 1]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "not a numeric design variable"),
+    ({"variables": ["section.h"], "bounds": [[0.02, 0.005]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "must be <"),
+    ({"variables": ["section.h"], "bounds": [[0.005]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "one [low, high] pair"),
+    ({"variables": ["section.h"], "bounds": [[0.02, 0.03]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "outside its bounds"),
+    ({"variables": ["section.h"], "bounds": [[0.005, 0.02]], "objective": "fastest",
+      "target": {"theta": 1}}, "objective must be one of"),
+    ({"variables": ["section.h"], "bounds": [[0.005, 0.02]], "objective": "tension",
+      "tip_angle": 1.0}, "exactly one of"),
+    ({"variables": ["section.h"], "bounds": [[0.005, 0.02]], "objective": "tip_pose",
+      "target": {"phi": 1}}, "needs target"),
+    ({"variables": ["section.h"], "bounds": [[0.005, 0.02]], "objective": "tip_pose",
+      "target": {"theta": 1}, "step": 3}, "unknown key"),
+    ({"variables": ["section.h"], "bounds": {"section.b": [0.005, 0.02]},
+      "objective": "tip_pose", "target": {"theta": 1}}, "missing 'section.h'"),
+    ({"variables": ["section.h"], "bounds": [[0.005, "big"]], "objective": "tip_pose",
+      "target": {"theta": 1}}, "one [low, high] pair"),
+]
+
+
+def test_bounds_as_a_table():
+    design, _ = parse_design(rod(variables=["section.h", "loads.tip_moment"],
+                                 bounds={"loads.tip_moment": [0.0, 0.1],
+                                         "section.h": [0.005, 0.02]},
+                                 objective="tip_pose", target={"theta": 1.0}))
+    assert design.bounds.tolist() == [[0.005, 0.02], [0.0, 0.1]]
+
+
+@pytest.mark.parametrize("design, words", BAD)
+def test_bad_design_tables(design, words):
+    with pytest.raises(ConfigError, match=words.replace("[", r"\[")):
+        parse_design(rod(**design))
+
+
+def test_cli_bad_design_exits_2(tmp_path, capsys):
+    path = tmp_path / "bad.toml"
+    path.write_text(dump_toml(rod(variables=["section.q"], bounds=[[0.1, 1]],
+                                  objective="tip_pose", target={"theta": 1.0})))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "section.q" in err and "Traceback" not in err
+
+
+def test_cli_design_writes_summary(tmp_path):
+    path = tmp_path / "good.toml"
+    path.write_text(dump_toml(rod(variables=["section.h"], bounds=[[0.005, 0.02]],
+                                  objective="tip_pose", target={"theta": 0.8})))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    exact = (12 * 0.01 * L / (E * B * 0.8)) ** (1 / 3)
+    assert summary["variables"]["section.h"] == pytest.approx(exact, rel=1e-7)
+    assert summary["gradient"] in ("adjoint", "finite-difference")
+
+
+@pytest.mark.mpi
+def test_design_on_two_ranks():
+    """The same optimum on every rank of a partitioned rod (collective solves and reductions)."""
+    moment, target = 0.011, 0.9
+    config = rod(moment, variables=["section.h"], bounds=[[0.005, 0.02]], objective="tip_pose",
+                 target={"theta": target})
+    config["mesh"]["elements"] = 6
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    exact = (12 * moment * L / (E * B * target)) ** (1 / 3)
+    assert summary["variables"]["section.h"] == pytest.approx(exact, rel=1e-7)
+    assert summary["kkt_residual"] < 1e-6
+    values = MPI.COMM_WORLD.allgather(summary["variables"]["section.h"])
+    assert all(v == values[0] for v in values)
+
+
+def test_taper_of_an_untapered_rod():
+    """section.h_tip of a uniform rod: the taper starts from h. Pure moment on a linear taper
+    h0 -> h1: theta = 6 M L (h0 + h1) / (E b h0^2 h1^2); the optimum h1 for a target angle
+    (the FE answer converges to it with the mesh: 12 degree-2 elements, 1e-5)."""
+    from scipy.optimize import brentq
+
+    moment, h0, target = 0.01, 0.01, 0.8
+    config = rod(moment, h=h0, variables=["section.h_tip"], bounds=[[0.005, 0.02]],
+                 objective="tip_pose", target={"theta": target})
+    config["mesh"]["elements"] = 12
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    exact = brentq(lambda h1: 6 * moment * L * (h0 + h1) / (E * B * h0**2 * h1**2) - target,
+                   0.005, 0.02)
+    assert summary["variables"]["section.h_tip"] == pytest.approx(exact, rel=1e-5)
+    assert summary["tip"]["theta"] == pytest.approx(target, rel=1e-8)
+    assert summary["kkt_residual"] < 1e-6
