@@ -88,6 +88,10 @@ def _prepare_raw(raw: dict, parameters: Sequence[str]) -> dict:
     dimension ``section.X_tip`` not given becomes X_tip = X (same numbers); a custom section's
     I3 not given becomes 0."""
     raw = copy.deepcopy(raw)
+    if raw.get("tendons"):  # the finger's defaults (its section among them) made explicit
+        from fe_beam.model.finger import with_defaults
+
+        raw = with_defaults(raw)
     section = raw.setdefault("section", {})
     for key in parameters:
         m = re.fullmatch(r"section\.([A-Za-z0-9]+?)(_tip)?", key)

@@ -300,3 +300,21 @@ def test_backbone_distances_of_unlabelled_points():
     finally:
         model.destroy()
     assert np.all(np.abs(fd - adjoint) <= TOLERANCE * np.abs(adjoint)), fd / adjoint - 1
+
+
+def test_finger_without_section_table_uses_the_finger_defaults():
+    """A finger config that leaves [section] to the chapter's defaults: its dimensions are
+    parameters too, with the same gradient as when the default table is written out."""
+    from fe_beam.model.finger import DEFAULT_FINGER
+
+    tendon = {"tension": 2.0, "offset_base": 0.006, "offset_tip": 0.004}
+    implicit = RodSensitivity({"tendons": [tendon]}, ["section.h", "tendons.0.offset_tip"])
+    explicit = RodSensitivity({"tendons": [tendon], "section": dict(DEFAULT_FINGER["section"])},
+                              ["section.h", "tendons.0.offset_tip"])
+    results = []
+    for model in (implicit, explicit):
+        model.solve()
+        results.append(model.gradient(["tip_theta"])[0])
+        model.destroy()
+    assert np.all(np.abs(results[0]) > 0)
+    np.testing.assert_allclose(results[0], results[1], rtol=1e-12)
