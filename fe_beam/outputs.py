@@ -37,7 +37,6 @@ from fe_beam import compat, runctl
 __all__ = [
     "AppendCSV",
     "BeamXDMFWriter",
-    "RunOutput",
     "XDMFSeries",
     "atomic_write_json",
     "atomic_write_text",
@@ -166,50 +165,6 @@ class AppendCSV:
 
     def close(self) -> None:
         self._file.close()
-
-
-class RunOutput:
-    """The files of a stepping run that grow with it: summary.json, a CSV history and (given
-    to `step`) an XDMF writer, brought up to date together, so that after an interruption at any
-    moment they hold the same steps (up to the one being written).
-
-    Rows and XDMF steps are appended (O(1) per step, buffered in between); summary.json,
-    whose ``steps``/``history`` grows, is rewritten whole, so the files are brought up to date
-    together at most once a second and at a bounded share of the wall time
-    (`fe_beam.runctl.Throttle`; the first step at once), and always by `finish`. Text files
-    are written by rank 0 only; ``writer.write(t, flush=...)`` is collective.
-    """
-
-    def __init__(self, out: Path | None, csv_name: str, header: list[str], comm):
-        self.root = comm.rank == 0
-        self.active = out is not None and self.root
-        self.summary_path = None if out is None else Path(out) / "summary.json"
-        self.table = AppendCSV(Path(out) / csv_name, header) if self.active else None
-        self._throttle = runctl.Throttle()
-
-    def write_summary(self, summary) -> None:
-        if self.active:
-            atomic_write_json(self.summary_path, summary() if callable(summary) else summary)
-
-    def step(self, rows: list[list], summary, writer=None, t: float = 0.0) -> None:
-        """Record one step: its CSV ``rows``, ``summary`` (a dict or a function returning one)
-        and, with ``writer``, its fields at time ``t`` (collective)."""
-        due = self._throttle.due() if self.root else False
-        with self._throttle.timing() if due else contextlib.nullcontext():
-            if writer is not None:
-                writer.write(t, flush=due)
-            if self.active:
-                self.table.add(rows, flush=due)
-                if due:
-                    self.write_summary(summary)
-
-    def finish(self, summary, writer=None) -> None:
-        """Close the writer (collective) and write everything, with the final ``summary``."""
-        if writer is not None:
-            writer.close()
-        if self.active:
-            self.table.close()
-            self.write_summary(summary)
 
 
 _XDMF_TOPOLOGY = {("interval", 2): "Polyline", ("interval", 3): "Edge_3",

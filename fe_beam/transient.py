@@ -31,13 +31,18 @@ from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.energy_momentum import EnergyMomentum
-from fe_beam.outputs import (
-    BeamXDMFWriter,
-    RunOutput,
-    _pyplot,
-    atomic_write_json,
-    write_csv,
+from fe_beam.exports import (
+    Column,
+    CSVExport,
+    Exports,
+    PlotExport,
+    SummaryExport,
+    XDMFExport,
+    figure,
+    indexed_columns,
+    tip_columns,
 )
+from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.solver import (
     LoadSteppingFailed,
 )
@@ -370,7 +375,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         notes += check_beam_work(config.static, config.static.stepping.steps, comm,
                                  " of load stepping (static pre-state)", quiet=out is None)
     problem, tendons = _tendon_problem(config.static, comm)
-    header = _history_header(len(config.static.tendons))
+    xdmf = out / "beam.xdmf" if out is not None and config.static.output.xdmf else None
     watch = StrainWatch()
     if config.from_static:
         try:
@@ -385,13 +390,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                    dofs=problem.global_dofs, notes=notes + watch.notes(),
                                    strain_range=watch.summary())
             prestate = _prestate_record(problem, failure)
-            files = RunOutput(out, "history.csv", header, comm)
-            writer = BeamXDMFWriter(problem, out / "beam.xdmf"
-                                    if out is not None and config.static.output.xdmf else None)
+            writer = BeamXDMFWriter(problem, xdmf)
+            files = Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
             summary = _dynamic_summary(result, config, result.info["wall_time_s"])
-            files.finish(summary | {"prestate": prestate}, writer)
+            files.finish(summary | {"prestate": prestate})
             return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
@@ -412,11 +416,14 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    files = RunOutput(out, "history.csv", header, comm)
-    files.write_summary(_dynamic_summary(result, config, 0.0))  # status "running"
-    xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
     shapes = []
+    files = Exports(_history_exports(
+        out, config, writer,
+        lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+        lambda _: _plot_dynamic(out, result, shapes, config)
+        if config.static.output.plots and result.history else None), comm)
+    files.start(_dynamic_summary(result, config, 0.0))  # status "running"
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
@@ -430,9 +437,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                              "pull_ins": pull_ins.tolist()}
             _note_pushing_tendons(tendons, tensions, t, notes, comm)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
-        files.step([_history_row(result.history[-1])],
-                   lambda: _dynamic_summary(result, config, time.perf_counter() - started),
-                   writer, t)
+        files.on_step(result.history[-1])
         if config.static.output.plots:
             shape = writer.vertex_values(update=False)
             if root:
@@ -454,10 +459,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         integrator.solver.destroy()
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
-        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]), writer)
-    if writing and root:
-        if config.static.output.plots and result.history:
-            _plot_dynamic(out, result, shapes, config)
+        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]))
     return result
 
 
@@ -504,9 +506,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
-    if out is not None and comm.rank == 0:
-        atomic_write_json(out / "summary.json", {"status": "running", "message": "",
-                                                 "scheme": config.time.scheme, "notes": notes})
+    status = Exports([SummaryExport(out / "summary.json")] if out is not None else [], comm)
+    status.start({"status": "running", "message": "", "scheme": config.time.scheme,
+                   "notes": notes})
     try:
         solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
                                   rtol=tolerance, atol=tolerance * 1e-3 * model.length)
@@ -514,11 +516,10 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         stop.where = "the FD + Runge-Kutta integration"
         stop.written = ("no history (the scheme writes it at its end): only summary.json, status "
                         "interrupted, is")
-        if out is not None and comm.rank == 0:
-            atomic_write_json(out / "summary.json", {
-                "status": "interrupted", "history": [], "scheme": config.time.scheme,
-                "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
-                "Runge-Kutta integration (its history is written at its end)"})
+        status.finish({
+            "status": "interrupted", "history": [], "scheme": config.time.scheme,
+            "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
+            "Runge-Kutta integration (its history is written at its end)"})
         raise
     history = [{"t": float(t), "tip": {"u": float(u), "v": float(v), "theta": float(th)},
                 "energies": {"kinetic": float(kin), "strain": float(strain),
@@ -547,11 +548,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         watch.observe(strains)
     result.notes, result.strain_range = notes + watch.notes(), watch.summary()
     runctl.warn(comm, watch.notes())
-    if out is not None and comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-        _write_dynamic(out, result, config, solution.wall_time)
-        if config.static.output.plots:
-            _plot_dynamic(out, result, [], config)
+    _write_dynamic(out, result, config, solution.wall_time, comm)
     return result
 
 
@@ -570,9 +567,7 @@ def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: s
 
     result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
-    if out is not None and comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-        _write_dynamic(out, result, config, 0.0)
+    _write_dynamic(out, result, config, 0.0, comm)
     return result
 
 
@@ -591,22 +586,30 @@ def _interruptible(load_time, comm, every: int = 200):
     return checked
 
 
-HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "external_work",
-                  "dissipated"]
+ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def _history_header(tendons: int) -> list[str]:
-    """HISTORY_HEADER, then tension_i and pull_in_i of each tendon."""
-    return HISTORY_HEADER + [f"tension_{i}" for i in range(tendons)] + [
-        f"pull_in_{i}" for i in range(tendons)]
+def history_columns(tendons: int) -> list[Column]:
+    """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
+    return [Column("t", lambda h: h["t"]), *tip_columns(),
+            *(Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            *indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
 
 
-def _history_row(h: dict) -> list:
-    row = [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
-           *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
-    if "tendons" in h:
-        row += h["tendons"]["tensions"] + h["tendons"]["pull_ins"]
-    return row
+HISTORY_HEADER = [c.name for c in history_columns(0)]
+
+
+def _history_exports(out: Path | None, config: DynamicConfig, writer=None, content=None,
+                     draw=None) -> list:
+    """The exports of a time history: XDMF states (``writer``), and with ``out`` history.csv,
+    summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
+    files = [XDMFExport(writer, "t")] if writer is not None else []
+    if out is not None:
+        files += [CSVExport(out / "history.csv", history_columns(len(config.static.tendons))),
+                  SummaryExport(out / "summary.json", content),
+                  PlotExport(draw) if draw is not None else None]
+    return files
 
 
 def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
@@ -621,33 +624,35 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
     } | ({"strain_range": result.strain_range} if result.strain_range else {})
 
 
-def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
-    atomic_write_json(out / "summary.json", _dynamic_summary(result, config, wall))
-    write_csv(out / "history.csv", HISTORY_HEADER, [_history_row(h) for h in result.history])
+def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfig, wall: float,
+                   comm) -> None:
+    """The files of a history computed in one go (the FD scheme): summary.json, history.csv
+    and the pictures."""
+    files = Exports(_history_exports(out, config, draw=lambda _: _plot_dynamic(
+        out, result, [], config) if config.static.output.plots else None), comm)
+    for record in result.history:
+        files.on_step(record)
+    files.finish(_dynamic_summary(result, config, wall))
 
 
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
-    plt = _pyplot()
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
-    figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
-    left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
-              [h["tip"]["v"] for h in result.history], lw=1.2)
-    left.set_xlabel("tip x [m]")
-    left.set_ylabel("tip y [m]")
-    left.set_title("tip trajectory")
-    left.set_aspect("equal", adjustable="datalim")
-    for key in ("kinetic", "strain", "external_work", "dissipated"):
-        right.plot(t, [h["energies"][key] for h in result.history], label=key)
-    right.set_xlabel("t [s]")
-    right.set_ylabel("energy [J]")
-    right.set_title("energies")
-    right.legend(fontsize=8)
-    for axis in (left, right):
-        axis.grid(alpha=0.3)
-    figure.tight_layout()
-    figure.savefig(out / "dynamics.png", dpi=130)
-    plt.close(figure)
+    with figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
+        left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
+                  [h["tip"]["v"] for h in result.history], lw=1.2)
+        left.set_xlabel("tip x [m]")
+        left.set_ylabel("tip y [m]")
+        left.set_title("tip trajectory")
+        left.set_aspect("equal", adjustable="datalim")
+        for key in ENERGIES:
+            right.plot(t, [h["energies"][key] for h in result.history], label=key)
+        right.set_xlabel("t [s]")
+        right.set_ylabel("energy [J]")
+        right.set_title("energies")
+        right.legend(fontsize=8)
+        for axis in (left, right):
+            axis.grid(alpha=0.3)
     if shapes and config.static.output.gif:
         _write_gif(out / "beam.gif", shapes, length)
 
@@ -662,7 +667,7 @@ def _write_gif(path: Path, shapes, length: float) -> None:
     frames = shapes[:: max(1, len(shapes) // 60)]
     xs = np.concatenate([s["x"] + s["u"] for _, s in frames])
     ys = np.concatenate([s["v"] for _, s in frames])
-    figure, axis = plt.subplots(figsize=(5, 4))
+    drawn, axis = plt.subplots(figsize=(5, 4))
     (line,) = axis.plot([], [], lw=2)
     margin = 0.05 * length
     axis.set_xlim(xs.min() - margin, xs.max() + margin)
@@ -677,11 +682,11 @@ def _write_gif(path: Path, shapes, length: float) -> None:
         return (line,)
 
     try:
-        FuncAnimation(figure, draw, frames=len(frames), blit=False).save(
+        FuncAnimation(drawn, draw, frames=len(frames), blit=False).save(
             str(path), writer=PillowWriter(fps=15))
     except Exception:  # an animation must never fail an analysis
         pass
-    plt.close(figure)
+    plt.close(drawn)
 
 
 def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM_WORLD,
