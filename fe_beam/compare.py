@@ -357,7 +357,7 @@ def _exports(out: Path, config: CompareConfig, content, every_step: bool = True)
 
 def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
     """The files of a finished sweep (``summary``) at once (on the calling rank)."""
-    files = Exports(_exports(out, config, lambda: summary, every_step=False), MPI.COMM_SELF)
+    files = Exports(_exports(out, config, lambda: summary, every_step=False))
     for row in summary["table"]:
         files.on_step(row)
     files.finish(summary)

@@ -64,10 +64,11 @@ class Export:
 
 class Exports:
     """A driver's exports, called together (see the module docstring); ``comm`` decides which
-    rank writes (rank 0) and ``throttle`` how often growing files are flushed."""
+    rank writes (rank 0; None: this one) and ``throttle`` how often growing files are flushed
+    (False: after every step)."""
 
-    def __init__(self, exports: Sequence[Export], comm, throttle: bool = True):
-        self.root = comm.rank == 0
+    def __init__(self, exports: Sequence[Export], comm=None, throttle: bool = True):
+        self.root = comm is None or comm.rank == 0
         self.exports = [e for e in exports if e is not None and (e.collective or self.root)]
         self._throttle = runctl.Throttle() if throttle else None
 
