@@ -31,18 +31,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import exports, runctl
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, table
-from fe_beam.exports import (
-    Column,
-    CSVExport,
-    Exports,
-    PlotExport,
-    SummaryExport,
-    figure,
-    indexed_columns,
-    tip_columns,
-)
 from fe_beam.outputs import _pyplot
 from fe_beam.solid.driver import (
     SolidConfig,
@@ -227,7 +217,7 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
         return summary
 
     # the solid's sweep points are slow: every file is brought up to date after each
-    files = Exports(_exports(out, config, current) if out is not None else [], comm,
+    files = exports.Exports(_exports(out, config, current) if out is not None else [], comm,
                     throttle=False)
     try:
         run = SolidRun(solid, comm)
@@ -327,7 +317,7 @@ def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
             f"point above: {found['first_sweep_point_above']:.4g})")
 
 
-def _columns(first: dict | None, laws) -> list[Column]:
+def _columns(first: dict | None, laws) -> list[exports.Column]:
     """compare.csv: the sweep point, the solid's tip, each rod's tip and distance (empty cells
     where the rod did not converge)."""
     count = len(first.get("tensions", [])) if first else 0
@@ -335,29 +325,30 @@ def _columns(first: dict | None, laws) -> list[Column]:
     def rod(law, key):
         return lambda r: r["rod"][law].get(key) or {}
 
-    columns = [Column("load_factor", lambda r: r["load_factor"]),
-               *indexed_columns("tension", count, lambda r: r["tensions"]),
-               *tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
+    columns = [exports.Column("load_factor", lambda r: r["load_factor"]),
+               *exports.indexed_columns("tension", count, lambda r: r["tensions"]),
+               *exports.tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
     for law in laws:
-        columns += [Column(f"{law}_tip_{k}", lambda r, law=law, k=k: rod(law, "tip")(r).get(k, ""))
+        columns += [exports.Column(f"{law}_tip_{k}",
+                                   lambda r, law=law, k=k: rod(law, "tip")(r).get(k, ""))
                     for k in ("u", "v", "theta")]
-        columns.append(Column(f"{law}_distance_over_L",
+        columns.append(exports.Column(f"{law}_distance_over_L",
                               lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
     return columns
 
 
 def _exports(out: Path, config: CompareConfig, content, every_step: bool = True) -> list:
     """summary.json, compare.csv and the pictures (``every_step``: redrawn after each point)."""
-    return [SummaryExport(out / "summary.json", content),
-            CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
-            PlotExport(lambda summary: _plot(out, summary, config)
+    return [exports.SummaryExport(out / "summary.json", content),
+            exports.CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
+            exports.PlotExport(lambda summary: _plot(out, summary, config)
                        if summary["table"] and config.solid.output.plots else None,
                        content, every_step)]
 
 
 def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
     """The files of a finished sweep (``summary``) at once (on the calling rank)."""
-    files = Exports(_exports(out, config, lambda: summary, every_step=False))
+    files = exports.Exports(_exports(out, config, lambda: summary, every_step=False))
     for row in summary["table"]:
         files.on_step(row)
     files.finish(summary)
@@ -384,7 +375,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                    for r in rows]
     length = config.solid.length
 
-    with figure(out / "backbones.png", figsize=(9, 5)) as (_, axis):
+    with exports.figure(out / "backbones.png", figsize=(9, 5)) as (_, axis):
         colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
         axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
         for row, value, colour in zip(rows, axis_values, colours, strict=True):
@@ -402,7 +393,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
         axis.grid(alpha=0.3)
         axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
-    with figure(out / "tip_vs_tension.png", 1, 4, figsize=(15, 3.6)) as (_, axes):
+    with exports.figure(out / "tip_vs_tension.png", 1, 4, figsize=(15, 3.6)) as (_, axes):
         names = [("solid", None)] + [(law, law) for law in config.laws]
         for axis, key, unit in zip(axes[:3], ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
             for name, law in names:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import exports, runctl
 from fe_beam.config import (
     NUMBER,
     ConfigError,
@@ -26,16 +26,6 @@ from fe_beam.config import (
     _wrap,
     parse_static,
     table,
-)
-from fe_beam.exports import (
-    Column,
-    CSVExport,
-    Exports,
-    PlotExport,
-    SummaryExport,
-    figure,
-    indexed_columns,
-    tip_columns,
 )
 from fe_beam.outputs import atomic_write_json, virtual_display
 from fe_beam.solver import LoadSteppingFailed
@@ -333,12 +323,12 @@ def run_finger(
         ]
     }
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
-    sweep = ([CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
+    sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
                         empty=False)] if out is not None else [])
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
-                          record_shapes=out is not None, exports=sweep)
-    after = Exports([SummaryExport(out / "summary.json"),
-                     PlotExport(lambda _: plot_finger(out, result, config)
+                          record_shapes=out is not None, extra_exports=sweep)
+    after = exports.Exports([exports.SummaryExport(out / "summary.json"),
+                     exports.PlotExport(lambda _: plot_finger(out, result, config)
                                 if config.output.plots else None)]
                     if out is not None and result.steps else [], comm)
     inverse = {}
@@ -355,11 +345,12 @@ def run_finger(
     return result, inverse
 
 
-def sweep_columns(tendons: int) -> list[Column]:
+def sweep_columns(tendons: int) -> list[exports.Column]:
     """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip."""
-    return [Column("load_factor", lambda s: s["load_factor"]),
-            *indexed_columns("tension", tendons, lambda s: s["tensions"]),
-            *indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]), *tip_columns()]
+    return [exports.Column("load_factor", lambda s: s["load_factor"]),
+            *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),
+            *exports.tip_columns()]
 
 
 def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
@@ -368,7 +359,8 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
 
     final = result.shapes[-1][1]
     cells = final["cells"]
-    with figure(out / "fig3_8_profiles.png", 2, 2, figsize=(9, 6), sharex=True) as (drawn, axes):
+    profiles = out / "fig3_8_profiles.png"
+    with exports.figure(profiles, 2, 2, figsize=(9, 6), sharex=True) as (drawn, axes):
         zero = np.zeros_like(cells["x"])
         panels = [
             ("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
@@ -389,7 +381,7 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
             " N (cf. chapter Fig. 3.8)"
         )
 
-    with figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
+    with exports.figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
         every = max(1, len(result.shapes) // 8)
         shapes = list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]
         for (_, shape), step in shapes:
@@ -403,7 +395,7 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         legend_inside(axis, fontsize=7)
 
     tensions = [s["tensions"][0] for s in result.steps]
-    with figure(out / "tension_tip.png", 1, 2, figsize=(9, 3.6)) as (_, (left, right)):
+    with exports.figure(out / "tension_tip.png", 1, 2, figsize=(9, 3.6)) as (_, (left, right)):
         left.plot(tensions, [s["tip"]["theta"] for s in result.steps], "o-", ms=3)
         left.set_xlabel("tension [N]")
         left.set_ylabel("tip angle [rad]")

@@ -11,18 +11,9 @@ import scipy.linalg
 import scipy.sparse
 from mpi4py import MPI
 
-from fe_beam import compat, runctl
+from fe_beam import compat, exports, runctl
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import StaticConfig
-from fe_beam.exports import (
-    Column,
-    CSVExport,
-    Exports,
-    PlotExport,
-    SummaryExport,
-    XDMFExport,
-    tip_columns,
-)
 from fe_beam.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.solver import (
     LoadSteppingFailed,
@@ -220,7 +211,7 @@ def solve_static(
     extra_summary: dict | None = None,
     on_step=None,
     record_shapes: bool = True,
-    exports: list | None = None,
+    extra_exports: list | None = None,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
@@ -235,7 +226,7 @@ def solve_static(
     updated as steps converge, at O(1) cost per step (rows and steps are appended; summary.json
     is rewritten at a bounded share of the wall time). On failure the last converged state is
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
-    it is written with status "interrupted" and the exception is re-raised. ``exports``: more
+    it is written with status "interrupted" and the exception is re-raised. ``extra_exports``: more
     `fe_beam.exports.Export` objects fed with the step records (e.g. the finger's sweep table).
     """
     started = time.perf_counter()
@@ -252,12 +243,13 @@ def solve_static(
         extra["notes"] = list(extra.get("notes", [])) + notes
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
-    files = Exports([XDMFExport(writer, "load_factor") if writer is not None else None] + ([
-        CSVExport(out / "load_displacement.csv", CSV_COLUMNS),
-        SummaryExport(out / "summary.json", lambda: result.summary(extra)),
-        PlotExport(lambda _: _write_plots(out, result, config)
-                   if config.output.plots and result.shapes else None),
-    ] + list(exports or []) if writing else []), comm)
+    states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
+    files = exports.Exports(states + ([
+        exports.CSVExport(out / "load_displacement.csv", CSV_COLUMNS),
+        exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
+        exports.PlotExport(lambda _: _write_plots(out, result, config)
+                           if config.output.plots and result.shapes else None),
+    ] + list(extra_exports or []) if writing else []), comm)
     files.start(result.summary(extra))  # status "running" from the start
 
     def record(step: StepResult) -> None:
@@ -354,8 +346,8 @@ def _model_summary(config: StaticConfig) -> dict:
 
 
 # load_displacement.csv
-CSV_COLUMNS = [Column("load_factor", lambda s: s["load_factor"]), *tip_columns(),
-               Column("newton_iterations", lambda s: s["newton_iterations"])]
+CSV_COLUMNS = [exports.Column("load_factor", lambda s: s["load_factor"]), *exports.tip_columns(),
+               exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 CSV_HEADER = [c.name for c in CSV_COLUMNS]
 
 

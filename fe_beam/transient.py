@@ -26,22 +26,11 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import compat, runctl
+from fe_beam import compat, exports, runctl
 from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
 from fe_beam.dynamics import Damping, DynamicsFailed, GeneralizedAlpha, TimeSettings
 from fe_beam.energy_momentum import EnergyMomentum
-from fe_beam.exports import (
-    Column,
-    CSVExport,
-    Exports,
-    PlotExport,
-    SummaryExport,
-    XDMFExport,
-    figure,
-    indexed_columns,
-    tip_columns,
-)
 from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.solver import (
     LoadSteppingFailed,
@@ -391,7 +380,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                    strain_range=watch.summary())
             prestate = _prestate_record(problem, failure)
             writer = BeamXDMFWriter(problem, xdmf)
-            files = Exports(_history_exports(out, config, writer), comm)
+            files = exports.Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
             summary = _dynamic_summary(result, config, result.info["wall_time_s"])
@@ -418,7 +407,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                            * problem.space.dofmap.index_map_bs, notes=notes)
     writer = BeamXDMFWriter(problem, xdmf)
     shapes = []
-    files = Exports(_history_exports(
+    files = exports.Exports(_history_exports(
         out, config, writer,
         lambda: _dynamic_summary(result, config, time.perf_counter() - started),
         lambda _: _plot_dynamic(out, result, shapes, config)
@@ -506,7 +495,8 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
-    status = Exports([SummaryExport(out / "summary.json")] if out is not None else [], comm)
+    status = exports.Exports([exports.SummaryExport(out / "summary.json")]
+                             if out is not None else [], comm)
     status.start({"status": "running", "message": "", "scheme": config.time.scheme,
                    "notes": notes})
     try:
@@ -589,12 +579,12 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def history_columns(tendons: int) -> list[Column]:
+def history_columns(tendons: int) -> list[exports.Column]:
     """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
-    return [Column("t", lambda h: h["t"]), *tip_columns(),
-            *(Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
-            *indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
-            *indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
+    return [exports.Column("t", lambda h: h["t"]), *exports.tip_columns(),
+            *(exports.Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            *exports.indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
 
 
 HISTORY_HEADER = [c.name for c in history_columns(0)]
@@ -604,11 +594,12 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
                      draw=None) -> list:
     """The exports of a time history: XDMF states (``writer``), and with ``out`` history.csv,
     summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
-    files = [XDMFExport(writer, "t")] if writer is not None else []
+    files = [exports.XDMFExport(writer, "t")] if writer is not None else []
     if out is not None:
-        files += [CSVExport(out / "history.csv", history_columns(len(config.static.tendons))),
-                  SummaryExport(out / "summary.json", content),
-                  PlotExport(draw) if draw is not None else None]
+        columns = history_columns(len(config.static.tendons))
+        files += [exports.CSVExport(out / "history.csv", columns),
+                  exports.SummaryExport(out / "summary.json", content),
+                  exports.PlotExport(draw) if draw is not None else None]
     return files
 
 
@@ -628,7 +619,7 @@ def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfi
                    comm) -> None:
     """The files of a history computed in one go (the FD scheme): summary.json, history.csv
     and the pictures."""
-    files = Exports(_history_exports(out, config, draw=lambda _: _plot_dynamic(
+    files = exports.Exports(_history_exports(out, config, draw=lambda _: _plot_dynamic(
         out, result, [], config) if config.static.output.plots else None), comm)
     for record in result.history:
         files.on_step(record)
@@ -638,7 +629,7 @@ def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfi
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
-    with figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
+    with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
         left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
                   [h["tip"]["v"] for h in result.history], lw=1.2)
         left.set_xlabel("tip x [m]")
