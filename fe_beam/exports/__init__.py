@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fe_beam import outputs, runctl
+from fe_beam.outputs import figure
 
 __all__ = [
     "CSVExport",
@@ -236,19 +237,3 @@ class PlotExport(Export):
             summary = self.content()
         if summary is None or summary.get("status") not in UNFINISHED:
             self.draw(summary)
-
-
-@contextlib.contextmanager
-def figure(path: str | Path | None, *args, layout: bool = True, dpi: int = 130, **kwargs):
-    """``plt.subplots(*args, **kwargs)`` as (figure, axes); on leaving: ``tight_layout`` (with
-    ``layout``), saved to ``path`` (atomically; not when None) and closed."""
-    plt = outputs._pyplot()
-    drawn, axes = plt.subplots(*args, **kwargs)
-    try:
-        yield drawn, axes
-        if layout:
-            drawn.tight_layout()
-        if path is not None:
-            drawn.savefig(path, dpi=dpi)
-    finally:
-        plt.close(drawn)
