@@ -495,9 +495,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
-    status = exports.Exports([exports.SummaryExport(out / "summary.json")]
-                             if out is not None else [], comm)
-    status.start({"status": "running", "message": "", "scheme": config.time.scheme,
+    summary_file = exports.Exports([exports.SummaryExport(out / "summary.json")]
+                                   if out is not None else [], comm)
+    summary_file.start({"status": "running", "message": "", "scheme": config.time.scheme,
                    "notes": notes})
     try:
         solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
@@ -506,7 +506,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         stop.where = "the FD + Runge-Kutta integration"
         stop.written = ("no history (the scheme writes it at its end): only summary.json, status "
                         "interrupted, is")
-        status.finish({
+        summary_file.finish({
             "status": "interrupted", "history": [], "scheme": config.time.scheme,
             "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
             "Runge-Kutta integration (its history is written at its end)"})
@@ -538,7 +538,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         watch.observe(strains)
     result.notes, result.strain_range = notes + watch.notes(), watch.summary()
     runctl.warn(comm, watch.notes())
-    _write_dynamic(out, result, config, solution.wall_time, comm)
+    _write_dynamic(out, result, config, solution.wall_time, comm, config.static.output.plots)
     return result
 
 
@@ -557,7 +557,7 @@ def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: s
 
     result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
-    _write_dynamic(out, result, config, 0.0, comm)
+    _write_dynamic(out, result, config, 0.0, comm, plots=False)
     return result
 
 
@@ -616,11 +616,11 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
 
 
 def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfig, wall: float,
-                   comm) -> None:
+                   comm, plots: bool) -> None:
     """The files of a history computed in one go (the FD scheme): summary.json, history.csv
-    and the pictures."""
-    files = exports.Exports(_history_exports(out, config, draw=lambda _: _plot_dynamic(
-        out, result, [], config) if config.static.output.plots else None), comm)
+    and, with ``plots``, the pictures."""
+    draw = (lambda _: _plot_dynamic(out, result, [], config)) if plots else None
+    files = exports.Exports(_history_exports(out, config, draw=draw), comm)
     for record in result.history:
         files.on_step(record)
     files.finish(_dynamic_summary(result, config, wall))
