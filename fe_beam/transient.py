@@ -498,7 +498,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     summary_file = exports.Exports([exports.SummaryExport(out / "summary.json")]
                                    if out is not None else [], comm)
     summary_file.start({"status": "running", "message": "", "scheme": config.time.scheme,
-                   "notes": notes})
+                        "notes": notes})
     try:
         solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
                                   rtol=tolerance, atol=tolerance * 1e-3 * model.length)
