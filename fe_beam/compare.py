@@ -218,7 +218,7 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
 
     # the solid's sweep points are slow: every file is brought up to date after each
     files = exports.Exports(_exports(out, config, current) if out is not None else [], comm,
-                    throttle=False)
+                            throttle=False)
     try:
         run = SolidRun(solid, comm)
     except RuntimeError as error:
@@ -322,18 +322,18 @@ def _columns(first: dict | None, laws) -> list[exports.Column]:
     where the rod did not converge)."""
     count = len(first.get("tensions", [])) if first else 0
 
-    def rod(law, key):
-        return lambda r: r["rod"][law].get(key) or {}
+    def rod_tip(row: dict, law: str) -> dict:
+        return row["rod"][law].get("tip") or {}
 
     columns = [exports.Column("load_factor", lambda r: r["load_factor"]),
                *exports.indexed_columns("tension", count, lambda r: r["tensions"]),
                *exports.tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
     for law in laws:
         columns += [exports.Column(f"{law}_tip_{k}",
-                                   lambda r, law=law, k=k: rod(law, "tip")(r).get(k, ""))
+                                   lambda r, law=law, k=k: rod_tip(r, law).get(k, ""))
                     for k in ("u", "v", "theta")]
         columns.append(exports.Column(f"{law}_distance_over_L",
-                              lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
+                                      lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
     return columns
 
 
@@ -342,8 +342,8 @@ def _exports(out: Path, config: CompareConfig, content, every_step: bool = True)
     return [exports.SummaryExport(out / "summary.json", content),
             exports.CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
             exports.PlotExport(lambda summary: _plot(out, summary, config)
-                       if summary["table"] and config.solid.output.plots else None,
-                       content, every_step)]
+                               if summary["table"] and config.solid.output.plots else None,
+                               content, every_step)]
 
 
 def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:

@@ -324,13 +324,14 @@ def run_finger(
     }
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
     sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
-                        empty=False)] if out is not None else [])
+                                empty=False)] if out is not None else [])
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
                           record_shapes=out is not None, extra_exports=sweep)
+    # after the sweep: summary.json again (with the inverse solve) and the chapter's pictures
+    draw = (lambda _: plot_finger(out, result, config)) if config.output.plots else None
     after = exports.Exports([exports.SummaryExport(out / "summary.json"),
-                     exports.PlotExport(lambda _: plot_finger(out, result, config)
-                                if config.output.plots else None)]
-                    if out is not None and result.steps else [], comm)
+                             exports.PlotExport(draw) if draw else None]
+                            if out is not None and result.steps else [], comm)
     inverse = {}
     if isinstance(target, (int, float)):
         target = InverseTarget("tip_angle", float(target))
