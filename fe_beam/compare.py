@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import exports, runctl
 from fe_beam.model.compare import (  # noqa: F401  (their home; re-exported)
     COMPARE_KEYS,
     MEASURE,
@@ -40,7 +40,7 @@ from fe_beam.model.compare import (  # noqa: F401  (their home; re-exported)
     parse_compare,
     rod_at,
 )
-from fe_beam.outputs import _pyplot, atomic_write_json, write_csv
+from fe_beam.outputs import _pyplot
 from fe_beam.solid.rod import backbone_distance, run_rod
 from fe_beam.solid.run import SolidRun
 from fe_beam.solver import LoadSteppingFailed
@@ -102,22 +102,24 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
             "material": solid.material_name, "coefficients": law.coefficients(),
             "volumetric": law.volumetric}
 
-    def save() -> None:
+    def current() -> dict:
         summary["wall_time_s"] = time.perf_counter() - started
         summary["departures"] = _departures(summary["table"], config, scale)
-        if out is not None and root:
-            _write_outputs(out, summary, config)
+        return summary
 
+    # the solid's sweep points are slow: every file is brought up to date after each
+    files = exports.Exports(_exports(out, config, current) if out is not None else [], comm,
+                            throttle=False)
     try:
         run = SolidRun(solid, comm)
     except RuntimeError as error:
         summary |= {"status": "failed", "message": str(error)}
-        save()
+        files.finish(current())
         if out is not None:
             comm.barrier()
         return summary
     summary["dofs"] = run.dofs
-    save()  # status "running" from the start
+    files.start(current())  # status "running" from the start
     try:
         for factor in config.load_factors:
             last = {}
@@ -147,18 +149,17 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
                     }
                 row["rod"][law] = entry
             summary["table"].append(row)
-            save()
+            files.on_step(row)
         else:
             summary["status"] = "converged"
     except runctl.Interrupted as stop:
         last = summary["table"][-1]["load_factor"] if summary["table"] else 0.0
         summary |= stop.stopped(f"load factor {last:.4g} of the sweep",
                                 f"after load factor {last:.6g}")
-        save()
         raise
     finally:
         run.destroy()
-    save()
+        files.finish(current())  # pictures unless interrupted (then those of the last point)
     if out is not None:
         comm.barrier()  # the files are complete on return, whichever rank looks
     return summary
@@ -207,27 +208,41 @@ def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
             f"point above: {found['first_sweep_point_above']:.4g})")
 
 
+def _columns(first: dict | None, laws) -> list[exports.Column]:
+    """compare.csv: the sweep point, the solid's tip, each rod's tip and distance (empty cells
+    where the rod did not converge)."""
+    count = len(first.get("tensions", [])) if first else 0
+
+    def rod_tip(row: dict, law: str) -> dict:
+        return row["rod"][law].get("tip") or {}
+
+    columns = [exports.Column("load_factor", lambda r: r["load_factor"]),
+               *exports.indexed_columns("tension", count, lambda r: r["tensions"]),
+               *exports.tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
+    for law in laws:
+        columns += [exports.Column(f"{law}_tip_{k}",
+                                   lambda r, law=law, k=k: rod_tip(r, law).get(k, ""))
+                    for k in ("u", "v", "theta")]
+        columns.append(exports.Column(f"{law}_distance_over_L",
+                                      lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
+    return columns
+
+
+def _exports(out: Path, config: CompareConfig, content, every_step: bool = True) -> list:
+    """summary.json, compare.csv and the pictures (``every_step``: redrawn after each point)."""
+    return [exports.SummaryExport(out / "summary.json", content),
+            exports.CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
+            exports.PlotExport(lambda summary: _plot(out, summary, config)
+                               if summary["table"] and config.solid.output.plots else None,
+                               content, every_step)]
+
+
 def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
-    atomic_write_json(out / "summary.json", summary)
-    rows = summary["table"]
-    count = len(rows[0].get("tensions", [])) if rows else 0
-    header = ["load_factor", *[f"tension_{i}" for i in range(count)],
-              "solid_tip_u", "solid_tip_v", "solid_tip_theta"]
-    for law in config.laws:
-        header += [f"{law}_tip_u", f"{law}_tip_v", f"{law}_tip_theta", f"{law}_distance_over_L"]
-    table_rows = []
-    for row in rows:
-        line = [row["load_factor"], *row.get("tensions", [])]
-        line += [row["solid"]["tip"][k] for k in ("u", "v", "theta")]
-        for law in config.laws:
-            rod = row["rod"][law]
-            tip = rod.get("tip") or {}
-            line += [tip.get(k, "") for k in ("u", "v", "theta")]
-            line.append(rod.get("distance_over_L", ""))
-        table_rows.append(line)
-    write_csv(out / "compare.csv", header, table_rows)
-    if rows and config.solid.output.plots:
-        _plot(out, summary, config)
+    """The files of a finished sweep (``summary``) at once (on the calling rank)."""
+    files = exports.Exports(_exports(out, config, lambda: summary, every_step=False))
+    for row in summary["table"]:
+        files.on_step(row)
+    files.finish(summary)
 
 
 STYLES = {"solid": ("-", "3D solid"), "nonstandard": ("--", "rod, non-standard law"),
@@ -251,57 +266,51 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                    for r in rows]
     length = config.solid.length
 
-    figure, axis = plt.subplots(figsize=(9, 5))
-    colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
-    axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
-    for row, value, colour in zip(rows, axis_values, colours, strict=True):
-        models = [("solid", row["solid"].get("backbone"))]
-        models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
-        for name, backbone in models:
-            if backbone is None:
-                continue
-            style, text = STYLES[name]
-            axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
-                      lw=1.6, label=f"{text}, {sweep_label(value, bool(tensions))}")
-    axis.set_xlabel("x + u [m]")
-    axis.set_ylabel("y + v [m]")
-    axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
-    axis.grid(alpha=0.3)
-    axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    figure.tight_layout()
-    figure.savefig(out / "backbones.png", dpi=130)
-    plt.close(figure)
+    with exports.figure(out / "backbones.png", figsize=(9, 5)) as (_, axis):
+        colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
+        axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
+        for row, value, colour in zip(rows, axis_values, colours, strict=True):
+            models = [("solid", row["solid"].get("backbone"))]
+            models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
+            for name, backbone in models:
+                if backbone is None:
+                    continue
+                style, text = STYLES[name]
+                axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
+                          lw=1.6, label=f"{text}, {sweep_label(value, bool(tensions))}")
+        axis.set_xlabel("x + u [m]")
+        axis.set_ylabel("y + v [m]")
+        axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
-    figure, axes = plt.subplots(1, 4, figsize=(15, 3.6))
-    names = [("solid", None)] + [(law, law) for law in config.laws]
-    for axis, key, unit in zip(axes[:3], ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
-        for name, law in names:
-            style, text = STYLES[name]
-            points = [
-                (value, (row["solid"] if law is None else row["rod"][law]).get("tip"))
-                for row, value in zip(rows, axis_values, strict=True)
-            ]
-            xs = [p for p, tip in points if tip]
-            ys = [tip[key] for _, tip in points if tip]
-            axis.plot(xs, ys, style, marker="o", ms=3, color=COLOURS[name], label=text)
+    with exports.figure(out / "tip_vs_tension.png", 1, 4, figsize=(15, 3.6)) as (_, axes):
+        names = [("solid", None)] + [(law, law) for law in config.laws]
+        for axis, key, unit in zip(axes[:3], ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+            for name, law in names:
+                style, text = STYLES[name]
+                points = [
+                    (value, (row["solid"] if law is None else row["rod"][law]).get("tip"))
+                    for row, value in zip(rows, axis_values, strict=True)
+                ]
+                xs = [p for p, tip in points if tip]
+                ys = [tip[key] for _, tip in points if tip]
+                axis.plot(xs, ys, style, marker="o", ms=3, color=COLOURS[name], label=text)
+            axis.set_xlabel(label)
+            axis.set_ylabel(f"tip {key} [{unit}]")
+            axis.grid(alpha=0.3)
+            axis.legend(fontsize=7)
+        axis = axes[3]
+        for law in config.laws:
+            style, text = STYLES[law]
+            pairs = [(v, r["rod"][law].get("distance_over_L")) for r, v in zip(rows, axis_values,
+                                                                                 strict=True)]
+            axis.plot([v for v, d in pairs if d is not None],
+                      [100 * d for _, d in pairs if d is not None], style, marker="o", ms=3,
+                      color=COLOURS[law], label=text)
+        for threshold in THRESHOLDS:
+            axis.axhline(100 * threshold, color="0.6", lw=0.8)
         axis.set_xlabel(label)
-        axis.set_ylabel(f"tip {key} [{unit}]")
+        axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
-    axis = axes[3]
-    for law in config.laws:
-        style, text = STYLES[law]
-        pairs = [(v, r["rod"][law].get("distance_over_L")) for r, v in zip(rows, axis_values,
-                                                                             strict=True)]
-        axis.plot([v for v, d in pairs if d is not None],
-                  [100 * d for _, d in pairs if d is not None], style, marker="o", ms=3,
-                  color=COLOURS[law], label=text)
-    for threshold in THRESHOLDS:
-        axis.axhline(100 * threshold, color="0.6", lw=0.8)
-    axis.set_xlabel(label)
-    axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
-    axis.grid(alpha=0.3)
-    axis.legend(fontsize=7)
-    figure.tight_layout()
-    figure.savefig(out / "tip_vs_tension.png", dpi=130)
-    plt.close(figure)

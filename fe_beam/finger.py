@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import exports, runctl
 from fe_beam.config import (
     ConfigError,
     StaticConfig,
@@ -32,7 +32,7 @@ from fe_beam.model.finger import (  # noqa: F401  (their home; re-exported)
     parse_tendon,
     with_defaults,
 )
-from fe_beam.outputs import _pyplot, atomic_write_json, virtual_display, write_csv
+from fe_beam.outputs import atomic_write_json, virtual_display
 from fe_beam.solver import LoadSteppingFailed
 from fe_beam.static import StaticResult, solve_static
 from fe_beam.tendons import tension_for_target
@@ -187,15 +187,15 @@ def run_finger(
         ]
     }
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
-    sweep = []
-    try:
-        result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
-                              record_shapes=out is not None,
-                              on_step=lambda problem, entry: sweep.append(entry))
-    except runctl.Interrupted:
-        if out is not None and comm.rank == 0 and sweep:
-            write_sweep(out, StaticResult(steps=sweep))  # the converged part of the sweep
-        raise
+    sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
+                                empty=False)] if out is not None else [])
+    result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
+                          record_shapes=out is not None, extra_exports=sweep)
+    # after the sweep: summary.json again (with the inverse solve) and the chapter's pictures
+    draw = (lambda _: plot_finger(out, result, config)) if config.output.plots else None
+    after = exports.Exports([exports.SummaryExport(out / "summary.json"),
+                             exports.PlotExport(draw) if draw else None]
+                            if out is not None and result.steps else [], comm)
     inverse = {}
     if isinstance(target, (int, float)):
         target = InverseTarget("tip_angle", float(target))
@@ -203,99 +203,74 @@ def run_finger(
         try:
             inverse = solve_inverse(config, target, comm, sweep=result.steps)
         except runctl.Interrupted as stop:
-            status = stop.stopped("the inverse solve (the sweep is complete)",
-                                  "during the inverse solve")
-            if out is not None and comm.rank == 0:
-                atomic_write_json(out / "summary.json", result.summary(extra | status))
-                write_sweep(out, result)
+            after.finish(result.summary(extra | stop.stopped(
+                "the inverse solve (the sweep is complete)", "during the inverse solve")))
             raise
-    if out is not None and comm.rank == 0 and result.steps:
-        if inverse:
-            atomic_write_json(out / "summary.json", result.summary(extra | {"inverse": inverse}))
-        write_sweep(out, result)
-        if config.output.plots:
-            plot_finger(out, result, config)
+    after.finish(result.summary(extra | ({"inverse": inverse} if inverse else {})))
     return result, inverse
 
 
-def write_sweep(out: Path, result: StaticResult) -> None:
-    header, rows = ["load_factor"], []
-    count = len(result.steps[0]["tensions"])
-    header += [f"tension_{i}" for i in range(count)] + [f"pull_in_{i}" for i in range(count)]
-    header += ["tip_u", "tip_v", "tip_theta"]
-    for step in result.steps:
-        rows.append(
-            [
-                step["load_factor"],
-                *step["tensions"],
-                *step["pull_ins"],
-                step["tip"]["u"],
-                step["tip"]["v"],
-                step["tip"]["theta"],
-            ]
-        )
-    write_csv(out / "tension_sweep.csv", header, rows)
+def sweep_columns(tendons: int) -> list[exports.Column]:
+    """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip."""
+    return [exports.Column("load_factor", lambda s: s["load_factor"]),
+            *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),
+            *exports.tip_columns()]
 
 
 def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     """The chapter's Figures 3.8 (profiles along s) and 3.9 (backbone), and tension curves."""
-    plt = _pyplot()
-    final = result.shapes[-1][1]
-    cells = final["cells"]
-    figure, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
-    zero = np.zeros_like(cells["x"])
-    panels = [
-        ("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
-        ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
-        ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
-        ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)"),
-    ]
-    for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
-        axis.plot(cells["x"], values, lw=1.8)
-        axis.set_title(title, fontsize=9)
-        axis.set_ylabel(label)
-        axis.grid(alpha=0.3)
-    for axis in axes[1]:
-        axis.set_xlabel("s [m]")
-    tension = result.steps[-1]["tensions"]
-    figure.suptitle(
-        f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
-        " N (cf. chapter Fig. 3.8)"
-    )
-    figure.tight_layout()
-    figure.savefig(out / "fig3_8_profiles.png", dpi=130)
-    plt.close(figure)
-
-    figure, axis = plt.subplots(figsize=(6, 5))
-    every = max(1, len(result.shapes) // 8)
-    for (_, shape), step in list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]:
-        axis.plot(shape["x"] + shape["u"], shape["v"], label=f"tension {step['tensions'][0]:.3g} N")
-    axis.set_aspect("equal", adjustable="datalim")
-    axis.set_xlabel("x [m]")
-    axis.set_ylabel("y [m]")
-    axis.set_title("Backbone in the XY plane (cf. chapter Fig. 3.9a)")
-    axis.grid(alpha=0.3)
     from fe_beam.plotting import legend_inside
 
-    legend_inside(axis, fontsize=7)
-    figure.savefig(out / "fig3_9_backbone.png", dpi=130)
-    plt.close(figure)
+    final = result.shapes[-1][1]
+    cells = final["cells"]
+    profiles = out / "fig3_8_profiles.png"
+    with exports.figure(profiles, 2, 2, figsize=(9, 6), sharex=True) as (drawn, axes):
+        zero = np.zeros_like(cells["x"])
+        panels = [
+            ("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
+            ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
+            ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
+            ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)"),
+        ]
+        for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
+            axis.plot(cells["x"], values, lw=1.8)
+            axis.set_title(title, fontsize=9)
+            axis.set_ylabel(label)
+            axis.grid(alpha=0.3)
+        for axis in axes[1]:
+            axis.set_xlabel("s [m]")
+        tension = result.steps[-1]["tensions"]
+        drawn.suptitle(
+            f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
+            " N (cf. chapter Fig. 3.8)"
+        )
+
+    with exports.figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
+        every = max(1, len(result.shapes) // 8)
+        shapes = list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]
+        for (_, shape), step in shapes:
+            axis.plot(shape["x"] + shape["u"], shape["v"],
+                      label=f"tension {step['tensions'][0]:.3g} N")
+        axis.set_aspect("equal", adjustable="datalim")
+        axis.set_xlabel("x [m]")
+        axis.set_ylabel("y [m]")
+        axis.set_title("Backbone in the XY plane (cf. chapter Fig. 3.9a)")
+        axis.grid(alpha=0.3)
+        legend_inside(axis, fontsize=7)
 
     tensions = [s["tensions"][0] for s in result.steps]
-    figure, (left, right) = plt.subplots(1, 2, figsize=(9, 3.6))
-    left.plot(tensions, [s["tip"]["theta"] for s in result.steps], "o-", ms=3)
-    left.set_xlabel("tension [N]")
-    left.set_ylabel("tip angle [rad]")
-    right.plot(tensions, [s["tip"]["u"] for s in result.steps], "o-", ms=3, label="tip u")
-    right.plot(tensions, [s["tip"]["v"] for s in result.steps], "s-", ms=3, label="tip v")
-    right.set_xlabel("tension [N]")
-    right.set_ylabel("tip displacement [m]")
-    right.legend()
-    for axis in (left, right):
-        axis.grid(alpha=0.3)
-    figure.tight_layout()
-    figure.savefig(out / "tension_tip.png", dpi=130)
-    plt.close(figure)
+    with exports.figure(out / "tension_tip.png", 1, 2, figsize=(9, 3.6)) as (_, (left, right)):
+        left.plot(tensions, [s["tip"]["theta"] for s in result.steps], "o-", ms=3)
+        left.set_xlabel("tension [N]")
+        left.set_ylabel("tip angle [rad]")
+        right.plot(tensions, [s["tip"]["u"] for s in result.steps], "o-", ms=3, label="tip u")
+        right.plot(tensions, [s["tip"]["v"] for s in result.steps], "s-", ms=3, label="tip v")
+        right.set_xlabel("tension [N]")
+        right.set_ylabel("tip displacement [m]")
+        right.legend()
+        for axis in (left, right):
+            axis.grid(alpha=0.3)
     reason = render_3d_skipped(out / "finger_3d.png", final, config)
     if reason is not None:
         note_skipped_picture(out, f"finger_3d.png was not made: {reason}")

@@ -37,10 +37,10 @@ from fe_beam import compat, runctl
 __all__ = [
     "AppendCSV",
     "BeamXDMFWriter",
-    "RunOutput",
     "XDMFSeries",
     "atomic_write_json",
     "atomic_write_text",
+    "figure",
     "gather_line",
     "plot_deformed_shapes",
     "plot_load_displacement",
@@ -166,50 +166,6 @@ class AppendCSV:
 
     def close(self) -> None:
         self._file.close()
-
-
-class RunOutput:
-    """The files of a stepping run that grow with it: summary.json, a CSV history and (given
-    to `step`) an XDMF writer, brought up to date together, so that after an interruption at any
-    moment they hold the same steps (up to the one being written).
-
-    Rows and XDMF steps are appended (O(1) per step, buffered in between); summary.json,
-    whose ``steps``/``history`` grows, is rewritten whole, so the files are brought up to date
-    together at most once a second and at a bounded share of the wall time
-    (`fe_beam.runctl.Throttle`; the first step at once), and always by `finish`. Text files
-    are written by rank 0 only; ``writer.write(t, flush=...)`` is collective.
-    """
-
-    def __init__(self, out: Path | None, csv_name: str, header: list[str], comm):
-        self.root = comm.rank == 0
-        self.active = out is not None and self.root
-        self.summary_path = None if out is None else Path(out) / "summary.json"
-        self.table = AppendCSV(Path(out) / csv_name, header) if self.active else None
-        self._throttle = runctl.Throttle()
-
-    def write_summary(self, summary) -> None:
-        if self.active:
-            atomic_write_json(self.summary_path, summary() if callable(summary) else summary)
-
-    def step(self, rows: list[list], summary, writer=None, t: float = 0.0) -> None:
-        """Record one step: its CSV ``rows``, ``summary`` (a dict or a function returning one)
-        and, with ``writer``, its fields at time ``t`` (collective)."""
-        due = self._throttle.due() if self.root else False
-        with self._throttle.timing() if due else contextlib.nullcontext():
-            if writer is not None:
-                writer.write(t, flush=due)
-            if self.active:
-                self.table.add(rows, flush=due)
-                if due:
-                    self.write_summary(summary)
-
-    def finish(self, summary, writer=None) -> None:
-        """Close the writer (collective) and write everything, with the final ``summary``."""
-        if writer is not None:
-            writer.close()
-        if self.active:
-            self.table.close()
-            self.write_summary(summary)
 
 
 _XDMF_TOPOLOGY = {("interval", 2): "Polyline", ("interval", 3): "Edge_3",
@@ -543,6 +499,22 @@ def _atomic_savefig(savefig):
     return save
 
 
+@contextlib.contextmanager
+def figure(path: str | Path | None, *args, layout: bool = True, dpi: int = 130, **kwargs):
+    """``plt.subplots(*args, **kwargs)`` as (figure, axes); on leaving: ``tight_layout`` (with
+    ``layout``), saved to ``path`` (atomically; not when None) and closed."""
+    plt = _pyplot()
+    drawn, axes = plt.subplots(*args, **kwargs)
+    try:
+        yield drawn, axes
+        if layout:
+            drawn.tight_layout()
+        if path is not None:
+            drawn.savefig(path, dpi=dpi)
+    finally:
+        plt.close(drawn)
+
+
 def plot_deformed_shapes(
     shapes: list[tuple[str, dict]],
     path: str | Path,
@@ -551,37 +523,30 @@ def plot_deformed_shapes(
     reference: list[tuple[str, float, float]] = (),
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points."""
-    plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(7, 5))
-    colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
-    axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
-    for (label, shape), colour in zip(shapes, colours, strict=False):
-        axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
-    for i, (label, x, y) in enumerate(reference):
-        axes.plot(x, y, "kx", ms=7, label=label if i == 0 else None)
-    # true shape (equal scales) in an axes that keeps its size: the legend fits inside it
-    axes.set_aspect("equal", adjustable="datalim")
-    axes.set_xlabel("x + u [m]")
-    axes.set_ylabel("y + v [m]")
-    axes.set_title(title)
-    axes.grid(alpha=0.3)
     from fe_beam.plotting import legend_inside
 
-    legend_inside(axes, fontsize=7)
-    figure.savefig(path, dpi=130)
-    plt.close(figure)
+    with figure(path, figsize=(7, 5), layout=False) as (_, axes):
+        colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
+        axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+        for (label, shape), colour in zip(shapes, colours, strict=False):
+            axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
+        for i, (label, x, y) in enumerate(reference):
+            axes.plot(x, y, "kx", ms=7, label=label if i == 0 else None)
+        # true shape (equal scales) in an axes that keeps its size: the legend fits inside it
+        axes.set_aspect("equal", adjustable="datalim")
+        axes.set_xlabel("x + u [m]")
+        axes.set_ylabel("y + v [m]")
+        axes.set_title(title)
+        axes.grid(alpha=0.3)
+        legend_inside(axes, fontsize=7)
 
 
 def plot_load_displacement(load_factors, tips: dict, path: str | Path, title: str) -> None:
-    plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(6, 4))
-    for name, values in tips.items():
-        axes.plot(load_factors, values, marker="o", ms=3, label=name)
-    axes.set_xlabel("load factor")
-    axes.set_ylabel("tip value [m] / [rad]")
-    axes.set_title(title)
-    axes.grid(alpha=0.3)
-    axes.legend()
-    figure.tight_layout()
-    figure.savefig(path, dpi=130)
-    plt.close(figure)
+    with figure(path, figsize=(6, 4)) as (_, axes):
+        for name, values in tips.items():
+            axes.plot(load_factors, values, marker="o", ms=3, label=name)
+        axes.set_xlabel("load factor")
+        axes.set_ylabel("tip value [m] / [rad]")
+        axes.set_title(title)
+        axes.grid(alpha=0.3)
+        axes.legend()

@@ -475,12 +475,15 @@ def run_refinement(
 ) -> dict:
     """Solve every level (coarse to fine), writing the outputs after each; stops at the first
     level that does not converge. Returns the summary (see `study_summary`)."""
+    from fe_beam.exports import Exports
     from fe_beam.progress import ProgressBar
 
     solve = _solve_solid if plan.kind == "solid" else _solve_rod
     bar = ProgressBar(comm, total=plan.levels, label="refine", enabled=progress, unit="level")
     records: list[dict] = []
     summary = study_summary(plan, records, config_path)
+    files = Exports(_exports(out, lambda: summary) if out is not None else [], comm,
+                    throttle=False)
     try:
         for level in range(plan.levels):
             size = plan.size(level)
@@ -489,8 +492,7 @@ def run_refinement(
             record = _level_record(plan, level, solve(plan, level, comm))
             records.append(record)
             summary = study_summary(plan, records, config_path)
-            if out is not None and comm.rank == 0:
-                write_outputs(out, summary, plot=False)
+            files.on_step(record)
             bar.update(level + 1, f"level {level}: {record['wall_time_s']:.2f} s")
             if getattr(bar, "_bar", None) is not None:
                 bar.note(_level_line(record, plan))  # above the bar, not through it
@@ -501,13 +503,10 @@ def run_refinement(
     except runctl.Interrupted as stop:
         summary = study_summary(plan, records, config_path) | stop.stopped(
             f"level {len(records)} of the refinement study", f"during level {len(records)}")
-        if out is not None and comm.rank == 0:
-            write_outputs(out, summary, plot=False)
         raise
     finally:
         bar.close()
-    if out is not None and comm.rank == 0:
-        write_outputs(out, summary, plot=True)
+        files.finish(summary)  # the picture once the study has finished
     return summary
 
 
@@ -553,97 +552,96 @@ def csv_rows(summary: dict) -> tuple[list[str], list[list]]:
     return header, rows
 
 
-def write_outputs(out: Path, summary: dict, plot: bool = True) -> None:
-    """refinement.json, refinement.csv (atomic) and, with ``plot``, refinement.png."""
-    from fe_beam.outputs import atomic_write_json, write_csv
+def _exports(out: Path, content, plot: bool = True) -> list:
+    """refinement.json, refinement.csv (rewritten whole: the analysis of earlier levels changes
+    with each new one) and, with ``plot``, refinement.png once the study has finished."""
+    from fe_beam.exports import PlotExport, SummaryExport, TableExport
 
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_json(out / "refinement.json", summary)
-    write_csv(out / "refinement.csv", *csv_rows(summary))
-    if plot and any(r["values"] for r in summary["levels"]):
+    return [SummaryExport(out / "refinement.json", content),
+            TableExport(out / "refinement.csv", csv_rows, content),
+            PlotExport(lambda summary: _draw(out, summary)) if plot else None]
+
+
+def _draw(out: Path, summary: dict) -> None:
+    if any(r["values"] for r in summary["levels"]):
         plot_convergence(summary, out / "refinement.png")
+
+
+def write_outputs(out: Path, summary: dict, plot: bool = True) -> None:
+    """refinement.json, refinement.csv (atomic) and, with ``plot``, refinement.png."""
+    from fe_beam.exports import Exports
+
+    Exports(_exports(out, lambda: summary, plot=False)).finish(summary)
+    if plot:
+        _draw(Path(out), summary)
 
 
 def plot_convergence(summary: dict, path: Path) -> None:
     """Log-log |q_k - q*| (q* the finest extrapolation) and |d_k| against h, one panel per
     quantity, with a line of the observed slope through the finest point."""
-    import os
-    import tempfile
-
-    from fe_beam.outputs import _pyplot
-
-    plt = _pyplot()
+    from fe_beam.exports import figure
 
     quantities = summary["quantities"]
     done = [r for r in summary["levels"] if r["values"]]
     h = [r["h"] for r in done]
-    figure, axes = plt.subplots(
-        1, len(quantities), figsize=(4.6 * len(quantities), 4.0), squeeze=False
-    )
-    for axis, quantity in zip(axes[0], quantities, strict=True):
-        result = summary["analysis"][quantity]
-        rows = result["levels"]
-        unit = UNITS[quantity]
-        best, order = result["extrapolated"], result["order"]
-        drawn, errors = False, []
-        if best is not None and order is not None:
-            errors = [(hk, abs(r["value"] - best)) for hk, r in zip(h, rows, strict=True)]
-            errors = [(x, y) for x, y in errors if y > 0]
-            if errors:
-                axis.loglog(*zip(*errors, strict=True), "o-", label="|q - q extrapolated|")
+    size = (4.6 * len(quantities), 4.0)
+    with figure(path, 1, len(quantities), figsize=size, squeeze=False) as (fig, axes):
+        for axis, quantity in zip(axes[0], quantities, strict=True):
+            result = summary["analysis"][quantity]
+            rows = result["levels"]
+            unit = UNITS[quantity]
+            best, order = result["extrapolated"], result["order"]
+            drawn, errors = False, []
+            if best is not None and order is not None:
+                errors = [(hk, abs(r["value"] - best)) for hk, r in zip(h, rows, strict=True)]
+                errors = [(x, y) for x, y in errors if y > 0]
+                if errors:
+                    axis.loglog(*zip(*errors, strict=True), "o-", label="|q - q extrapolated|")
+                    drawn = True
+            differences = [
+                (hk, abs(r["difference"]))
+                for hk, r in zip(h, rows, strict=True)
+                if r["difference"] is not None and r["difference"] != 0
+            ]
+            if differences:
+                axis.loglog(
+                    *zip(*differences, strict=True), "s--", mfc="none",
+                    label="|q_k - q_(k-1)| at h_k",
+                )
                 drawn = True
-        differences = [
-            (hk, abs(r["difference"]))
-            for hk, r in zip(h, rows, strict=True)
-            if r["difference"] is not None and r["difference"] != 0
-        ]
-        if differences:
-            axis.loglog(
-                *zip(*differences, strict=True), "s--", mfc="none", label="|q_k - q_(k-1)| at h_k"
-            )
-            drawn = True
-        shown = order if order is not None else table_order(result)[0]
-        if shown is not None and drawn:
-            order = shown
-            anchor_h, anchor = errors[-1] if errors else differences[-1]
-            xs = [h[0], h[-1]]
-            axis.loglog(  # offset below the data so that neither hides the other
-                xs,
-                [0.3 * anchor * (x / anchor_h) ** order for x in xs],
-                "k:",
-                lw=1,
-                label=f"slope {order:.2f} (observed order)",
-            )
-        if not drawn:
-            axis.text(
-                0.5,
-                0.5,
-                "differences at round-off:\nnothing to plot",
-                ha="center",
-                va="center",
-                transform=axis.transAxes,
-            )
-        axis.set_title(f"{quantity} [{unit}]\n{table_order(result)[1]}", fontsize=10)
-        axis.set_xlabel("element size h [m]")
-        axis.set_ylabel(f"error estimate [{unit}]")
-        axis.grid(alpha=0.3, which="both")
-        if drawn:
-            _log_ticks(axis, h)
-        if drawn:
-            axis.legend(fontsize=7)
-    figure.suptitle(
-        f"mesh refinement ({summary['refined']}, ratio {summary['ratio']:g})", fontsize=10
-    )
-    figure.tight_layout()
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".png")
-    os.close(handle)
-    try:
-        figure.savefig(temporary, dpi=130)
-        os.replace(temporary, path)
-    finally:
-        plt.close(figure)
-        Path(temporary).unlink(missing_ok=True)
+            shown = order if order is not None else table_order(result)[0]
+            if shown is not None and drawn:
+                order = shown
+                anchor_h, anchor = errors[-1] if errors else differences[-1]
+                xs = [h[0], h[-1]]
+                axis.loglog(  # offset below the data so that neither hides the other
+                    xs,
+                    [0.3 * anchor * (x / anchor_h) ** order for x in xs],
+                    "k:",
+                    lw=1,
+                    label=f"slope {order:.2f} (observed order)",
+                )
+            if not drawn:
+                axis.text(
+                    0.5,
+                    0.5,
+                    "differences at round-off:\nnothing to plot",
+                    ha="center",
+                    va="center",
+                    transform=axis.transAxes,
+                )
+            axis.set_title(f"{quantity} [{unit}]\n{table_order(result)[1]}", fontsize=10)
+            axis.set_xlabel("element size h [m]")
+            axis.set_ylabel(f"error estimate [{unit}]")
+            axis.grid(alpha=0.3, which="both")
+            if drawn:
+                _log_ticks(axis, h)
+            if drawn:
+                axis.legend(fontsize=7)
+        fig.suptitle(
+            f"mesh refinement ({summary['refined']}, ratio {summary['ratio']:g})", fontsize=10
+        )
 
 
 def table_order(result: dict) -> tuple[float | None, str]:

@@ -163,7 +163,7 @@ def check(comm, where: str = "") -> None:
 # --- cost-bounded rewriting --------------------------------------------------------------------
 class Throttle:
     """When to bring files that grow with the run up to date (summary.json, whose step list
-    grows, and with it the CSV and XDMF appends, see `fe_beam.outputs.RunOutput`): the first
+    grows, and with it the CSV and XDMF appends, see `fe_beam.exports.Exports`): the first
     time at once, then at most every ``min_interval`` seconds, and never spending more than
     ``share`` of the wall time on it (a write that took c seconds waits c / share). The work
     per step is O(1) (appends are buffered); whole-file rewrites happen a bounded number of

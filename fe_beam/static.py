@@ -11,15 +11,10 @@ import scipy.linalg
 import scipy.sparse
 from mpi4py import MPI
 
-from fe_beam import compat, runctl
+from fe_beam import compat, exports, runctl
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import StaticConfig
-from fe_beam.outputs import (
-    BeamXDMFWriter,
-    RunOutput,
-    plot_deformed_shapes,
-    plot_load_displacement,
-)
+from fe_beam.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.solver import (
     LoadSteppingFailed,
     NonlinearProblem,
@@ -216,6 +211,7 @@ def solve_static(
     extra_summary: dict | None = None,
     on_step=None,
     record_shapes: bool = True,
+    extra_exports: list | None = None,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
@@ -230,7 +226,8 @@ def solve_static(
     updated as steps converge, at O(1) cost per step (rows and steps are appended; summary.json
     is rewritten at a bounded share of the wall time). On failure the last converged state is
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
-    it is written with status "interrupted" and the exception is re-raised.
+    it is written with status "interrupted" and the exception is re-raised. ``extra_exports``: more
+    `fe_beam.exports.Export` objects fed with the step records (e.g. the finger's sweep table).
 
     The problem and solver come from `fe_beam.realtime.acquire`: a second solve of the same
     kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
@@ -249,10 +246,16 @@ def solve_static(
     extra = {"model": _model_summary(config)} | (extra_summary or {})
     if notes:
         extra["notes"] = list(extra.get("notes", [])) + notes
-    files = RunOutput(out, "load_displacement.csv", CSV_HEADER, comm)
-    files.write_summary(result.summary(extra))  # status "running" from the start
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
+    states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
+    files = exports.Exports(states + ([
+        exports.CSVExport(out / "load_displacement.csv", CSV_COLUMNS),
+        exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
+        exports.PlotExport(lambda _: _write_plots(out, result, config)
+                           if config.output.plots and result.shapes else None),
+    ] + list(extra_exports or []) if writing else []), comm)
+    files.start(result.summary(extra))  # status "running" from the start
 
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
@@ -266,7 +269,7 @@ def solve_static(
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
-        files.step([_csv_row(entry)], lambda: result.summary(extra), writer, step.load_factor)
+        files.on_step(entry)
         if writer is not None and record_shapes:
             shape = writer.vertex_values(update=False)
             if root:
@@ -290,10 +293,7 @@ def solve_static(
         result.notes = run.watch.notes()
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
-        files.finish(result.summary(extra), writer)
-    if writing and root:
-        if config.output.plots and result.shapes:
-            _write_plots(out, result, config)
+        files.finish(result.summary(extra))  # pictures unless interrupted
     return result
 
 
@@ -350,12 +350,10 @@ def _model_summary(config: StaticConfig) -> dict:
     } | law
 
 
-CSV_HEADER = ["load_factor", "tip_u", "tip_v", "tip_theta", "newton_iterations"]
-
-
-def _csv_row(s: dict) -> list:
-    return [s["load_factor"], s["tip"]["u"], s["tip"]["v"], s["tip"]["theta"],
-            s["newton_iterations"]]
+# load_displacement.csv
+CSV_COLUMNS = [exports.Column("load_factor", lambda s: s["load_factor"]), *exports.tip_columns(),
+               exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
+CSV_HEADER = [c.name for c in CSV_COLUMNS]
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import compat, runctl
+from fe_beam import compat, exports, runctl
 from fe_beam.beam import BeamProblem, StrainRange, StrainWatch
 from fe_beam.config import ConfigError, StaticConfig
 from fe_beam.dynamics import DynamicsFailed, GeneralizedAlpha
@@ -48,13 +48,7 @@ from fe_beam.model.transient import (  # noqa: F401  (their home; re-exported)
     parse_dynamic,
     parse_modes,
 )
-from fe_beam.outputs import (
-    BeamXDMFWriter,
-    RunOutput,
-    _pyplot,
-    atomic_write_json,
-    write_csv,
-)
+from fe_beam.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.solver import (
     LoadSteppingFailed,
 )
@@ -163,7 +157,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         notes += check_beam_work(config.static, config.static.stepping.steps, comm,
                                  " of load stepping (static pre-state)", quiet=out is None)
     problem, tendons = _tendon_problem(config.static, comm)
-    header = _history_header(len(config.static.tendons))
+    xdmf = out / "beam.xdmf" if out is not None and config.static.output.xdmf else None
     watch = StrainWatch()
     if config.from_static:
         try:
@@ -178,13 +172,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                    dofs=problem.global_dofs, notes=notes + watch.notes(),
                                    strain_range=watch.summary())
             prestate = _prestate_record(problem, failure)
-            files = RunOutput(out, "history.csv", header, comm)
-            writer = BeamXDMFWriter(problem, out / "beam.xdmf"
-                                    if out is not None and config.static.output.xdmf else None)
+            writer = BeamXDMFWriter(problem, xdmf)
+            files = exports.Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
             summary = _dynamic_summary(result, config, result.info["wall_time_s"])
-            files.finish(summary | {"prestate": prestate}, writer)
+            files.finish(summary | {"prestate": prestate})
             return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
@@ -205,11 +198,14 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    files = RunOutput(out, "history.csv", header, comm)
-    files.write_summary(_dynamic_summary(result, config, 0.0))  # status "running"
-    xdmf = out / "beam.xdmf" if writing and config.static.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf)
     shapes = []
+    files = exports.Exports(_history_exports(
+        out, config, writer,
+        lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+        lambda _: _plot_dynamic(out, result, shapes, config)
+        if config.static.output.plots and result.history else None), comm)
+    files.start(_dynamic_summary(result, config, 0.0))  # status "running"
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
@@ -223,9 +219,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                              "pull_ins": pull_ins.tolist()}
             _note_pushing_tendons(tendons, tensions, t, notes, comm)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
-        files.step([_history_row(result.history[-1])],
-                   lambda: _dynamic_summary(result, config, time.perf_counter() - started),
-                   writer, t)
+        files.on_step(result.history[-1])
         if config.static.output.plots:
             shape = writer.vertex_values(update=False)
             if root:
@@ -247,10 +241,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         integrator.solver.destroy()
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
-        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]), writer)
-    if writing and root:
-        if config.static.output.plots and result.history:
-            _plot_dynamic(out, result, shapes, config)
+        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]))
     return result
 
 
@@ -297,9 +288,10 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
     method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
     tolerance = min(config.time.tol, 1e-6)
-    if out is not None and comm.rank == 0:
-        atomic_write_json(out / "summary.json", {"status": "running", "message": "",
-                                                 "scheme": config.time.scheme, "notes": notes})
+    summary_file = exports.Exports([exports.SummaryExport(out / "summary.json")]
+                                   if out is not None else [], comm)
+    summary_file.start({"status": "running", "message": "", "scheme": config.time.scheme,
+                        "notes": notes})
     try:
         solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
                                   rtol=tolerance, atol=tolerance * 1e-3 * model.length)
@@ -307,11 +299,10 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         stop.where = "the FD + Runge-Kutta integration"
         stop.written = ("no history (the scheme writes it at its end): only summary.json, status "
                         "interrupted, is")
-        if out is not None and comm.rank == 0:
-            atomic_write_json(out / "summary.json", {
-                "status": "interrupted", "history": [], "scheme": config.time.scheme,
-                "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
-                "Runge-Kutta integration (its history is written at its end)"})
+        summary_file.finish({
+            "status": "interrupted", "history": [], "scheme": config.time.scheme,
+            "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
+            "Runge-Kutta integration (its history is written at its end)"})
         raise
     history = [{"t": float(t), "tip": {"u": float(u), "v": float(v), "theta": float(th)},
                 "energies": {"kinetic": float(kin), "strain": float(strain),
@@ -340,11 +331,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         watch.observe(strains)
     result.notes, result.strain_range = notes + watch.notes(), watch.summary()
     runctl.warn(comm, watch.notes())
-    if out is not None and comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-        _write_dynamic(out, result, config, solution.wall_time)
-        if config.static.output.plots:
-            _plot_dynamic(out, result, [], config)
+    _write_dynamic(out, result, config, solution.wall_time, comm, config.static.output.plots)
     return result
 
 
@@ -363,9 +350,7 @@ def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: s
 
     result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
-    if out is not None and comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-        _write_dynamic(out, result, config, 0.0)
+    _write_dynamic(out, result, config, 0.0, comm, plots=False)
     return result
 
 
@@ -384,22 +369,31 @@ def _interruptible(load_time, comm, every: int = 200):
     return checked
 
 
-HISTORY_HEADER = ["t", "tip_u", "tip_v", "tip_theta", "kinetic", "strain", "external_work",
-                  "dissipated"]
+ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def _history_header(tendons: int) -> list[str]:
-    """HISTORY_HEADER, then tension_i and pull_in_i of each tendon."""
-    return HISTORY_HEADER + [f"tension_{i}" for i in range(tendons)] + [
-        f"pull_in_{i}" for i in range(tendons)]
+def history_columns(tendons: int) -> list[exports.Column]:
+    """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
+    return [exports.Column("t", lambda h: h["t"]), *exports.tip_columns(),
+            *(exports.Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            *exports.indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
 
 
-def _history_row(h: dict) -> list:
-    row = [h["t"], h["tip"]["u"], h["tip"]["v"], h["tip"]["theta"],
-           *(h["energies"][k] for k in ("kinetic", "strain", "external_work", "dissipated"))]
-    if "tendons" in h:
-        row += h["tendons"]["tensions"] + h["tendons"]["pull_ins"]
-    return row
+HISTORY_HEADER = [c.name for c in history_columns(0)]
+
+
+def _history_exports(out: Path | None, config: DynamicConfig, writer=None, content=None,
+                     draw=None) -> list:
+    """The exports of a time history: XDMF states (``writer``), and with ``out`` history.csv,
+    summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
+    files = [exports.XDMFExport(writer, "t")] if writer is not None else []
+    if out is not None:
+        columns = history_columns(len(config.static.tendons))
+        files += [exports.CSVExport(out / "history.csv", columns),
+                  exports.SummaryExport(out / "summary.json", content),
+                  exports.PlotExport(draw) if draw is not None else None]
+    return files
 
 
 def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
@@ -414,33 +408,35 @@ def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) 
     } | ({"strain_range": result.strain_range} if result.strain_range else {})
 
 
-def _write_dynamic(out: Path, result: DynamicResult, config: DynamicConfig, wall: float) -> None:
-    atomic_write_json(out / "summary.json", _dynamic_summary(result, config, wall))
-    write_csv(out / "history.csv", HISTORY_HEADER, [_history_row(h) for h in result.history])
+def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfig, wall: float,
+                   comm, plots: bool) -> None:
+    """The files of a history computed in one go (the FD scheme): summary.json, history.csv
+    and, with ``plots``, the pictures."""
+    draw = (lambda _: _plot_dynamic(out, result, [], config)) if plots else None
+    files = exports.Exports(_history_exports(out, config, draw=draw), comm)
+    for record in result.history:
+        files.on_step(record)
+    files.finish(_dynamic_summary(result, config, wall))
 
 
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
-    plt = _pyplot()
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
-    figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
-    left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
-              [h["tip"]["v"] for h in result.history], lw=1.2)
-    left.set_xlabel("tip x [m]")
-    left.set_ylabel("tip y [m]")
-    left.set_title("tip trajectory")
-    left.set_aspect("equal", adjustable="datalim")
-    for key in ("kinetic", "strain", "external_work", "dissipated"):
-        right.plot(t, [h["energies"][key] for h in result.history], label=key)
-    right.set_xlabel("t [s]")
-    right.set_ylabel("energy [J]")
-    right.set_title("energies")
-    right.legend(fontsize=8)
-    for axis in (left, right):
-        axis.grid(alpha=0.3)
-    figure.tight_layout()
-    figure.savefig(out / "dynamics.png", dpi=130)
-    plt.close(figure)
+    with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
+        left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
+                  [h["tip"]["v"] for h in result.history], lw=1.2)
+        left.set_xlabel("tip x [m]")
+        left.set_ylabel("tip y [m]")
+        left.set_title("tip trajectory")
+        left.set_aspect("equal", adjustable="datalim")
+        for key in ENERGIES:
+            right.plot(t, [h["energies"][key] for h in result.history], label=key)
+        right.set_xlabel("t [s]")
+        right.set_ylabel("energy [J]")
+        right.set_title("energies")
+        right.legend(fontsize=8)
+        for axis in (left, right):
+            axis.grid(alpha=0.3)
     if shapes and config.static.output.gif:
         _write_gif(out / "beam.gif", shapes, length)
 
@@ -455,7 +451,7 @@ def _write_gif(path: Path, shapes, length: float) -> None:
     frames = shapes[:: max(1, len(shapes) // 60)]
     xs = np.concatenate([s["x"] + s["u"] for _, s in frames])
     ys = np.concatenate([s["v"] for _, s in frames])
-    figure, axis = plt.subplots(figsize=(5, 4))
+    drawn, axis = plt.subplots(figsize=(5, 4))
     (line,) = axis.plot([], [], lw=2)
     margin = 0.05 * length
     axis.set_xlim(xs.min() - margin, xs.max() + margin)
@@ -470,11 +466,11 @@ def _write_gif(path: Path, shapes, length: float) -> None:
         return (line,)
 
     try:
-        FuncAnimation(figure, draw, frames=len(frames), blit=False).save(
+        FuncAnimation(drawn, draw, frames=len(frames), blit=False).save(
             str(path), writer=PillowWriter(fps=15))
     except Exception:  # an animation must never fail an analysis
         pass
-    plt.close(figure)
+    plt.close(drawn)
 
 
 def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM_WORLD,
