@@ -103,8 +103,8 @@ def _agree(a, b, what: str) -> None:
 
 def check_folder(kind: str, out: Path, code: int, stderr: str, sent: int | None) -> str:
     """Every file in ``out`` opens and agrees with summary.json; returns the status."""
-    if code == 1 and sent == signal.SIGINT and "init_import_site" in stderr:
-        # the interpreter itself was still starting (importing `site`, on a loaded machine):
+    if code == 1 and sent == signal.SIGINT and stderr.startswith("Fatal Python error: init_"):
+        # the interpreter itself was still starting (streams, `site`; on a loaded machine):
         # CPython aborts there before any fe_beam code runs; nothing may have been written
         assert not (out.exists() and any(out.iterdir())), stderr
         return "none"
