@@ -152,7 +152,7 @@ def check_petsc_options(options: dict, where: str = "solver.petsc_options") -> N
     prefix = "fe_beam_option_check_"
     snes = PETSc.SNES().create(PETSc.COMM_SELF)
     snes.setOptionsPrefix(prefix)
-    PETSc.Sys.pushErrorHandler("ignore")  # the ValueError below says it better than PETSc
+    compat.push_quiet_petsc_error_handler()  # the ValueError below says it better than PETSc
     try:
         for key, value in options.items():
             database[prefix + key] = value
@@ -195,7 +195,7 @@ class NonlinearProblem:
         self,
         residual: ufl.Form,
         w: fem.Function,
-        bcs: Sequence[fem.DirichletBCMetaClass] = (),
+        bcs: Sequence[compat.DirichletBC] = (),
         jacobian: ufl.Form | None = None,
         contributions: Sequence[Contribution] = (),
     ):
