@@ -309,8 +309,7 @@ class EnergyMomentum(StepDriver):
     def _gauss_values(self, compiled) -> tuple[np.ndarray, np.ndarray]:
         cells = np.arange(self.problem.mesh.topology.index_map(1).size_local, dtype=np.int32)
         values = compat.evaluate_expression(compiled, self.problem.mesh, cells)
-        count = len(self._gauss_points)
-        dofs = self.gauss_space.dofmap.list.array.reshape(-1, count)[: len(cells)]
+        dofs = compat.cell_dofs(self.gauss_space)[: len(cells)]
         return dofs.ravel(), np.asarray(values).reshape(-1)
 
     def _set_gauss(self, pairs) -> None:
