@@ -163,12 +163,16 @@ def geometry_degree(msh: mesh.Mesh) -> int:
 
 def geometry_cell_nodes(msh: mesh.Mesh) -> np.ndarray:
     """(local cells incl. ghosts, nodes per cell) geometry node indices of each cell."""
-    dofmap = msh.geometry.dofmap
     if LEGACY:
+        dofmap = msh.geometry.dofmap
         offsets = dofmap.offsets
         per_cell = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 1
         return dofmap.array.reshape(-1, per_cell)
-    return np.asarray(dofmap)
+    geometry = msh.geometry
+    dofmaps = getattr(geometry, "dofmaps", None)  # 0.10+: one per cell type
+    if dofmaps is None:
+        return np.asarray(geometry.dofmap)
+    return np.asarray(dofmaps[0] if not callable(dofmaps) else dofmaps(0))
 
 
 def cell_dofs(space: fem.FunctionSpace) -> np.ndarray:
