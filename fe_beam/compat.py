@@ -60,14 +60,13 @@ DOLFINX_VERSION = dolfinx.__version__
 LEGACY = tuple(int(p) for p in DOLFINX_VERSION.split(".")[:2]) < (0, 6)
 XDMFFile = dolfinx.io.XDMFFile
 DirichletBC = fem.DirichletBCMetaClass if LEGACY else fem.DirichletBC
-
+create_matrix = fem_petsc.create_matrix
 
 
 def set_bc(b: PETSc.Vec, bcs, x0: PETSc.Vec | None = None, scale: float = 1.0) -> None:
     """b[dofs] = scale (g - x0[dofs]) on the owned Dirichlet dofs (x0 = 0 when None)."""
     keyword = "scale" if LEGACY else "alpha"
     fem_petsc.set_bc(b, bcs, x0, **{keyword: scale})
-create_matrix = fem_petsc.create_matrix
 
 
 def assemble_vector(*args, **kwargs) -> PETSc.Vec:
