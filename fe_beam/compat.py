@@ -44,6 +44,7 @@ __all__ = [
     "mixed_element",
     "owned_bc_dofs",
     "push_quiet_petsc_error_handler",
+    "usable_after_petsc_error",
     "locate_entities",
     "locate_entities_boundary",
     "meshtags",
@@ -205,6 +206,20 @@ def push_quiet_petsc_error_handler() -> None:
     ``"ignore"`` up to PETSc 3.18, ``"return"`` later."""
     name = "ignore" if PETSc.Sys.getVersion() < (3, 19) else "return"
     PETSc.Sys.pushErrorHandler(name)
+
+
+def usable_after_petsc_error(vector: PETSc.Vec) -> PETSc.Vec:
+    """``vector`` after a PETSc error unwound a solve that used it. PETSc 3.19+ leaves the
+    solution vector of an aborted ``SNESSolve`` locked read-only (the next copy into it fails):
+    a fresh vector of the same layout there; the vector itself on older PETSc."""
+    if PETSc.Sys.getVersion() < (3, 19):
+        return vector
+    fresh = vector.duplicate()
+    try:
+        vector.destroy()
+    except PETSc.Error:
+        pass
+    return fresh
 
 
 def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:

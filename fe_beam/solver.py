@@ -350,6 +350,7 @@ class SNESSolver:
         try:
             self.snes.solve(None, self._x)
         except PETSc.Error as error:  # e.g. a factorisation that breaks down: a failed step
+            self._x = compat.usable_after_petsc_error(self._x)
             raise SolveFailed(f"PETSc error {error.ierr} in the Newton solve") from None
         finally:
             self._reference_fnorm = None
