@@ -209,8 +209,8 @@ def push_quiet_petsc_error_handler() -> None:
 
 
 def usable_after_petsc_error(vector: PETSc.Vec) -> PETSc.Vec:
-    """``vector`` after a PETSc error unwound a solve that used it. PETSc 3.19+ leaves the
-    solution vector of an aborted ``SNESSolve`` locked read-only (the next copy into it fails):
+    """``vector`` after a PETSc error unwound a solve that used it. Newer PETSc (3.25 here) leaves
+    the solution vector of an aborted ``SNESSolve`` locked read-only (the next copy into it fails):
     a fresh vector of the same layout there; the vector itself on older PETSc."""
     if PETSc.Sys.getVersion() < (3, 19):
         return vector
