@@ -37,6 +37,7 @@ __all__ = [
     "function_space",
     "geometry_cell_nodes",
     "geometry_degree",
+    "gmsh_initialize",
     "gmsh_model_to_mesh",
     "local_array",
     "facet_vertex_coordinates",
@@ -282,6 +283,20 @@ def locate_entities_boundary(msh: mesh.Mesh, dim: int, marker):
 def meshtags(msh: mesh.Mesh, dim: int, entities: np.ndarray, values: np.ndarray):
     order = np.argsort(entities)
     return mesh.meshtags(msh, dim, entities[order].astype(np.int32), values[order].astype(np.int32))
+
+
+def gmsh_initialize() -> None:
+    """``gmsh.initialize()`` that keeps Python's SIGINT handler: gmsh's Python API since 4.9
+    (PyPI's 4.15; Debian has 4.8) sets SIGINT to the default action unless
+    ``interruptible=False``, which would kill a run instead of fe_beam's clean interruption."""
+    import inspect
+
+    import gmsh
+
+    if "interruptible" in inspect.signature(gmsh.initialize).parameters:
+        gmsh.initialize(interruptible=False)
+    else:
+        gmsh.initialize()
 
 
 def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):

@@ -186,7 +186,7 @@ def mesh_from_file(path: Path):
         if comm.rank != rank:
             msh, cell_tags, facet_tags = compat.gmsh_model_to_mesh(None, comm, rank, 3)
         else:
-            gmsh.initialize()
+            compat.gmsh_initialize()
             try:
                 gmsh.option.setNumber("General.Terminal", 0)
                 gmsh.model.add("stored")

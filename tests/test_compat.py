@@ -40,6 +40,7 @@ VERSION_SPECIFIC = [
     (r"(?<!compat\.)\bcreate_mesh\(", "compat.create_interval_from_vertices"),
     (r"\batan_2\b|\bufl\.atan2\b", "compat.atan2"),
     (r"\bpushErrorHandler\(", "compat.push_quiet_petsc_error_handler"),
+    (r"\bgmsh\.initialize\(", "compat.gmsh_initialize"),
 ]
 
 
@@ -81,7 +82,7 @@ def test_the_grep_sees_the_package_and_would_catch_a_use():
         "set_bc(b, bcs)", "fem.DirichletBCMetaClass", "from dolfinx.cpp.io import perm_vtk",
         "msh.geometry.dofmap", "V.ufl_element().degree()", "V.element.interpolation_points",
         "fem.Expression(e, X)", "mesh.create_mesh(comm, c, x, d)", "ufl.atan_2(y, x)",
-        "PETSc.Sys.pushErrorHandler('ignore')",
+        "PETSc.Sys.pushErrorHandler('ignore')", "gmsh.initialize()",
     ]
     for pattern, _ in VERSION_SPECIFIC:
         assert any(re.search(pattern, sample) for sample in samples), pattern
