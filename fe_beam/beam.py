@@ -251,11 +251,10 @@ class BeamProblem:
         self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
         degree = model.mesh.degree
-        cell = self.mesh.ufl_cell()
         self.multipliers = constrained_strains(model.options.constraint)
-        elements = [ufl.FiniteElement("Lagrange", cell, degree)] * 3
-        elements += [ufl.FiniteElement("DG", cell, degree - 1)] * len(self.multipliers)
-        self.space = compat.function_space(self.mesh, ufl.MixedElement(elements))
+        elements = [compat.element(self.mesh, "Lagrange", degree)] * 3
+        elements += [compat.element(self.mesh, "DG", degree - 1)] * len(self.multipliers)
+        self.space = compat.function_space(self.mesh, compat.mixed_element(elements))
         self.w = fem.Function(self.space, name="state")
         self.load_factor = fem.Constant(self.mesh, 0.0)
         self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
@@ -512,7 +511,7 @@ class BeamProblem:
         plain = strains(u, v, theta)
         return {
             "eps": plain.eps,
-            "gamma": ufl.atan_2(plain.g, plain.one_plus_e),
+            "gamma": compat.atan2(plain.g, plain.one_plus_e),
             "kappa": plain.kappa,
             "N": normal,
             "T": shear,
@@ -568,7 +567,7 @@ class BeamProblem:
         two E11)] at the Gauss points of the energy rule."""
         u, v, theta, _ = self.fields()
         s = strains(u, v, theta)
-        gamma = ufl.atan_2(s.g, s.one_plus_e)
+        gamma = compat.atan2(s.g, s.one_plus_e)
         if self._bending_limit_applies():
             # the law's own energy W(eps, kappa) at gamma = 0, differentiated by UFL
             eps, kappa = ufl.variable(s.eps), ufl.variable(s.kappa)

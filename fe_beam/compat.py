@@ -1,7 +1,11 @@
-"""Every dolfinx-version-specific call of fe_beam lives here (written against dolfinx 0.5.2).
+"""Every dolfinx/ufl/basix/petsc4py-version-specific call of fe_beam lives here.
 
-A move to a newer dolfinx (0.6+: ``functionspace``, ``x.array``, ``dolfinx.io.gmshio`` renames,
-``petsc.assemble_*`` moves) should touch this file only.
+Two stacks are supported: Debian bookworm's dolfinx 0.5.2 (legacy ``ufl.FiniteElement`` elements,
+``fem.FunctionSpace``, ``Function.vector``, ``dolfinx.io.gmshio``) and PyPI's dolfinx 0.10/0.11
+(``basix.ufl`` elements, ``fem.functionspace``, ``x.petsc_vec``, ``dolfinx.io.gmsh``,
+``apply_lifting(alpha=)``, ``assemble_matrix(diag=)``). The rest of the package calls the
+functions below only (``tests/test_compat.py`` greps for the version-specific names), so a move
+to another dolfinx touches this file only.
 """
 
 from __future__ import annotations
@@ -16,38 +20,207 @@ from petsc4py import PETSc
 
 __all__ = [
     "DOLFINX_VERSION",
+    "LEGACY",
     "XDMFFile",
     "apply_lifting",
+    "atan2",
     "assemble_matrix",
     "assemble_vector",
+    "cell_dofs",
     "create_interval",
     "create_interval_from_vertices",
     "create_matrix",
-    "create_vector",
+    "vector_for_form",
     "cell_vertex_x",
+    "element",
+    "element_degree",
     "function_space",
+    "geometry_cell_nodes",
+    "geometry_degree",
+    "gmsh_initialize",
     "gmsh_model_to_mesh",
     "local_array",
     "facet_vertex_coordinates",
     "locate_dofs_geometrical",
+    "mixed_element",
     "owned_bc_dofs",
+    "push_quiet_petsc_error_handler",
+    "usable_after_petsc_error",
     "locate_entities",
     "locate_entities_boundary",
     "meshtags",
+    "quadrature_element",
     "set_bc",
     "sub_space_collapsed",
+    "vector_element",
     "vector_of",
+    "vtk_permutation",
 ]
 
 DOLFINX_VERSION = dolfinx.__version__
+# dolfinx before 0.6: legacy UFL elements, fem.FunctionSpace, Function.vector, gmshio
+LEGACY = tuple(int(p) for p in DOLFINX_VERSION.split(".")[:2]) < (0, 6)
 XDMFFile = dolfinx.io.XDMFFile
-
-assemble_vector = fem_petsc.assemble_vector
-assemble_matrix = fem_petsc.assemble_matrix
-apply_lifting = fem_petsc.apply_lifting
-set_bc = fem_petsc.set_bc
+DirichletBC = fem.DirichletBCMetaClass if LEGACY else fem.DirichletBC
 create_matrix = fem_petsc.create_matrix
-create_vector = fem_petsc.create_vector
+
+
+def set_bc(b: PETSc.Vec, bcs, x0: PETSc.Vec | None = None, scale: float = 1.0) -> None:
+    """b[dofs] = scale (g - x0[dofs]) on the owned Dirichlet dofs (x0 = 0 when None)."""
+    keyword = "scale" if LEGACY else "alpha"
+    fem_petsc.set_bc(b, bcs, x0, **{keyword: scale})
+
+
+def assemble_vector(*args, **kwargs) -> PETSc.Vec:
+    """``assemble_vector(form)`` (a new vector) or ``assemble_vector(b, form)`` (into ``b``)."""
+    return fem_petsc.assemble_vector(*args, **kwargs)
+
+
+def assemble_matrix(*args, bcs=None, diagonal: float = 1.0) -> PETSc.Mat:
+    """``assemble_matrix(form, bcs=, diagonal=)`` or ``assemble_matrix(A, form, bcs=)``;
+    ``diagonal`` is the value on the rows and columns of the Dirichlet dofs."""
+    keyword = "diagonal" if LEGACY else "diag"
+    return fem_petsc.assemble_matrix(*args, bcs=[] if bcs is None else bcs,
+                                     **{keyword: diagonal})
+
+
+def apply_lifting(b: PETSc.Vec, forms, bcs, x0=None, scale: float = 1.0) -> None:
+    """b -= scale A (g - x0) for the Dirichlet values g (dolfinx's lifting)."""
+    keyword = "scale" if LEGACY else "alpha"
+    extra = {} if x0 is None else {"x0": x0}
+    fem_petsc.apply_lifting(b, forms, bcs=bcs, **extra, **{keyword: scale})
+
+
+def create_vector(form) -> PETSc.Vec:
+    """A (ghosted) PETSc vector for the compiled linear ``form``."""
+    if LEGACY:
+        return fem_petsc.create_vector(form)
+    return fem_petsc.create_vector(form.function_spaces[0])
+
+
+vector_for_form = create_vector
+
+
+# --- elements and spaces ---
+
+
+def _cell(msh: mesh.Mesh):
+    return msh.ufl_cell() if LEGACY else msh.basix_cell()
+
+
+def element(msh: mesh.Mesh, family: str, degree: int):
+    """Scalar element (``"Lagrange"``, ``"DG"``) on the cells of ``msh``."""
+    if LEGACY:
+        return ufl.FiniteElement(family, msh.ufl_cell(), degree)
+    import basix.ufl
+
+    return basix.ufl.element(family, _cell(msh), degree)
+
+
+def vector_element(msh: mesh.Mesh, family: str, degree: int, dim: int | None = None):
+    """Vector element with ``dim`` components (default: the geometric dimension)."""
+    dim = msh.geometry.dim if dim is None else dim
+    if LEGACY:
+        return ufl.VectorElement(family, msh.ufl_cell(), degree, dim=dim)
+    import basix.ufl
+
+    return basix.ufl.element(family, _cell(msh), degree, shape=(dim,))
+
+
+def mixed_element(elements):
+    """Mixed element of the given sub-elements (in order)."""
+    if LEGACY:
+        return ufl.MixedElement(list(elements))
+    import basix.ufl
+
+    return basix.ufl.mixed_element(list(elements))
+
+
+def quadrature_element(msh: mesh.Mesh, degree: int):
+    """Scalar quadrature element of the default rule of ``degree`` (Gauss-Jacobi)."""
+    if LEGACY:
+        return ufl.FiniteElement("Quadrature", msh.ufl_cell(), degree, quad_scheme="default")
+    import basix.ufl
+
+    return basix.ufl.quadrature_element(_cell(msh), value_shape=(), scheme="default",
+                                        degree=degree)
+
+
+def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:
+    """Function space from an element of `element`, `vector_element` or `mixed_element`."""
+    if LEGACY:
+        return fem.FunctionSpace(msh, element)
+    return fem.functionspace(msh, element)
+
+
+def element_degree(space: fem.FunctionSpace) -> int:
+    """Polynomial degree of the element of ``space``."""
+    element = space.ufl_element()
+    degree = element.degree
+    return int(degree() if callable(degree) else degree)
+
+
+def geometry_degree(msh: mesh.Mesh) -> int:
+    """Degree of the coordinate element of ``msh`` (1: straight cells, 2: quadratic)."""
+    element = msh.ufl_domain().ufl_coordinate_element()
+    degree = element.degree
+    return int(degree() if callable(degree) else degree)
+
+
+def geometry_cell_nodes(msh: mesh.Mesh) -> np.ndarray:
+    """(local cells incl. ghosts, nodes per cell) geometry node indices of each cell."""
+    if LEGACY:
+        dofmap = msh.geometry.dofmap
+        offsets = dofmap.offsets
+        per_cell = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 1
+        return dofmap.array.reshape(-1, per_cell)
+    geometry = msh.geometry
+    dofmaps = getattr(geometry, "dofmaps", None)  # 0.10+: one per cell type
+    if dofmaps is None:
+        return np.asarray(geometry.dofmap)
+    return np.asarray(dofmaps[0] if not callable(dofmaps) else dofmaps(0))
+
+
+def cell_dofs(space: fem.FunctionSpace) -> np.ndarray:
+    """(local cells incl. ghosts, dofs per cell) block dof indices of each cell."""
+    dofmap_list = space.dofmap.list
+    if LEGACY:
+        return dofmap_list.array.reshape(-1, space.dofmap.dof_layout.num_dofs)
+    return np.asarray(dofmap_list)
+
+
+def vtk_permutation(cell_type, nodes_per_cell: int) -> np.ndarray:
+    """dolfinx's node order -> VTK's (``perm_vtk``)."""
+    from dolfinx.cpp.io import perm_vtk
+
+    return np.asarray(perm_vtk(cell_type, nodes_per_cell))
+
+
+def atan2(y, x):
+    """UFL's two-argument arctangent (``ufl.atan_2`` up to ufl 2023.1, ``ufl.atan2`` later)."""
+    function = getattr(ufl, "atan_2", None) or ufl.atan2
+    return function(y, x)
+
+
+def push_quiet_petsc_error_handler() -> None:
+    """Push PETSc's error handler that prints nothing (``PETSc.Sys.popErrorHandler`` undoes it):
+    ``"ignore"`` up to PETSc 3.18, ``"return"`` later."""
+    name = "ignore" if PETSc.Sys.getVersion() < (3, 19) else "return"
+    PETSc.Sys.pushErrorHandler(name)
+
+
+def usable_after_petsc_error(vector: PETSc.Vec) -> PETSc.Vec:
+    """``vector`` after a PETSc error unwound a solve that used it. Newer PETSc (3.25 here) leaves
+    the solution vector of an aborted ``SNESSolve`` locked read-only (the next copy into it fails):
+    a fresh vector of the same layout there; the vector itself on older PETSc."""
+    if PETSc.Sys.getVersion() < (3, 19):
+        return vector
+    fresh = vector.duplicate()
+    try:
+        vector.destroy()
+    except PETSc.Error:
+        pass
+    return fresh
 
 
 def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:
@@ -62,31 +235,32 @@ def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.
         cells = np.column_stack([np.arange(len(points) - 1), np.arange(1, len(points))])
     else:
         points, cells = np.empty((0, 1)), np.empty((0, 2))
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", "interval", 1, dim=1))
-    return mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+    if LEGACY:
+        domain = ufl.Mesh(ufl.VectorElement("Lagrange", "interval", 1, dim=1))
+        return mesh.create_mesh(comm, cells.astype(np.int64), points, domain)
+    import basix.ufl
+
+    domain = ufl.Mesh(basix.ufl.element("Lagrange", "interval", 1, shape=(1,)))
+    return mesh.create_mesh(comm, cells.astype(np.int64), domain, points)
 
 
 def cell_vertex_x(msh: mesh.Mesh) -> np.ndarray:
     """(local cells, 2) x coordinates of the two vertices of each local cell of an interval
     mesh (owned and ghost cells)."""
-    dofmap = msh.geometry.dofmap
-    nodes = np.asarray(getattr(dofmap, "array", dofmap)).reshape(-1, 2)
-    return msh.geometry.x[nodes, 0]
-
-
-def function_space(msh: mesh.Mesh, element) -> fem.FunctionSpace:
-    """Function space from a UFL element (FiniteElement, VectorElement or MixedElement)."""
-    return fem.FunctionSpace(msh, element)
+    return msh.geometry.x[geometry_cell_nodes(msh), 0]
 
 
 def sub_space_collapsed(space: fem.FunctionSpace, index: int):
     """(collapsed sub-space, map from its dofs to the parent's dofs)."""
-    return space.sub(index).collapse()
+    sub, dofs = space.sub(index).collapse()
+    if LEGACY:
+        return sub, dofs
+    return sub, np.concatenate([np.asarray(d, dtype=np.int32).reshape(-1) for d in dofs])
 
 
 def vector_of(function: fem.Function) -> PETSc.Vec:
     """The PETSc vector holding a Function's dofs (owned + ghosts)."""
-    return function.vector
+    return function.vector if LEGACY else function.x.petsc_vec
 
 
 def local_array(function: fem.Function) -> np.ndarray:
@@ -111,22 +285,44 @@ def meshtags(msh: mesh.Mesh, dim: int, entities: np.ndarray, values: np.ndarray)
     return mesh.meshtags(msh, dim, entities[order].astype(np.int32), values[order].astype(np.int32))
 
 
+def gmsh_initialize() -> None:
+    """``gmsh.initialize()`` that keeps Python's SIGINT handler: gmsh's Python API since 4.9
+    (PyPI's 4.15; Debian has 4.8) sets SIGINT to the default action unless
+    ``interruptible=False``, which would kill a run instead of fe_beam's clean interruption."""
+    import inspect
+
+    import gmsh
+
+    if "interruptible" in inspect.signature(gmsh.initialize).parameters:
+        gmsh.initialize(interruptible=False)
+    else:
+        gmsh.initialize()
+
+
 def gmsh_model_to_mesh(model, comm: MPI.Comm, rank: int = 0, gdim: int = 3):
     """(mesh, cell tags, facet tags) from an in-memory gmsh model."""
-    from dolfinx.io import gmshio
+    if LEGACY:
+        from dolfinx.io import gmshio
 
-    return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+        return gmshio.model_to_mesh(model, comm, rank, gdim=gdim)
+    from dolfinx.io import gmsh as dolfinx_gmsh
+
+    data = dolfinx_gmsh.model_to_mesh(model, comm, rank, gdim=gdim)
+    return data.mesh, data.cell_tags, data.facet_tags
 
 
 def facet_vertex_coordinates(msh: mesh.Mesh, facets: np.ndarray) -> np.ndarray:
     """(k, 3, 3) coordinates of the three vertices of each local triangle facet."""
-    from dolfinx.cpp.mesh import entities_to_geometry
-
     facets = np.asarray(facets, dtype=np.int32)
     if len(facets) == 0:
         return np.zeros((0, 3, 3))
-    cpp_mesh = getattr(msh, "_mesh", getattr(msh, "_cpp_object", msh))  # 0.5: _mesh
-    nodes = entities_to_geometry(cpp_mesh, msh.topology.dim - 1, facets, False)
+    if LEGACY:
+        from dolfinx.cpp.mesh import entities_to_geometry
+
+        cpp_mesh = getattr(msh, "_mesh", getattr(msh, "_cpp_object", msh))  # 0.5: _mesh
+        nodes = entities_to_geometry(cpp_mesh, msh.topology.dim - 1, facets, False)
+    else:
+        nodes = mesh.entities_to_geometry(msh, msh.topology.dim - 1, facets, False)
     return msh.geometry.x[nodes[:, :3]]
 
 
@@ -143,10 +339,10 @@ def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
     stay in PETSc's global database (512 entries at most) long after the solve.
     """
     bilinear, linear = fem.form(a), fem.form(L)
-    matrix = fem_petsc.assemble_matrix(bilinear, bcs=bcs)
+    matrix = assemble_matrix(bilinear, bcs=bcs)
     matrix.assemble()
-    rhs = fem_petsc.assemble_vector(linear)
-    fem_petsc.apply_lifting(rhs, [bilinear], bcs=[bcs])
+    rhs = assemble_vector(linear)
+    apply_lifting(rhs, [bilinear], bcs=[bcs])
     rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     fem_petsc.set_bc(rhs, bcs)
     ksp = PETSc.KSP().create(target.function_space.mesh.comm)
@@ -154,7 +350,7 @@ def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
-    ksp.solve(rhs, target.vector)
+    ksp.solve(rhs, vector_of(target))
     target.x.scatter_forward()
     for petsc_object in (ksp, matrix, rhs):
         petsc_object.destroy()
@@ -176,7 +372,9 @@ def bounding_box_tree(msh: mesh.Mesh, dim: int):
     """Bounding-box tree of the local entities of dimension ``dim``."""
     from dolfinx import geometry
 
-    return geometry.BoundingBoxTree(msh, dim)
+    if LEGACY:
+        return geometry.BoundingBoxTree(msh, dim)
+    return geometry.bb_tree(msh, dim)
 
 
 def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray) -> np.ndarray:
@@ -184,7 +382,10 @@ def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray) -> np.ndarra
     from dolfinx import geometry
 
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    candidates = geometry.compute_collisions(tree, points)
+    if LEGACY:
+        candidates = geometry.compute_collisions(tree, points)
+    else:
+        candidates = geometry.compute_collisions_points(tree, points)
     colliding = geometry.compute_colliding_cells(msh, candidates, points)
     cells = np.full(len(points), -1, dtype=np.int32)
     for i in range(len(points)):
@@ -201,4 +402,5 @@ def expression(expr: ufl.core.expr.Expr, reference_points: np.ndarray) -> fem.Ex
 
 def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndarray) -> np.ndarray:
     """Values (n_cells, n_points * value_size) of a compiled expression in local ``cells``."""
-    return compiled.eval(np.asarray(cells, dtype=np.int32))
+    cells = np.asarray(cells, dtype=np.int32)
+    return compiled.eval(cells) if LEGACY else compiled.eval(msh, cells)

@@ -130,9 +130,7 @@ class EnergyMomentum(StepDriver):
         self._trial_range = None
         space, mesh = problem.space, problem.mesh
         degree = 2 * problem.model.mesh.degree - 1  # the energy rule (problem.dx_energy)
-        quadrature = ufl.FiniteElement("Quadrature", mesh.ufl_cell(), degree,
-                                       quad_scheme="default")
-        self.gauss_space = compat.function_space(mesh, quadrature)
+        self.gauss_space = compat.function_space(mesh, compat.quadrature_element(mesh, degree))
         self._gauss_points = basix.make_quadrature(basix.CellType.interval, degree)[0]
         self.theta_q, self.kappa_q = (fem.Function(self.gauss_space) for _ in range(2))
         # The Gauss-point terms get their own integration domain (every cell, tag 1): FFCx
@@ -311,8 +309,7 @@ class EnergyMomentum(StepDriver):
     def _gauss_values(self, compiled) -> tuple[np.ndarray, np.ndarray]:
         cells = np.arange(self.problem.mesh.topology.index_map(1).size_local, dtype=np.int32)
         values = compat.evaluate_expression(compiled, self.problem.mesh, cells)
-        count = len(self._gauss_points)
-        dofs = self.gauss_space.dofmap.list.array.reshape(-1, count)[: len(cells)]
+        dofs = compat.cell_dofs(self.gauss_space)[: len(cells)]
         return dofs.ravel(), np.asarray(values).reshape(-1)
 
     def _set_gauss(self, pairs) -> None:

@@ -194,22 +194,19 @@ class XDMFSeries:
     """
 
     def __init__(self, mesh, path: str | Path):
-        from dolfinx.cpp.io import perm_vtk
-
         self.comm = mesh.comm
         self.path = Path(path)
         self.h5_path = self.path.with_suffix(".h5")
         self.root = self.comm.rank == 0
         tdim = mesh.topology.dim
         cells = mesh.topology.index_map(tdim).size_local
-        offsets = mesh.geometry.dofmap.offsets
-        per_cell = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 1
-        nodes = mesh.geometry.dofmap.array.reshape(-1, per_cell)[:cells]
+        nodes = compat.geometry_cell_nodes(mesh)[:cells]
+        per_cell = nodes.shape[1]
         self._nodes, inverse = np.unique(nodes, return_inverse=True)
         self._cell_nodes = inverse.reshape(nodes.shape)
         self._cells = cells
         cell_name = mesh.topology.cell_type.name
-        order = np.argsort(np.asarray(perm_vtk(mesh.topology.cell_type, per_cell)))
+        order = np.argsort(compat.vtk_permutation(mesh.topology.cell_type, per_cell))
         topology = self._cell_nodes[:, order].astype(np.int64)
         gathered = self.comm.gather((mesh.geometry.x[self._nodes], topology), root=0)
         self._maps: dict = {}
@@ -232,11 +229,10 @@ class XDMFSeries:
         space = function.function_space
         key = id(space)
         if key not in self._maps:
-            element = space.ufl_element()
             bs = space.dofmap.index_map_bs
-            per_cell = space.dofmap.dof_layout.num_dofs
-            dofs = space.dofmap.list.array.reshape(-1, per_cell)[: self._cells]
-            if element.degree() == 0:
+            dofs = compat.cell_dofs(space)[: self._cells]
+            per_cell = dofs.shape[1]
+            if compat.element_degree(space) == 0:
                 self._maps[key] = ("Cell", dofs[:, 0], bs)
             else:
                 if per_cell != self._cell_nodes.shape[1]:
@@ -380,10 +376,9 @@ class BeamXDMFWriter:
     def __init__(self, problem, path: str | Path | None):
         self.problem = problem
         mesh = problem.mesh
-        cell = mesh.ufl_cell()
-        scalar = compat.function_space(mesh, ufl.FiniteElement("Lagrange", cell, 1))
-        vector = compat.function_space(mesh, ufl.VectorElement("Lagrange", cell, 1, dim=2))
-        cellwise = compat.function_space(mesh, ufl.FiniteElement("DG", cell, 0))
+        scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
+        vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=2))
+        cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
         u, v, theta, _ = problem.fields()
         plan = [
             ("u", u, scalar),

@@ -83,7 +83,7 @@ def _check_with_petsc(options: dict, where: str) -> None:
     prefix = "fe_beam_option_check_"
     snes = PETSc.SNES().create(PETSc.COMM_SELF)
     snes.setOptionsPrefix(prefix)
-    PETSc.Sys.pushErrorHandler("ignore")  # the ValueError below says it better than PETSc
+    compat.push_quiet_petsc_error_handler()  # the ValueError below says it better than PETSc
     try:
         for key, value in options.items():
             database[prefix + key] = value
@@ -126,7 +126,7 @@ class NonlinearProblem:
         self,
         residual: ufl.Form,
         w: fem.Function,
-        bcs: Sequence[fem.DirichletBCMetaClass] = (),
+        bcs: Sequence[compat.DirichletBC] = (),
         jacobian: ufl.Form | None = None,
         contributions: Sequence[Contribution] = (),
     ):
@@ -282,6 +282,7 @@ class SNESSolver:
         try:
             self.snes.solve(None, self._x)
         except PETSc.Error as error:  # e.g. a factorisation that breaks down: a failed step
+            self._x = compat.usable_after_petsc_error(self._x)
             raise SolveFailed(f"PETSc error {error.ierr} in the Newton solve") from None
         finally:
             self._reference_fnorm = None

@@ -81,9 +81,8 @@ class TendonSet:
         """Offsets, indicators, tension constants and length forms on the problem's mesh."""
         self._problem = problem
         mesh = problem.mesh
-        cell = mesh.ufl_cell()
-        offsets = compat.function_space(mesh, ufl.FiniteElement("Lagrange", cell, 1))
-        indicator_space = compat.function_space(mesh, ufl.FiniteElement("DG", cell, 0))
+        offsets = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
+        indicator_space = compat.function_space(mesh, compat.element(mesh, "DG", 0))
         self._geometry = []
         for tendon in self.tendons:
             inside = fem.Function(indicator_space)

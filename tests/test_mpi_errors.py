@@ -5,7 +5,6 @@ seconds, with one message and the exit code of its kind (2 user mistake, 3 analy
 Each case is a real ``mpirun`` job with a timeout, so a hang fails the test instead of CI."""
 
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -14,12 +13,13 @@ from pathlib import Path
 
 import pytest
 from mpi4py import MPI
+from mpilaunch import mpirun_command
 from test_config import BASE, dump_toml, edited
 
 TIMEOUT_S = 90  # a job that hangs is killed here; the cases below end in seconds
-MPIRUN = shutil.which("mpirun")
 pytestmark = pytest.mark.skipif(
-    MPIRUN is None or MPI.COMM_WORLD.size > 1, reason="needs mpirun (and a serial pytest)")
+    mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+    reason="needs mpirun (and a serial pytest)")
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -28,8 +28,7 @@ def mpirun(tmp_path, *command, ranks=2):
         [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
     started = time.monotonic()
     process = subprocess.run(
-        [MPIRUN, "--allow-run-as-root", "--oversubscribe", "-n", str(ranks), "-x", "PYTHONPATH",
-         sys.executable, *command],
+        [*mpirun_command(ranks, pass_env=("PYTHONPATH",)), sys.executable, *command],
         capture_output=True, text=True, timeout=TIMEOUT_S, env=env, cwd=tmp_path)
     return process, time.monotonic() - started
 

@@ -144,6 +144,7 @@ def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
     import ufl
     from dolfinx import fem
 
+    from fe_beam import compat
     from fe_beam.mpi import assemble_scalar
     from fe_beam.solid import (
         CLAMP_TAG,
@@ -166,7 +167,7 @@ def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
     assert assemble_scalar(fem.form(one * ds(CLAMP_TAG))) == pytest.approx(B * H0, rel=1e-12)
     chain = finger.tendon_chains[0]
     assert chain[-1][0] == pytest.approx(L, abs=1e-12 * L)
-    space = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
+    space = compat.function_space(msh, compat.vector_element(msh, "Lagrange", 1))
     dofs = locate_vertex_dofs(space, chain[[0, -1]])
     assert dofs.shape == (2, 3) and np.all(dofs >= 0)
 

@@ -97,7 +97,7 @@ def test_linear_solve_leaves_no_options_behind():
     from fe_beam import compat
 
     mesh = compat.create_interval(MPI.COMM_WORLD, 8, 1.0)
-    space = compat.function_space(mesh, ufl.FiniteElement("CG", mesh.ufl_cell(), 1))
+    space = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
     target = fem.Function(space)
     trial, test = ufl.TrialFunction(space), ufl.TestFunction(space)
     count = len(PETSc.Options().getAll())

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import ufl
 from dolfinx import fem
 
 from fe_beam import compat
@@ -25,8 +24,8 @@ class DisplacementXDMF:
     def __init__(self, problem, path: str | Path):
         self.problem = problem
         msh = problem.mesh
-        degree = msh.ufl_domain().ufl_coordinate_element().degree()
-        space = compat.function_space(msh, ufl.VectorElement("Lagrange", msh.ufl_cell(), degree))
+        degree = compat.geometry_degree(msh)
+        space = compat.function_space(msh, compat.vector_element(msh, "Lagrange", degree))
         self.output = fem.Function(space, name="displacement")
         self.path = Path(path)
         self._file = XDMFSeries(msh, self.path)

@@ -255,7 +255,7 @@ def create_finger_mesh(
 
     chains, error = None, None
     if comm.rank == rank:
-        gmsh.initialize()
+        compat.gmsh_initialize()
         try:
             gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
             gmsh.model.add("finger")
@@ -286,7 +286,7 @@ def write_msh(geometry: FingerGeometry, sizes: MeshSizes, path: str, verbose: bo
     """Mesh the finger with gmsh (this process only) and write it to a .msh file."""
     import gmsh
 
-    gmsh.initialize()
+    compat.gmsh_initialize()
     try:
         gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
         gmsh.model.add("finger")

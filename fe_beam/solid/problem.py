@@ -133,12 +133,11 @@ class SolidFingerProblem:
         return tendons
 
     def _spaces(self) -> None:
-        cell = self.mesh.ufl_cell()
         d = self.discretization
-        vector = ufl.VectorElement("Lagrange", cell, d.degree)
+        vector = compat.vector_element(self.mesh, "Lagrange", d.degree)
         if d.formulation == "mixed":
-            pressure = ufl.FiniteElement("Lagrange", cell, 1)
-            self.W = compat.function_space(self.mesh, ufl.MixedElement([vector, pressure]))
+            pressure = compat.element(self.mesh, "Lagrange", 1)
+            self.W = compat.function_space(self.mesh, compat.mixed_element([vector, pressure]))
             self.V = self.W.sub(0)
             self.w = fem.Function(self.W, name="state")
             self.u, self.p = ufl.split(self.w)

@@ -3,7 +3,6 @@ energy, each segment counted once in parallel."""
 
 import numpy as np
 import pytest
-import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -30,15 +29,10 @@ def finger():
 
 
 def spaces(msh):
-    cell = msh.ufl_cell()
-    p1 = compat.function_space(msh, ufl.VectorElement("Lagrange", cell, 1))
-    p2 = compat.function_space(msh, ufl.VectorElement("Lagrange", cell, 2))
-    th = compat.function_space(
-        msh,
-        ufl.MixedElement(
-            [ufl.VectorElement("Lagrange", cell, 2), ufl.FiniteElement("Lagrange", cell, 1)]
-        ),
-    )
+    p1 = compat.function_space(msh, compat.vector_element(msh, "Lagrange", 1))
+    p2 = compat.function_space(msh, compat.vector_element(msh, "Lagrange", 2))
+    th = compat.function_space(msh, compat.mixed_element(
+        [compat.vector_element(msh, "Lagrange", 2), compat.element(msh, "Lagrange", 1)]))
     return {"P1": (p1, p1), "P2": (p2, p2), "Taylor-Hood": (th, th.sub(0))}
 
 
@@ -69,9 +63,9 @@ def test_chains_lie_on_mesh_edges(finger):
     vertex_x = np.empty((msh.topology.index_map(0).size_local
                          + msh.topology.index_map(0).num_ghosts, 3))
     c2v = msh.topology.connectivity(3, 0)
-    dofmap = msh.geometry.dofmap
+    nodes = compat.geometry_cell_nodes(msh)
     for c in range(msh.topology.index_map(3).size_local):
-        vertex_x[c2v.links(c)] = x[dofmap.links(c)[:4]]
+        vertex_x[c2v.links(c)] = x[nodes[c, :4]]
     edges = e2v.array.reshape(-1, 2)
     mids = 0.5 * (vertex_x[edges[:, 0]] + vertex_x[edges[:, 1]])
     from scipy.spatial import cKDTree

@@ -16,6 +16,7 @@ import pytest
 from mpi4py import MPI
 from tomlio import dump_toml
 
+from fe_beam import compat
 from fe_beam.cli import main
 from fe_beam.config import ConfigError
 from fe_beam.solid import SILICONE_PRESETS
@@ -367,7 +368,10 @@ def test_serial_and_two_ranks_agree():
         assert a["load_factor"] == b["load_factor"]
         for key in ("u", "v", "theta"):
             assert a["tip"][key] == pytest.approx(b["tip"][key], rel=1e-8, abs=1e-14)
-        assert np.allclose(a["backbone"]["v"], b["backbone"]["v"], rtol=0, atol=1e-10)
+        # dolfinx 0.10+ locates and pulls back points in curved (P2) cells less tightly than
+        # 0.5 (serial vs 2 ranks: 3e-10 m here, 5e-8 of v): 1e-9 there
+        atol = 1e-10 if compat.LEGACY else 1e-9
+        assert np.allclose(a["backbone"]["v"], b["backbone"]["v"], rtol=0, atol=atol)
         assert a["max_principal_stretch"] == pytest.approx(b["max_principal_stretch"], rel=1e-8)
     assert serial["rod"]["steps"][-1]["tip"]["v"] == pytest.approx(
         parallel["rod"]["steps"][-1]["tip"]["v"], rel=1e-8)
