@@ -182,19 +182,17 @@ def test_unusable_parameters(key, problem):
 
 def test_point_evaluation_matches_interpolation():
     """x@S, y@S: the deformed backbone between nodes, against dolfinx's own evaluation."""
-    from dolfinx import geometry
+    from fe_beam import compat
 
     model = RodSensitivity(rod(), ["material.E"])
     try:
         model.solve(1.0)
         problem = model.problem
         u, v = problem.w.sub(0).collapse(), problem.w.sub(1).collapse()
-        tree = geometry.BoundingBoxTree(problem.mesh, 1)
+        tree = compat.bounding_box_tree(problem.mesh, 1)
         for s in (0.0, 0.137, 0.5, 0.91, 1.2):
             point = np.array([[s, 0.0, 0.0]])
-            cells = geometry.compute_colliding_cells(
-                problem.mesh, geometry.compute_collisions(tree, point), point)
-            cell = cells.links(0)[:1]
+            cell = compat.first_colliding_cells(problem.mesh, tree, point)[:1]
             expected = [s + u.eval(point, cell)[0], v.eval(point, cell)[0]]
             got = model.outputs([f"x@{s}", f"y@{s}"])
             np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
