@@ -258,6 +258,7 @@ class _Residuals:
         self.levels = sorted(set(load_factors.tolist()))
         self.history: list[dict] = []
         self._cache: dict = {}
+        self.failed = 0  # trial points without an equilibrium
         # per level: output names and (row index, column, output index, data value, weight)
         self.plan = {}
         self.points = {}  # per level: backbone points without s (distance residuals)
@@ -280,6 +281,20 @@ class _Residuals:
                                     spec.weights.get(column, 1.0)))
             self.plan[level] = (names, entries)
             self.points[level] = np.array(points).reshape(-1, 2)
+
+    def trial(self, q: np.ndarray, size: int) -> np.ndarray:
+        """The residuals at a trial point, or ``size`` infinities when the model has no
+        equilibrium there (the point is recorded in the history as failed)."""
+        from fe_beam.solver import LoadSteppingFailed, SolveFailed
+
+        try:
+            return self.evaluate(q)[0]
+        except (LoadSteppingFailed, SolveFailed):
+            self.failed += 1
+            self.history.append({"parameters": dict(zip(self.spec.parameters,
+                                                        (q * self.scale).tolist(), strict=True)),
+                                 "residual_norm": None, "equilibrium": False})
+            return np.full(size, np.inf)
 
     def evaluate(self, q: np.ndarray):
         key = tuple(np.asarray(q, dtype=float).tolist())
@@ -342,7 +357,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             bad = spec.parameters[int(np.flatnonzero((start < low) | (start > high))[0])]
             raise ConfigError(f"[calibrate] the start value of {bad!r} lies outside its bounds")
         residuals = _Residuals(model, data, spec, scale, factors)
-        fit = least_squares(lambda q: residuals.evaluate(q)[0],
+        # the start must have equilibria (else LoadSteppingFailed: exit 3); a trial parameter
+        # set without one gives non-finite residuals, which the trust-region method rejects
+        # (it shrinks the region) instead of ending the fit
+        size_r = len(residuals.evaluate(start / scale)[0])
+        fit = least_squares(lambda q: residuals.trial(q, size_r),
                             start / scale, jac=lambda q: residuals.evaluate(q)[1],
                             bounds=(low / scale, high / scale), method="trf",
                             x_scale="jac", xtol=tolerance, ftol=tolerance, gtol=tolerance,
@@ -350,16 +369,32 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         r, jac = residuals.evaluate(fit.x)
         values = fit.x * scale
         jac_p = jac / scale  # d r / d p
-        errors, correlation = _uncertainty(r, jac_p, scale)
         names = list(spec.parameters)
+        # a parameter stopped by its bound is not a least-squares estimate: no standard error
+        # for it, and the others' are those with it held there
+        at_bound = (np.asarray(fit.active_mask) != 0) | (values <= low) | (values >= high)
+        free = np.flatnonzero(~at_bound)
+        errors = correlation = None
+        if len(free):
+            sub_errors, sub_corr = _uncertainty(r, jac_p[:, free], scale[free])
+            if sub_errors is not None:
+                errors = np.full(size, np.nan)
+                errors[free] = sub_errors
+                if sub_corr is not None:
+                    correlation = np.full((size, size), np.nan)
+                    correlation[np.ix_(free, free)] = sub_corr
+        bound_notes = [f"{names[i]} ended at its bound "
+                       f"[{low[i]:.6g}, {high[i]:.6g}]: no standard error (the data pull it "
+                       "further; check the model, the data or the bounds)"
+                       for i in np.flatnonzero(at_bound)]
         summary = {
             "status": "converged" if fit.success else "not converged",
             "message": str(fit.message),
             "parameters": dict(zip(names, values.tolist(), strict=True)),
             "initial": dict(zip(names, start.tolist(), strict=True)),
-            "standard_errors": (dict(zip(names, errors.tolist(), strict=True))
+            "standard_errors": (dict(zip(names, _or_none(errors), strict=True))
                                 if errors is not None else None),
-            "correlation": ({a: dict(zip(names, row.tolist(), strict=True))
+            "correlation": ({a: dict(zip(names, _or_none(row), strict=True))
                              for a, row in zip(names, correlation, strict=True)}
                             if correlation is not None else None),
             "residual_norm": float(np.linalg.norm(r)),
@@ -368,9 +403,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "function_evaluations": int(fit.nfev),
             "history": residuals.history,
             "wall_time_s": time.perf_counter() - started,
-            "notes": ([] if errors is not None else [
+            "notes": bound_notes + ([] if errors is not None or len(free) == 0 else [
                 "no standard errors: as many data as parameters, or parameters the data cannot "
-                "tell apart (J^T J singular)"]),
+                "tell apart (J^T J singular)"]) + ([
+                f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]
+                if residuals.failed else []),
         }
         if curves:
             summary["_model"] = (_fitted_curves(model, residuals), factors)
@@ -378,6 +415,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     finally:
         if own:
             model.destroy()
+
+
+def _or_none(values) -> list:
+    """A list of floats with NaN (no value: a parameter at its bound) as None (JSON null)."""
+    return [None if not math.isfinite(v) else float(v) for v in np.asarray(values).tolist()]
 
 
 def default_bounds(key: str) -> tuple[float, float]:

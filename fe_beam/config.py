@@ -655,7 +655,8 @@ class Validated:
     petsc_options: tuple[dict, ...] = ()
 
 
-COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate", "design")
+COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
+            "design")
 
 
 def _solver_settings(parsed) -> list:

@@ -312,3 +312,63 @@ def test_parameters_the_data_cannot_tell_apart_have_no_standard_errors():
         model.destroy()
     assert summary["standard_errors"] is None and summary["correlation"] is None
     assert "cannot tell apart" in summary["notes"][0]
+
+
+def test_trial_without_equilibrium_is_a_rejected_step(finger_model, monkeypatch):
+    """A trial parameter set without an equilibrium (here: the first trial step) shrinks the
+    trust region instead of ending the fit (was: LoadSteppingFailed, exit 3, no summary)."""
+    from fe_beam.solver import LoadSteppingFailed
+
+    clean = synthetic(finger_model, TRUTH, TENSIONS)
+    finger_model.set_values(TRUTH * [0.8, 1.25])
+    first = finger_model._version + 1
+    solve = finger_model.solve
+
+    def failing(load_factor=1.0, stepping=None):
+        if finger_model._version == first:
+            raise LoadSteppingFailed("no equilibrium (test)", 0.0, [])
+        return solve(load_factor, stepping)
+
+    monkeypatch.setattr(finger_model, "solve", failing)
+    summary = calibrate(None, data_of(clean), CalibrationSpec(PARAMETERS), model=finger_model)
+    monkeypatch.undo()
+    np.testing.assert_allclose([summary["parameters"][k] for k in PARAMETERS], TRUTH, rtol=1e-6)
+    assert summary["status"] == "converged"
+    failed = [h for h in summary["history"] if h["residual_norm"] is None]
+    assert len(failed) == 1 and failed[0]["equilibrium"] is False
+    assert any("no equilibrium" in note for note in summary["notes"])
+
+
+def test_parameter_stopped_by_its_bound_has_no_standard_error(finger_model):
+    """E bounded away from the truth ends at its bound: no standard error for it (a bound is
+    not a statistical estimate; was a tiny, meaningless one), the free parameter's error is
+    that of the fit with E held there, and a note says so."""
+    clean = synthetic(finger_model, TRUTH, TENSIONS)
+    finger_model.set_values([0.8e6, 0.004])
+    spec = CalibrationSpec(PARAMETERS, bounds={"material.E": (0.7e6, 1e6)})
+    summary = calibrate(None, data_of(clean), spec, model=finger_model)
+    assert summary["parameters"]["material.E"] == pytest.approx(0.7e6, rel=1e-9)
+    assert summary["standard_errors"]["material.E"] is None
+    assert summary["correlation"]["material.E"]["tendons.0.offset_tip"] is None
+    assert any("material.E ended at its bound" in note for note in summary["notes"])
+    # independent: the one-parameter least-squares error of the offset at E = 0.7e6
+    offset = summary["parameters"]["tendons.0.offset_tip"]
+    data = data_of(clean)
+    h = 1e-7
+    columns = ("tip_u", "tip_v", "tip_theta")
+
+    def residuals(value):
+        finger_model.set_values([0.7e6, value])
+        out = []
+        for tension in TENSIONS:
+            finger_model.solve(tension / 2.0)
+            out.extend(finger_model.outputs(list(columns)))
+        measured = np.array([[data.columns[c][i] for c in columns]
+                             for i in range(len(TENSIONS))]).ravel()
+        return np.array(out) - measured
+
+    r = residuals(offset)
+    slope = (residuals(offset + h) - residuals(offset - h)) / (2 * h)
+    expected = np.sqrt(r @ r / (len(r) - 1) / (slope @ slope))
+    assert summary["standard_errors"]["tendons.0.offset_tip"] == pytest.approx(expected,
+                                                                               rel=1e-4)
