@@ -189,7 +189,7 @@ def read_data(path) -> CalibrationData:
     if path.stat().st_size > MAX_DATA_BYTES:
         raise ConfigError(f"data file {name} is larger than {MAX_DATA_BYTES // 2**20} MiB")
     try:
-        with path.open(newline="", encoding="utf-8") as stream:
+        with path.open(newline="", encoding="utf-8-sig") as stream:  # a BOM (Excel) too
             rows = [row for row in csv.reader(stream) if any(c.strip() for c in row)]
     except (OSError, UnicodeDecodeError, csv.Error) as error:
         raise ConfigError(f"data file {name} cannot be read as CSV ({error})") from None
@@ -360,7 +360,16 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         # the start must have equilibria (else LoadSteppingFailed: exit 3); a trial parameter
         # set without one gives non-finite residuals, which the trust-region method rejects
         # (it shrinks the region) instead of ending the fit
-        size_r = len(residuals.evaluate(start / scale)[0])
+        r0, jac0 = residuals.evaluate(start / scale)
+        size_r = len(r0)
+        # a parameter the data do not depend on (e.g. material.rho without gravity, or only
+        # unloaded data) has no best value: the optimiser would report any number as fitted
+        influence = np.linalg.norm(jac0, axis=0)
+        dead = np.flatnonzero(~(influence > 1e-12 * max(float(influence.max()), 0.0)))
+        if len(dead):
+            raise ConfigError(f"[calibrate] parameter {spec.parameters[int(dead[0])]!r} does not "
+                              "influence the data (zero sensitivity of every measured value): "
+                              "remove it from parameters or give data it changes")
         fit = least_squares(lambda q: residuals.trial(q, size_r),
                             start / scale, jac=lambda q: residuals.evaluate(q)[1],
                             bounds=(low / scale, high / scale), method="trf",
@@ -497,6 +506,10 @@ def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = Fa
         raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
                           f"{data.count()} measured values in {data_path} (give at least as "
                           "many data as parameters)")
+    absent = [c for c in spec.weights if c not in data.columns]
+    if absent:
+        raise ConfigError(f"[calibrate] weights.{absent[0]}: {data_path} has no column "
+                          f"{absent[0]} (columns with data: {', '.join(data.columns)})")
     summary = calibrate(raw, data, spec, comm, curves=True)
     curves, factors = summary.pop("_model")
     summary["data"] = str(data_path)

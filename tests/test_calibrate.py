@@ -236,6 +236,13 @@ def test_command_writes_summary_and_plot(tmp_path, finger_model):
     ({"extra": 'weights = {tip_w = 1.0}'}, "weights are given per data column"),
     ({"parameters": '["tendons.0.tension"]'}, "cannot be fitted when the data give the tension"),
     ({"parameters": '["tendons.3.tension"]'}, "there are 1 tendons"),
+    # a parameter the data do not depend on (was: "fitted" to an arbitrary value, exit 0)
+    ({"parameters": '["material.E", "material.rho"]'},
+     "parameter 'material.rho' does not influence the data"),
+    ({"header": ("tension", "tip_theta"), "rows": [[0.0, 0.0], [0.0, 0.0]],
+      "parameters": '["material.E"]'}, "parameter 'material.E' does not influence the data"),
+    # weights for a column the data do not have (was: silently unused)
+    ({"extra": 'weights = {x = 10.0}'}, "weights.x:"),
 ])
 def test_bad_input_exits_2_with_one_sentence(tmp_path, capfd, case, words):
     config, data = write_case(tmp_path, **case)
@@ -372,3 +379,17 @@ def test_parameter_stopped_by_its_bound_has_no_standard_error(finger_model):
     expected = np.sqrt(r @ r / (len(r) - 1) / (slope @ slope))
     assert summary["standard_errors"]["tendons.0.offset_tip"] == pytest.approx(expected,
                                                                                rel=1e-4)
+
+
+def test_data_file_with_a_byte_order_mark(tmp_path, finger_model):
+    """A CSV saved by a spreadsheet with a UTF-8 byte order mark reads like one without (was:
+    unknown column '\\ufefftension')."""
+    from fe_beam.calibrate import read_data
+
+    _, data = write_case(tmp_path)
+    plain = read_data(data)
+    data.write_bytes(b"\xef\xbb\xbf" + data.read_bytes())
+    marked = read_data(data)
+    assert marked.load_column == "tension"
+    np.testing.assert_array_equal(marked.loads, plain.loads)
+    assert marked.columns.keys() == plain.columns.keys()
