@@ -256,6 +256,8 @@ def run_design_command(args, config: dict, comm) -> int:
     summary = run_design(config, args.out, comm, progress=not args.quiet)
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam design: note: {note}", sys.stderr)
     _say(comm, f"design {summary['status']}: {values}; objective {objective:.6g}"
                f", KKT residual {summary['kkt_residual']:.2g}, {summary['iterations']} iterations "
                f"({summary['gradient']} gradients); results in {args.out}")

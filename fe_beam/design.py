@@ -558,8 +558,31 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         "tip": final["tip"],
         "history": history,
         "wall_time_s": time.perf_counter() - started,
+        "notes": _target_notes(design, final, conditions),
     }
     return summary | {"_shapes": (start_shape, shape)}
+
+
+TARGET_TOLERANCE = 1e-10  # dimensionless objective: a miss of 1e-5 L (or 1e-5 rad)
+
+
+def _target_notes(design: DesignProblem, values: dict, conditions: dict) -> list[str]:
+    """A tip_pose or backbone target that the optimum does not reach (the optimum of the
+    misfit within the bounds and constraints is then not the wanted shape): one note naming
+    the miss and what stops it."""
+    if design.objective not in ("tip_pose", "backbone") or not (
+            values["objective"] > TARGET_TOLERANCE):
+        return []
+    if design.objective == "tip_pose":
+        units = {"u": "m", "v": "m", "theta": "rad"}
+        miss = ", ".join(f"tip {k} = {values['tip'][k]:.6g} {units[k]} (target {v:.6g})"
+                         for k, v in design.target.items())
+    else:
+        miss = f"rms distance to the target points {math.sqrt(values['objective']):.3g} L"
+    limits = [a for a in conditions.get("active", []) if not a.startswith("equality")]
+    why = (f"; active: {', '.join(limits)}" if limits else
+           " (no bound or constraint is active: a local minimum of the misfit)")
+    return [f"the target is not reached: {miss}{why}"]
 
 
 def _constraint_summary(design: DesignProblem, values: dict) -> dict:

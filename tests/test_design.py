@@ -203,3 +203,36 @@ def test_taper_of_an_untapered_rod():
     assert summary["variables"]["section.h_tip"] == pytest.approx(exact, rel=1e-5)
     assert summary["tip"]["theta"] == pytest.approx(target, rel=1e-8)
     assert summary["kkt_residual"] < 1e-6
+
+
+def test_unreachable_target_is_said():
+    """A tip angle the bounds cannot reach: the misfit's optimum is at the bound h = h_hi (a
+    valid constrained optimum) and the summary and the command say that the target is not
+    reached (was: "design converged" and nothing else)."""
+    moment, h_hi = 0.01, 0.02
+    reachable = tip_angle(moment, h_hi)  # the smallest tip angle within the bounds
+    target = 0.5 * reachable
+    config = rod(moment, variables=["section.h"], bounds=[[0.005, h_hi]],
+                 objective="tip_pose", target={"theta": target})
+    summary = run_design(copy.deepcopy(config), None, MPI.COMM_WORLD)
+    assert summary["variables"]["section.h"] == pytest.approx(h_hi, rel=1e-9)
+    assert summary["tip"]["theta"] == pytest.approx(reachable, rel=1e-6)
+    assert len(summary["notes"]) == 1
+    note = summary["notes"][0]
+    assert "target is not reached" in note and "upper section.h" in note
+    # a reached target: no note
+    config["design"]["target"] = {"theta": 1.5 * reachable}
+    assert run_design(config, None, MPI.COMM_WORLD)["notes"] == []
+
+
+def test_unreachable_target_note_on_the_command_line(tmp_path, capfd):
+    moment, h_hi = 0.01, 0.02
+    config = rod(moment, variables=["section.h"], bounds=[[0.005, h_hi]],
+                 objective="tip_pose", target={"theta": 0.5 * tip_angle(moment, h_hi)})
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    err = capfd.readouterr().err
+    assert "note: the target is not reached" in err
+    saved = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert saved["notes"] and "not reached" in saved["notes"][0]
