@@ -42,7 +42,8 @@ from scipy.optimize import least_squares
 from fe_beam.config import ConfigError
 
 __all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
-           "parse_calibrate", "parameter_kind", "read_data", "run_calibrate"]
+           "check_data", "parse_calibrate", "parameter_kind", "read_data",
+           "run_calibrate"]
 
 SECTION_DIMS = ("b", "h", "d", "t", "tf", "tw", "A", "I", "I3", "I4")
 DATA_COLUMNS = ("tension", "load_factor", "tip_u", "tip_v", "tip_theta", "s", "x", "y")
@@ -496,10 +497,9 @@ def _fitted_curves(model, residuals: _Residuals) -> dict:
     return curves
 
 
-def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = False) -> dict:
-    """The command: validate, fit, write summary.json and calibration.png under ``out``."""
-    from fe_beam.outputs import atomic_write_json
-
+def check_data(raw: dict, data_path) -> tuple[CalibrationSpec, CalibrationData]:
+    """[calibrate] and DATA.csv checked together (FE-free: the command calls it before the
+    FE stack is loaded): ConfigError with one sentence on any mistake."""
     spec = parse_calibrate(raw)
     data = read_data(data_path)
     if data.count() < len(spec.parameters):
@@ -510,6 +510,14 @@ def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = Fa
     if absent:
         raise ConfigError(f"[calibrate] weights.{absent[0]}: {data_path} has no column "
                           f"{absent[0]} (columns with data: {', '.join(data.columns)})")
+    return spec, data
+
+
+def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = False) -> dict:
+    """The command: validate, fit, write summary.json and calibration.png under ``out``."""
+    from fe_beam.outputs import atomic_write_json
+
+    spec, data = check_data(raw, data_path)
     summary = calibrate(raw, data, spec, comm, curves=True)
     curves, factors = summary.pop("_model")
     summary["data"] = str(data_path)

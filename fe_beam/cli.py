@@ -592,6 +592,10 @@ def _main(argv: list[str] | None = None) -> int:
         refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
                   "quantities": getattr(args, "quantity", None)}
         validated = validate(args.command, config, refine)
+        if args.command == "calibrate":  # the data file too, before the FE stack is loaded
+            from fe_beam.calibrate import check_data
+
+            check_data(config, args.data)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()
         check_solver_options(validated)

@@ -393,3 +393,32 @@ def test_data_file_with_a_byte_order_mark(tmp_path, finger_model):
     assert marked.load_column == "tension"
     np.testing.assert_array_equal(marked.loads, plain.loads)
     assert marked.columns.keys() == plain.columns.keys()
+
+
+def test_data_file_mistake_loads_no_fe_stack(tmp_path):
+    """A mistake in DATA.csv is found before dolfinx, PETSc and MPI are loaded (was: after,
+    seconds later), like a configuration mistake."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    config, data = write_case(tmp_path, rows=[[1.0, -0.001, "nan", 0.2]])
+    root = Path(__file__).resolve().parents[1]
+    code = f"""
+import json, sys
+from fe_beam.cli import main
+code = main(["calibrate", {str(config)!r}, "--data", {str(data)!r}, "--out",
+             {str(tmp_path / "out")!r}, "--quiet"])
+heavy = ("dolfinx", "petsc4py", "mpi4py", "basix", "ffcx")
+print(json.dumps({{"code": code, "loaded": [m for m in heavy if m in sys.modules]}}))
+"""
+    from fe_beam.cli import MPI_LAUNCHER_PREFIXES
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith(MPI_LAUNCHER_PREFIXES)}
+    env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, cwd=root, timeout=120)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result == {"code": 2, "loaded": []}, (result, done.stderr)
+    assert "tip_v = 'nan' is not a finite number" in done.stderr
