@@ -480,6 +480,20 @@ def _load_factors(model, data: CalibrationData, spec: CalibrationSpec) -> np.nda
     if "tendons.0.tension" in spec.parameters:
         raise ConfigError("tendons.0.tension cannot be fitted when the data give the tension "
                           "(use a load_factor column)")
+    # the load factor scales every load and tendon: a tension column would silently scale the
+    # others with tendon 0's tension (e.g. gravity at a quarter for a quarter of the tension)
+    loads = model.config.model.loads
+    others = [f"loads.{name}" for name, value in (
+        ("tip_force", loads.tip_force), ("tip_moment", loads.tip_moment),
+        ("distributed", loads.distributed),
+        ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0))
+        if np.any(np.asarray(value, dtype=float) != 0)]
+    others += [f"tendons.{i}" for i, t in enumerate(tendons.tendons) if i > 0 and (
+        t.controlled_by_pull_in or t.tension)]
+    if others:
+        raise ConfigError(f"the data column tension scales every load with tendon 0's tension "
+                          f"(load factor = tension / tendons.0.tension), {others[0]} included: "
+                          "with other loads or tendons give a load_factor column")
     return data.loads / float(first.tension)
 
 

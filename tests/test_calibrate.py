@@ -422,3 +422,33 @@ print(json.dumps({{"code": code, "loaded": [m for m in heavy if m in sys.modules
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result == {"code": 2, "loaded": []}, (result, done.stderr)
     assert "tip_v = 'nan' is not a finite number" in done.stderr
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"loads": {"steps": 4, "gravity": [0.0, -9.81]}, "material": {"E": 0.6e6, "nu": 0.45,
+                                                                   "rho": 1070.0}},
+     "loads.gravity"),
+    ({"tendons": [FINGER["tendons"][0], {"offset_base": -0.008, "offset_tip": -0.004,
+                                         "tension": 0.5}]}, "tendons.1"),
+])
+def test_tension_column_with_other_loads_is_refused(change, named):
+    """The load factor tension / tendons.0.tension scales every load: with gravity or a
+    second tendon a tension column would fit a model whose gravity (other tendon) changes
+    with tendon 0's tension (was: fitted silently). load_factor data are accepted."""
+    from fe_beam.config import ConfigError
+
+    raw = {**FINGER, **change}
+    model = RodSensitivity(raw, ("material.E",))
+    try:
+        data = CalibrationData("tension", np.array([1.0, 2.0]),
+                               {"tip_theta": np.array([0.2, 0.4])})
+        with pytest.raises(ConfigError, match=f"{named} included: .* load_factor column"):
+            calibrate(None, data, CalibrationSpec(("material.E",)), model=model)
+        model.solve(1.0)
+        theta = model.outputs(["tip_theta"])[0]
+        data = CalibrationData("load_factor", np.array([1.0]), {"tip_theta": np.array([theta])})
+        model.set_values([0.8e6])
+        fitted = calibrate(None, data, CalibrationSpec(("material.E",)), model=model)
+        assert fitted["parameters"]["material.E"] == pytest.approx(0.6e6, rel=1e-6)
+    finally:
+        model.destroy()
