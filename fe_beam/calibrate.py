@@ -12,7 +12,9 @@ Configuration::
     weights = {tip_theta = 1.0, x = 10.0, y = 10.0}       # optional, per data column
 
 DATA.csv: a header line, then one row per measurement. One load column, ``tension`` (N, the
-tension of tendon 0; load factor = tension / tendons.0.tension) or ``load_factor``; and any of
+tension of tendon 0; load factor = tension / tendons.0.tension, which scales every load, so a
+configuration with other loads or loaded tendons needs ``load_factor``) or ``load_factor``; and
+any of
 ``tip_u``, ``tip_v``, ``tip_theta`` (tip displacement [m], rotation [rad]) and ``x``, ``y``
 (deformed positions [m] of backbone points; several rows per load). With a column ``s``, each
 point is the material point at reference coordinate s [m]: two residuals, x(s) - x and
