@@ -266,6 +266,26 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
 
 
 # --- evaluation ----------------------------------------------------------------------------------
+def _check_in_place(design: DesignProblem, config, comm) -> None:
+    """Every variable must change numbers held by Constants only (one solver for all
+    evaluations): a custom section's dimensions (its height sqrt(12 I / A)) and those of a
+    hyperelastic section rule are compiled into the forms. ConfigError naming the variable."""
+    from fe_beam.realtime import set_parameters, structure_key
+
+    base = structure_key(config, comm)
+    for key, initial, (low, high) in zip(design.variables, design.initial, design.bounds,
+                                         strict=True):
+        try:
+            changed = set_parameters(config, {key: high if high != initial else low})
+        except (KeyError, ValueError):
+            continue  # reported by the solver with its own message
+        if structure_key(changed, comm) != base:
+            raise ConfigError(f"[design] variables: {key!r} cannot be a design variable of "
+                              "this model (a custom section's or a hyperelastic section rule's "
+                              "dimensions are compiled into its forms); use a closed-form "
+                              "section shape (rectangle, circle, tube, t-section)")
+
+
 class Evaluator:
     """Objective and constraints of a design at scaled variables t in [0, 1]^n, from one
     `RealtimeSolver` (each evaluation warm-started from the last equilibrium)."""
@@ -279,6 +299,7 @@ class Evaluator:
         from fe_beam.realtime import RealtimeSolver
 
         self.design = design
+        _check_in_place(design, config, comm)
         solver = replace(config.solver, rtol=min(config.solver.rtol, DESIGN_RTOL))
         self.config = replace(config, solver=solver)
         self.comm = comm

@@ -236,3 +236,22 @@ def test_unreachable_target_note_on_the_command_line(tmp_path, capfd):
     assert "note: the target is not reached" in err
     saved = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert saved["notes"] and "not reached" in saved["notes"][0]
+
+
+def test_custom_section_dimension_is_refused_with_one_sentence(tmp_path, capfd):
+    """A custom section's A and I are compiled into the forms (its height sqrt(12 I / A)):
+    exit 2 naming the variable (was: internal error, exit 1, after building the model).
+    material.E of the same model is a valid variable."""
+    config = rod(0.01, variables=["section.I"], bounds=[[1e-10, 1e-8]], objective="tip_pose",
+                 target={"theta": 0.5})
+    config["section"] = {"shape": "custom", "A": B * 0.01, "I": B * 0.01**3 / 12}
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capfd.readouterr().err.strip()
+    assert "'section.I' cannot be a design variable" in err and len(err.splitlines()) == 1
+    config["design"].update(variables=["material.E"], bounds=[[1e6, 1e8]])
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged"
+    assert summary["variables"]["material.E"] == pytest.approx(
+        0.01 * L / (0.5 * B * 0.01**3 / 12), rel=1e-7)
