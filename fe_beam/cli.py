@@ -252,8 +252,14 @@ RUNNERS["refine"] = run_refine
 
 def run_design_command(args, config: dict, comm) -> int:
     from fe_beam.design import run_design
+    from fe_beam.realtime import UpdateFailed
 
-    summary = run_design(config, args.out, comm, progress=not args.quiet)
+    try:
+        summary = run_design(config, args.out, comm, progress=not args.quiet)
+    except UpdateFailed as failure:  # a trial design without equilibrium (was: internal error)
+        _say(comm, f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
+                   "[design] bounds)", sys.stderr)
+        return EXIT_FAILED
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
     for note in summary.get("notes", []):

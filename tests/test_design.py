@@ -255,3 +255,27 @@ def test_custom_section_dimension_is_refused_with_one_sentence(tmp_path, capfd):
     assert summary["status"] == "converged"
     assert summary["variables"]["material.E"] == pytest.approx(
         0.01 * L / (0.5 * B * 0.01**3 / 12), rel=1e-7)
+
+
+def test_trial_design_without_equilibrium_exits_3(tmp_path, capfd, monkeypatch):
+    """A trial design the solver finds no equilibrium for ends the command with exit 3 and one
+    line saying so (was: 'internal error', exit 1)."""
+    from fe_beam import realtime
+
+    update = realtime.RealtimeSolver.update
+    calls = []
+
+    def failing(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise realtime.UpdateFailed("no equilibrium at the new values (test)", 0.0)
+        return update(self, *args, **kwargs)
+
+    monkeypatch.setattr(realtime.RealtimeSolver, "update", failing)
+    config = rod(0.01, variables=["section.h"], bounds=[[0.005, 0.02]], objective="tip_pose",
+                 target={"theta": 0.5})
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    err = capfd.readouterr().err.strip()
+    assert "no equilibrium for a trial design" in err and len(err.splitlines()) == 1, err
