@@ -321,6 +321,7 @@ def test_parameters_the_data_cannot_tell_apart_have_no_standard_errors():
     assert "cannot tell apart" in summary["notes"][0]
 
 
+@pytest.mark.mpi
 def test_trial_without_equilibrium_is_a_rejected_step(finger_model, monkeypatch):
     """A trial parameter set without an equilibrium (here: the first trial step) shrinks the
     trust region instead of ending the fit (was: LoadSteppingFailed, exit 3, no summary)."""
@@ -346,6 +347,7 @@ def test_trial_without_equilibrium_is_a_rejected_step(finger_model, monkeypatch)
     assert any("no equilibrium" in note for note in summary["notes"])
 
 
+@pytest.mark.mpi
 def test_parameter_stopped_by_its_bound_has_no_standard_error(finger_model):
     """E bounded away from the truth ends at its bound: no standard error for it (a bound is
     not a statistical estimate; was a tiny, meaningless one), the free parameter's error is
