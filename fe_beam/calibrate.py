@@ -522,6 +522,17 @@ def check_data(raw: dict, data_path) -> tuple[CalibrationSpec, CalibrationData]:
         raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
                           f"{data.count()} measured values in {data_path} (give at least as "
                           "many data as parameters)")
+    merged = raw
+    if raw.get("tendons"):
+        from fe_beam.model.finger import with_defaults  # FE-free: the finger's beam length
+
+        merged = with_defaults(raw)
+    length = (merged.get("beam") or {}).get("length") if isinstance(merged, dict) else None
+    if data.s is not None and _number(length):
+        outside = np.flatnonzero(np.isfinite(data.s) & ((data.s < 0) | (data.s > length)))
+        if len(outside):
+            raise ConfigError(f"data file {data_path}: s = {data.s[outside[0]]:g} (data row "
+                              f"{outside[0] + 1}) lies outside the rod, s in [0, {length:g}] m")
     absent = [c for c in spec.weights if c not in data.columns]
     if absent:
         raise ConfigError(f"[calibrate] weights.{absent[0]}: {data_path} has no column "

@@ -241,6 +241,10 @@ def test_command_writes_summary_and_plot(tmp_path, finger_model):
      "parameter 'material.rho' does not influence the data"),
     ({"header": ("tension", "tip_theta"), "rows": [[0.0, 0.0], [0.0, 0.0]],
       "parameters": '["material.E"]'}, "parameter 'material.E' does not influence the data"),
+    # a backbone point off the rod (was: found after the FE build, named as an 'output')
+    ({"header": ("tension", "s", "x", "y"), "rows": [[1.0, 0.05, 0.05, 0.01],
+                                                      [2.0, 0.12, 0.1, 0.02]]},
+     "s = 0.12 (data row 2) lies outside the rod, s in [0, 0.1] m"),
     # weights for a column the data do not have (was: silently unused)
     ({"extra": 'weights = {x = 10.0}'}, "weights.x:"),
 ])
