@@ -353,7 +353,8 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         factors = _load_factors(model, data, spec)
         start = model.values()
         scale = np.where(start != 0, np.abs(start), 1.0)
-        limits = [spec.bounds.get(k, default_bounds(k)) for k in spec.parameters]
+        limits = [spec.bounds.get(k, _offset_bounds(model, k) or default_bounds(k))
+                  for k in spec.parameters]
         low = np.array([lo for lo, _ in limits])
         high = np.array([hi for _, hi in limits])
         if np.any(start < low) or np.any(start > high):
@@ -427,6 +428,28 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     finally:
         if own:
             model.destroy()
+
+
+def _offset_bounds(model, key: str) -> tuple[float, float] | None:
+    """Default bounds of a tendon offset parameter: the section's extent at that path point
+    (the configuration refuses a tendon outside the section; a fit must not report one). None
+    for other parameters or a section of unknown shape (custom)."""
+    m = re.fullmatch(r"tendons\.(\d+)\.(offset_base|offset_tip|path\.(\d+)\.1|"
+                     r"paths\.(\d+)\.(\d+)\.1)", key)
+    if m is None or not getattr(model, "tendons", None):
+        return None
+    index = int(m.group(1))
+    paths = model.tendons.tendons[index].paths
+    if m.group(2) in ("offset_base", "offset_tip"):
+        branch, point = 0, (0 if m.group(2) == "offset_base" else len(paths[0]) - 1)
+    elif m.group(3) is not None:
+        branch, point = 0, int(m.group(3))
+    else:
+        branch, point = int(m.group(4)), int(m.group(5))
+    x = float(paths[branch][point][0])
+    config = model.config.model
+    extent = config.section.y_extent(x / float(config.length))
+    return None if extent is None else (float(extent[0]), float(extent[1]))
 
 
 def _or_none(values) -> list:
