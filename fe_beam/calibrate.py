@@ -353,8 +353,7 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         factors = _load_factors(model, data, spec)
         start = model.values()
         scale = np.where(start != 0, np.abs(start), 1.0)
-        limits = [spec.bounds.get(k, _offset_bounds(model, k) or default_bounds(k))
-                  for k in spec.parameters]
+        limits = [spec.bounds.get(k, default_bounds(k)) for k in spec.parameters]
         low = np.array([lo for lo, _ in limits])
         high = np.array([hi for _, hi in limits])
         if np.any(start < low) or np.any(start > high):
@@ -385,7 +384,14 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         names = list(spec.parameters)
         # a parameter stopped by its bound is not a least-squares estimate: no standard error
         # for it, and the others' are those with it held there
-        at_bound = (np.asarray(fit.active_mask) != 0) | (values <= low) | (values >= high)
+        # (trust-region iterates stay strictly inside: one close to a bound, 1e-6 of its
+        # scale, with the misfit's gradient pushing outwards is stopped by it)
+        near = 1e-6 * np.maximum(scale, np.abs(np.where(np.isfinite(low), low, 0.0)))
+        push = jac_p.T @ r  # half the gradient of |r|^2 by p
+        cosine = push / np.maximum(np.linalg.norm(jac_p, axis=0) * np.linalg.norm(r), 1e-300)
+        at_bound = ((np.asarray(fit.active_mask) != 0)
+                    | ((values <= low + near) & (cosine > 1e-8))
+                    | ((values >= high - near) & (cosine < -1e-8)))
         free = np.flatnonzero(~at_bound)
         errors = correlation = None
         if len(free):
@@ -400,9 +406,21 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
                        f"[{low[i]:.6g}, {high[i]:.6g}]: no standard error (the data pull it "
                        "further; check the model, the data or the bounds)"
                        for i in np.flatnonzero(at_bound)]
+        # a fitted tendon outside the section is a model the configuration itself refuses:
+        # the data cannot be reproduced inside it (not a fit to report as converged)
+        outside = []
+        for k, value in zip(names, values, strict=True):
+            extent = _offset_bounds(model, k)
+            if extent is not None and not (
+                    extent[0] - 1e-9 * (extent[1] - extent[0]) <= value
+                    <= extent[1] + 1e-9 * (extent[1] - extent[0])):
+                outside.append(f"the fit puts {k} = {value:.6g} m outside the section (y from "
+                               f"{extent[0]:.6g} to {extent[1]:.6g} m): this model cannot "
+                               "reproduce the data with the tendon inside; check the data or "
+                               "give [calibrate] bounds")
         summary = {
-            "status": "converged" if fit.success else "not converged",
-            "message": str(fit.message),
+            "status": "converged" if fit.success and not outside else "not converged",
+            "message": outside[0] if outside else str(fit.message),
             "parameters": dict(zip(names, values.tolist(), strict=True)),
             "initial": dict(zip(names, start.tolist(), strict=True)),
             "standard_errors": (dict(zip(names, _or_none(errors), strict=True))
@@ -431,9 +449,9 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
 
 
 def _offset_bounds(model, key: str) -> tuple[float, float] | None:
-    """Default bounds of a tendon offset parameter: the section's extent at that path point
-    (the configuration refuses a tendon outside the section; a fit must not report one). None
-    for other parameters or a section of unknown shape (custom)."""
+    """The section's extent at the path point of a tendon offset parameter (the
+    configuration refuses a tendon outside the section; a fit must not report one), of the
+    configuration's section. None for other parameters or a custom section."""
     m = re.fullmatch(r"tendons\.(\d+)\.(offset_base|offset_tip|path\.(\d+)\.1|"
                      r"paths\.(\d+)\.(\d+)\.1)", key)
     if m is None or not getattr(model, "tendons", None):

@@ -460,19 +460,25 @@ def test_tension_column_with_other_loads_is_refused(change, named):
         model.destroy()
 
 
-def test_fitted_tendon_offset_stays_inside_the_section(finger_model):
+def test_fitted_tendon_outside_the_section_is_not_a_converged_fit(finger_model):
     """Data the model cannot reproduce (a steel cantilever's tip poses) pull the tip offset
-    out of the section: it stops at the section's edge h_tip / 2 = 5 mm by default (was
-    -0.059 m, a tendon outside the finger that the configuration itself refuses, reported as
-    converged), with a note and no standard error for it."""
+    out of the section (to -0.059 m, a tendon outside the finger that the configuration itself
+    refuses, was reported as converged): status "not converged" naming it. With the section
+    as bounds the offset stops at its edge h_tip / 2, with a note and no standard error."""
     rows = [(0.5, np.array([-0.1, -0.3, -0.6]), []), (1.0, np.array([-0.39, -0.71, -1.2]), []),
             (1.5, np.array([-0.5, -0.8, -1.4]), []), (2.0, np.array([-0.6, -0.85, -1.5]), [])]
+    half = FINGER["section"]["h_tip"] / 2
     finger_model.set_values(TRUTH)
     summary = calibrate(None, data_of(rows), CalibrationSpec(PARAMETERS), model=finger_model)
-    half = FINGER["section"]["h_tip"] / 2
-    offset = summary["parameters"]["tendons.0.offset_tip"]
-    assert -half <= offset <= half, summary
-    assert offset == pytest.approx(-half, rel=1e-6), summary
+    assert summary["parameters"]["tendons.0.offset_tip"] < -half
+    assert summary["status"] == "not converged"
+    assert "tendons.0.offset_tip" in summary["message"] and "outside the section" in \
+        summary["message"]
+    finger_model.set_values(TRUTH)
+    spec = CalibrationSpec(PARAMETERS, bounds={"tendons.0.offset_tip": (-half, half)})
+    summary = calibrate(None, data_of(rows), spec, model=finger_model)
+    assert summary["parameters"]["tendons.0.offset_tip"] == pytest.approx(-half, rel=1e-6)
+    assert summary["status"] == "converged"
     assert summary["standard_errors"] is None or \
         summary["standard_errors"]["tendons.0.offset_tip"] is None
     assert any("tendons.0.offset_tip ended at its bound" in n for n in summary["notes"])
