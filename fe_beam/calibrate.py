@@ -12,7 +12,9 @@ Configuration::
     weights = {tip_theta = 1.0, x = 10.0, y = 10.0}       # optional, per data column
 
 DATA.csv: a header line, then one row per measurement. One load column, ``tension`` (N, the
-tension of tendon 0; load factor = tension / tendons.0.tension) or ``load_factor``; and any of
+tension of tendon 0; load factor = tension / tendons.0.tension, which scales every load, so a
+configuration with other loads or loaded tendons needs ``load_factor``) or ``load_factor``; and
+any of
 ``tip_u``, ``tip_v``, ``tip_theta`` (tip displacement [m], rotation [rad]) and ``x``, ``y``
 (deformed positions [m] of backbone points; several rows per load). With a column ``s``, each
 point is the material point at reference coordinate s [m]: two residuals, x(s) - x and
@@ -42,7 +44,8 @@ from scipy.optimize import least_squares
 from fe_beam.config import ConfigError
 
 __all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
-           "parse_calibrate", "parameter_kind", "read_data", "run_calibrate"]
+           "check_data", "parse_calibrate", "parameter_kind", "read_data",
+           "run_calibrate"]
 
 SECTION_DIMS = ("b", "h", "d", "t", "tf", "tw", "A", "I", "I3", "I4")
 DATA_COLUMNS = ("tension", "load_factor", "tip_u", "tip_v", "tip_theta", "s", "x", "y")
@@ -189,7 +192,7 @@ def read_data(path) -> CalibrationData:
     if path.stat().st_size > MAX_DATA_BYTES:
         raise ConfigError(f"data file {name} is larger than {MAX_DATA_BYTES // 2**20} MiB")
     try:
-        with path.open(newline="", encoding="utf-8") as stream:
+        with path.open(newline="", encoding="utf-8-sig") as stream:  # a BOM (Excel) too
             rows = [row for row in csv.reader(stream) if any(c.strip() for c in row)]
     except (OSError, UnicodeDecodeError, csv.Error) as error:
         raise ConfigError(f"data file {name} cannot be read as CSV ({error})") from None
@@ -258,6 +261,7 @@ class _Residuals:
         self.levels = sorted(set(load_factors.tolist()))
         self.history: list[dict] = []
         self._cache: dict = {}
+        self.failed = 0  # trial points without an equilibrium
         # per level: output names and (row index, column, output index, data value, weight)
         self.plan = {}
         self.points = {}  # per level: backbone points without s (distance residuals)
@@ -280,6 +284,20 @@ class _Residuals:
                                     spec.weights.get(column, 1.0)))
             self.plan[level] = (names, entries)
             self.points[level] = np.array(points).reshape(-1, 2)
+
+    def trial(self, q: np.ndarray, size: int) -> np.ndarray:
+        """The residuals at a trial point, or ``size`` infinities when the model has no
+        equilibrium there (the point is recorded in the history as failed)."""
+        from fe_beam.solver import LoadSteppingFailed, SolveFailed
+
+        try:
+            return self.evaluate(q)[0]
+        except (LoadSteppingFailed, SolveFailed):
+            self.failed += 1
+            self.history.append({"parameters": dict(zip(self.spec.parameters,
+                                                        (q * self.scale).tolist(), strict=True)),
+                                 "residual_norm": None, "equilibrium": False})
+            return np.full(size, np.inf)
 
     def evaluate(self, q: np.ndarray):
         key = tuple(np.asarray(q, dtype=float).tolist())
@@ -342,7 +360,20 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             bad = spec.parameters[int(np.flatnonzero((start < low) | (start > high))[0])]
             raise ConfigError(f"[calibrate] the start value of {bad!r} lies outside its bounds")
         residuals = _Residuals(model, data, spec, scale, factors)
-        fit = least_squares(lambda q: residuals.evaluate(q)[0],
+        # the start must have equilibria (else LoadSteppingFailed: exit 3); a trial parameter
+        # set without one gives non-finite residuals, which the trust-region method rejects
+        # (it shrinks the region) instead of ending the fit
+        r0, jac0 = residuals.evaluate(start / scale)
+        size_r = len(r0)
+        # a parameter the data do not depend on (e.g. material.rho without gravity, or only
+        # unloaded data) has no best value: the optimiser would report any number as fitted
+        influence = np.linalg.norm(jac0, axis=0)
+        dead = np.flatnonzero(~(influence > 1e-12 * max(float(influence.max()), 0.0)))
+        if len(dead):
+            raise ConfigError(f"[calibrate] parameter {spec.parameters[int(dead[0])]!r} does not "
+                              "influence the data (zero sensitivity of every measured value): "
+                              "remove it from parameters or give data it changes")
+        fit = least_squares(lambda q: residuals.trial(q, size_r),
                             start / scale, jac=lambda q: residuals.evaluate(q)[1],
                             bounds=(low / scale, high / scale), method="trf",
                             x_scale="jac", xtol=tolerance, ftol=tolerance, gtol=tolerance,
@@ -350,16 +381,51 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         r, jac = residuals.evaluate(fit.x)
         values = fit.x * scale
         jac_p = jac / scale  # d r / d p
-        errors, correlation = _uncertainty(r, jac_p, scale)
         names = list(spec.parameters)
+        # a parameter stopped by its bound is not a least-squares estimate: no standard error
+        # for it, and the others' are those with it held there
+        # (trust-region iterates stay strictly inside: one close to a bound, 1e-6 of its
+        # scale, with the misfit's gradient pushing outwards is stopped by it)
+        near = 1e-6 * np.maximum(scale, np.abs(np.where(np.isfinite(low), low, 0.0)))
+        push = jac_p.T @ r  # half the gradient of |r|^2 by p
+        cosine = push / np.maximum(np.linalg.norm(jac_p, axis=0) * np.linalg.norm(r), 1e-300)
+        at_bound = ((np.asarray(fit.active_mask) != 0)
+                    | ((values <= low + near) & (cosine > 1e-8))
+                    | ((values >= high - near) & (cosine < -1e-8)))
+        free = np.flatnonzero(~at_bound)
+        errors = correlation = None
+        if len(free):
+            sub_errors, sub_corr = _uncertainty(r, jac_p[:, free], scale[free])
+            if sub_errors is not None:
+                errors = np.full(size, np.nan)
+                errors[free] = sub_errors
+                if sub_corr is not None:
+                    correlation = np.full((size, size), np.nan)
+                    correlation[np.ix_(free, free)] = sub_corr
+        bound_notes = [f"{names[i]} ended at its bound "
+                       f"[{low[i]:.6g}, {high[i]:.6g}]: no standard error (the data pull it "
+                       "further; check the model, the data or the bounds)"
+                       for i in np.flatnonzero(at_bound)]
+        # a fitted tendon outside the section is a model the configuration itself refuses:
+        # the data cannot be reproduced inside it (not a fit to report as converged)
+        outside = []
+        for k, value in zip(names, values, strict=True):
+            extent = _offset_bounds(model, k)
+            if extent is not None and not (
+                    extent[0] - 1e-9 * (extent[1] - extent[0]) <= value
+                    <= extent[1] + 1e-9 * (extent[1] - extent[0])):
+                outside.append(f"the fit puts {k} = {value:.6g} m outside the section (y from "
+                               f"{extent[0]:.6g} to {extent[1]:.6g} m): this model cannot "
+                               "reproduce the data with the tendon inside; check the data or "
+                               "give [calibrate] bounds")
         summary = {
-            "status": "converged" if fit.success else "not converged",
-            "message": str(fit.message),
+            "status": "converged" if fit.success and not outside else "not converged",
+            "message": outside[0] if outside else str(fit.message),
             "parameters": dict(zip(names, values.tolist(), strict=True)),
             "initial": dict(zip(names, start.tolist(), strict=True)),
-            "standard_errors": (dict(zip(names, errors.tolist(), strict=True))
+            "standard_errors": (dict(zip(names, _or_none(errors), strict=True))
                                 if errors is not None else None),
-            "correlation": ({a: dict(zip(names, row.tolist(), strict=True))
+            "correlation": ({a: dict(zip(names, _or_none(row), strict=True))
                              for a, row in zip(names, correlation, strict=True)}
                             if correlation is not None else None),
             "residual_norm": float(np.linalg.norm(r)),
@@ -368,9 +434,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "function_evaluations": int(fit.nfev),
             "history": residuals.history,
             "wall_time_s": time.perf_counter() - started,
-            "notes": ([] if errors is not None else [
+            "notes": bound_notes + ([] if errors is not None or len(free) == 0 else [
                 "no standard errors: as many data as parameters, or parameters the data cannot "
-                "tell apart (J^T J singular)"]),
+                "tell apart (J^T J singular)"]) + ([
+                f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]
+                if residuals.failed else []),
         }
         if curves:
             summary["_model"] = (_fitted_curves(model, residuals), factors)
@@ -378,6 +446,33 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     finally:
         if own:
             model.destroy()
+
+
+def _offset_bounds(model, key: str) -> tuple[float, float] | None:
+    """The section's extent at the path point of a tendon offset parameter (the
+    configuration refuses a tendon outside the section; a fit must not report one), of the
+    configuration's section. None for other parameters or a custom section."""
+    m = re.fullmatch(r"tendons\.(\d+)\.(offset_base|offset_tip|path\.(\d+)\.1|"
+                     r"paths\.(\d+)\.(\d+)\.1)", key)
+    if m is None or not getattr(model, "tendons", None):
+        return None
+    index = int(m.group(1))
+    paths = model.tendons.tendons[index].paths
+    if m.group(2) in ("offset_base", "offset_tip"):
+        branch, point = 0, (0 if m.group(2) == "offset_base" else len(paths[0]) - 1)
+    elif m.group(3) is not None:
+        branch, point = 0, int(m.group(3))
+    else:
+        branch, point = int(m.group(4)), int(m.group(5))
+    x = float(paths[branch][point][0])
+    config = model.config.model
+    extent = config.section.y_extent(x / float(config.length))
+    return None if extent is None else (float(extent[0]), float(extent[1]))
+
+
+def _or_none(values) -> list:
+    """A list of floats with NaN (no value: a parameter at its bound) as None (JSON null)."""
+    return [None if not math.isfinite(v) else float(v) for v in np.asarray(values).tolist()]
 
 
 def default_bounds(key: str) -> tuple[float, float]:
@@ -428,6 +523,20 @@ def _load_factors(model, data: CalibrationData, spec: CalibrationSpec) -> np.nda
     if "tendons.0.tension" in spec.parameters:
         raise ConfigError("tendons.0.tension cannot be fitted when the data give the tension "
                           "(use a load_factor column)")
+    # the load factor scales every load and tendon: a tension column would silently scale the
+    # others with tendon 0's tension (e.g. gravity at a quarter for a quarter of the tension)
+    loads = model.config.model.loads
+    others = [f"loads.{name}" for name, value in (
+        ("tip_force", loads.tip_force), ("tip_moment", loads.tip_moment),
+        ("distributed", loads.distributed),
+        ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0))
+        if np.any(np.asarray(value, dtype=float) != 0)]
+    others += [f"tendons.{i}" for i, t in enumerate(tendons.tendons) if i > 0 and (
+        t.controlled_by_pull_in or t.tension)]
+    if others:
+        raise ConfigError(f"the data column tension scales every load with tendon 0's tension "
+                          f"(load factor = tension / tendons.0.tension), {others[0]} included: "
+                          "with other loads or tendons give a load_factor column")
     return data.loads / float(first.tension)
 
 
@@ -445,16 +554,38 @@ def _fitted_curves(model, residuals: _Residuals) -> dict:
     return curves
 
 
-def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = False) -> dict:
-    """The command: validate, fit, write summary.json and calibration.png under ``out``."""
-    from fe_beam.outputs import atomic_write_json
-
+def check_data(raw: dict, data_path) -> tuple[CalibrationSpec, CalibrationData]:
+    """[calibrate] and DATA.csv checked together (FE-free: the command calls it before the
+    FE stack is loaded): ConfigError with one sentence on any mistake."""
     spec = parse_calibrate(raw)
     data = read_data(data_path)
     if data.count() < len(spec.parameters):
         raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
                           f"{data.count()} measured values in {data_path} (give at least as "
                           "many data as parameters)")
+    merged = raw
+    if raw.get("tendons"):
+        from fe_beam.model.finger import with_defaults  # FE-free: the finger's beam length
+
+        merged = with_defaults(raw)
+    length = (merged.get("beam") or {}).get("length") if isinstance(merged, dict) else None
+    if data.s is not None and _number(length):
+        outside = np.flatnonzero(np.isfinite(data.s) & ((data.s < 0) | (data.s > length)))
+        if len(outside):
+            raise ConfigError(f"data file {data_path}: s = {data.s[outside[0]]:g} (data row "
+                              f"{outside[0] + 1}) lies outside the rod, s in [0, {length:g}] m")
+    absent = [c for c in spec.weights if c not in data.columns]
+    if absent:
+        raise ConfigError(f"[calibrate] weights.{absent[0]}: {data_path} has no column "
+                          f"{absent[0]} (columns with data: {', '.join(data.columns)})")
+    return spec, data
+
+
+def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = False) -> dict:
+    """The command: validate, fit, write summary.json and calibration.png under ``out``."""
+    from fe_beam.outputs import atomic_write_json
+
+    spec, data = check_data(raw, data_path)
     summary = calibrate(raw, data, spec, comm, curves=True)
     curves, factors = summary.pop("_model")
     summary["data"] = str(data_path)

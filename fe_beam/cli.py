@@ -252,10 +252,18 @@ RUNNERS["refine"] = run_refine
 
 def run_design_command(args, config: dict, comm) -> int:
     from fe_beam.design import run_design
+    from fe_beam.realtime import UpdateFailed
 
-    summary = run_design(config, args.out, comm, progress=not args.quiet)
+    try:
+        summary = run_design(config, args.out, comm, progress=not args.quiet)
+    except UpdateFailed as failure:  # a trial design without equilibrium (was: internal error)
+        _say(comm, f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
+                   "[design] bounds)", sys.stderr)
+        return EXIT_FAILED
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam design: note: {note}", sys.stderr)
     _say(comm, f"design {summary['status']}: {values}; objective {objective:.6g}"
                f", KKT residual {summary['kkt_residual']:.2g}, {summary['iterations']} iterations "
                f"({summary['gradient']} gradients); results in {args.out}")
@@ -590,6 +598,10 @@ def _main(argv: list[str] | None = None) -> int:
         refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
                   "quantities": getattr(args, "quantity", None)}
         validated = validate(args.command, config, refine)
+        if args.command == "calibrate":  # the data file too, before the FE stack is loaded
+            from fe_beam.calibrate import check_data
+
+            check_data(config, args.data)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()
         check_solver_options(validated)

@@ -266,6 +266,26 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
 
 
 # --- evaluation ----------------------------------------------------------------------------------
+def _check_in_place(design: DesignProblem, config, comm) -> None:
+    """Every variable must change numbers held by Constants only (one solver for all
+    evaluations): a custom section's dimensions (its height sqrt(12 I / A)) and those of a
+    hyperelastic section rule are compiled into the forms. ConfigError naming the variable."""
+    from fe_beam.realtime import set_parameters, structure_key
+
+    base = structure_key(config, comm)
+    for key, initial, (low, high) in zip(design.variables, design.initial, design.bounds,
+                                         strict=True):
+        try:
+            changed = set_parameters(config, {key: high if high != initial else low})
+        except (KeyError, ValueError):
+            continue  # reported by the solver with its own message
+        if structure_key(changed, comm) != base:
+            raise ConfigError(f"[design] variables: {key!r} cannot be a design variable of "
+                              "this model (a custom section's or a hyperelastic section rule's "
+                              "dimensions are compiled into its forms); use a closed-form "
+                              "section shape (rectangle, circle, tube, t-section)")
+
+
 class Evaluator:
     """Objective and constraints of a design at scaled variables t in [0, 1]^n, from one
     `RealtimeSolver` (each evaluation warm-started from the last equilibrium)."""
@@ -279,6 +299,7 @@ class Evaluator:
         from fe_beam.realtime import RealtimeSolver
 
         self.design = design
+        _check_in_place(design, config, comm)
         solver = replace(config.solver, rtol=min(config.solver.rtol, DESIGN_RTOL))
         self.config = replace(config, solver=solver)
         self.comm = comm
@@ -558,8 +579,31 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         "tip": final["tip"],
         "history": history,
         "wall_time_s": time.perf_counter() - started,
+        "notes": _target_notes(design, final, conditions),
     }
     return summary | {"_shapes": (start_shape, shape)}
+
+
+TARGET_TOLERANCE = 1e-10  # dimensionless objective: a miss of 1e-5 L (or 1e-5 rad)
+
+
+def _target_notes(design: DesignProblem, values: dict, conditions: dict) -> list[str]:
+    """A tip_pose or backbone target that the optimum does not reach (the optimum of the
+    misfit within the bounds and constraints is then not the wanted shape): one note naming
+    the miss and what stops it."""
+    if design.objective not in ("tip_pose", "backbone") or not (
+            values["objective"] > TARGET_TOLERANCE):
+        return []
+    if design.objective == "tip_pose":
+        units = {"u": "m", "v": "m", "theta": "rad"}
+        miss = ", ".join(f"tip {k} = {values['tip'][k]:.6g} {units[k]} (target {v:.6g})"
+                         for k, v in design.target.items())
+    else:
+        miss = f"rms distance to the target points {math.sqrt(values['objective']):.3g} L"
+    limits = [a for a in conditions.get("active", []) if not a.startswith("equality")]
+    why = (f"; active: {', '.join(limits)}" if limits else
+           " (no bound or constraint is active: a local minimum of the misfit)")
+    return [f"the target is not reached: {miss}{why}"]
 
 
 def _constraint_summary(design: DesignProblem, values: dict) -> dict:

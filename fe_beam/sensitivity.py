@@ -538,7 +538,20 @@ class RodSensitivity:
         self.run.load_factor = value
 
     def _newton(self) -> None:
+        """Newton from the current state (continuation after a parameter change). A result
+        that jumped branch (rotations changed by more than max_rotation_jump, e.g. onto a
+        looped or collapsed equilibrium of a coarse mesh) or is inadmissible is a failure, as in
+        load stepping: the caller then steps the load (was: accepted, a wrong equilibrium)."""
+        from fe_beam.solver import _agreed
+
+        previous = compat.local_array(self.problem.w).copy()
         self.run.solver.solve()
+        checker = self.__dict__.get("_checker")
+        if checker is None:
+            checker = self._checker = self.run._step_check()
+        reason = _agreed(self.comm, checker(previous, compat.local_array(self.problem.w)))
+        if reason:
+            raise SolveFailed(f"continuation left the equilibrium branch: {reason}")
 
     def _converged(self, load_factor: float) -> None:
         self._dirty = False

@@ -236,6 +236,17 @@ def test_command_writes_summary_and_plot(tmp_path, finger_model):
     ({"extra": 'weights = {tip_w = 1.0}'}, "weights are given per data column"),
     ({"parameters": '["tendons.0.tension"]'}, "cannot be fitted when the data give the tension"),
     ({"parameters": '["tendons.3.tension"]'}, "there are 1 tendons"),
+    # a parameter the data do not depend on (was: "fitted" to an arbitrary value, exit 0)
+    ({"parameters": '["material.E", "material.rho"]'},
+     "parameter 'material.rho' does not influence the data"),
+    ({"header": ("tension", "tip_theta"), "rows": [[0.0, 0.0], [0.0, 0.0]],
+      "parameters": '["material.E"]'}, "parameter 'material.E' does not influence the data"),
+    # a backbone point off the rod (was: found after the FE build, named as an 'output')
+    ({"header": ("tension", "s", "x", "y"), "rows": [[1.0, 0.05, 0.05, 0.01],
+                                                      [2.0, 0.12, 0.1, 0.02]]},
+     "s = 0.12 (data row 2) lies outside the rod, s in [0, 0.1] m"),
+    # weights for a column the data do not have (was: silently unused)
+    ({"extra": 'weights = {x = 10.0}'}, "weights.x:"),
 ])
 def test_bad_input_exits_2_with_one_sentence(tmp_path, capfd, case, words):
     config, data = write_case(tmp_path, **case)
@@ -312,3 +323,194 @@ def test_parameters_the_data_cannot_tell_apart_have_no_standard_errors():
         model.destroy()
     assert summary["standard_errors"] is None and summary["correlation"] is None
     assert "cannot tell apart" in summary["notes"][0]
+
+
+@pytest.mark.mpi
+def test_trial_without_equilibrium_is_a_rejected_step(finger_model, monkeypatch):
+    """A trial parameter set without an equilibrium (here: the first trial step) shrinks the
+    trust region instead of ending the fit (was: LoadSteppingFailed, exit 3, no summary)."""
+    from fe_beam.solver import LoadSteppingFailed
+
+    clean = synthetic(finger_model, TRUTH, TENSIONS)
+    finger_model.set_values(TRUTH * [0.8, 1.25])
+    first = finger_model._version + 1
+    solve = finger_model.solve
+
+    def failing(load_factor=1.0, stepping=None):
+        if finger_model._version == first:
+            raise LoadSteppingFailed("no equilibrium (test)", 0.0, [])
+        return solve(load_factor, stepping)
+
+    monkeypatch.setattr(finger_model, "solve", failing)
+    summary = calibrate(None, data_of(clean), CalibrationSpec(PARAMETERS), model=finger_model)
+    monkeypatch.undo()
+    np.testing.assert_allclose([summary["parameters"][k] for k in PARAMETERS], TRUTH, rtol=1e-6)
+    assert summary["status"] == "converged"
+    failed = [h for h in summary["history"] if h["residual_norm"] is None]
+    assert len(failed) == 1 and failed[0]["equilibrium"] is False
+    assert any("no equilibrium" in note for note in summary["notes"])
+
+
+@pytest.mark.mpi
+def test_parameter_stopped_by_its_bound_has_no_standard_error(finger_model):
+    """E bounded away from the truth ends at its bound: no standard error for it (a bound is
+    not a statistical estimate; was a tiny, meaningless one), the free parameter's error is
+    that of the fit with E held there, and a note says so."""
+    clean = synthetic(finger_model, TRUTH, TENSIONS)
+    finger_model.set_values([0.8e6, 0.004])
+    spec = CalibrationSpec(PARAMETERS, bounds={"material.E": (0.7e6, 1e6)})
+    summary = calibrate(None, data_of(clean), spec, model=finger_model)
+    assert summary["parameters"]["material.E"] == pytest.approx(0.7e6, rel=1e-9)
+    assert summary["standard_errors"]["material.E"] is None
+    assert summary["correlation"]["material.E"]["tendons.0.offset_tip"] is None
+    assert any("material.E ended at its bound" in note for note in summary["notes"])
+    # independent: the one-parameter least-squares error of the offset at E = 0.7e6
+    offset = summary["parameters"]["tendons.0.offset_tip"]
+    data = data_of(clean)
+    h = 1e-7
+    columns = ("tip_u", "tip_v", "tip_theta")
+
+    def residuals(value):
+        finger_model.set_values([0.7e6, value])
+        out = []
+        for tension in TENSIONS:
+            finger_model.solve(tension / 2.0)
+            out.extend(finger_model.outputs(list(columns)))
+        measured = np.array([[data.columns[c][i] for c in columns]
+                             for i in range(len(TENSIONS))]).ravel()
+        return np.array(out) - measured
+
+    r = residuals(offset)
+    slope = (residuals(offset + h) - residuals(offset - h)) / (2 * h)
+    expected = np.sqrt(r @ r / (len(r) - 1) / (slope @ slope))
+    assert summary["standard_errors"]["tendons.0.offset_tip"] == pytest.approx(expected,
+                                                                               rel=1e-4)
+
+
+def test_data_file_with_a_byte_order_mark(tmp_path, finger_model):
+    """A CSV saved by a spreadsheet with a UTF-8 byte order mark reads like one without (was:
+    unknown column '\\ufefftension')."""
+    from fe_beam.calibrate import read_data
+
+    _, data = write_case(tmp_path)
+    plain = read_data(data)
+    data.write_bytes(b"\xef\xbb\xbf" + data.read_bytes())
+    marked = read_data(data)
+    assert marked.load_column == "tension"
+    np.testing.assert_array_equal(marked.loads, plain.loads)
+    assert marked.columns.keys() == plain.columns.keys()
+
+
+def test_data_file_mistake_loads_no_fe_stack(tmp_path):
+    """A mistake in DATA.csv is found before dolfinx, PETSc and MPI are loaded (was: after,
+    seconds later), like a configuration mistake."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    config, data = write_case(tmp_path, rows=[[1.0, -0.001, "nan", 0.2]])
+    root = Path(__file__).resolve().parents[1]
+    code = f"""
+import json, sys
+from fe_beam.cli import main
+code = main(["calibrate", {str(config)!r}, "--data", {str(data)!r}, "--out",
+             {str(tmp_path / "out")!r}, "--quiet"])
+heavy = ("dolfinx", "petsc4py", "mpi4py", "basix", "ffcx")
+print(json.dumps({{"code": code, "loaded": [m for m in heavy if m in sys.modules]}}))
+"""
+    from fe_beam.cli import MPI_LAUNCHER_PREFIXES
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith(MPI_LAUNCHER_PREFIXES)}
+    env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, cwd=root, timeout=120)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result == {"code": 2, "loaded": []}, (result, done.stderr)
+    assert "tip_v = 'nan' is not a finite number" in done.stderr
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"loads": {"steps": 4, "gravity": [0.0, -9.81]}, "material": {"E": 0.6e6, "nu": 0.45,
+                                                                   "rho": 1070.0}},
+     "loads.gravity"),
+    ({"tendons": [FINGER["tendons"][0], {"offset_base": -0.008, "offset_tip": -0.004,
+                                         "tension": 0.5}]}, "tendons.1"),
+])
+def test_tension_column_with_other_loads_is_refused(change, named):
+    """The load factor tension / tendons.0.tension scales every load: with gravity or a
+    second tendon a tension column would fit a model whose gravity (other tendon) changes
+    with tendon 0's tension (was: fitted silently). load_factor data are accepted."""
+    from fe_beam.config import ConfigError
+
+    raw = {**FINGER, **change}
+    model = RodSensitivity(raw, ("material.E",))
+    try:
+        data = CalibrationData("tension", np.array([1.0, 2.0]),
+                               {"tip_theta": np.array([0.2, 0.4])})
+        with pytest.raises(ConfigError, match=f"{named} included: .* load_factor column"):
+            calibrate(None, data, CalibrationSpec(("material.E",)), model=model)
+        model.solve(1.0)
+        theta = model.outputs(["tip_theta"])[0]
+        data = CalibrationData("load_factor", np.array([1.0]), {"tip_theta": np.array([theta])})
+        model.set_values([0.8e6])
+        fitted = calibrate(None, data, CalibrationSpec(("material.E",)), model=model)
+        assert fitted["parameters"]["material.E"] == pytest.approx(0.6e6, rel=1e-6)
+    finally:
+        model.destroy()
+
+
+def test_fitted_tendon_outside_the_section_is_not_a_converged_fit(finger_model):
+    """Data the model cannot reproduce (a steel cantilever's tip poses) pull the tip offset
+    out of the section (to -0.059 m, a tendon outside the finger that the configuration itself
+    refuses, was reported as converged): status "not converged" naming it. With the section
+    as bounds the offset stops at its edge h_tip / 2, with a note and no standard error."""
+    rows = [(0.5, np.array([-0.1, -0.3, -0.6]), []), (1.0, np.array([-0.39, -0.71, -1.2]), []),
+            (1.5, np.array([-0.5, -0.8, -1.4]), []), (2.0, np.array([-0.6, -0.85, -1.5]), [])]
+    half = FINGER["section"]["h_tip"] / 2
+    finger_model.set_values(TRUTH)
+    summary = calibrate(None, data_of(rows), CalibrationSpec(PARAMETERS), model=finger_model)
+    assert summary["parameters"]["tendons.0.offset_tip"] < -half
+    assert summary["status"] == "not converged"
+    assert "tendons.0.offset_tip" in summary["message"] and "outside the section" in \
+        summary["message"]
+    finger_model.set_values(TRUTH)
+    spec = CalibrationSpec(PARAMETERS, bounds={"tendons.0.offset_tip": (-half, half)})
+    summary = calibrate(None, data_of(rows), spec, model=finger_model)
+    assert summary["parameters"]["tendons.0.offset_tip"] == pytest.approx(-half, rel=1e-6)
+    assert summary["status"] == "converged"
+    assert summary["standard_errors"] is None or \
+        summary["standard_errors"]["tendons.0.offset_tip"] is None
+    assert any("tendons.0.offset_tip ended at its bound" in n for n in summary["notes"])
+
+
+@pytest.mark.mpi
+def test_continuation_does_not_jump_to_another_equilibrium():
+    """After a large parameter change, Newton from the cached equilibria of the old
+    parameters must give the equilibria a fresh load stepping gives (was: at load factor 1 it
+    converged to a collapsed, curled state, tip_theta 16 rad instead of 0.12, so a fit saw
+    residuals of another model)."""
+    levels = (0.25, 0.5, 0.75, 1.0)
+    trial = [1246157.6548371331, 0.0009870624570883786]
+    outputs = ["tip_u", "tip_v", "tip_theta"]
+
+    def sweep(model):
+        values = []
+        for level in levels:
+            model.solve(level)
+            values.append(model.outputs(outputs))
+        return np.array(values)
+
+    continued, fresh = RodSensitivity(FINGER, PARAMETERS), RodSensitivity(FINGER, PARAMETERS)
+    try:
+        sweep(continued)
+        continued.set_values(trial)
+        fresh.set_values(trial)
+        np.testing.assert_allclose(sweep(continued), sweep(fresh), rtol=1e-8, atol=1e-12)
+        continued.set_values(TRUTH)
+        fresh.set_values(TRUTH)
+        fresh.forget_states()
+        np.testing.assert_allclose(sweep(continued), sweep(fresh), rtol=1e-8, atol=1e-12)
+    finally:
+        continued.destroy()
+        fresh.destroy()

@@ -203,3 +203,79 @@ def test_taper_of_an_untapered_rod():
     assert summary["variables"]["section.h_tip"] == pytest.approx(exact, rel=1e-5)
     assert summary["tip"]["theta"] == pytest.approx(target, rel=1e-8)
     assert summary["kkt_residual"] < 1e-6
+
+
+def test_unreachable_target_is_said():
+    """A tip angle the bounds cannot reach: the misfit's optimum is at the bound h = h_hi (a
+    valid constrained optimum) and the summary and the command say that the target is not
+    reached (was: "design converged" and nothing else)."""
+    moment, h_hi = 0.01, 0.02
+    reachable = tip_angle(moment, h_hi)  # the smallest tip angle within the bounds
+    target = 0.5 * reachable
+    config = rod(moment, variables=["section.h"], bounds=[[0.005, h_hi]],
+                 objective="tip_pose", target={"theta": target})
+    summary = run_design(copy.deepcopy(config), None, MPI.COMM_WORLD)
+    assert summary["variables"]["section.h"] == pytest.approx(h_hi, rel=1e-9)
+    assert summary["tip"]["theta"] == pytest.approx(reachable, rel=1e-6)
+    assert len(summary["notes"]) == 1
+    note = summary["notes"][0]
+    assert "target is not reached" in note and "upper section.h" in note
+    # a reached target: no note
+    config["design"]["target"] = {"theta": 1.5 * reachable}
+    assert run_design(config, None, MPI.COMM_WORLD)["notes"] == []
+
+
+def test_unreachable_target_note_on_the_command_line(tmp_path, capfd):
+    moment, h_hi = 0.01, 0.02
+    config = rod(moment, variables=["section.h"], bounds=[[0.005, h_hi]],
+                 objective="tip_pose", target={"theta": 0.5 * tip_angle(moment, h_hi)})
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    err = capfd.readouterr().err
+    assert "note: the target is not reached" in err
+    saved = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert saved["notes"] and "not reached" in saved["notes"][0]
+
+
+def test_custom_section_dimension_is_refused_with_one_sentence(tmp_path, capfd):
+    """A custom section's A and I are compiled into the forms (its height sqrt(12 I / A)):
+    exit 2 naming the variable (was: internal error, exit 1, after building the model).
+    material.E of the same model is a valid variable."""
+    config = rod(0.01, variables=["section.I"], bounds=[[1e-10, 1e-8]], objective="tip_pose",
+                 target={"theta": 0.5})
+    config["section"] = {"shape": "custom", "A": B * 0.01, "I": B * 0.01**3 / 12}
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capfd.readouterr().err.strip()
+    assert "'section.I' cannot be a design variable" in err and len(err.splitlines()) == 1
+    config["design"].update(variables=["material.E"], bounds=[[1e6, 1e8]])
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged"
+    assert summary["variables"]["material.E"] == pytest.approx(
+        0.01 * L / (0.5 * B * 0.01**3 / 12), rel=1e-7)
+
+
+def test_trial_design_without_equilibrium_exits_3(tmp_path, capfd, monkeypatch):
+    """A trial design the solver finds no equilibrium for ends the command with exit 3 and one
+    line saying so (was: 'internal error', exit 1)."""
+    from fe_beam import realtime
+
+    update = realtime.RealtimeSolver.update
+    calls = []
+
+    def failing(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise realtime.UpdateFailed("no equilibrium at the new values (test)", 0.0)
+        return update(self, *args, **kwargs)
+
+    monkeypatch.setattr(realtime.RealtimeSolver, "update", failing)
+    config = rod(0.01, variables=["section.h"], bounds=[[0.005, 0.02]], objective="tip_pose",
+                 target={"theta": 0.5})
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    err = capfd.readouterr().err.strip()
+    assert "no equilibrium for a trial design" in err and len(err.splitlines()) == 1, err
