@@ -8,6 +8,7 @@ if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "fe-beam":
     from fe_beam import runctl as _runctl
 
     _runctl.defer_signals()
+from fe_beam.lazy import lazy_getattr
 from fe_beam.materials import Material
 from fe_beam.model import (
     BeamModel,
@@ -32,14 +33,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'fe_beam' has no attribute {name!r}")
+__getattr__ = lazy_getattr("fe_beam", _LAZY, globals())
 
 
 __version__ = "0.1.0"

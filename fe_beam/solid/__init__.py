@@ -9,6 +9,8 @@
 
 # every name loads dolfinx (or gmsh) with its module: imported when first used (PEP 562), so that
 # the FE-free parts (`fe_beam.solid.config`, `fe_beam.solid.materials`) import without them
+from fe_beam.lazy import lazy_getattr
+
 _LAZY = {
     "TendonCable": "fe_beam.solid.cable",
     "locate_vertex_dofs": "fe_beam.solid.cable",
@@ -40,14 +42,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'fe_beam.solid' has no attribute {name!r}")
+__getattr__ = lazy_getattr("fe_beam.solid", _LAZY, globals())
 
 
 __all__ = [

@@ -30,6 +30,7 @@ rotation ``tip = {u, v, theta}``, the backbone (deformed centroids of the sectio
 
 from __future__ import annotations
 
+from fe_beam.lazy import lazy_getattr
 from fe_beam.solid.config import (  # noqa: F401
     FORMULATIONS,
     MATERIAL_KEYS,
@@ -77,11 +78,4 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'fe_beam.solid.driver' has no attribute {name!r}")
+__getattr__ = lazy_getattr("fe_beam.solid.driver", _LAZY, globals())
