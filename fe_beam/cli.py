@@ -262,13 +262,20 @@ def run_design_command(args, config: dict, comm) -> int:
         return EXIT_FAILED
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
+    return _report_fit(comm, "design", summary,
+                       f"design {summary['status']}: {values}; objective {objective:.6g}, KKT "
+                       f"residual {summary['kkt_residual']:.2g}, {summary['iterations']} "
+                       f"iterations ({summary['gradient']} gradients); results in {args.out}")
+
+
+def _report_fit(comm, command: str, summary: dict, line: str) -> int:
+    """Notes on stderr, the result line on stdout; exit 3 when the fit/optimum did not
+    converge (calibrate, design)."""
     for note in summary.get("notes", []):
-        _say(comm, f"fe-beam design: note: {note}", sys.stderr)
-    _say(comm, f"design {summary['status']}: {values}; objective {objective:.6g}"
-               f", KKT residual {summary['kkt_residual']:.2g}, {summary['iterations']} iterations "
-               f"({summary['gradient']} gradients); results in {args.out}")
+        _say(comm, f"fe-beam {command}: note: {note}", sys.stderr)
+    _say(comm, line)
     if summary["status"] != "converged":
-        _say(comm, f"fe-beam design: {summary['message']}", sys.stderr)
+        _say(comm, f"fe-beam {command}: {summary['message']}", sys.stderr)
         return EXIT_FAILED
     return 0
 
@@ -342,16 +349,11 @@ def run_calibrate_command(args, config: dict, comm) -> int:
         _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
              sys.stderr)
         return EXIT_FAILED
-    for note in summary.get("notes", []):
-        _say(comm, f"fe-beam calibrate: note: {note}", sys.stderr)
     fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
-    _say(comm, f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
-               f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; results in "
-               f"{args.out}")
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam calibrate: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _report_fit(comm, "calibrate", summary,
+                       f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
+                       f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; "
+                       f"results in {args.out}")
 
 
 RUNNERS["calibrate"] = run_calibrate_command
