@@ -15,7 +15,17 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import runctl
-from fe_beam.outputs import _pyplot, atomic_write_json, write_csv
+from fe_beam.exports import (
+    Column,
+    CSVExport,
+    Exports,
+    PlotExport,
+    SummaryExport,
+    figure,
+    indexed_columns,
+    tip_columns,
+)
+from fe_beam.outputs import _pyplot, write_csv
 from fe_beam.solid.config import SolidConfig, parse_solid, solid_dofs_estimate
 from fe_beam.solid.export import DisplacementXDMF
 from fe_beam.solid.geometry import create_finger_mesh
@@ -203,19 +213,49 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         "notes": list(config.notes) + notes,
     }
 
-    def save() -> None:
+    def content() -> dict:
         summary["wall_time_s"] = time.perf_counter() - started
-        if out is not None and root:
-            _write_tables(out, summary)
+        return summary
 
-    save()  # status "running" from the start
+    files = Exports(solid_exports(out, config, content) if out is not None else [], comm)
+    files.start(content())  # status "running" from the start
     try:
-        return _run_solid(config, out, comm, progress, summary, save)
+        _run_solid(config, out, comm, progress, summary, files)
     except runctl.Interrupted as stop:
         last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
         summary |= stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
-        save()
         raise
+    finally:
+        files.finish(content())  # pictures only for a finished analysis (not interrupted)
+    if out is not None:
+        comm.barrier()  # the files are complete on return, whichever rank looks
+    return summary
+
+
+def _csv_columns(record: dict | None) -> list[Column]:
+    """load_displacement.csv: one ``tension_i`` per tendon of the first record (none without)."""
+    count = len(record.get("tensions", [])) if record else 0
+    return [
+        Column("load_factor", lambda s: s["load_factor"]),
+        *indexed_columns("tension", count, lambda s: s.get("tensions", [])),
+        *tip_columns(),
+        *(Column(key, lambda s, key=key: s[key]) for key in (
+            "newton_iterations", "linear_iterations", "max_principal_stretch",
+            "max_principal_stretch_bulk")),
+    ]
+
+
+def solid_exports(out: Path, config: SolidConfig, content) -> list:
+    """The files of ``fe-beam solid`` in ``out`` (`fe_beam.exports`): load_displacement.csv,
+    summary.json (``content()``: the summary as it stands) and, with ``[output] plots``, the
+    pictures of a finished run with steps. The 3D states (solid.xdmf) and the rod (rod.xdmf) are
+    written by the run itself (collective, once the mesh exists)."""
+    return [
+        CSVExport(out / "load_displacement.csv", _csv_columns),
+        SummaryExport(out / "summary.json", content),
+        PlotExport(lambda s: _plot_solid(out, s, config) if s["steps"] else None)
+        if config.output.plots else None,
+    ]
 
 
 def check_solid_work(config: SolidConfig, comm, quiet: bool = False) -> list[str]:
@@ -231,7 +271,9 @@ def check_solid_work(config: SolidConfig, comm, quiet: bool = False) -> list[str
 
 
 def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summary: dict,
-               save) -> dict:
+               files: Exports) -> dict:
+    """The rod companion and the 3D load stepping, filling ``summary``; ``files`` gets the step
+    records (`run_solid` starts and finishes it)."""
     root = comm.rank == 0
     rod = None
     if config.rod is not None:
@@ -246,9 +288,6 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
         run = SolidRun(config, comm)
     except RuntimeError as error:  # gmsh could not mesh (e.g. a tendon not on tet edges)
         summary |= {"status": "failed", "message": str(error)}
-        save()
-        if out is not None:
-            comm.barrier()
         return summary
     summary |= {"dofs": run.dofs, "cells": run.cells}
     writer = None
@@ -260,7 +299,7 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
         summary["steps"].append(record)
         if writer is not None:
             writer.write(record["load_factor"])
-        save()
+        files.on_step(record)
 
     try:
         run.advance(1.0, config.stepping, on_step, progress=progress, label="solid")
@@ -282,70 +321,57 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
                 "x": distance["x"],
                 "measure": "max over x of |r_rod(x) - r_solid(x)| / L (deformed centroids)",
             }
-    save()
-    if out is not None and root and config.output.plots and summary["steps"]:
-        _plot_solid(out, summary, config)
-    if out is not None:
-        comm.barrier()  # the files are complete on return, whichever rank looks
     return summary
 
 
 def _write_tables(out: Path, summary: dict) -> None:
-    atomic_write_json(out / "summary.json", summary)
+    """summary.json and the whole load_displacement.csv of ``summary`` at once (the columns of
+    `solid_exports`; kept for callers of the old name)."""
+    SummaryExport(out / "summary.json").write(summary)
     steps = summary["steps"]
-    count = len(steps[0].get("tensions", [])) if steps else 0
-    header = ["load_factor", *[f"tension_{i}" for i in range(count)], "tip_u", "tip_v",
-              "tip_theta", "newton_iterations", "linear_iterations", "max_principal_stretch",
-              "max_principal_stretch_bulk"]
-    rows = [
-        [s["load_factor"], *s.get("tensions", []), s["tip"]["u"], s["tip"]["v"],
-         s["tip"]["theta"], s["newton_iterations"], s["linear_iterations"],
-         s["max_principal_stretch"], s["max_principal_stretch_bulk"]]
-        for s in steps
-    ]
-    write_csv(out / "load_displacement.csv", header, rows)
+    columns = _csv_columns(steps[0] if steps else None)
+    write_csv(out / "load_displacement.csv", [c.name for c in columns],
+              [[c.get(s) for c in columns] for s in steps])
 
 
 def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
+    """backbone.png (deformed backbones, 3D and rod) and load_displacement.png (tip u, v, theta
+    against the load factor) of ``summary`` (with at least one step)."""
     plt = _pyplot()
     steps = summary["steps"]
     rod = summary.get("rod") or {}
-    figure, axis = plt.subplots(figsize=(9, 4.5))
-    every = max(1, len(steps) // 8)
-    chosen = steps[every - 1 :: every]
-    if chosen[-1] is not steps[-1]:
-        chosen.append(steps[-1])
-    colours = plt.cm.viridis(np.linspace(0, 0.9, len(chosen)))
-    axis.plot([0, config.length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
-    for step, colour in zip(chosen, colours, strict=True):
-        b = step["backbone"]
-        axis.plot(np.add(b["x"], b["u"]), b["v"], color=colour, lw=1.8,
-                  label=f"3D, load factor {step['load_factor']:.3g}")
-    if rod.get("backbone") and rod.get("steps"):
-        b = rod["backbone"]
-        axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
-                  label=f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.3g}")
-    axis.set_xlabel("x + u [m]")
-    axis.set_ylabel("y + v [m]")
-    axis.set_title(f"Backbone: 3D {config.material_name} vs rod")
-    axis.grid(alpha=0.3)
-    axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    figure.tight_layout()
-    figure.savefig(out / "backbone.png", dpi=130)
-    plt.close(figure)
-
-    figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
-    factors = [s["load_factor"] for s in steps]
-    rod_steps = rod.get("steps") or []
-    for axis, key, unit in zip(axes, ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
-        axis.plot(factors, [s["tip"][key] for s in steps], "o-", ms=3, label="3D")
-        if rod_steps:
-            axis.plot([s["load_factor"] for s in rod_steps], [s["tip"][key] for s in rod_steps],
-                      "s--", ms=3, label=f"rod ({rod['law']})")
-        axis.set_xlabel("load factor")
-        axis.set_ylabel(f"tip {key} [{unit}]")
+    with figure(out / "backbone.png", figsize=(9, 4.5)) as (_, axis):
+        every = max(1, len(steps) // 8)
+        chosen = steps[every - 1 :: every]
+        if chosen[-1] is not steps[-1]:
+            chosen.append(steps[-1])
+        colours = plt.cm.viridis(np.linspace(0, 0.9, len(chosen)))
+        axis.plot([0, config.length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+        for step, colour in zip(chosen, colours, strict=True):
+            b = step["backbone"]
+            axis.plot(np.add(b["x"], b["u"]), b["v"], color=colour, lw=1.8,
+                      label=f"3D, load factor {step['load_factor']:.3g}")
+        if rod.get("backbone") and rod.get("steps"):
+            b = rod["backbone"]
+            axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
+                      label=f"rod ({rod['law']}), load factor "
+                      f"{rod['steps'][-1]['load_factor']:.3g}")
+        axis.set_xlabel("x + u [m]")
+        axis.set_ylabel("y + v [m]")
+        axis.set_title(f"Backbone: 3D {config.material_name} vs rod")
         axis.grid(alpha=0.3)
-        axis.legend(fontsize=7)
-    figure.tight_layout()
-    figure.savefig(out / "load_displacement.png", dpi=130)
-    plt.close(figure)
+        axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+    with figure(out / "load_displacement.png", 1, 3, figsize=(11, 3.4)) as (_, axes):
+        factors = [s["load_factor"] for s in steps]
+        rod_steps = rod.get("steps") or []
+        for axis, key, unit in zip(axes, ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+            axis.plot(factors, [s["tip"][key] for s in steps], "o-", ms=3, label="3D")
+            if rod_steps:
+                axis.plot([s["load_factor"] for s in rod_steps],
+                          [s["tip"][key] for s in rod_steps], "s--", ms=3,
+                          label=f"rod ({rod['law']})")
+            axis.set_xlabel("load factor")
+            axis.set_ylabel(f"tip {key} [{unit}]")
+            axis.grid(alpha=0.3)
+            axis.legend(fontsize=7)

@@ -375,3 +375,37 @@ def test_serial_and_two_ranks_agree():
         assert a["max_principal_stretch"] == pytest.approx(b["max_principal_stretch"], rel=1e-8)
     assert serial["rod"]["steps"][-1]["tip"]["v"] == pytest.approx(
         parallel["rod"]["steps"][-1]["tip"]["v"], rel=1e-8)
+
+
+def test_exported_table_matches_the_summary_and_the_old_writer(tmp_path):
+    """load_displacement.csv, appended step by step by the export, holds exactly the steps of
+    summary.json (rebuilt here from the documented header); `_write_tables` (the old name,
+    whole-file) writes the same bytes from the same summary."""
+    import csv
+
+    from fe_beam.solid.driver import _write_tables
+
+    config = edited(FINGER, {"solid.order": 1, "output.plots": False, "output.xdmf": False})
+    code, _, stderr, out = run_cli("solid", shared_folder(tmp_path), config)
+    assert code == 0, stderr
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    summary = json.loads((out / "summary.json").read_text())
+    steps = summary["steps"]
+    assert len(steps) == 3 and summary["status"] == "converged"
+    expected = io.StringIO()
+    writer = csv.writer(expected)
+    writer.writerow(["load_factor", "tension_0", "tip_u", "tip_v", "tip_theta",
+                     "newton_iterations", "linear_iterations", "max_principal_stretch",
+                     "max_principal_stretch_bulk"])
+    for s in steps:
+        writer.writerow([s["load_factor"], s["tensions"][0], s["tip"]["u"], s["tip"]["v"],
+                         s["tip"]["theta"], s["newton_iterations"], s["linear_iterations"],
+                         s["max_principal_stretch"], s["max_principal_stretch_bulk"]])
+    written = (out / "load_displacement.csv").read_text()
+    assert written.splitlines() == expected.getvalue().splitlines()
+    again = tmp_path / "again"
+    again.mkdir()
+    _write_tables(again, summary)
+    assert (again / "load_displacement.csv").read_text() == written
+    assert json.loads((again / "summary.json").read_text()) == summary
