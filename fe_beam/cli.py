@@ -567,6 +567,11 @@ def launched_by_mpi() -> bool:
 
 
 def _world():
+    # fe-beam handles SIGINT/SIGTERM itself (fe_beam.runctl: last good state written, exit
+    # 130/143): PETSc must not install its own handlers (PETSc 3.25 aborts the run on SIGTERM)
+    import petsc4py
+
+    petsc4py.init(["fe-beam", "-no_signal_handler"])
     from mpi4py import MPI
 
     return MPI.COMM_WORLD

@@ -352,7 +352,7 @@ class DenseLU:
     def apply(self, pc, x, y) -> None:
         from scipy.linalg import lapack
 
-        solution, _ = lapack.dgetrs(*self.factors, x.array)
+        solution, _ = lapack.dgetrs(*self.factors, x.array_r)
         y.array[:] = solution
 
 

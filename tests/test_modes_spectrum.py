@@ -71,7 +71,11 @@ def test_very_slender_free_free_beam_rigid_round_off_is_not_instability(constrai
     assert modes.rigid_body_modes == 3 and modes.unstable_count == 0 and modes.unstable == []
     assert modes.kinds == ["rigid"] * 3 + ["bending"]
     expected = euler_bernoulli_eigenvalue(h, BETA_FREE_FREE / L)
-    assert modes.eigenvalues[3] == pytest.approx(expected, rel=2e-3)  # round-off limited
+    # round-off limited (multipliers of the constrained rod at L/h = 1e4): with Debian's
+    # PETSc 3.18/MUMPS (measured 0.02%), 0.62% with PyPI's PETSc 3.25 build; the next bending
+    # mode is 2.7x higher
+    tolerance = 2e-3 if constraint == "none" else 1e-2
+    assert modes.eigenvalues[3] == pytest.approx(expected, rel=tolerance)
 
 
 @pytest.mark.parametrize(("x0", "xL", "rigid"), [
