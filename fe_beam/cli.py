@@ -412,6 +412,7 @@ def _output_folder_problem(out: Path) -> str | None:
 # How long a failing rank waits for the other ranks to fail at the same point (then all return
 # normally and rank 0 prints) before it aborts the job (the others are in a collective operation
 # that will never complete).
+ABORT_GRACE_S = 1.0  # seconds between the last message and MPI_Abort
 ERROR_AGREEMENT_S = float(os.environ.get("FE_BEAM_ERROR_WAIT_S", "3"))
 _ERROR_COMM = []
 USER_ERRNOS = {errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOSPC, errno.EROFS, errno.ENOTDIR,
@@ -477,6 +478,9 @@ def end_on_error(comm, code: int, message: str) -> int:
         if time.monotonic() > deadline:
             print(message, file=sys.stderr, flush=True)
             sys.stdout.flush()
+            # mpirun's I/O forwarder reads our stderr asynchronously; an immediate abort can
+            # kill it before it passed the message on (seen with MPICH's hydra under load)
+            time.sleep(ABORT_GRACE_S)
             comm.Abort(code)
         time.sleep(0.005)
     code, message = _error_comm(comm).bcast((code, message), root=0)
