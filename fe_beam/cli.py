@@ -303,6 +303,10 @@ def run_solid_command(args, config: dict, comm) -> int:
     if "distance_to_solid" in rod:
         _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
                    f"{rod['distance_to_solid']['max_over_L']:.3g}")
+    from fe_beam.solid.modes import modes_table  # [modes]: solid vs rod frequencies
+
+    for line in modes_table(summary.get("modes")):
+        _say(comm, line)
     _say(comm, f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
     if summary["status"] != "converged":

@@ -551,7 +551,7 @@ COMMAND_TABLES = {
     "finger": ("tendons", "inverse"),
     "dynamic": ("time", "initial", "damping", "modes", "tendons"),
     "modes": ("time", "initial", "damping", "modes", "tendons"),
-    "solid": ("tendons", "solid", "compare"),
+    "solid": ("tendons", "solid", "compare", "modes"),
     "compare": ("tendons", "solid", "compare"),
     "calibrate": ("tendons", "inverse", "calibrate"),
 }

@@ -125,6 +125,7 @@ class SolidConfig:
     raw: dict = field(default_factory=dict)
     notes: tuple[str, ...] = ()
     anchor: str = "face"
+    modes: dict | None = None  # [modes]: {"count", "about", "rho"} (`parse_solid_modes`)
 
     @property
     def length(self) -> float:
@@ -372,6 +373,7 @@ def parse_solid(raw: dict) -> SolidConfig:
         raw=copy.deepcopy(raw),
         notes=tuple(notes),
         anchor=solid["anchor"],
+        modes=parse_solid_modes(raw, tip_force, tendon_loads),
     )
 
 
@@ -383,3 +385,32 @@ def solid_dofs_estimate(config: SolidConfig) -> float:
     h = min(sizes.size, sizes.tendon or sizes.size)
     nodes = 1.5 * volume / h**3 * (8 if config.discretization.degree >= 2 else 1)
     return 3.0 * nodes
+
+
+# --- [modes]: 3D modal analysis (fe_beam.solid.modes) ------------------------------------------
+SOLID_MODES_KEYS: dict[str, Key] = {
+    "count": Key((int,), 6, "number of modes (the lowest natural frequencies)"),
+    "about": Key((str,), None, "undeformed | loaded: the state the modes are about (default: "
+                 "loaded when the config has a tip force or tendons, else undeformed)"),
+}
+MODES_ABOUT = ("undeformed", "loaded")
+
+
+def parse_solid_modes(raw: dict, tip_force, tendon_loads) -> dict | None:
+    """The ``[modes]`` table of a solid configuration ({"count", "about", "rho"}; None without
+    the table); ConfigError naming the key for a mistake."""
+    if "modes" not in raw:
+        return None
+    modes = table(raw, "modes", SOLID_MODES_KEYS)
+    if modes["count"] < 1:
+        raise ConfigError(f"[modes] count must be an integer >= 1; got {modes['count']!r}")
+    loaded = any(tip_force) or any(t.tension or t.pull_in for t in tendon_loads)
+    about = modes["about"] or ("loaded" if loaded else "undeformed")
+    if about not in MODES_ABOUT:
+        raise ConfigError(f"[modes] about must be one of {', '.join(MODES_ABOUT)}; "
+                          f"got {about!r}")
+    rho = table(raw, "material", MATERIAL_KEYS)["rho"]
+    if not rho > 0:
+        raise ConfigError("[material] rho must be > 0 for [modes] (the mass of the modal "
+                          f"analysis); got {rho!r}")
+    return {"count": int(modes["count"]), "about": about, "rho": float(rho)}

@@ -304,6 +304,10 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
     try:
         run.advance(1.0, config.stepping, on_step, progress=progress, label="solid")
         summary["status"] = "converged"
+        if config.modes is not None:  # [modes]: 3D modal analysis, the rod's beside it
+            from fe_beam.solid.modes import run_solid_modes
+
+            summary["modes"] = run_solid_modes(run, config, out, comm)
     except LoadSteppingFailed as failure:
         summary |= {"status": "failed", "message": str(failure)}
     finally:
