@@ -318,6 +318,9 @@ def run_solid_modes(run, config, out, comm) -> dict:
         "shapes": None,
         "notes": list(result.notes),
     }
+    if about == "loaded" and any(t.controlled_by_pull_in for t in config.tendon_loads):
+        entry["notes"].append("tendons under pull-in control: the modes hold their converged "
+                              "tensions constant (a motor holding the force, not the length)")
     if config.rod is not None:
         # more rod modes than asked: the planar rod has no out-of-plane bending or torsion, so
         # its bending and axial modes that match the solid's lie further up its list
@@ -378,4 +381,8 @@ def modes_table(modes: dict | None) -> list[str]:
             g, d = rod[law]["matched_hz"][i], rod[law]["relative_difference"][i]
             line += (f"  {'-':>17} {'-':>8}" if g is None else f"  {g:>17.6g} {d:>+8.2%}")
         lines.append(line)
+    if modes.get("rod"):
+        lines.append("(diff = rod / solid - 1; the planar rod has no out-of-plane bending "
+                     "(bending_z) or torsion modes)")
+    lines += [f"note: {note}" for note in modes.get("notes", [])]
     return lines
