@@ -107,7 +107,9 @@ def solid_natural_frequencies(problem, count: int, rho: float,
         pressure_space = compat.sub_space_collapsed(problem.W, 1)[0]
         pressure_dofs = int(pressure_space.dofmap.index_map.size_global)
     unstable = 0
-    if symmetric:
+    if symmetric and not undeformed:
+        # (undeformed and clamped, K is linear elasticity's: positive definite on u (Korn),
+        # one negative eigenvalue per pressure dof in u-p; nothing to count)
         unstable = max(_negative_pivots(K, mixed) - pressure_dofs, 0)
     else:  # not expected (dead tip force, cables of given tension: conservative)
         notes.append("the tangent stiffness is not symmetric: solved as a non-Hermitian problem, "
@@ -123,11 +125,12 @@ def solid_natural_frequencies(problem, count: int, rho: float,
         notes.insert(0, f"the state is unstable: {unstable} direction(s) with omega^2 < 0 "
                         "(counted by inertia); the frequencies are the lowest positive ones")
     shapes, shares, kinds = [], [], []
+    energy = _EnergyShares(problem, rho)
     for index, (_, shape) in enumerate(positive, start=1):
         displacement = shape.sub(0).collapse() if mixed else shape
         _normalise(displacement)
         displacement.name = f"mode_{index}"
-        share = _energy_shares(problem, displacement, rho)
+        share = energy(displacement)
         shapes.append(displacement)
         shares.append(share)
         kinds.append(_kind(share))
@@ -227,19 +230,28 @@ def _normalise(function: fem.Function) -> None:
         array *= math.copysign(1.0 / largest[0], largest[1])
 
 
-def _energy_shares(problem, u: fem.Function, rho: float) -> dict:
-    """Shares of int rho |u|^2 dX: axial (u_x), bending_y (u_y), bending_z (u_z), and the
-    torsion share int rho (y^2 + z^2) (curl(u)_x / 2)^2 / int rho |u|^2 (see the module)."""
-    X = ufl.SpatialCoordinate(problem.mesh)
-    dx = problem.dx
-    parts = [assemble_scalar(fem.form(rho * u[i] ** 2 * dx)) for i in range(3)]
-    spin = 0.5 * (u[2].dx(1) - u[1].dx(2))
-    torsion = assemble_scalar(fem.form(rho * (X[1] ** 2 + X[2] ** 2) * spin**2 * dx))
-    total = sum(parts)
-    if not total > 0:
-        return dict.fromkeys(KINDS, 0.0)
-    return {"axial": parts[0] / total, "bending_y": parts[1] / total,
-            "bending_z": parts[2] / total, "torsion": torsion / total}
+class _EnergyShares:
+    """Shares of int rho |u|^2 dX of a displacement u: axial (u_x), bending_y (u_y), bending_z
+    (u_z), and the torsion share int rho (y^2 + z^2) (curl(u)_x / 2)^2 / int rho |u|^2 (see the
+    module); the forms are compiled once, for a work Function that takes each u's values."""
+
+    def __init__(self, problem, rho: float):
+        space = compat.sub_space_collapsed(problem.W, 0)[0] if problem.p is not None \
+            else problem.W
+        self.u = u = fem.Function(space)
+        X, dx = ufl.SpatialCoordinate(problem.mesh), problem.dx
+        spin = 0.5 * (u[2].dx(1) - u[1].dx(2))
+        self.forms = [fem.form(rho * u[i] ** 2 * dx) for i in range(3)] + [
+            fem.form(rho * (X[1] ** 2 + X[2] ** 2) * spin**2 * dx)]
+
+    def __call__(self, displacement: fem.Function) -> dict:
+        compat.local_array(self.u)[:] = compat.local_array(displacement)
+        *parts, torsion = (assemble_scalar(form) for form in self.forms)
+        total = sum(parts)
+        if not total > 0:
+            return dict.fromkeys(KINDS, 0.0)
+        return {"axial": parts[0] / total, "bending_y": parts[1] / total,
+                "bending_z": parts[2] / total, "torsion": torsion / total}
 
 
 def _kind(share: dict) -> str:
