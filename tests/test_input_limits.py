@@ -203,7 +203,9 @@ def test_unused_tables_are_noted_not_silently_ignored():
     text = " | ".join(notes)
     for name in ("[time]", "[initial]", "[solid]", "[modes]", "time_function"):
         assert name in text, text
-    assert len(notes) == 3, notes  # one per group of readers, and the [loads] key
+    # one per group of readers ([time], [initial]: dynamic and modes; [modes]: also solid;
+    # [solid]), and the [loads] key
+    assert len(notes) == 4, notes
     assert check_command_tables("finger", {**FINGER, "compare": {}})[0].startswith("[compare]")
 
 
