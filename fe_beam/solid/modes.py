@@ -81,18 +81,23 @@ def solid_natural_frequencies(problem, count: int, rho: float,
         raise ValueError(f"count must be >= 1, got {count!r}")
     state = compat.vector_of(problem.w)
     saved_state, saved_factor = state.copy(), problem.load_factor
+    saved_tensions = [cable.tension for cable in problem.cables]
     nonlinear = problem.problem
     try:
         if undeformed:
             state.set(0.0)
             state.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             problem.set_load_factor(0.0)
+            for cable in problem.cables:  # pull-in control keeps its tension otherwise
+                cable.tension = 0.0
         nonlinear.jacobian(None, state, nonlinear.A, nonlinear.A)
         K = nonlinear.A.copy()
     finally:
         saved_state.copy(state)
         state.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         problem.set_load_factor(saved_factor)
+        for cable, tension in zip(problem.cables, saved_tensions, strict=True):
+            cable.tension = tension
         saved_state.destroy()
     M = compat.assemble_matrix(fem.form(_mass_form(problem, rho)), bcs=problem.bcs,
                                diagonal=0.0)

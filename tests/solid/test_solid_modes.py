@@ -152,6 +152,36 @@ def test_mixed_up_gives_the_same_frequencies():
     assert np.allclose(mixed.frequencies_hz, displacement.frequencies_hz, rtol=5e-3)
 
 
+def test_undeformed_modes_of_a_loaded_run():
+    """about = "undeformed" after a sweep (a tendon under pull-in control, whose tension the
+    load factor does not set): the modes of the unloaded bar, and the loaded state is left as
+    it was; the loaded state's modes differ."""
+    from fe_beam.solid.modes import solid_natural_frequencies
+    from fe_beam.solid.run import SolidRun
+
+    config = bar(solid__mesh_size=H, modes__count=3)
+    config["tendons"] = [{"name": "t", "offset_base": 0.003, "offset_tip": 0.003,
+                          "pull_in": 2e-4}]
+    config = parse_solid(config)
+    run = SolidRun(config, MPI.COMM_WORLD)
+    try:
+        fresh = solid_natural_frequencies(run.problem, 3, RHO, undeformed=True)
+        run.advance(1.0, config.stepping)
+        tip, tension = run.tip(), run.problem.tensions()
+        assert tension[0] > 0.01
+        undeformed = solid_natural_frequencies(run.problem, 3, RHO, undeformed=True)
+        assert run.tip() == tip and run.problem.tensions() == tension
+        assert run.problem.load_factor == 1.0
+        loaded = solid_natural_frequencies(run.problem, 3, RHO)
+    finally:
+        run.destroy()
+    assert np.allclose(undeformed.frequencies_hz, fresh.frequencies_hz, rtol=1e-9)
+    assert loaded.unstable_count == 0
+    # the tendon's pull changes the tangent (a tendon along the bar does not soften it like a
+    # dead compression: its geometric stiffness pulls the bar back), well beyond round-off
+    assert abs(loaded.frequencies_hz[0] / fresh.frequencies_hz[0] - 1) > 1e-4
+
+
 def test_cli_writes_modes_summary_xdmf_and_table(tmp_path):
     """fe-beam solid with [modes] and an axial tip tension: modes about the loaded state by
     default (the tension stiffens bending: P L^2 / EI = 1.6 raises the first frequency by a
