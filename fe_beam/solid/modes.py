@@ -112,10 +112,11 @@ def solid_natural_frequencies(problem, count: int, rho: float,
         pressure_space = compat.sub_space_collapsed(problem.W, 1)[0]
         pressure_dofs = int(pressure_space.dofmap.index_map.size_global)
     unstable = 0
-    if symmetric and not undeformed:
-        # (undeformed and clamped, K is linear elasticity's: positive definite on u (Korn),
-        # one negative eigenvalue per pressure dof in u-p; nothing to count)
-        unstable = max(_negative_pivots(K, mixed) - pressure_dofs, 0)
+    if symmetric:
+        if not undeformed:
+            # (undeformed and clamped, K is linear elasticity's: positive definite on u
+            # (Korn), one negative eigenvalue per pressure dof in u-p; nothing to count)
+            unstable = max(_negative_pivots(K, mixed) - pressure_dofs, 0)
     else:  # not expected (dead tip force, cables of given tension: conservative)
         notes.append("the tangent stiffness is not symmetric: solved as a non-Hermitian problem, "
                      "unstable directions not counted")

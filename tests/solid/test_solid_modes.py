@@ -125,6 +125,7 @@ def test_straight_bar_matches_timoshenko_and_converges():
     errors, frequencies = [], []
     for size in (H / 2, H / 3):
         result, _ = bar_modes(size)
+        assert result.notes == [] and result.unstable_count == 0  # symmetric, stable
         first = first_of_each_kind(result)
         assert set(first) == set(reference), result.kinds
         errors.append({k: first[k] / reference[k] - 1 for k in reference})
@@ -195,6 +196,7 @@ def test_cli_writes_modes_summary_xdmf_and_table(tmp_path):
         return
     modes = json.loads((out / "summary.json").read_text())["modes"]
     assert modes["about"] == "loaded" and modes["load_factor"] == 1.0
+    assert modes["notes"] == [] and modes["unstable_count"] == 0
     assert len(modes["frequencies_hz"]) == 4 and modes["frequencies_hz"] == sorted(
         modes["frequencies_hz"])
     assert set(modes["rod_frequencies_hz"]) == {"nonstandard", "reissner"}
