@@ -321,39 +321,30 @@ def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
 
 
 # --- the 3D solid -------------------------------------------------------------------------------
-def solid_buckling(problem, count: int, prestress: float = 0.0, advance=None) -> Buckling:
-    """Buckling of a `fe_beam.solid.problem.SolidFingerProblem` (displacement formulation) about
-    the state at load factor ``prestress`` (``advance(target)`` loads it there; None: the
-    problem is at it already)."""
-    if advance is not None and prestress != 0.0:
-        advance(prestress)
-    lin = _solid_linearised(problem, prestress)
-    return buckling_modes(lin, count)
-
-
-def _solid_linearised(problem, load_factor: float) -> LinearisedProblem:
-    space = problem.space
+def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
+                   progress: bool = False) -> Buckling:
+    """Buckling of the 3D solid of ``run`` (a `fe_beam.solid.run.SolidRun`, tip force only:
+    its cables' contributions are outside the UFL residual) about the state at ``prestress``."""
+    if prestress > run.load_factor:
+        run.advance(prestress, stepping or run.config.stepping, progress=progress,
+                    label="buckling pre-state")
+    elif prestress != run.load_factor:
+        raise ValueError("the solid's pre-state is loaded upwards from its current load factor")
+    problem = run.problem
+    problem.set_load_factor(run.load_factor)
+    space = problem.W
     owned = space.dofmap.index_map.size_local * space.dofmap.index_map_bs
-    dofs = np.arange(owned, dtype=np.int32)
-    sub = getattr(problem, "displacement_dofs", None)
-    if callable(sub):
-        dofs = sub()
-
-    def set_factor(value: float) -> None:
-        problem.set_load_factor(value)
-
-    def set_prescribed(value: float) -> None:
-        prescribed = getattr(problem, "set_prescribed_factor", None)
-        if prescribed is not None:
-            prescribed(value)
-
-    problem.set_load_factor(load_factor)
-    return LinearisedProblem(
-        space=space, w=problem.state, residual=problem.residual, bcs=problem.bcs,
-        set_load_factor=set_factor, set_prescribed_factor=set_prescribed,
-        load_factor=float(load_factor), displacement_dofs=dofs, comm=problem.comm,
-        saddle_point=bool(getattr(problem, "saddle_point", False)),
-        explicit=bool(getattr(problem, "tendon_loads", False)))
+    if problem.p is None:
+        dofs = np.arange(owned, dtype=np.int32)
+    else:
+        dofs = np.asarray(compat.sub_space_collapsed(space, 0)[1])
+        dofs = dofs[dofs < owned]
+    lin = LinearisedProblem(
+        space=space, w=problem.w, residual=problem.residual, bcs=problem.bcs,
+        set_load_factor=problem.set_load_factor, set_prescribed_factor=lambda value: None,
+        load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
+        saddle_point=problem.p is not None)
+    return buckling_modes(lin, count)
 
 
 # --- the command ------------------------------------------------------------------------------
@@ -386,14 +377,51 @@ def _scaling(name: str, factor: float):
     return factor
 
 
-def run_buckling(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
-    """`fe-beam buckling` on a rod (statics or finger) configuration: ``parsed`` is
-    (StaticConfig, BucklingSettings). Writes summary.json and buckling_modes.xdmf."""
+def run_buckling(config: dict, out: Path | None, comm=MPI.COMM_WORLD,
+                 progress: bool = True) -> dict:
+    """`fe-beam buckling` on a validated configuration (rod, finger or 3D solid: [solid]);
+    writes summary.json and buckling_modes.xdmf into ``out`` and returns the summary."""
+    from fe_beam.model.buckling import parse_buckling
+
+    kind, parsed, settings = parse_buckling(config)
+    if kind == "solid":
+        return _run_solid(parsed, settings, out, comm, progress)
+    return _run_rod(parsed, settings, out, comm, progress)
+
+
+def _failed(failure, prestress, dofs, started, prestate, out, comm) -> dict:
+    from fe_beam.outputs import atomic_write_json
+
+    summary = {"status": "failed", "message": f"buckling pre-state: {failure}",
+               "load_factors": [], "prestress": prestress, "prestate": prestate,
+               "dofs": dofs, "notes": [], "wall_time_s": time.perf_counter() - started}
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_json(out / "summary.json", summary)
+    return summary
+
+
+def _summary(result: Buckling, settings, dofs: int, started: float, critical: list) -> dict:
+    return {
+        "status": "completed",
+        "message": "",
+        "load_factors": result.load_factors,
+        "critical_loads": critical,
+        "reversed_load_factors": result.negative[: settings.count],
+        "prestress": result.prestress,
+        "modes": [{"load_factor": f, "shape": {"file": "buckling_modes.xdmf", "index": i}}
+                  for i, f in enumerate(result.load_factors, start=1)],
+        "dofs": dofs,
+        "notes": result.notes,
+        "wall_time_s": time.perf_counter() - started,
+    }
+
+
+def _run_rod(static, settings, out, comm, progress) -> dict:
     from fe_beam.outputs import BeamXDMFWriter, atomic_write_json
     from fe_beam.solver import LoadSteppingFailed
     from fe_beam.static import StaticContinuation
 
-    static, settings = parsed
     started = time.perf_counter()
     run = StaticContinuation(static, comm, prefix="fe_beam_buckling_static_")
     problem = run.problem
@@ -402,30 +430,15 @@ def run_buckling(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
             result = rod_buckling(run, settings.count, settings.prestress, static.stepping,
                                   progress=progress)
         except LoadSteppingFailed as failure:
-            summary = {"status": "failed", "message": f"buckling pre-state: {failure}",
-                       "load_factors": [], "prestress": settings.prestress,
-                       "prestate": {"load_factor": float(run.load_factor),
-                                    "tip": problem.end_values("xL")},
-                       "dofs": problem.global_dofs,
-                       "wall_time_s": time.perf_counter() - started}
-            if out is not None and comm.rank == 0:
-                out.mkdir(parents=True, exist_ok=True)
-                atomic_write_json(out / "summary.json", summary)
-            return summary
-        summary = {
-            "status": "completed",
-            "message": "",
-            "load_factors": result.load_factors,
-            "critical_loads": [load_scale_record(static.model, f) for f in result.load_factors],
-            "reversed_load_factors": result.negative[: settings.count],
-            "prestress": result.prestress,
-            "prestate_tip": problem.end_values("xL"),
-            "modes": [{"load_factor": f, "shape": {"file": "buckling_modes.xdmf", "index": i}}
-                      for i, f in enumerate(result.load_factors, start=1)],
-            "dofs": problem.global_dofs,
-            "notes": result.notes,
-            "wall_time_s": time.perf_counter() - started,
-        }
+            return _failed(failure, settings.prestress, problem.global_dofs, started,
+                           {"load_factor": float(run.load_factor),
+                            "tip": problem.end_values("xL")}, out, comm)
+        critical = [load_scale_record(static.model, f) for f in result.load_factors]
+        if run.tendons:
+            for record, factor in zip(critical, result.load_factors, strict=True):
+                record["tensions"] = [factor * t.tension for t in static.tendons]
+        summary = _summary(result, settings, problem.global_dofs, started, critical)
+        summary["prestate_tip"] = problem.end_values("xL")
         if out is not None:
             if comm.rank == 0:
                 out.mkdir(parents=True, exist_ok=True)
@@ -443,3 +456,37 @@ def run_buckling(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
         return summary
     finally:
         run.destroy()
+
+
+def _run_solid(config, settings, out, comm, progress) -> dict:
+    from fe_beam.outputs import atomic_write_json
+    from fe_beam.solid.export import DisplacementXDMF
+    from fe_beam.solid.run import SolidRun
+    from fe_beam.solver import LoadSteppingFailed
+
+    started = time.perf_counter()
+    run = SolidRun(config, comm)
+    problem = run.problem
+    try:
+        result = solid_buckling(run, settings.count, settings.prestress, config.stepping,
+                                progress=progress)
+    except LoadSteppingFailed as failure:
+        return _failed(failure, settings.prestress, run.dofs, started,
+                       {"load_factor": float(run.load_factor)}, out, comm)
+    critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
+    summary = _summary(result, settings, run.dofs, started, critical)
+    summary["model"] = "solid"
+    if out is not None:
+        if comm.rank == 0:
+            out.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        state = compat.local_array(problem.w).copy()
+        if config.output.xdmf:
+            with DisplacementXDMF(problem, out / "buckling_modes.xdmf") as writer:
+                for index, shape in enumerate(result.shapes, start=1):
+                    compat.local_array(problem.w)[:] = compat.local_array(shape)
+                    writer.write(float(index))
+        compat.local_array(problem.w)[:] = state
+        if comm.rank == 0:
+            atomic_write_json(out / "summary.json", summary)
+    return summary
