@@ -95,6 +95,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "gravity": Key((list,), [0.0, 0.0], "[gx, gy] acceleration [m/s^2]"),
         "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
         "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
+        "point_forces": Key((list,), [], "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
+        "end_displacement": Key((list,), None, "[du, dv] prescribed at x = L [m]"),
+        "end_rotation": Key(NUMBER, None, "rotation prescribed at x = L [rad]"),
         "steps": Key((int,), 10, "initial number of load steps"),
         "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
         "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),
@@ -392,6 +395,9 @@ def parse_model(config: dict) -> BeamModel:
             follower=loads["follower"],
             distributed=loads["distributed"],
             gravity=loads["gravity"],
+            point_forces=loads["point_forces"],
+            end_displacement=loads["end_displacement"],
+            end_rotation=loads["end_rotation"],
         ),
     )
 
