@@ -561,7 +561,7 @@ COMMAND_TABLES = {
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
     "calibrate": ("tendons", "inverse", "calibrate"),
-    "buckling": ("tendons", "solid", "compare", "buckling"),
+    "buckling": ("tendons", "solid", "buckling"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")

@@ -246,6 +246,23 @@ def test_cli_buckling_bad_input_exits_2(tmp_path, capsys, changes, key):
     assert key in error and "Traceback" not in error and error.count("\n") == 0
 
 
+def test_example_runs_and_gives_euler_loads(tmp_path):
+    """examples/column_buckling.toml: Euler's loads of the pinned-pinned column within 0.1%,
+    no note about unused tables."""
+    from pathlib import Path
+
+    from fe_beam.config import check_command_tables, load_config
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "column_buckling.toml"
+    assert check_command_tables("buckling", load_config(example)) == []
+    out = tmp_path / "out"
+    assert main(["buckling", str(example), "--out", str(out), "--quiet"]) == 0
+    factors = json.loads((out / "summary.json").read_text())["load_factors"]
+    EI = 2e11 * 0.01**4 / 12
+    assert factors == pytest.approx([(n * math.pi) ** 2 * EI / 1000.0 for n in (1, 2, 3)],
+                                    rel=1e-3)
+
+
 # --- the 3D column ----------------------------------------------------------------------------
 SOLID_COLUMN = {"beam": {"length": 0.2}, "section": {"shape": "rectangle", "b": 0.01, "h": 0.01},
                 "material": {"E": 1.0e6, "nu": 0.0}, "model": {"law": "reissner"},
