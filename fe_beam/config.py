@@ -622,7 +622,7 @@ def check_partition(config: dict, ranks: int, command: str = "static") -> None:
     """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
     that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
     hang in parallel, while they run serially)."""
-    if ranks > 1 and command in ("solid", "compare", "refine"):
+    if ranks > 1 and command in ("solid", "compare", "refine", "buckling"):
         _check_solid_partition(config, ranks)
     mesh = config.get("mesh")
     elements = mesh.get("elements", SCHEMA["mesh"]["elements"].default) if isinstance(
