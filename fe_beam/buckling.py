@@ -437,6 +437,12 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         if run.tendons:
             for record, factor in zip(critical, result.load_factors, strict=True):
                 record["tensions"] = [factor * t.tension for t in static.tendons]
+            result.notes.append(
+                "tendon loads: the load factors are the linearised-buckling estimate about the "
+                "given state (the tendon's tension enters the geometric stiffness); a tendon "
+                "that bends the rod gives no bifurcation of the nonlinear path, and these "
+                "factors are not verified against a reference: confirm with the stability "
+                "check of the static path")
         summary = _summary(result, settings, problem.global_dofs, started, critical)
         summary["prestate_tip"] = problem.end_values("xL")
         if out is not None:
