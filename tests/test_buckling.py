@@ -188,6 +188,29 @@ def test_prestress_moves_the_linearisation_point():
         run.destroy()
 
 
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_displacement_controlled_column_buckles_at_the_force_controlled_load(law):
+    """Clamped-clamped column shortened by a prescribed end displacement du (the state's load
+    derivative lifted from the Dirichlet values): the linear prestress's axial force at the
+    critical factor, EA lambda |du| / L, equals the critical force of the force-controlled
+    column (about the undeformed state the axial and bending fields decouple: the same
+    eigenproblem whether u(L) is prescribed or free)."""
+    h, du = 0.02, -1e-4
+    EA = stiffness(h)[0]
+    force = linear_factors(law, "none", "clamped-clamped", h, 24)
+    x0, xL = CASES["clamped-clamped"]
+    config = {"beam": {"length": L}, "section": {"shape": "rectangle", "b": B, "h": h},
+              "material": {"E": E, "nu": NU}, "model": {"law": law, "constraint": "none"},
+              "mesh": {"elements": 24}, "supports": {"x0": "clamped", "xL": "clamped"},
+              "loads": {"prescribed_xL": {"u": du}, "steps": 2}}
+    run = StaticContinuation(parse_static(config))
+    try:
+        shortened = rod_buckling(run, 3).load_factors
+    finally:
+        run.destroy()
+    assert [f * EA * abs(du) / L for f in shortened] == pytest.approx(force, rel=1e-8)
+
+
 @pytest.mark.mpi
 def test_two_ranks_equal_serial():
     together = linear_factors("nonstandard", "none", "clamped-clamped", 0.05, 16)
