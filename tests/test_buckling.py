@@ -261,6 +261,7 @@ def test_cli_buckling_writes_load_factors_and_modes(tmp_path, capsys):
     ({"buckling__shift": 1.0}, "shift"),
     ({"buckling__count": 1.5}, "count"),
     ({"loads__point_forces": [[1.5, 0.0, 1.0]]}, "point_forces"),
+    ({"loads__tip_force": [0.0, 0.0]}, "[loads]"),
 ])
 def test_cli_buckling_bad_input_exits_2(tmp_path, capsys, changes, key):
     path = write_config(tmp_path / "bad.toml", rod_config(**changes))

@@ -60,7 +60,24 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
             raise ConfigError(f"[[tendons]] {pulled[0]!r} is pull-in controlled: fe-beam "
                               "buckling needs tension-controlled tendons (give tension, not "
                               "pull_in)")
-        return "rod", static, settings
+        return "rod", _loaded(static), settings
     from fe_beam.config import parse_static
 
-    return "rod", parse_static(rest), settings
+    return "rod", _loaded(parse_static(rest)), settings
+
+
+def _loaded(static):
+    """The rod's configuration, if some load or prescribed value is nonzero (ConfigError
+    otherwise: nothing to buckle under)."""
+    model = static.model
+    loads = model.loads
+    given = (any(loads.tip_force) or loads.tip_moment or any(loads.distributed)
+             or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
+             or any(model.supports.prescribed_x0.values())
+             or any(model.supports.prescribed_xL.values())
+             or any(t.tension for t in static.tendons))
+    if not given:
+        raise ConfigError("[loads] are all zero: fe-beam buckling needs a load to buckle under "
+                          "(tip_force, point_forces, end_displacement, ... or tendon tensions); "
+                          "the load factors are multiples of it")
+    return static
