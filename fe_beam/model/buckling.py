@@ -47,6 +47,9 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
             raise ConfigError(f"[[tendons]] {pulled[0]!r}: fe-beam buckling of the 3D solid "
                               "takes the tip force as its load (give the tendons no tension, "
                               "or leave out [solid] for the rod's buckling)")
+        if settings.prestress < 0:
+            raise ConfigError(f"[buckling] prestress = {settings.prestress:g}: the 3D solid is "
+                              "loaded from 0 upwards; give a prestress >= 0")
         if not any(solid.tip_force):
             raise ConfigError("[loads] tip_force is zero: fe-beam buckling of the 3D solid needs "
                               "a tip force to buckle under")
