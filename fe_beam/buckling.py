@@ -420,9 +420,12 @@ def _summary(result: Buckling, settings, dofs: int, started: float, critical: li
 def _run_rod(static, settings, out, comm, progress) -> dict:
     from fe_beam.outputs import BeamXDMFWriter, atomic_write_json
     from fe_beam.solver import LoadSteppingFailed
-    from fe_beam.static import StaticContinuation
+    from fe_beam.static import StaticContinuation, check_beam_work
 
     started = time.perf_counter()
+    # up-front limits (fe_beam.runctl; TooLarge: exit 2 unless [solver] allow_large)
+    work_notes = check_beam_work(static, static.stepping.steps if settings.prestress else None,
+                                 comm, quiet=out is None)
     run = StaticContinuation(static, comm, prefix="fe_beam_buckling_static_")
     problem = run.problem
     try:
@@ -444,6 +447,7 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
                 "factors are not verified against a reference: confirm with the stability "
                 "check of the static path")
         summary = _summary(result, settings, problem.global_dofs, started, critical)
+        summary["notes"] = work_notes + summary["notes"]
         summary["prestate_tip"] = problem.end_values("xL")
         if out is not None:
             if comm.rank == 0:
@@ -467,10 +471,11 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
 def _run_solid(config, settings, out, comm, progress) -> dict:
     from fe_beam.outputs import atomic_write_json
     from fe_beam.solid.export import DisplacementXDMF
-    from fe_beam.solid.run import SolidRun
+    from fe_beam.solid.run import SolidRun, check_solid_work
     from fe_beam.solver import LoadSteppingFailed
 
     started = time.perf_counter()
+    work_notes = check_solid_work(config, comm, quiet=out is None)
     run = SolidRun(config, comm)
     problem = run.problem
     try:
@@ -481,6 +486,7 @@ def _run_solid(config, settings, out, comm, progress) -> dict:
                        {"load_factor": float(run.load_factor)}, out, comm)
     critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
     summary = _summary(result, settings, run.dofs, started, critical)
+    summary["notes"] = work_notes + summary["notes"]
     summary["model"] = "solid"
     if out is not None:
         if comm.rank == 0:
