@@ -248,6 +248,8 @@ class BeamProblem:
         kinks of tendon paths); ``extra_energy(problem, (u, v, theta))`` returns a UFL form
         added to the stored energy (e.g. tendons)."""
         self.model = model
+        # every point force sits on a mesh vertex (its work is a vertex integral)
+        breakpoints = tuple(breakpoints) + tuple(x for x, _, _ in model.loads.point_forces)
         self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
         degree = model.mesh.degree
@@ -262,6 +264,7 @@ class BeamProblem:
         self._make_constants()
         self._mark_ends()
         self._check_breakpoints(breakpoints)
+        self._point_force_measures()
         self.bcs, self._prescribed = self._dirichlet_conditions()
         self.extra_energy = extra_energy
         self.residual = self._residual()
@@ -344,6 +347,42 @@ class BeamProblem:
                 raise RuntimeError(f"breakpoint x = {x!r} is {found} mesh vertices instead of "
                                    "exactly one")
 
+    def _point_force_measures(self) -> None:
+        """(measure, force constant) per point force: a vertex integral at x (an interior
+        facet of the interval mesh; at x = L the tip's boundary facet)."""
+        self.point_forces = []
+        forces = self.model.loads.point_forces
+        if not forces:
+            return
+        self.mesh.topology.create_connectivity(0, 1)
+        points = sorted({x for x, _, _ in forces})
+        entities, values = [], []
+        for tag, x in enumerate(points, start=1):
+            found = compat.locate_entities(self.mesh, 0, self.point_marker(x))
+            entities.append(found)
+            values.append(np.full(len(found), tag))
+        tags = compat.meshtags(self.mesh, 0, np.concatenate(entities).astype(np.int32),
+                               np.concatenate(values))
+        interior = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
+        for x, px, py in forces:
+            tag = points.index(x) + 1
+            force = fem.Constant(self.mesh, np.array([px, py], dtype=float))
+            measure = self.ds_tip if abs(x - self.model.length) <= self.point_tolerance \
+                else interior(tag)
+            self.point_forces.append((measure, force, measure is self.ds_tip))
+
+    def point_force_work(self, parts):
+        """Work of the point forces (at load factor 1) on the state ``parts``."""
+        u, v = parts[0], parts[1]
+        work = 0
+        for measure, force, at_tip in self.point_forces:
+            displacement = ufl.as_vector([u, v])
+            if at_tip:
+                work += ufl.dot(force, displacement) * measure
+            else:
+                work += ufl.avg(ufl.dot(force, displacement)) * measure
+        return work
+
     def point_marker(self, x: float):
         """Marker (for locate_dofs_geometrical / locate_entities) of the point x."""
         tol = self.point_tolerance
@@ -410,6 +449,8 @@ class BeamProblem:
         work += lam * self.tip_moment * theta * self.ds_tip
         if not self.model.loads.follower:
             work += lam * ufl.dot(self.tip_force, ufl.as_vector([u, v])) * self.ds_tip
+        if self.point_forces:
+            work += lam * self.point_force_work(parts)
         return work
 
     def constraint_term(self, parts, multipliers):
@@ -494,6 +535,24 @@ class BeamProblem:
         """{u, v, theta} at a mesh vertex x (exactly one owner; RuntimeError if x is not a
         vertex)."""
         return self._values_at({n: self.point_dofs(n, x) for n in COMPONENTS})
+
+    def end_reaction(self, end: str = "xL") -> dict:
+        """The support's force and moment on the beam at an end, {Fx, Fy, M} (global axes;
+        0 on free components): the residual of the current state at the end's dofs."""
+        if not hasattr(self, "_residual_form"):
+            self._residual_form = fem.form(self.residual)
+        from petsc4py import PETSc
+
+        vector = compat.assemble_vector(self._residual_form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vector.getArray(readonly=True)
+        fixed = self.model.supports.fixed(end)
+        result = {}
+        for key, name in (("Fx", "u"), ("Fy", "v"), ("M", "theta")):
+            local = values[self.component_dofs(name, end)].sum() if name in fixed else 0.0
+            result[key] = float(global_sum(self.comm, local))
+        vector.destroy()
+        return result
 
     def _values_at(self, dofs: dict) -> dict:
         values = compat.local_array(self.w)

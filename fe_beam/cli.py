@@ -47,6 +47,7 @@ COMMANDS = {
     "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
     "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
                  "points (--data DATA.csv), with standard errors",
+    "buckling": "linear buckling load factors and modes of the rod or the 3D solid ([buckling])",
 }
 
 
@@ -281,6 +282,26 @@ def _report_fit(comm, command: str, summary: dict, line: str) -> int:
 
 
 RUNNERS["design"] = run_design_command
+
+
+def run_buckling_command(args, config: dict, comm) -> int:
+    from fe_beam.buckling import run_buckling
+
+    summary = run_buckling(config, args.out, comm, progress=not args.quiet)
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam buckling: note: {note}", sys.stderr)
+    if summary["status"] != "completed":
+        _say(comm, f"fe-beam buckling: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    _say(comm, f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
+               f"{summary['prestress']:g}")
+    for index, factor in enumerate(summary["load_factors"], start=1):
+        _say(comm, f"{index:>4}  {factor:>14.8g}")
+    _say(comm, f"{summary['dofs']} dofs, {summary['wall_time_s']:.2f} s; results in {args.out}")
+    return 0
+
+
+RUNNERS["buckling"] = run_buckling_command
 
 
 def run_solid_command(args, config: dict, comm) -> int:

@@ -95,6 +95,9 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "gravity": Key((list,), [0.0, 0.0], "[gx, gy] acceleration [m/s^2]"),
         "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
         "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
+        "point_forces": Key((list,), [], "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
+        "end_displacement": Key((list,), None, "[du, dv] prescribed at x = L [m]"),
+        "end_rotation": Key(NUMBER, None, "rotation prescribed at x = L [rad]"),
         "steps": Key((int,), 10, "initial number of load steps"),
         "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
         "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),
@@ -133,6 +136,7 @@ OTHER_TABLES = (
     "compare",
     "refine",
     "calibrate",
+    "buckling",
 )
 
 
@@ -391,6 +395,9 @@ def parse_model(config: dict) -> BeamModel:
             follower=loads["follower"],
             distributed=loads["distributed"],
             gravity=loads["gravity"],
+            point_forces=loads["point_forces"],
+            end_displacement=loads["end_displacement"],
+            end_rotation=loads["end_rotation"],
         ),
     )
 
@@ -554,6 +561,7 @@ COMMAND_TABLES = {
     "solid": ("tendons", "solid", "compare", "modes"),
     "compare": ("tendons", "solid", "compare"),
     "calibrate": ("tendons", "inverse", "calibrate"),
+    "buckling": ("tendons", "solid", "buckling"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
@@ -614,7 +622,7 @@ def check_partition(config: dict, ranks: int, command: str = "static") -> None:
     """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
     that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
     hang in parallel, while they run serially)."""
-    if ranks > 1 and command in ("solid", "compare", "refine"):
+    if ranks > 1 and command in ("solid", "compare", "refine", "buckling"):
         _check_solid_partition(config, ranks)
     mesh = config.get("mesh")
     elements = mesh.get("elements", SCHEMA["mesh"]["elements"].default) if isinstance(
@@ -656,7 +664,7 @@ class Validated:
 
 
 COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
-            "design")
+            "design", "buckling")
 
 
 def _solver_settings(parsed) -> list:
@@ -700,6 +708,10 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         from fe_beam.model.compare import parse_compare
 
         parsed = parse_compare(config)
+    elif command == "buckling":
+        from fe_beam.model.buckling import parse_buckling
+
+        parsed = parse_buckling(config)
     elif command == "calibrate":
         from fe_beam.calibrate import parse_calibrate
         from fe_beam.model.finger import parse_finger

@@ -57,11 +57,14 @@ class StaticResult:
 
 
 def _step_record(problem: BeamProblem, step: StepResult) -> dict:
-    return {
+    record = {
         "load_factor": step.load_factor,
         "tip": problem.end_values("xL"),
         "newton_iterations": step.iterations,
     }
+    if problem.model.loads.end_motion():  # displacement control: the force it takes
+        record["reaction_xL"] = problem.end_reaction("xL")
+    return record
 
 
 # the stability check is a dense eigenvalue problem: O(n^3), a few tenths of a second here

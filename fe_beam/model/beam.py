@@ -165,6 +165,20 @@ class Supports:
         return free
 
 
+def _with_end_motion(supports: Supports, motion: dict) -> Supports:
+    """The supports with the end motion's components fixed at x = L and prescribed."""
+    clash = [name for name in motion if name in supports.prescribed_xL]
+    if clash:
+        raise ValueError(f"loads.prescribed_xL.{clash[0]} and loads.end_"
+                         f"{'rotation' if clash[0] == 'theta' else 'displacement'} both "
+                         "prescribe the same component at x = L; give it once")
+    fixed = supports.fixed("xL")
+    components = tuple(c for c in COMPONENTS if c in fixed or c in motion)
+    prescribed = dict(supports.prescribed_xL) | motion
+    return Supports(x0=supports.x0, xL=components, prescribed_x0=dict(supports.prescribed_x0),
+                    prescribed_xL=prescribed)
+
+
 def _rank(rows) -> int:
     """Rank of a small matrix (a list of equal-length rows) by Gaussian elimination with
     partial pivoting (the rows of `Supports.rigid_motions` hold 0, 1 and x in [0, 1])."""
@@ -206,6 +220,11 @@ class Loads:
     are taken in the tip section's frame (a1 = (cos theta, sin theta), d = (-sin theta, cos theta)),
     equal to the global ones in the undeformed state. ``distributed`` is a dead force per unit
     reference length; ``gravity`` an acceleration (force rho A g per unit length).
+
+    ``point_forces``: dead forces ((x, Px, Py), ...) at points 0 < x <= L (each x becomes a
+    mesh vertex). ``end_displacement`` (du, dv) and ``end_rotation``: the end x = L moved to
+    (u, v) = lambda (du, dv), turned to theta = lambda end_rotation (displacement control: the
+    components become Dirichlet conditions at x = L, `BeamModel` adds them to the supports).
     """
 
     tip_force: tuple = (0.0, 0.0)
@@ -213,6 +232,9 @@ class Loads:
     follower: bool = False
     distributed: tuple = (0.0, 0.0)
     gravity: tuple = (0.0, 0.0)
+    point_forces: tuple = ()
+    end_displacement: tuple | None = None
+    end_rotation: float | None = None
 
     def __post_init__(self):
         for name in ("tip_force", "distributed", "gravity"):
@@ -221,6 +243,59 @@ class Loads:
             raise ValueError(f"loads.tip_moment must be a number, got {self.tip_moment!r}")
         if not isinstance(self.follower, bool):
             raise ValueError(f"loads.follower must be true or false, got {self.follower!r}")
+        object.__setattr__(self, "point_forces", _point_forces(self.point_forces))
+        if self.end_displacement is not None:
+            object.__setattr__(self, "end_displacement",
+                               _pair("end_displacement", self.end_displacement))
+        rotation = self.end_rotation
+        if rotation is not None and (isinstance(rotation, bool)
+                                     or not isinstance(rotation, (int, float))
+                                     or not _finite(rotation)):
+            raise ValueError(f"loads.end_rotation must be a number [rad], got {rotation!r}")
+        self._check_end_motion()
+
+    def _check_end_motion(self) -> None:
+        """A load on a component the end motion prescribes would be taken by the support, not
+        by the beam: refused."""
+        if self.end_displacement is not None:
+            if self.follower:
+                raise ValueError("loads.end_displacement cannot be combined with follower = "
+                                 "true (the prescribed end takes the tip force)")
+            for index, name in enumerate(("x", "y")):
+                if self.tip_force[index] != 0:
+                    raise ValueError(
+                        f"loads.end_displacement prescribes the tip's {name} displacement: "
+                        f"loads.tip_force[{index}] = {self.tip_force[index]!r} on the same "
+                        "component would be taken by the support; give one or the other")
+        if self.end_rotation is not None and self.tip_moment != 0:
+            raise ValueError(f"loads.end_rotation prescribes the tip rotation: loads.tip_moment "
+                             f"= {self.tip_moment!r} would be taken by the support; give one or "
+                             "the other")
+
+    def end_motion(self) -> dict:
+        """{u, v, theta: value at load factor 1} prescribed at x = L by the end motion."""
+        motion = {}
+        if self.end_displacement is not None:
+            motion.update(u=self.end_displacement[0], v=self.end_displacement[1])
+        if self.end_rotation is not None:
+            motion["theta"] = float(self.end_rotation)
+        return motion
+
+
+def _point_forces(value) -> tuple:
+    """((x, Px, Py), ...) as floats (ValueError naming loads.point_forces otherwise)."""
+    if not isinstance(value, (list, tuple)):
+        raise ValueError(f"loads.point_forces must be a list of [x, Px, Py], got {value!r}")
+    forces = []
+    for index, entry in enumerate(value):
+        ok = (isinstance(entry, (list, tuple)) and len(entry) == 3
+              and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in entry)
+              and all(_finite(c) for c in entry))
+        if not ok:
+            raise ValueError(f"loads.point_forces[{index}] must be [x, Px, Py] (three numbers: "
+                             f"the position [m] and the force [N]); got {entry!r}")
+        forces.append(tuple(float(c) for c in entry))
+    return tuple(forces)
 
 
 @dataclass(frozen=True)
@@ -241,6 +316,13 @@ class BeamModel:
             raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
         if self.material.rho == 0 and any(self.loads.gravity):
             raise ValueError("loads.gravity needs material.rho > 0")
+        for index, (x, _, _) in enumerate(self.loads.point_forces):
+            if not 0 < x <= self.length:
+                raise ValueError(f"loads.point_forces[{index}]: x = {x!r} is outside the beam "
+                                 f"(0 < x <= L = {self.length!r})")
+        motion = self.loads.end_motion()
+        if motion:
+            object.__setattr__(self, "supports", _with_end_motion(self.supports, motion))
         if self.options.law == "hyperelastic":
             self._check_hyperelastic()
 

@@ -1,0 +1,150 @@
+"""[loads] point_forces, end_displacement and end_rotation of the rod: closed forms of the
+linear range (Euler-Bernoulli / Timoshenko), pure bending at large rotation, 2 ranks, the
+static command's reaction record and the validation (exit 2, one sentence naming the key)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from mpi4py import MPI
+
+from fe_beam.cli import main
+from fe_beam.config import ConfigError, parse_static
+from fe_beam.static import StaticContinuation
+
+E, NU, B, H, L = 2.0e11, 0.3, 0.01, 0.02, 1.0
+EI = E * B * H**3 / 12
+GA = E / (2 * (1 + NU)) * B * H
+
+
+def config(law="reissner", constraint="none", elements=10, xL="free", **loads):
+    return {"beam": {"length": L}, "section": {"shape": "rectangle", "b": B, "h": H},
+            "material": {"E": E, "nu": NU}, "model": {"law": law, "constraint": constraint},
+            "mesh": {"elements": elements, "degree": 2},
+            "supports": {"x0": "clamped", "xL": xL}, "loads": {"steps": 1, **loads}}
+
+
+def solved(cfg, comm=MPI.COMM_WORLD):
+    run = StaticContinuation(parse_static(cfg), comm)
+    run.advance(1.0, run.config.stepping)
+    return run
+
+
+@pytest.mark.parametrize("law, constraint", [("reissner", "none"), ("nonstandard", "none"),
+                                             ("reissner", "inextensible-unshearable")])
+@pytest.mark.parametrize("a", [0.37, 0.5, 1.0])
+def test_point_force_deflection_matches_beam_theory(law, constraint, a):
+    """Cantilever, small force P at x = a (a vertex is placed there; 0.37 is not on the
+    uniform mesh): v(L) = P a^2 (3L - a) / (6 EI) + P a / GA (no shear term when unshearable)."""
+    P = 1e-6 * EI / L**2
+    run = solved(config(law, constraint, point_forces=[[a, 0.0, P]]))
+    expected = P * a**2 * (3 * L - a) / (6 * EI) + (P * a / GA if constraint == "none" else 0)
+    tip = run.problem.end_values("xL")
+    assert tip["v"] == pytest.approx(expected, rel=1e-8)
+    assert tip["theta"] == pytest.approx(P * a**2 / (2 * EI), rel=1e-8)
+    run.destroy()
+
+
+def test_point_forces_superpose_with_a_tip_force():
+    """Two interior forces and an axial one: the linear-range sum of the closed forms."""
+    P = 1e-6 * EI / L**2
+    run = solved(config(point_forces=[[0.25, 0.0, P], [0.6, 0.0, -2 * P], [0.6, 3 * P, 0.0]],
+                        tip_force=[0.0, 0.5 * P]))
+    expected = sum(p * a**2 * (3 * L - a) / (6 * EI) + p * a / GA
+                   for a, p in ((0.25, P), (0.6, -2 * P), (L, 0.5 * P)))
+    tip = run.problem.end_values("xL")
+    assert tip["v"] == pytest.approx(expected, rel=1e-7)
+    assert tip["u"] == pytest.approx(3 * P * 0.6 / (E * B * H), rel=1e-5)
+    run.destroy()
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_end_displacement_reaction_is_the_timoshenko_stiffness(law):
+    """A prescribed tip deflection dv: the support's force is dv / (L^3 / 3EI + L / GA); the
+    tip rotation that of a tip-loaded cantilever."""
+    dv = 1e-6 * L
+    run = solved(config(law, end_displacement=[0.0, dv]))
+    force = dv / (L**3 / (3 * EI) + L / GA)
+    reaction = run.problem.end_reaction("xL")
+    assert reaction["Fy"] == pytest.approx(force, rel=1e-6)
+    assert reaction["M"] == 0.0
+    tip = run.problem.end_values("xL")
+    assert tip["v"] == pytest.approx(dv, rel=1e-12)
+    assert tip["theta"] == pytest.approx(force * L**2 / (2 * EI), rel=1e-6)
+    run.destroy()
+
+
+def test_end_displacement_axial_reaction():
+    du = -1e-6 * L
+    run = solved(config("reissner", end_displacement=[du, 0.0]))
+    assert run.problem.end_reaction("xL")["Fx"] == pytest.approx(E * B * H * du / L, rel=1e-5)
+    run.destroy()
+
+
+@pytest.mark.parametrize("law", ["reissner", "nonstandard"])
+def test_end_rotation_is_pure_bending(law):
+    """theta(L) = 1 rad with u, v free: uniform curvature kappa = 1/L, the support's moment
+    EI kappa (Reissner, exact at any rotation) or EI kappa (1 - 0.3 h^2 kappa^2) (the
+    non-standard law's pure bending of a rectangle, docs/theory.md)."""
+    run = solved(config(law, elements=8, end_rotation=1.0, steps=4))
+    kappa = 1.0 / L
+    moment = EI * kappa * (1 - 0.3 * H**2 * kappa**2 if law == "nonstandard" else 1)
+    assert run.problem.end_reaction("xL")["M"] == pytest.approx(moment, rel=1e-6)
+    assert run.problem.end_values("xL")["theta"] == pytest.approx(1.0, rel=1e-12)
+    run.destroy()
+
+
+@pytest.mark.mpi
+def test_two_ranks_equal_serial():
+    P = 1e-3 * EI / L**2
+    cfg = config("nonstandard", elements=12, point_forces=[[0.41, 0.0, P]],
+                 end_displacement=[0.0, 1e-3])
+    together, alone = solved(cfg), solved(cfg, MPI.COMM_SELF)
+    for key in ("u", "v", "theta"):
+        assert together.problem.end_values("xL")[key] == pytest.approx(
+            alone.problem.end_values("xL")[key], rel=1e-10, abs=1e-14)
+    assert together.problem.end_reaction("xL")["Fy"] == pytest.approx(
+        alone.problem.end_reaction("xL")["Fy"], rel=1e-9)
+
+
+def test_static_command_records_the_reaction(tmp_path):
+    from tomlio import dump_toml
+
+    path = tmp_path / "pushed.toml"
+    dv = 1e-6
+    path.write_text(dump_toml(config(end_displacement=[0.0, dv], steps=2)))
+    out = tmp_path / "out"
+    assert main(["static", str(path), "--out", str(out), "--quiet"]) == 0
+    steps = json.loads((out / "summary.json").read_text())["steps"]
+    assert steps[-1]["reaction_xL"]["Fy"] == pytest.approx(dv / (L**3 / (3 * EI) + L / GA),
+                                                           rel=1e-6)
+    # half the load factor, half the prescribed deflection (linear range: 1e-8 of nonlinearity)
+    assert steps[0]["reaction_xL"]["Fy"] == pytest.approx(steps[-1]["reaction_xL"]["Fy"] / 2,
+                                                          rel=1e-6)
+
+
+@pytest.mark.parametrize("loads, key", [
+    ({"point_forces": [[0.0, 0.0, 1.0]]}, "point_forces"),
+    ({"point_forces": [[1.2, 0.0, 1.0]]}, "point_forces"),
+    ({"point_forces": [[-0.1, 0.0, 1.0]]}, "point_forces"),
+    ({"point_forces": [[0.5, 1.0]]}, "point_forces"),
+    ({"point_forces": [0.5, 0.0, 1.0]}, "point_forces"),
+    ({"end_displacement": [0.1]}, "end_displacement"),
+    ({"end_displacement": [0.0, 0.1], "tip_force": [0.0, 1.0]}, "tip_force"),
+    ({"end_displacement": [0.1, 0.0], "tip_force": [1.0, 0.0]}, "tip_force"),
+    ({"end_rotation": 0.5, "tip_moment": 1.0}, "tip_moment"),
+    ({"end_rotation": "a lot"}, "end_rotation"),
+    ({"end_rotation": 0.5, "prescribed_xL": {"theta": 1.0}}, "prescribed_xL"),
+])
+def test_bad_point_loads_exit_2(tmp_path, capsys, loads, key):
+    from tomlio import dump_toml
+
+    cfg = config(**loads)
+    with pytest.raises(ConfigError, match=key):
+        parse_static(cfg)
+    path = tmp_path / "bad.toml"
+    path.write_text(dump_toml(cfg))
+    assert main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert key in error and error.count("\n") == 0 and "Traceback" not in error
