@@ -89,6 +89,11 @@ class LinearisedProblem:
     jacobian: object = None
 
 
+class BucklingFailed(ArithmeticError):
+    """The linearised buckling problem cannot be set up or solved at the given state (exit 3:
+    an analysis failure, not a user mistake nor an internal error)."""
+
+
 def _assemble_vector(form) -> PETSc.Vec:
     vector = compat.assemble_vector(form)
     vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
@@ -123,8 +128,10 @@ def load_derivative(problem: LinearisedProblem, K: PETSc.Mat, jacobian_form) -> 
     for vector in (plus, minus, rhs):
         vector.destroy()
     if reason < 0:
-        raise RuntimeError(f"the tangent at the prestress state could not be factorised "
-                           f"(PETSc reason {reason}): the state is singular (critical)")
+        raise BucklingFailed(
+            f"the tangent at the prestress state is singular (PETSc reason {reason}): the state "
+            "is critical, or the constraints leave no room for the prescribed end values (an "
+            "inextensible rod cannot take an axial end displacement)")
     return w1
 
 

@@ -235,6 +235,10 @@ def rod_config(**changes):
               "loads": {"tip_force": [-250.0, 0.0]}, "buckling": {"count": 2}}
     for key, value in changes.items():
         table, name = key.split("__")
+        if table == "tendons":  # a tensioned tendon along the rod (no bifurcation: refused)
+            config["tendons"] = [{"name": "flexor", "offset_base": 0.003,
+                                  "offset_tip": 0.002, "tension": 1.0}]
+            continue
         config.setdefault(table, {})[name] = value
     return config
 
@@ -262,12 +266,23 @@ def test_cli_buckling_writes_load_factors_and_modes(tmp_path, capsys):
     ({"buckling__count": 1.5}, "count"),
     ({"loads__point_forces": [[1.5, 0.0, 1.0]]}, "point_forces"),
     ({"loads__tip_force": [0.0, 0.0]}, "[loads]"),
+    ({"tendons__": None}, "tendons"),
 ])
 def test_cli_buckling_bad_input_exits_2(tmp_path, capsys, changes, key):
     path = write_config(tmp_path / "bad.toml", rod_config(**changes))
     assert main(["buckling", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     error = capsys.readouterr().err.strip()
     assert key in error and "Traceback" not in error and error.count("\n") == 0
+
+
+def test_inextensible_rod_with_axial_end_displacement_is_an_analysis_failure(tmp_path, capsys):
+    """No straight prestate exists (the constraint forbids the shortening): exit 3, one line."""
+    config = rod_config(supports__xL="clamped", supports__x0="clamped",
+                        loads__tip_force=[0.0, 0.0], loads__end_displacement=[-0.01, 0.0])
+    path = write_config(tmp_path / "inextensible.toml", config)
+    assert main(["buckling", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    error = capsys.readouterr().err.strip()
+    assert "inextensible" in error and error.count("\n") == 0
 
 
 def test_example_runs_and_gives_euler_loads(tmp_path):

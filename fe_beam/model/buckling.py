@@ -59,6 +59,17 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
 
         static, _ = parse_finger({k: v for k, v in rest.items() if k != "inverse"})
         pulled = [t.name for t in static.tendons if t.controlled_by_pull_in]
+        tensioned = [t.name for t in static.tendons if t.tension]
+        if tensioned:
+            # a tendon that runs along the rod bends it from the first newton of tension: the
+            # path has no bifurcation, and the linearised eigenvalues about it are not a
+            # buckling load of anything (fe-beam finger's stability check says it is stable)
+            raise ConfigError(f"[[tendons]] {tensioned[0]!r} has a tension: fe-beam buckling "
+                              "does not take tendon loads (a tendon along the rod bends it "
+                              "without a bifurcation, so a linearised buckling load would be "
+                              "meaningless); give the tendons no tension and a [loads] load, or "
+                              "run fe-beam finger, whose stability check reports unstable "
+                              "directions")
         if pulled:
             raise ConfigError(f"[[tendons]] {pulled[0]!r} is pull-in controlled: fe-beam "
                               "buckling needs tension-controlled tendons (give tension, not "
