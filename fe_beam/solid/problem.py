@@ -54,7 +54,6 @@ from fe_beam.solver import (
     SNESSolver,
     SolveFailed,
     SolverSettings,
-    run_load_stepping,
 )
 
 __all__ = [
@@ -291,7 +290,7 @@ class SolidFingerProblem:
         progress: bool = False,
         record_steps: bool = True,
     ) -> dict:
-        """Ramp the load factor 0 -> 1 (`fe_beam.solver.run_load_stepping`) from the current
+        """Ramp the load factor 0 -> 1 (load control of `engine`) from the current
         state; returns ``{"steps": [...], **self.summary()}`` (plain Python data).
 
         Raises `fe_beam.solver.LoadSteppingFailed` when the ramp stalls.
@@ -313,11 +312,42 @@ class SolidFingerProblem:
                 }
             )
 
-        run_load_stepping(
-            self.solver, self.set_load_factor, stepping or LoadStepping(steps=5),
-            on_converged=on_converged, progress=progress, label="solid",
-        )
+        engine = self.engine()
+        engine.parameter = 0.0  # a ramp 0 -> 1 from the current state, as always
+        engine.load_control(1.0, stepping or LoadStepping(steps=5), on_converged=on_converged,
+                            progress=progress, label="solid")
         return {"steps": steps, **self.summary()}
+
+    def parameter_problem(self):
+        """This problem as a `fe_beam.continuation.ParameterProblem` of the load factor
+        (`set_load_factor`): its residual is affine in it (tip traction, cable tensions), the
+        arc metric weighs the displacement by 1/L^2 and the pressure by 0. Under pull-in
+        control: load control only."""
+        from fe_beam.continuation import NonlinearParameterProblem
+
+        metric = compat.vector_of(self.w).duplicate()
+        weights = np.zeros(metric.getLocalSize())
+        owned = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
+        if self.p is None:
+            weights[:] = 1.0
+        else:
+            dofs = np.asarray(compat.sub_space_collapsed(self.W, 0)[1])
+            weights[dofs[dofs < owned]] = 1.0
+        metric.getArray()[:] = weights / self.finger.geometry.length**2
+        adapter = NonlinearParameterProblem(self.solver, self.set_load_factor, metric=metric,
+                                            parameter=self.load_factor)
+        adapter.arc_length_ready = self.solver is self.snes_solver
+        return adapter
+
+    def engine(self):
+        """The continuation engine of the load factor (`fe_beam.continuation.Continuation`,
+        built once); its parameter follows ``load_factor``."""
+        from fe_beam.continuation import Continuation
+
+        if getattr(self, "_engine", None) is None:
+            self._engine = Continuation(self.parameter_problem(), self.load_factor)
+        self._engine.parameter = self.load_factor
+        return self._engine
 
     # --- post-processing --------------------------------------------------------------------
 
