@@ -202,11 +202,14 @@ class NonlinearParameterProblem:
     """A `ParameterProblem` from a `fe_beam.solver.SNESSolver` (or a solver wrapping one, with
     ``.solver`` or ``.snes``) and a ``set_parameter`` callable.
 
-    ``parameter_derivative`` is the exact two-point difference R(x, lambda + 1) - R(x, lambda)
-    when ``affine`` (the residual is affine in the parameter at fixed x: every dead load, follower
-    load, tendon tension and prescribed end value of the rod and of the solid is linear in its
-    factor), else the central finite difference (R(lambda + h) - R(lambda - h)) / 2h with
-    h = ``step`` max(1, |lambda|) (second-order accurate).
+    ``parameter_derivative`` is the central difference R(x, lambda + 1/2) - R(x, lambda - 1/2)
+    when ``affine``: exact when the residual is a polynomial of degree <= 2 in the parameter at
+    fixed x. Every dead load, follower load, tendon tension and prescribed end value of the rod
+    and of the solid is linear in its factor; the Dirichlet lifting term K_ib(x, lambda)
+    (g(lambda) - x_b) of `fe_beam.solver.NonlinearProblem` is then at most quadratic (a one-sided
+    difference of width 1 would be wrong by dK_ib/dlambda g there). Otherwise
+    (``affine=False``) the central finite difference (R(lambda + h) - R(lambda - h)) / 2h with
+    h = ``step`` max(1, |lambda|), second-order accurate.
     ``metric``: diagonal weights of the arc metric (e.g. 1/L on displacements, 1 on rotations,
     0 on multipliers and pressures); ``check_step(previous, current)`` vetoes converged steps.
     """
@@ -258,8 +261,8 @@ class NonlinearParameterProblem:
         value = self.value
         other = out.duplicate()
         try:
-            if self.affine:
-                high, low, scale = value + 1.0, value, 1.0
+            if self.affine:  # exact for any polynomial of degree <= 2 in the parameter
+                high, low, scale = value + 0.5, value - 0.5, 1.0
             else:
                 h = self.step * max(1.0, abs(value))
                 high, low, scale = value + h, value - h, 1.0 / (2 * h)

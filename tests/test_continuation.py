@@ -326,3 +326,77 @@ def test_rod_tendon_tension_as_the_parameter():
     finally:
         reference.destroy()
         arc.destroy()
+
+
+# --- the 3D solid --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
+def test_solid_arc_length_step_matches_load_control(formulation):
+    from fe_beam.solid import (
+        Discretization,
+        FingerGeometry,
+        MeshSizes,
+        NeoHookean,
+        SolidFingerProblem,
+        create_finger_mesh,
+    )
+
+    finger = create_finger_mesh(FingerGeometry(10.0, 1.0, 1.0),
+                                MeshSizes(1.0, clamp=1.0, clamp_distance=1.0), MPI.COMM_WORLD)
+    problem = SolidFingerProblem(finger, NeoHookean.from_young(1.0, 0.3),
+                                 tip_force=(0.0, 3e-4, 0.0),
+                                 discretization=Discretization(formulation))
+    engine = problem.engine()
+    start = engine.snapshot()
+    engine.prepare_arc_length(ArcLength(increment=1.0))
+    point = engine.step(engine.arc_length)
+    assert 0.5 < point.load_factor < 1.5 and point.iterations >= 2  # a nonlinear step
+    assert problem.load_factor == point.load_factor
+    tip = problem.tip_displacement()
+    assert tip[1] > 0.05 * 10.0
+    arc_state = point.state
+    engine.restore(start)
+    engine.load_control(point.load_factor, LoadStepping(steps=2))
+    from fe_beam import compat
+
+    scale = np.abs(arc_state).max()
+    np.testing.assert_allclose(compat.local_array(problem.w), arc_state, atol=1e-8 * scale)
+    np.testing.assert_allclose(problem.tip_displacement(), tip, atol=1e-8 * 10.0)
+    problem.snes_solver.destroy()
+
+
+def test_rod_parameter_derivative_matches_a_central_difference():
+    """dR/dlambda (the affine two-point difference) against the central difference of the
+    residual, on a loaded, tendon-pulled state with a prescribed end value."""
+    from dataclasses import replace
+
+    from beam_cases import cantilever
+
+    from fe_beam import Supports
+    from fe_beam.continuation import NonlinearParameterProblem
+    from fe_beam.tendons import Tendon
+
+    tendon = Tendon(paths=(((0.0, 0.004), (1.0, 0.002)),), tension=1.5)
+    model = cantilever(elements=8, constraint="inextensible-unshearable",
+                       tip_force=(0.0, -2e-3), tip_moment=1e-3)
+    model = replace(model, supports=Supports("clamped", ("theta",), prescribed_xL={"theta": 0.3}))
+    run = _rod_run(model, [tendon])
+    try:
+        run.advance(0.7, LoadStepping(steps=2))
+        exact = run.parameter_problem()
+        central = NonlinearParameterProblem(run.solver, run._set_load_factor, affine=False,
+                                            step=1e-4, parameter=0.7)
+        exact.value = 0.7
+        x = central.state_vector
+        a, b = x.duplicate(), x.duplicate()
+        exact.parameter_derivative(x, a)
+        central.parameter_derivative(x, b)
+        assert a.norm() > 0
+        b.axpy(-1.0, a)
+        assert b.norm() <= 1e-9 * a.norm()
+        # the Dirichlet row of theta(L) carries -0.3
+        assert a.getArray()[run.problem.component_dofs("theta", "xL")] == pytest.approx(
+            [-0.3] * len(run.problem.component_dofs("theta", "xL")))
+    finally:
+        run.destroy()
