@@ -226,13 +226,13 @@ def test_bordered_solve_matches_a_dense_solve():
 # --- the rod -------------------------------------------------------------------------------------
 
 
-def _rod_run(model, tendons=()):
+def _rod_run(model, tendons=(), comm=MPI.COMM_WORLD):
     from fe_beam import SolverSettings
     from fe_beam.config import StaticConfig
     from fe_beam.static import StaticContinuation
 
     config = StaticConfig(model, SolverSettings(), LoadStepping(steps=4), tendons=tuple(tendons))
-    return StaticContinuation(config, MPI.COMM_WORLD)
+    return StaticContinuation(config, comm)
 
 
 def _tip_array(run):
@@ -273,6 +273,27 @@ def test_rod_arc_length_agrees_with_load_control_on_the_stable_path(case):
     finally:
         reference.destroy()
         arc.destroy()
+
+
+@pytest.mark.mpi
+def test_rod_arc_length_in_parallel_equals_serial():
+    """The same arc-length path on all ranks together and on each rank alone: same steps, same
+    load factors and tips to 1e-10."""
+    from beam_cases import cantilever
+
+    model = cantilever(elements=16, **ROD_CASES["tip force, inextensible-unshearable"])
+    paths = []
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        run = _rod_run(model, comm=comm)
+        try:
+            points = run.engine().arc_length_path(ArcLength(increment=0.3, max_load_factor=1.0))
+            paths.append(([p.load_factor for p in points], _tip_array(run)))
+        finally:
+            run.destroy()
+    (together, tip_together), (alone, tip_alone) = paths
+    assert len(together) == len(alone) and together[-1] == 1.0
+    np.testing.assert_allclose(together, alone, rtol=1e-10)
+    np.testing.assert_allclose(tip_together, tip_alone, rtol=1e-10, atol=1e-12)
 
 
 def compat_state(run):
