@@ -38,6 +38,7 @@ from fe_beam.solver import STAGNATION_RTOL, LoadSteppingFailed, SolveFailed, Ste
 
 __all__ = [
     "ArcLength",
+    "BorderedConstraintSolver",
     "CallbackProblem",
     "Continuation",
     "ContinuationFailed",
@@ -359,6 +360,171 @@ def _ksp_solve(ksp, b, x) -> None:
         raise SolveFailed(f"PETSc error {error.ierr} in a linear solve") from None
     if ksp.getConvergedReason() < 0:
         raise SolveFailed(f"linear solve diverged (KSP reason {ksp.getConvergedReason()})")
+
+
+# --- constraints with global unknowns: pull-in control ------------------------------------------
+
+
+class BorderedConstraintSolver:
+    """Fixed-parameter Newton on the state x and m global unknowns tau (tendon tensions) with
+    m scalar constraints c(x) = l(x) - target = 0 (pull-in control), all in one Newton system:
+
+        [ K    dR/dtau ] [dx  ]     [ R(x, tau) ]
+        [ G^T  0       ] [dtau] = - [ c(x)      ],   G = dc/dx = dl/dx,
+
+    each iteration one `bordered_solve` (m + 1 solves of K through the SNES's KSP). dR/dtau is
+    the unit-width central difference of the residual in each tau_j (exact: the residual is
+    linear in a tension, its Dirichlet lifting at most quadratic). Same interface as
+    `fe_beam.solver.SNESSolver` (``solve()``, ``linear_iterations``, ``residual_norm()``,
+    ``set_reference_residual()``, ``problem``, ``snes``, ``destroy()``), so load stepping and
+    time stepping drive it unchanged.
+
+    Callbacks: ``get_tensions() -> array``, ``set_tensions(array)``, ``lengths(x) -> array``,
+    ``gradients(x) -> list of Vec`` (dl_i/dx, Dirichlet rows zeroed), ``targets() -> array``.
+    Converged when |c_i| <= ``length_tolerance`` and ||R|| meets the SNES settings' rtol
+    against max(||R|| at the start, ||sum_j tau_j dR/dtau_j|| of the iterate) (or their step
+    and round-off tests); ``nonnegative``: tensions are clipped at 0 after each update (a
+    cable cannot push); ``unloaded()`` (optional) True means the equilibrium is x = 0 (set, no
+    iterations).
+    Raises `fe_beam.solver.SolveFailed` with the start (x, tau) restored.
+    """
+
+    def __init__(self, solver, get_tensions, set_tensions, lengths, gradients, targets,
+                 length_tolerance: float, max_it: int | None = None,
+                 nonnegative: bool = False, unloaded=None, name: str = "pull-in control"):
+        self.solver = solver
+        self.inner = solver
+        self.snes = solver.snes
+        self.problem = solver.problem
+        self.get_tensions, self.set_tensions = get_tensions, set_tensions
+        self.lengths, self.gradients, self.targets = lengths, gradients, targets
+        self.length_tolerance = float(length_tolerance)
+        settings = getattr(solver, "settings", None)
+        self.max_it = max_it or getattr(settings, "max_it", 25)
+        self.rtol = getattr(settings, "rtol", 1e-9)
+        self.stol = getattr(settings, "stol", 1e-11)
+        self.atol = getattr(settings, "atol", 1e-300)
+        self.nonnegative = nonnegative
+        self.unloaded = unloaded
+        self.name = name
+        self.linear_iterations = 0
+        self._reference: float | None = None
+        self._largest = 0.0
+
+    def residual_norm(self) -> float:
+        return self.solver.residual_norm()
+
+    def set_reference_residual(self, value: float | None) -> None:
+        self._reference = value
+
+    def destroy(self) -> None:
+        self.solver.destroy()
+
+    def _tension_columns(self, x, tensions) -> list:
+        columns = []
+        b = x.duplicate()
+        try:
+            for j in range(len(tensions)):
+                column = x.duplicate()
+                for shift, target in ((0.5, column), (-0.5, b)):
+                    trial = np.array(tensions, dtype=float)
+                    trial[j] += shift
+                    self.set_tensions(trial)
+                    self.problem.residual(None, x, target)
+                column.axpy(-1.0, b)
+                columns.append(column)
+        finally:
+            self.set_tensions(tensions)
+            b.destroy()
+        return columns
+
+    def solve(self) -> int:
+        problem = self.problem
+        x = compat.vector_of(problem.w)
+        start_x = x.copy()
+        start_tau = np.array(self.get_tensions(), dtype=float)
+        reference, self._reference = self._reference, None
+        try:
+            return self._solve(x, reference)
+        except (SolveFailed, np.linalg.LinAlgError) as error:
+            start_x.copy(x)
+            _ghost_update(x)
+            self.set_tensions(start_tau)
+            raise SolveFailed(f"{self.name}: {error}") from None
+        finally:
+            start_x.destroy()
+
+    def _solve(self, x, reference) -> int:
+        problem = self.problem
+        if self.unloaded is not None and self.unloaded():
+            x.set(0.0)
+            _ghost_update(x)
+            return 0
+        b = x.duplicate()
+        dx = x.duplicate()
+        previous, step_norm, linear = None, math.inf, 0
+        try:
+            for iteration in range(self.max_it + 1):
+                tensions = np.array(self.get_tensions(), dtype=float)
+                problem.residual(None, x, b)
+                fnorm = b.norm()
+                if not math.isfinite(fnorm):
+                    raise SolveFailed("residual not a number")
+                mismatch = np.asarray(self.lengths(x), dtype=float) - self.targets()
+                columns = self._tension_columns(x, tensions)
+                try:
+                    # the tendon forces sum_j tau_j dR/dtau_j: the load scale of the residual
+                    load = x.duplicate()
+                    load.set(0.0)
+                    for tau, column in zip(tensions, columns, strict=True):
+                        load.axpy(tau, column)
+                    scale = load.norm()
+                    load.destroy()
+                    if iteration == 0:
+                        initial = fnorm if reference is None else min(fnorm, reference)
+                    measure = max(initial, scale)
+                    self._largest = max(self._largest, measure)
+                    constrained = bool(np.all(np.abs(mismatch) <= self.length_tolerance))
+                    if iteration > 0 and constrained and (
+                            fnorm <= self.atol or fnorm <= self.rtol * measure
+                            or (iteration >= 2 and fnorm > 0.5 * previous
+                                and fnorm <= STAGNATION_RTOL * self._largest)
+                            or step_norm <= self.stol * max(x.norm(),
+                                                            getattr(self.solver, "state_scale",
+                                                                    0.0))):
+                        self.linear_iterations = linear
+                        return iteration
+                    if iteration == self.max_it:
+                        break
+                    previous = fnorm
+                    A = problem.A
+                    problem.jacobian(None, x, A, A)
+                    ksp = self.snes.getKSP()
+                    ksp.setOperators(A)
+                    rows = self.gradients(x)
+                    try:
+                        b.scale(-1.0)
+                        m = len(columns)
+                        change = bordered_solve(ksp, b, columns, rows, np.zeros((m, m)),
+                                                -mismatch, dx)
+                    finally:
+                        for row in rows:
+                            row.destroy()
+                    linear += (m + 1) * max(1, ksp.getIterationNumber())
+                finally:
+                    for column in columns:
+                        column.destroy()
+                step_norm = dx.norm()
+                x.axpy(1.0, dx)
+                _ghost_update(x)
+                tensions = tensions + change
+                if self.nonnegative:
+                    tensions = np.maximum(tensions, 0.0)
+                self.set_tensions(tensions)
+            raise SolveFailed(f"no convergence in {self.max_it} Newton iterations")
+        finally:
+            b.destroy()
+            dx.destroy()
 
 
 # --- the engine ---------------------------------------------------------------------------------

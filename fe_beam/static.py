@@ -149,8 +149,11 @@ class StaticContinuation:
                 constant.value = float(value)
         else:
             raise ValueError(f"parameter must be 'load_factor' or 'tension', got {parameter!r}")
-        return NonlinearParameterProblem(self.solver, setter, check_step=self._step_check(),
-                                         metric=self._metric())
+        adapter = NonlinearParameterProblem(self.solver, setter, check_step=self._step_check(),
+                                            metric=self._metric())
+        adapter.arc_length_ready = not (self.tendons and any(
+            t.controlled_by_pull_in for t in self.tendons.tendons))
+        return adapter
 
     def engine(self) -> Continuation:
         """The continuation engine of the load factor (built once; its state is this problem's)."""

@@ -421,3 +421,24 @@ def test_rod_parameter_derivative_matches_a_central_difference():
             [-0.3] * len(run.problem.component_dofs("theta", "xL")))
     finally:
         run.destroy()
+
+
+def test_arc_length_refuses_pull_in_control_and_the_bordered_pull_in_keeps_the_length():
+    """Pull-in control is a bordered constraint of the fixed-parameter Newton: the reached
+    pull-in is the prescribed one to 1e-10 L; arc length on it is refused with a reason."""
+    from beam_cases import cantilever
+
+    from fe_beam.tendons import Tendon
+
+    tendon = Tendon(paths=(((0.0, 0.004), (1.0, 0.004)),), pull_in=0.002)
+    run = _rod_run(cantilever(elements=10, constraint="none"), [tendon])
+    try:
+        run.advance(1.0, LoadStepping(steps=2))
+        assert run.tendons.pull_ins()[0] == pytest.approx(0.002, abs=1e-10)
+        # the tension found makes the rod's residual vanish (equilibrium at that tension)
+        assert float(run.tendons.tensions[0].value) > 0
+        assert run.snes.residual_norm() < 1e-8 * float(run.tendons.tensions[0].value)
+        with pytest.raises(ValueError, match="pull-in"):
+            run.engine().arc_length_path(ArcLength())
+    finally:
+        run.destroy()

@@ -52,7 +52,6 @@ from fe_beam.solver import (
     LoadStepping,
     NonlinearProblem,
     SNESSolver,
-    SolveFailed,
     SolverSettings,
 )
 
@@ -508,27 +507,53 @@ def bulk_mask(points: np.ndarray, chains: Sequence[np.ndarray], geometry) -> np.
 
 
 class _PullInSolver:
-    """Tension of pull-in-controlled cables as outer unknowns: Newton on
-
-        r_i(tau) = (l_i^0 - l_i(u(tau))) - target_i = 0,   dr_i/dtau_j = g_i . K^-1 g_j,
-
-    with g_i = dl_i/du (Dirichlet rows zeroed) and K the Jacobian at the converged u(tau).
-    When nothing is loaded (the first step) the state is set to the known equilibrium u = 0
-    instead of asking SNES to reduce a round-off residual.
+    """Pull-in control of cables: their tensions are global unknowns of the Newton system with
+    the constraints l_i^0 - l_i(u) = target_i (`fe_beam.continuation.BorderedConstraintSolver`:
+    [[K, dR/dtau], [g^T, 0]], g_i = dl_i/du with Dirichlet rows zeroed, one bordered solve per
+    iteration; tensions clipped at 0). When nothing is loaded and no pull-in is asked (the
+    first step) the state is set to the known equilibrium u = 0 instead of asking Newton to
+    reduce a round-off residual.
     """
 
     def __init__(self, inner: SNESSolver, cables: list[TendonCable], unloaded,
                  rtol: float = 1e-10, max_it: int = 30):
+        from fe_beam.continuation import BorderedConstraintSolver
+
         self.inner = inner
+        self.solver = inner
         self.unloaded = unloaded
         self.problem = inner.problem
         self.cables = cables
         self.rtol, self.max_it = rtol, max_it
-        self.linear_iterations = 0
         for c in cables:
             c.target_pull_in = 0.0
         start = self.problem.b.getOwnershipRange()[0]
         self._bc_rows = (compat.owned_bc_dofs(self.problem.bcs) + start).astype(PETSc.IntType)
+        scale = max(c.reference_length for c in cables)
+        self._bordered = BorderedConstraintSolver(
+            inner, lambda: [c.tension for c in self.cables], self._set_tensions,
+            lambda x: np.array([c.length(x) for c in self.cables]), self._gradient_vectors,
+            lambda: np.array([c.reference_length - c.target_pull_in for c in self.cables]),
+            rtol * scale, max_it, nonnegative=True,
+            unloaded=lambda: self.unloaded() and all(c.target_pull_in == 0 for c in self.cables),
+        )
+
+    @property
+    def linear_iterations(self) -> int:
+        return self._bordered.linear_iterations
+
+    def _set_tensions(self, values) -> None:
+        for c, value in zip(self.cables, values, strict=True):
+            c.tension = float(value)
+
+    def residual_norm(self) -> float:
+        return self.inner.residual_norm()
+
+    def set_reference_residual(self, value) -> None:
+        self._bordered.set_reference_residual(value)
+
+    def destroy(self) -> None:
+        self.inner.destroy()
 
     def _gradient_vectors(self, x: PETSc.Vec) -> list[PETSc.Vec]:
         vectors = []
@@ -546,42 +571,7 @@ class _PullInSolver:
         return vectors
 
     def solve(self) -> int:
-        tau0 = [c.tension for c in self.cables]
-        total = 0
-        try:
-            for _ in range(self.max_it):
-                x = compat.vector_of(self.problem.w)
-                if self.unloaded():
-                    x.set(0.0)
-                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-                else:
-                    total += self.inner.solve()
-                r = np.array([c.reference_length - c.length(x) - c.target_pull_in
-                              for c in self.cables])
-                scale = max(c.reference_length for c in self.cables)
-                if np.all(np.abs(r) <= self.rtol * scale):
-                    return total
-                A = self.problem.A
-                self.problem.jacobian(None, x, A, A)
-                ksp = self.inner.snes.getKSP()
-                ksp.setOperators(A)
-                g = self._gradient_vectors(x)
-                z = [v.duplicate() for v in g]
-                for gi, zi in zip(g, z, strict=True):
-                    ksp.solve(gi, zi)
-                S = np.array([[gi.dot(zj) for zj in z] for gi in g])
-                step = np.linalg.solve(S, r)
-                for c, dt in zip(self.cables, step, strict=True):
-                    c.tension = max(c.tension - dt, 0.0)
-                for v in g + z:
-                    v.destroy()
-        except (SolveFailed, np.linalg.LinAlgError) as error:
-            for c, t in zip(self.cables, tau0, strict=True):
-                c.tension = t
-            raise SolveFailed(f"pull-in control: {error}") from error
-        for c, t in zip(self.cables, tau0, strict=True):
-            c.tension = t
-        raise SolveFailed(f"pull-in control: no convergence in {self.max_it} tension updates")
+        return self._bordered.solve()
 
 
 def evaluate_at_points(function: fem.Function, points: np.ndarray) -> np.ndarray:
