@@ -133,6 +133,7 @@ OTHER_TABLES = (
     "compare",
     "refine",
     "calibrate",
+    "validity",
 )
 
 
@@ -554,6 +555,7 @@ COMMAND_TABLES = {
     "solid": ("tendons", "solid", "compare"),
     "compare": ("tendons", "solid", "compare"),
     "calibrate": ("tendons", "inverse", "calibrate"),
+    "validity": ("tendons", "solid", "compare", "validity"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
@@ -656,7 +658,7 @@ class Validated:
 
 
 COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
-            "design")
+            "design", "validity")
 
 
 def _solver_settings(parsed) -> list:
@@ -700,6 +702,10 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         from fe_beam.model.compare import parse_compare
 
         parsed = parse_compare(config)
+    elif command == "validity":
+        from fe_beam.model.validity import parse_validity
+
+        parsed = parse_validity(config)
     elif command == "calibrate":
         from fe_beam.calibrate import parse_calibrate
         from fe_beam.model.finger import parse_finger
