@@ -242,7 +242,8 @@ def test_richardson_estimate_of_the_solid(grid):
             factor * math.hypot(tip["u"] - coarse["u"], tip["v"] - coarse["v"]) / L, rel=1e-9)
         assert error["rotation"] == pytest.approx(factor * abs(tip["theta"] - coarse["theta"]),
                                                   rel=1e-9)
-        assert 0 < error["tip"] < 0.01 and 0 < error["backbone"] < 0.01  # the solid resolves the 1 % question
+        # the solid resolves the 1 % question
+        assert 0 < error["tip"] < 0.01 and 0 < error["backbone"] < 0.01
     with (out / "validity.csv").open(newline="") as stream:
         rows = list(csv.DictReader(stream))
     assert len(rows) == 2 and float(rows[1]["reissner_backbone_distance"]) == pytest.approx(
