@@ -248,17 +248,30 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
     if done:
         tell(f"fe-beam validity: {len(done)} of {len(config.points)} points already finished in "
              f"{out / POINTS} (skipped; delete a point's file to recompute it)")
+    if root:  # summary.json from the start (status "running")
+        _write(out, config, started, "running", "", len(done))
     mine = todo[comm.rank::comm.size]
     local = MPI.COMM_SELF if comm.size > 1 else comm
     bar = ProgressBar(local, total=len(mine), label="validity points", enabled=progress and root,
                       unit="pt")
     computed = 0
+
+    def finished(point: GridPoint, record: dict) -> None:
+        nonlocal computed
+        atomic_write_json(_point_path(out, point), record)
+        computed += 1
+        bar.update(computed, f"{point.name}: {record['status']}")
+
+    workers = min(config.workers, len(mine))
+    if workers > 1 and comm.size > 1:
+        tell(f"fe-beam validity: note: [validity] workers = {config.workers} is not used under "
+             f"mpirun: the {comm.size} ranks share the points")
     try:
-        for count, point in enumerate(mine, start=1):
-            record = solve_point(point, config, local)
-            atomic_write_json(_point_path(out, point), record)
-            computed += 1
-            bar.update(count, f"{point.name}: {record['status']}")
+        if workers > 1 and comm.size == 1:
+            _run_workers(raw, config, mine, workers, finished, comm)
+        else:
+            for point in mine:
+                finished(point, solve_point(point, config, local))
     except runctl.Interrupted as stop:
         bar.close()
         if root:  # the finished points are on disk; the summary says what is missing
@@ -275,6 +288,41 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
         summary = _write(out, config, started, None, "", len(done), computed)
     summary = comm.bcast(summary, root=0) if comm.size > 1 else summary
     return summary
+
+
+def _run_workers(raw: dict, config: ValidityConfig, points: list[GridPoint], workers: int,
+                 finished, comm) -> None:
+    """Solve ``points`` in ``workers`` new processes (`fe_beam.model.validity.worker_point`),
+    calling ``finished(point, record)`` here as each one ends; Ctrl-C (noticed here: the
+    workers ignore it) ends the workers and raises `fe_beam.runctl.Interrupted`."""
+    import multiprocessing
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    from fe_beam.model.validity import worker_point, worker_start
+
+    index = {p.name: k for k, p in enumerate(config.points)}
+    executor = ProcessPoolExecutor(max_workers=workers, initializer=worker_start,
+                                   mp_context=multiprocessing.get_context("spawn"))
+    try:
+        pending = {executor.submit(worker_point, raw, index[p.name]): p for p in points}
+        while pending:
+            done, _ = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
+            for future in done:
+                point = pending.pop(future)
+                try:
+                    record = future.result()
+                except Exception as error:  # the worker process died (BrokenProcessPool)
+                    record = {"i": point.i, "j": point.j, "x": point.x, "y": point.y,
+                              "hash": point.hash, "status": "failed", "solid": None, "rod": {},
+                              "message": f"worker process: {type(error).__name__}: {error}"}
+                finished(point, record)
+            runctl.check(comm)
+    except BaseException:
+        for process in list((getattr(executor, "_processes", None) or {}).values()):
+            process.kill()  # (a worker handles SIGTERM at its own step boundaries)
+        executor.shutdown(wait=False, cancel_futures=True)
+        raise
+    executor.shutdown(wait=True)
 
 
 def _write(out: Path, config: ValidityConfig, started: float, status: str | None, message: str,
@@ -310,7 +358,7 @@ def _write(out: Path, config: ValidityConfig, started: float, status: str | None
     }
     atomic_write_json(out / "summary.json", summary)
     _write_csv(out / "validity.csv", points, config)
-    if _plots(config) and points:
+    if _plots(config) and points and status != "running":
         _plot(out / "validity.png", points, config)
     return summary
 

@@ -49,7 +49,10 @@ VALIDITY_KEYS = {
                              "/ r (r = 2: twice as fine) for a Richardson estimate of its error"),
     "order": Key(NUMBER, DEFAULT_ORDER, "convergence order p of the solid assumed by the "
                  "Richardson estimate"),
+    "workers": Key((int,), 1, "points solved at once in separate processes (serial runs; "
+                   "under mpirun the ranks share the points)"),
 }
+MAX_WORKERS = 64
 #: tables a map axis cannot name (they configure the map itself or are replaced per point)
 NOT_AXES = ("validity", "compare", "refine", "output")
 #: keys of the 3D solid's tables beyond `SCHEMA` (their defaults exist without being written)
@@ -84,6 +87,7 @@ class ValidityConfig:
     second_mesh_ratio: float | None
     order: float
     points: tuple[GridPoint, ...]
+    workers: int = 1
 
 
 def _known_keys(name: str) -> dict:
@@ -260,6 +264,10 @@ def parse_validity(raw: dict) -> ValidityConfig:
     order = given["order"]
     if not 0.5 <= order <= 8:
         raise ConfigError(f"[validity] order must be in [0.5, 8]; got {order!r}")
+    workers = given["workers"]
+    if not 1 <= workers <= MAX_WORKERS:
+        raise ConfigError(f"[validity] workers must be an integer from 1 to {MAX_WORKERS}; "
+                          f"got {workers!r}")
 
     points = []
     for i, xv in enumerate(x_values):
@@ -282,7 +290,8 @@ def parse_validity(raw: dict) -> ValidityConfig:
                                     parsed, config_hash(point | {"__map__": {
                                         "second_mesh_ratio": ratio, "order": order}})))
     return ValidityConfig(given["x"], x_values, y, y_values, tuple(laws),
-                          None if ratio is None else float(ratio), float(order), tuple(points))
+                          None if ratio is None else float(ratio), float(order), tuple(points),
+                          workers)
 
 
 def second_mesh(point: dict, parsed: CompareConfig, ratio: float) -> dict:
@@ -290,3 +299,38 @@ def second_mesh(point: dict, parsed: CompareConfig, ratio: float) -> dict:
     raw = copy.deepcopy(point)
     raw.setdefault("solid", {})["mesh_size"] = parsed.solid.sizes.size / ratio
     return raw
+
+
+# --- entry points of the worker processes (``workers`` > 1) --------------------------------------
+# Here, in a module that imports no finite-element code, so that a new ("spawn") worker process
+# can start PETSc its own way before dolfinx loads.
+def worker_start() -> None:
+    """Set up a worker process: Ctrl-C is the parent's to handle (it ends the workers), PETSc
+    without its signal handlers, no progress bars, no JIT chatter."""
+    import os
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:  # Linux: end with the parent, however it ends (prctl PR_SET_PDEATHSIG = 1)
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, int(signal.SIGKILL))
+    except (OSError, AttributeError):
+        pass
+    os.environ["FE_BEAM_PROGRESS"] = "0"
+    import petsc4py
+
+    petsc4py.init(["fe-beam", "-no_signal_handler"])
+    from fe_beam.cli import quiet_jit_logging
+
+    quiet_jit_logging()
+
+
+def worker_point(raw: dict, index: int) -> dict:
+    """Solve point ``index`` of the map of ``raw`` in this worker process (on COMM_SELF)."""
+    from mpi4py import MPI
+
+    from fe_beam.validity import solve_point
+
+    config = parse_validity(raw)
+    return solve_point(config.points[index], config, MPI.COMM_SELF)
