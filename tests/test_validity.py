@@ -144,6 +144,8 @@ def test_validation_loads_no_fe_stack():
         "from fe_beam.config import validate, ConfigError\n"
         f"config = {with_map()!r}\n"
         "validate('validity', config)\n"
+        "from fe_beam.config import load_config\n"
+        "validate('validity', load_config('examples/finger_validity.toml'))\n"
         "config['validity']['x'] = 'beam.nothing'\n"
         "try:\n    validate('validity', config)\nexcept ConfigError as e:\n    error = str(e)\n"
         "heavy = ('dolfinx', 'petsc4py', 'mpi4py', 'gmsh', 'basix', 'ffcx')\n"
