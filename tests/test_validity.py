@@ -304,3 +304,34 @@ def test_failed_point_is_recorded_and_the_map_goes_on(tmp_path, grid):
         for law in ("nonstandard", "reissner"):
             assert good["rod"][law]["tip"][key] == pytest.approx(
                 reference["rod"][law]["tip"][key], rel=1e-6)
+
+
+@pytest.mark.mpi
+def test_ranks_share_the_points(tmp_path):
+    """Under mpirun each rank solves its own points on COMM_SELF: all points are in the map, and
+    the one rank 1 solved is what ``fe-beam compare``'s code gives serially on rank 0."""
+    from mpi4py import MPI
+
+    from fe_beam.compare import run_compare
+    from fe_beam.validity import run_validity
+
+    world = MPI.COMM_WORLD
+    if world.size == 1:
+        pytest.skip("run under mpirun -n 2")
+    out = Path(world.bcast(str(tmp_path), root=0)) / "out"
+    config = with_map(y_values=[0.3])
+    del config["validity"]["second_mesh_ratio"]
+    config["output"]["plots"] = False
+    summary = run_validity(config, out, world, progress=False)
+    assert summary["status"] == "converged" and summary["counts"]["computed"] == 2
+    assert sorted(p.name for p in (out / "points").glob("*.json")) == ["0_0.json", "1_0.json"]
+    if world.rank == 0:  # point 1 was rank 1's
+        point = parse_validity(config).points[1]
+        row = run_compare(point.raw, None, MPI.COMM_SELF, progress=False)["table"][0]
+        mapped = summary["points"][1]
+        for key in ("u", "v", "theta"):
+            assert mapped["solid"]["tip"][key] == pytest.approx(row["solid"]["tip"][key],
+                                                                rel=1e-12, abs=1e-15)
+            assert mapped["rod"]["reissner"]["tip"][key] == pytest.approx(
+                row["rod"]["reissner"]["tip"][key], rel=1e-12, abs=1e-15)
+    world.barrier()
