@@ -335,3 +335,43 @@ def test_ranks_share_the_points(tmp_path):
             assert mapped["rod"]["reissner"]["tip"][key] == pytest.approx(
                 row["rod"]["reissner"]["tip"][key], rel=1e-12, abs=1e-15)
     world.barrier()
+
+
+def test_ctrl_c_leaves_the_finished_points_and_a_rerun_finishes_the_map(tmp_path, monkeypatch):
+    """SIGINT after the first point: exit 130, that point's file and an "interrupted" summary
+    are there; the rerun solves only the other point. (The solves are stand-ins here: this is
+    about the files, the physics is tested above.)"""
+    import signal
+
+    from fe_beam import validity
+
+    solved = []
+
+    def stand_in(point, config, comm):
+        solved.append(point.name)
+        if len(solved) == 1:
+            os.kill(os.getpid(), signal.SIGINT)  # noticed at the next step boundary
+        tip = {"u": -0.001 * point.x, "v": 0.01 * point.x, "theta": 0.1 * point.x}
+        rod = {"status": "converged", "message": "", "tip": tip,
+               "tip_error": {"distance_over_L": 0.0, "rotation": 0.0}, "backbone_distance": 0.0}
+        return {"i": point.i, "j": point.j, "x": point.x, "y": point.y, "hash": point.hash,
+                "status": "converged", "message": "",
+                "solid": {"tip": tip, "dofs": 1, "mesh_size": 0.01, "discretisation_error": None},
+                "rod": {law: dict(rod) for law in config.laws}}
+
+    monkeypatch.setattr(validity, "solve_point", stand_in)
+    config = with_map()
+    del config["validity"]["second_mesh_ratio"]
+    config["output"]["plots"] = False
+    code, _, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 130, stderr
+    assert solved == ["0_0"]
+    assert [f.name for f in (out / "points").glob("*.json")] == ["0_0.json"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["counts"]["finished"] == 1
+    code, _, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 0, stderr
+    assert solved == ["0_0", "1_0"]
+    assert "1 of 2 points already finished" in stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["counts"]["computed"] == 1

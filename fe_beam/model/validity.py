@@ -89,6 +89,12 @@ class ValidityConfig:
     points: tuple[GridPoint, ...]
     workers: int = 1
 
+    @property
+    def solid(self):
+        """The first point's solid configuration (its solver settings are every point's:
+        `fe_beam.config.validate` has PETSc check their options)."""
+        return self.points[0].parsed.solid
+
 
 def _known_keys(name: str) -> dict:
     """The keys (with their Key) a table understands when they are not written."""
