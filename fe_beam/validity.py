@@ -425,6 +425,7 @@ def _plot(path: Path, points: list[dict], config: ValidityConfig) -> None:
             axis.bar(range(len(laws)), values, yerr=None if math.isnan(error) else error,
                      color=[f"C{k}" for k in range(len(laws))], capsize=4)
             axis.set_xticks(range(len(laws)), laws)
+            axis.set_yscale("log")
             _threshold_lines(axis)
             axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
             axis.set_title(_point_title(config, p) + _error_note(error), fontsize=8)
@@ -494,11 +495,11 @@ def _plot_map(path: Path, points: list[dict], config: ValidityConfig) -> None:
                                        if np.isfinite(grid).all() else "nearest",
                                        cmap="viridis", norm=norm)
                 axis.figure.colorbar(mesh, ax=axis, label="max_x |r_rod - r_solid| / L [%]")
-                if np.isfinite(grid).all():
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        lines = axis.contour(X, Y, grid, levels=[100 * t for t in THRESHOLDS],
-                                             colors=["white", "red"], linewidths=1.5)
+                with warnings.catch_warnings():  # (no contour where d stays on one side)
+                    warnings.simplefilter("ignore")
+                    lines = axis.contour(X, Y, np.ma.masked_invalid(grid),
+                                         levels=[100 * t for t in THRESHOLDS],
+                                         colors=["white", "red"], linewidths=1.5)
                     axis.clabel(lines, fmt=lambda v: f"{v:g} %", fontsize=8)
             for (i, j), p in by_index.items():
                 ok = p["status"] == "converged"

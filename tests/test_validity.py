@@ -375,3 +375,26 @@ def test_ctrl_c_leaves_the_finished_points_and_a_rerun_finishes_the_map(tmp_path
     assert "1 of 2 points already finished" in stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "converged" and summary["counts"]["computed"] == 1
+
+
+@pytest.mark.parametrize("shape", [(3, 2), (1, 1), (1, 3)])
+def test_pictures_of_any_grid_shape(tmp_path, shape):
+    """2-D maps (with a failed point: no colour there), a single point and a 1-D grid along y
+    draw (the records are stand-ins: this is about the drawing)."""
+    from fe_beam.validity import _plot
+
+    nx, ny = shape
+    config = parse_validity(with_map(x_values=[0.1 * (k + 1) for k in range(nx)],
+                                     y_values=[0.2 + 0.05 * k for k in range(ny)]))
+    points = []
+    for p in config.points:
+        d = 0.01 * p.x / p.y
+        points.append({"i": p.i, "j": p.j, "x": p.x, "y": p.y, "message": "",
+                       "status": "failed" if (p.i, p.j) == (nx - 1, 0) and nx > 1 else
+                       "converged",
+                       "solid": {"tip": {}, "dofs": 1, "mesh_size": 0.01,
+                                 "discretisation_error": {"backbone": 1e-4}},
+                       "rod": {"nonstandard": {"backbone_distance": d},
+                               "reissner": {"backbone_distance": d / 2}}})
+    _plot(tmp_path / "validity.png", points, config)
+    assert (tmp_path / "validity.png").stat().st_size > 1000
