@@ -272,20 +272,24 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
         else:
             for point in mine:
                 finished(point, solve_point(point, config, local))
+        bar.close()
+        if comm.size > 1:  # wait for the other ranks' points, noticing Ctrl-C meanwhile
+            request = comm.Ibarrier()
+            while not request.Test():
+                if runctl.pending():
+                    raise runctl.Interrupted(runctl.pending())
+                time.sleep(0.05)
     except runctl.Interrupted as stop:
         bar.close()
         if root:  # the finished points are on disk; the summary says what is missing
             _write(out, config, started, "interrupted",
-                             f"interrupted ({stop.name}); rerun the command to finish the map",
-                             len(done))
+                   f"interrupted ({stop.name}); rerun the command to finish the map", len(done))
         raise
     finally:
         bar.close()
-    computed = comm.allreduce(computed, op=MPI.SUM) if comm.size > 1 else computed
-    comm.barrier()
     summary = None
     if root:
-        summary = _write(out, config, started, None, "", len(done), computed)
+        summary = _write(out, config, started, None, "", len(done))
     summary = comm.bcast(summary, root=0) if comm.size > 1 else summary
     return summary
 
@@ -326,13 +330,16 @@ def _run_workers(raw: dict, config: ValidityConfig, points: list[GridPoint], wor
 
 
 def _write(out: Path, config: ValidityConfig, started: float, status: str | None, message: str,
-           skipped: int, computed: int = 0) -> dict:
+           skipped: int) -> dict:
     records = _collect(out, config)
     points = [_summary_point(r) for r in records]
     failed = [p for p in points if p["status"] == "failed"]
     total = len(config.points)
+    computed = len(points) - skipped
     if status is None:
         status = "failed" if failed or len(points) < total else "converged"
+        if len(points) < total:
+            message = f"{total - len(points)} of {total} points have no result"
         if failed:
             message = (f"{len(failed)} of {total} points failed (first: {config.x} = "
                        f"{failed[0]['x']:g}"
