@@ -260,6 +260,8 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
         nonlocal computed
         atomic_write_json(_point_path(out, point), record)
         computed += 1
+        if root:  # summary.json and validity.csv up to date (the points on disk so far)
+            _write(out, config, started, "running", "", len(done))
         bar.update(computed, f"{point.name}: {record['status']}")
 
     workers = min(config.workers, len(mine))
