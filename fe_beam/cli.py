@@ -44,6 +44,8 @@ COMMANDS = {
     "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
     "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
     "compare": "tension sweep: 3D solid vs the rod with the non-standard and Reissner laws",
+    "validity": "map of where the rod agrees with the 3D solid over two config keys "
+                "([validity])",
     "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
     "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
                  "points (--data DATA.csv), with standard errors",
@@ -362,6 +364,26 @@ def run_compare_command(args, config: dict, comm) -> int:
 
 RUNNERS["solid"] = run_solid_command
 RUNNERS["compare"] = run_compare_command
+
+
+def run_validity_command(args, config: dict, comm) -> int:
+    from fe_beam.validity import run_validity
+
+    summary = run_validity(config, args.out, comm, progress=not args.quiet,
+                           say=lambda text: _say(comm, text, sys.stderr))
+    for entry in summary["departures"].values():
+        _say(comm, entry["statement"])
+    counts = summary["counts"]
+    _say(comm, f"{counts['finished']} of {counts['total']} points ({counts['computed']} computed, "
+               f"{counts['skipped']} already finished, {counts['failed']} failed), "
+               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam validity: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS["validity"] = run_validity_command
 
 
 def run_calibrate_command(args, config: dict, comm) -> int:

@@ -137,6 +137,7 @@ OTHER_TABLES = (
     "refine",
     "calibrate",
     "buckling",
+    "validity",
 )
 
 
@@ -562,6 +563,7 @@ COMMAND_TABLES = {
     "compare": ("tendons", "solid", "compare"),
     "calibrate": ("tendons", "inverse", "calibrate"),
     "buckling": ("tendons", "solid", "buckling"),
+    "validity": ("tendons", "solid", "compare", "validity"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
@@ -664,7 +666,7 @@ class Validated:
 
 
 COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
-            "design", "buckling")
+            "design", "buckling", "validity")
 
 
 def _solver_settings(parsed) -> list:
@@ -712,6 +714,10 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         from fe_beam.model.buckling import parse_buckling
 
         parsed = parse_buckling(config)
+    elif command == "validity":
+        from fe_beam.model.validity import parse_validity
+
+        parsed = parse_validity(config)
     elif command == "calibrate":
         from fe_beam.calibrate import parse_calibrate
         from fe_beam.model.finger import parse_finger

@@ -1,0 +1,400 @@
+"""``fe-beam validity``: the map of where the rod agrees with the 3D solid. Configuration mistakes
+(exit 2, one sentence naming the key, validated without the finite-element stack); a slender,
+lightly loaded finger on which both rod laws agree with the solid to < 1 % of L (and the
+Reissner rod's tip rotation is the closed form T d L / (E I)); the map's numbers are those of
+``fe-beam compare`` at the same point; the Richardson estimate of the solid's error; resume
+(finished points skipped, a deleted point recomputed); a failed point recorded (exit 3)."""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import csv
+import io
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from tomlio import dump_toml
+
+from fe_beam.config import ConfigError, validate
+from fe_beam.model.validity import parse_validity, resolve_key
+
+ROOT = Path(__file__).resolve().parents[1]
+L, B, H, D = 0.1, 0.01, 0.01, 0.003  # length, width, height, tendon offset [m]
+E = 0.6e6
+# slender (L/h = 10) square finger, one straight tendon at constant offset d: a pure moment T d
+# and an axial force T. At T = 0.5 N the tip turns 0.3 rad and rises 15 % of L: a rod 10 % too
+# stiff or too soft would be 1.5 % of L off
+FINGER = {
+    "beam": {"length": L},
+    "section": {"shape": "rectangle", "b": B, "h": H},
+    "material": {"E": E, "nu": 0.3, "rho": 1070.0},
+    "mesh": {"elements": 16, "degree": 2},
+    "loads": {"steps": 2},
+    "solid": {"mesh_size": 0.01, "order": 2},
+    "output": {"xdmf": False, "plots": True},
+    "tendons": [{"name": "flexor", "offset_base": D, "offset_tip": D, "tension": 0.5}],
+}
+TENSIONS = [0.25, 0.5]
+RATIO = 0.8  # second mesh 1.25 times coarser than the configured one (cheap)
+MAP = {"x": "tendons.0.tension", "x_values": TENSIONS, "y": "material.nu", "y_values": [0.3],
+       "second_mesh_ratio": RATIO}
+
+
+def with_map(base: dict = FINGER, **validity) -> dict:
+    config = copy.deepcopy(base)
+    config["validity"] = dict(MAP) | validity
+    return config
+
+
+def run_cli(command: str, folder: Path, config: dict, out: Path | None = None):
+    """``fe-beam <command>`` in-process: (exit code, stdout, stderr, output folder)."""
+    from fe_beam.cli import main
+
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{command}.toml"
+    path.write_text(dump_toml(config))
+    out = out or folder / "out"
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(stdout):
+        code = main([command, str(path), "--out", str(out), "--quiet"])
+    return code, stdout.getvalue(), stderr.getvalue(), out
+
+
+# --- configuration mistakes --------------------------------------------------------------------
+BAD = [
+    ({"x": "beam.lenght"}, "beam.lenght"),
+    ({"x": "solid.mesh_sise"}, "solid.mesh_sise"),
+    ({"x": "tendons.3.tension"}, "tendons.3.tension"),
+    ({"x": "loads.tip_force.2"}, "loads.tip_force.2"),
+    ({"x": "model.law"}, "not a numeric key"),
+    ({"x": "solid.material"}, "not a numeric key"),
+    ({"x": "loads.tip_force"}, "not a numeric key"),
+    ({"x": "length"}, "dotted key path"),
+    ({"x": "compare.steps"}, "[compare]"),
+    ({"x": 3}, "[validity] x"),
+    ({"x_values": []}, "[validity] x_values"),
+    ({"x_values": ["one", 2]}, "[validity] x_values"),
+    ({"x_values": 0.5}, "[validity] x_values"),
+    ({"y_values": []}, "[validity] y_values"),
+    ({"y_values": [True]}, "[validity] y_values"),
+    ({"y": "material.nu", "y_values": [0.3, 0.6]}, "[material] nu"),
+    ({"x": "section.h", "x_values": [0.01, -0.01]}, "section.h = -0.01"),
+    ({"x": "mesh.elements", "x_values": [10.5]}, "[mesh] elements"),
+    ({"y": "tendons.0.tension"}, "same key"),
+    ({"second_mesh_ratio": 1.0}, "second_mesh_ratio"),
+    ({"lawz": ["reissner"]}, "[validity] unknown key"),
+    ({"laws": ["euler"]}, "[validity] laws"),
+]
+
+
+@pytest.mark.parametrize("changes, fragment", BAD, ids=[str(i) for i in range(len(BAD))])
+def test_bad_input_exits_2_naming_the_key(tmp_path, changes, fragment):
+    config = with_map(**changes)
+    code, stdout, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 2, stderr
+    assert fragment in stderr, stderr
+    assert len(stderr.strip().splitlines()) == 1 and "Traceback" not in stderr
+    assert not (out / "summary.json").exists() and not (out / "points").exists()
+
+
+def test_missing_table_and_axis():
+    with pytest.raises(ConfigError, match=r"\[validity\] is required"):
+        validate("validity", FINGER)
+    config = with_map()
+    del config["validity"]["x"]
+    with pytest.raises(ConfigError, match=r"\[validity\] x is required"):
+        validate("validity", config)
+    config = with_map()
+    del config["validity"]["y"]
+    with pytest.raises(ConfigError, match=r"\[validity\] y is required"):
+        validate("validity", config)
+
+
+def test_key_paths_resolve_given_and_default_keys():
+    for path in ("beam.length", "section.h_tip", "material.nu", "material.G", "solid.mesh_size",
+                 "tendons.0.tension", "tendons.0.offset_tip", "loads.tip_force.1",
+                 "solid.tendon_refinement"):
+        resolve_key(FINGER, path, "[validity] x")
+    parsed = parse_validity(with_map(x="loads.tip_force.1", x_values=[0.01],
+                                     y="section.h_tip", y_values=[0.008, 0.009]))
+    assert [(p.i, p.j) for p in parsed.points] == [(0, 0), (0, 1)]
+    point = parsed.points[1].raw
+    assert point["loads"]["tip_force"] == [0.0, 0.01] and point["section"]["h_tip"] == 0.009
+    assert point["compare"] == {"load_factors": [1.0], "laws": ["nonstandard", "reissner"]}
+    assert "validity" not in point and FINGER["section"].get("h_tip") is None
+    assert parsed.points[1].parsed.solid.geometry.height_tip == 0.009
+    # a finished point is reused only for the same configuration
+    changed = copy.deepcopy(FINGER)
+    changed["material"]["E"] = 1.1 * E
+    other = parse_validity(with_map(changed))
+    assert other.points[0].hash != parse_validity(with_map()).points[0].hash
+
+
+def test_validation_loads_no_fe_stack():
+    from fe_beam.cli import MPI_LAUNCHER_PREFIXES
+
+    code = (
+        "import json, sys\n"
+        "from fe_beam.config import validate, ConfigError\n"
+        f"config = {with_map()!r}\n"
+        "validate('validity', config)\n"
+        "from fe_beam.config import load_config\n"
+        "validate('validity', load_config('examples/finger_validity.toml'))\n"
+        "config['validity']['x'] = 'beam.nothing'\n"
+        "try:\n    validate('validity', config)\nexcept ConfigError as e:\n    error = str(e)\n"
+        "heavy = ('dolfinx', 'petsc4py', 'mpi4py', 'gmsh', 'basix', 'ffcx')\n"
+        "print(json.dumps({'loaded': [m for m in heavy if m in sys.modules], 'error': error}))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith(MPI_LAUNCHER_PREFIXES)}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          cwd=ROOT, timeout=120)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["loaded"] == [] and "beam.nothing" in result["error"]
+
+
+# --- the map ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("validity")
+    code, stdout, stderr, out = run_cli("validity", folder, with_map())
+    assert code == 0, stderr
+    return folder, out, json.loads((out / "summary.json").read_text())
+
+
+def test_rod_agrees_with_the_solid_on_a_slender_lightly_loaded_finger(grid):
+    _, _, summary = grid
+    assert summary["status"] == "converged"
+    assert summary["counts"] == {"total": 2, "finished": 2, "failed": 0, "skipped": 0,
+                                 "computed": 2}
+    points = summary["points"]
+    assert [(p["x"], p["y"]) for p in points] == [(0.25, 0.3), (0.5, 0.3)]
+    inertia = B * H**3 / 12
+    for point in points:
+        tension = point["x"]
+        solid = point["solid"]
+        assert solid["dofs"] > 0 and solid["mesh_size"] == 0.01
+        # the load is the point's: the Reissner rod's tip rotation is exactly M L / (E I), M = T d
+        closed_form = tension * D * L / (E * inertia)
+        reissner = point["rod"]["reissner"]
+        assert reissner["tip"]["theta"] == pytest.approx(closed_form, rel=1e-6)
+        # and the 3D solid's within 2 %
+        assert solid["tip"]["theta"] == pytest.approx(closed_form, rel=0.02)
+        for law in ("nonstandard", "reissner"):
+            rod = point["rod"][law]
+            print(f"T = {tension} N, {law}: backbone d/L = {rod['backbone_distance']:.4g}, "
+                  f"tip {rod['tip_error']['distance_over_L']:.4g} L, "
+                  f"{rod['tip_error']['rotation']:.4g} rad; solid error "
+                  f"{solid['discretisation_error']['backbone']:.3g} L")
+            assert 0 < rod["backbone_distance"] < 0.01
+            assert 0 < rod["tip_error"]["distance_over_L"] <= rod["backbone_distance"] * (1 + 1e-6)
+            tip, other = rod["tip"], solid["tip"]
+            assert rod["tip_error"]["distance_over_L"] == pytest.approx(
+                math.hypot(tip["u"] - other["u"], tip["v"] - other["v"]) / L, rel=1e-12)
+            assert rod["tip_error"]["rotation"] == pytest.approx(
+                abs(tip["theta"] - other["theta"]), rel=1e-12)
+    # the check has teeth: the tip rises 10-20 % of L at the largest tension
+    assert 0.1 < points[-1]["solid"]["tip"]["v"] / L < 0.2
+    for law in ("nonstandard", "reissner"):
+        entry = summary["departures"][law]
+        assert entry["below_1_percent"] == 2 and law in entry["statement"]
+
+
+def test_map_point_equals_fe_beam_compare(grid):
+    """The point T = 0.25 N against ``fe-beam compare`` on a configuration written here."""
+    folder, _, summary = grid
+    config = copy.deepcopy(FINGER)
+    config["tendons"][0]["tension"] = 0.25
+    config["compare"] = {"load_factors": [1.0], "laws": ["nonstandard", "reissner"]}
+    config["output"]["plots"] = False  # (no picture changes a number)
+    code, _, stderr, out = run_cli("compare", folder / "compare", config)
+    assert code == 0, stderr
+    compared = json.loads((out / "summary.json").read_text())
+    row = compared["table"][0]
+    point = summary["points"][0]
+    assert point["solid"]["dofs"] == compared["dofs"]
+    for key in ("u", "v", "theta"):
+        assert point["solid"]["tip"][key] == pytest.approx(row["solid"]["tip"][key], rel=1e-9,
+                                                           abs=1e-14)
+        for law in ("nonstandard", "reissner"):
+            assert point["rod"][law]["tip"][key] == pytest.approx(row["rod"][law]["tip"][key],
+                                                                  rel=1e-9, abs=1e-14)
+    for law in ("nonstandard", "reissner"):
+        assert point["rod"][law]["backbone_distance"] == pytest.approx(
+            row["rod"][law]["distance_over_L"], rel=1e-9)
+
+
+def test_richardson_estimate_of_the_solid(grid):
+    _, out, summary = grid
+    for point in summary["points"]:
+        error = point["solid"]["discretisation_error"]
+        assert error["second_mesh_size"] == pytest.approx(0.01 / RATIO)
+        assert 0 < error["second_dofs"] < point["solid"]["dofs"]
+        # configured = the finer mesh: |q* - q_h| = |q_h - q_H| / (R^p - 1), R = 1 / RATIO
+        tip, coarse = point["solid"]["tip"], error["second_tip"]
+        factor = 1 / ((1 / RATIO) ** error["order"] - 1)
+        assert error["tip"] == pytest.approx(
+            factor * math.hypot(tip["u"] - coarse["u"], tip["v"] - coarse["v"]) / L, rel=1e-9)
+        assert error["rotation"] == pytest.approx(factor * abs(tip["theta"] - coarse["theta"]),
+                                                  rel=1e-9)
+        # the solid resolves the 1 % question
+        assert 0 < error["tip"] < 0.01 and 0 < error["backbone"] < 0.01
+    with (out / "validity.csv").open(newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == 2 and float(rows[1]["reissner_backbone_distance"]) == pytest.approx(
+        summary["points"][1]["rod"]["reissner"]["backbone_distance"])
+    assert float(rows[0]["solid_error_backbone"]) == pytest.approx(
+        summary["points"][0]["solid"]["discretisation_error"]["backbone"])
+    assert (out / "validity.png").stat().st_size > 1000
+
+
+def test_resume_skips_finished_points_and_recomputes_a_deleted_one(grid):
+    folder, out, summary = grid
+    files = sorted((out / "points").glob("*.json"))
+    assert [f.name for f in files] == ["0_0.json", "1_0.json"]
+    stamps = {f.name: f.stat().st_mtime_ns for f in files}
+    code, stdout, stderr, _ = run_cli("validity", folder, with_map(), out)
+    assert code == 0, stderr
+    assert "2 of 2 points already finished" in stderr
+    again = json.loads((out / "summary.json").read_text())
+    assert again["counts"]["skipped"] == 2 and again["counts"]["computed"] == 0
+    assert again["points"] == summary["points"]
+    assert {f.name: f.stat().st_mtime_ns for f in files} == stamps
+    (out / "points" / "1_0.json").unlink()
+    code, stdout, stderr, _ = run_cli("validity", folder, with_map(), out)
+    assert code == 0, stderr
+    assert "1 of 2 points already finished" in stderr
+    third = json.loads((out / "summary.json").read_text())
+    assert third["counts"]["skipped"] == 1 and third["counts"]["computed"] == 1
+    assert (out / "points" / "0_0.json").stat().st_mtime_ns == stamps["0_0.json"]
+    recomputed, before = third["points"][1], summary["points"][1]
+    for key in ("u", "v", "theta"):
+        assert recomputed["solid"]["tip"][key] == pytest.approx(before["solid"]["tip"][key],
+                                                                rel=1e-9, abs=1e-14)
+
+
+def test_failed_point_is_recorded_and_the_map_goes_on(tmp_path, grid):
+    """One Newton iteration per step cannot converge: that point fails (with the reason), the
+    other is computed; exit 3 after everything is written. The two points run in two worker
+    processes (``workers = 2``): the one that converges is the map's point T = 0.25 N."""
+    config = with_map(x="solver.max_it", x_values=[1, 25], y_values=[0.3], workers=2)
+    del config["validity"]["second_mesh_ratio"]
+    config["tendons"][0]["tension"] = 0.25
+    config["output"]["plots"] = False
+    config["solver"] = {"adaptive": False}  # (fail at once: no cut-backs)
+    code, stdout, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 3, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["counts"]["failed"] == 1
+    failed, good = summary["points"]
+    assert failed["status"] == "failed" and failed["message"] and "solver.max_it" in stderr
+    assert good["status"] == "converged" and good["solid"]["discretisation_error"] is None
+    assert json.loads((out / "points" / "0_0.json").read_text())["status"] == "failed"
+    reference = grid[2]["points"][0]
+    for key in ("u", "v", "theta"):
+        assert good["solid"]["tip"][key] == pytest.approx(reference["solid"]["tip"][key],
+                                                          rel=1e-6)
+        for law in ("nonstandard", "reissner"):
+            assert good["rod"][law]["tip"][key] == pytest.approx(
+                reference["rod"][law]["tip"][key], rel=1e-6)
+
+
+@pytest.mark.mpi
+def test_ranks_share_the_points(tmp_path):
+    """Under mpirun each rank solves its own points on COMM_SELF: all points are in the map, and
+    the one rank 1 solved is what ``fe-beam compare``'s code gives serially on rank 0."""
+    from mpi4py import MPI
+
+    from fe_beam.compare import run_compare
+    from fe_beam.validity import run_validity
+
+    world = MPI.COMM_WORLD
+    if world.size == 1:
+        pytest.skip("run under mpirun -n 2")
+    out = Path(world.bcast(str(tmp_path), root=0)) / "out"
+    config = with_map(y_values=[0.3])
+    del config["validity"]["second_mesh_ratio"]
+    config["output"]["plots"] = False
+    summary = run_validity(config, out, world, progress=False)
+    assert summary["status"] == "converged" and summary["counts"]["computed"] == 2
+    assert sorted(p.name for p in (out / "points").glob("*.json")) == ["0_0.json", "1_0.json"]
+    if world.rank == 0:  # point 1 was rank 1's
+        point = parse_validity(config).points[1]
+        row = run_compare(point.raw, None, MPI.COMM_SELF, progress=False)["table"][0]
+        mapped = summary["points"][1]
+        for key in ("u", "v", "theta"):
+            assert mapped["solid"]["tip"][key] == pytest.approx(row["solid"]["tip"][key],
+                                                                rel=1e-12, abs=1e-15)
+            assert mapped["rod"]["reissner"]["tip"][key] == pytest.approx(
+                row["rod"]["reissner"]["tip"][key], rel=1e-12, abs=1e-15)
+    world.barrier()
+
+
+def test_ctrl_c_leaves_the_finished_points_and_a_rerun_finishes_the_map(tmp_path, monkeypatch):
+    """SIGINT after the first point: exit 130, that point's file and an "interrupted" summary
+    are there; the rerun solves only the other point. (The solves are stand-ins here: this is
+    about the files, the physics is tested above.)"""
+    import signal
+
+    from fe_beam import validity
+
+    solved = []
+
+    def stand_in(point, config, comm):
+        solved.append(point.name)
+        if len(solved) == 1:
+            os.kill(os.getpid(), signal.SIGINT)  # noticed at the next step boundary
+        tip = {"u": -0.001 * point.x, "v": 0.01 * point.x, "theta": 0.1 * point.x}
+        rod = {"status": "converged", "message": "", "tip": tip,
+               "tip_error": {"distance_over_L": 0.0, "rotation": 0.0}, "backbone_distance": 0.0}
+        return {"i": point.i, "j": point.j, "x": point.x, "y": point.y, "hash": point.hash,
+                "status": "converged", "message": "",
+                "solid": {"tip": tip, "dofs": 1, "mesh_size": 0.01, "discretisation_error": None},
+                "rod": {law: dict(rod) for law in config.laws}}
+
+    monkeypatch.setattr(validity, "solve_point", stand_in)
+    config = with_map()
+    del config["validity"]["second_mesh_ratio"]
+    config["output"]["plots"] = False
+    code, _, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 130, stderr
+    assert solved == ["0_0"]
+    assert [f.name for f in (out / "points").glob("*.json")] == ["0_0.json"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["counts"]["finished"] == 1
+    code, _, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 0, stderr
+    assert solved == ["0_0", "1_0"]
+    assert "1 of 2 points already finished" in stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["counts"]["computed"] == 1
+
+
+@pytest.mark.parametrize("shape", [(3, 2), (1, 1), (1, 3)])
+def test_pictures_of_any_grid_shape(tmp_path, shape):
+    """2-D maps (with a failed point: no colour there), a single point and a 1-D grid along y
+    draw (the records are stand-ins: this is about the drawing)."""
+    from fe_beam.validity import _plot
+
+    nx, ny = shape
+    config = parse_validity(with_map(x_values=[0.1 * (k + 1) for k in range(nx)],
+                                     y_values=[0.2 + 0.05 * k for k in range(ny)]))
+    points = []
+    for p in config.points:
+        d = 0.01 * p.x / p.y
+        points.append({"i": p.i, "j": p.j, "x": p.x, "y": p.y, "message": "",
+                       "status": "failed" if (p.i, p.j) == (nx - 1, 0) and nx > 1 else
+                       "converged",
+                       "solid": {"tip": {}, "dofs": 1, "mesh_size": 0.01,
+                                 "discretisation_error": {"backbone": 1e-4}},
+                       "rod": {"nonstandard": {"backbone_distance": d},
+                               "reissner": {"backbone_distance": d / 2}}})
+    _plot(tmp_path / "validity.png", points, config)
+    assert (tmp_path / "validity.png").stat().st_size > 1000
