@@ -52,6 +52,9 @@ __all__ = ["SolidRun", "check_solid_work", "run_solid"]
 _RUNS = itertools.count(1)
 
 
+STEP_GROWTH = 4.0
+
+
 class SolidRun:
     """The meshed 3D finger and its problem, advanced along the load factor in segments.
 
@@ -103,6 +106,9 @@ class SolidRun:
             grow_factor=stepping.grow_factor,
             easy_iterations=stepping.easy_iterations,
             adaptive=stepping.adaptive,
+            # easy steps may grow to STEP_GROWTH initial increments (the default cap, one
+            # initial increment, kept 3-Newton-iteration steps at their initial size)
+            max_increment=min(1.0, STEP_GROWTH / steps),
         )
 
         attempted = [start]
@@ -289,7 +295,8 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
     except RuntimeError as error:  # gmsh could not mesh (e.g. a tendon not on tet edges)
         summary |= {"status": "failed", "message": str(error)}
         return summary
-    summary |= {"dofs": run.dofs, "cells": run.cells}
+    summary |= {"dofs": run.dofs, "cells": run.cells,
+                "linear_solver_resolved": run.problem.linear_solver}
     writer = None
     if out is not None and config.output.xdmf:
         writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
