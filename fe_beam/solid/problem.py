@@ -39,13 +39,13 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import compat
+from fe_beam.model.settings import INEXACT_NEWTON, resolve_solid_solver
 from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
     ANCHORS,
     FORMULATIONS,
     Discretization,
     TendonLoad,
 )
-from fe_beam.model.settings import INEXACT_NEWTON, resolve_solid_solver
 from fe_beam.mpi import assemble_scalar, global_max, global_sum
 from fe_beam.solid.cable import TendonCable
 from fe_beam.solid.geometry import CLAMP_TAG, TIP_TAG, FingerMesh
