@@ -30,7 +30,7 @@ LINEAR_SOLVERS = ("auto", "mumps", "lu", "gamg", "gmres-ilu")
 SOLID_LINEAR_SOLVERS = ("auto", "mumps", "gamg", "fieldsplit")
 #: "auto" for the 3D solid: MUMPS up to this many unknowns, the iterative solver above
 #: (measured with benchmarks/bench_solid.py --crossover: see `resolve_solid_solver`)
-AUTO_DIRECT_MAX_DOFS = 40_000
+AUTO_DIRECT_MAX_DOFS = 10_000
 LINE_SEARCHES = ("bt", "basic", "l2", "cp")
 
 
