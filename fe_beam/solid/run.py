@@ -52,9 +52,6 @@ __all__ = ["SolidRun", "check_solid_work", "run_solid"]
 _RUNS = itertools.count(1)
 
 
-STEP_GROWTH = 4.0
-
-
 class SolidRun:
     """The meshed 3D finger and its problem, advanced along the load factor in segments.
 
@@ -106,9 +103,6 @@ class SolidRun:
             grow_factor=stepping.grow_factor,
             easy_iterations=stepping.easy_iterations,
             adaptive=stepping.adaptive,
-            # easy steps may grow to STEP_GROWTH initial increments (the default cap, one
-            # initial increment, kept 3-Newton-iteration steps at their initial size)
-            max_increment=min(1.0, STEP_GROWTH / steps),
         )
 
         attempted = [start]
