@@ -24,11 +24,21 @@ c. 1 vs 2 ranks (run under ``mpirun -n 2 ... --ranks``): the load step of part a
 
     python benchmarks/bench_solid.py [--quick]                  # a + b (~11 min; --quick ~1.5 min)
     mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --ranks [--quick]
+
+d-g. The u-p (Taylor-Hood P2-P1) finger of issue 10 (nu = 0.45, tendon to 5 N), MUMPS vs
+   ``[solid] solver = "fieldsplit"`` (``--up PART ...``, under mpirun for 2 ranks): ``sweep``
+   the full sweep on the 2 mm mesh (~92k DOFs) with fieldsplit, MUMPS timed for its first
+   ``--mumps-newton`` Newton iterations and extrapolated to the sweep's Newton iterations;
+   ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration, Krylov
+   its per Newton and peak RSS vs DOFs; ``nu`` Krylov its vs nu (0.3 .. 0.4999).
+
+    mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up sweep ranks
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import sys
 import time
 
@@ -39,6 +49,7 @@ from mpi4py import MPI
 from fe_beam import compat
 from fe_beam.finger import DEFAULT_FINGER
 from fe_beam.solid import (
+    Discretization,
     FingerGeometry,
     MeshSizes,
     NeoHookean,
@@ -47,7 +58,7 @@ from fe_beam.solid import (
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solver import LoadStepping, SolverSettings, run_load_stepping
+from fe_beam.solver import LoadStepping, SolveFailed, SolverSettings, run_load_stepping
 
 _d = DEFAULT_FINGER
 LENGTH = _d["beam"]["length"]
@@ -277,6 +288,221 @@ def ranks(sizes_solvers) -> dict:
     return {"runs": results}
 
 
+# --- d-g. the u-p (Taylor-Hood) finger: MUMPS vs fieldsplit (issue 10) -----------------------
+UP_TENSION = 5.0  # N, the issue's sweep
+UP_SWEEP_SIZE = 0.002  # m: ~92k DOFs
+UP_STEPS = 10
+# easy steps may grow to this many initial increments (`fe-beam solid` keeps LoadStepping's
+# cap of one increment: growth let an SVK bar jump past its limit load, see the README)
+STEP_GROWTH = 4.0
+UP_PROBE_TENSION = 1.0  # N, the one load step of the per-iteration timings
+# mesh size [m] -> u-p DOFs: 0.006: 6.9k, 0.005: 9.8k, 0.004: 16.7k, 0.003: 36k, 0.002: 92k,
+# 0.0015: 0.22M, 0.0013: 0.33M, 0.001: 0.73M
+UP_SIZES = (0.005, 0.004, 0.003, 0.002, 0.0015, 0.0013)
+UP_NUS = (0.3, 0.45, 0.49, 0.4999)
+
+
+def peak_rss_gib(comm) -> dict:
+    """Peak resident memory of this process and summed over the ranks [GiB] (getrusage)."""
+    mine = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # kB on Linux
+    return {"max_rank": comm.allreduce(mine, op=MPI.MAX), "sum": comm.allreduce(mine, op=MPI.SUM)}
+
+
+def up_problem(finger, solver: str, tension: float, nu: float = 0.45,
+               max_it: int | None = None) -> SolidFingerProblem:
+    settings = SolverSettings(linear_solver=solver)
+    if max_it is not None:
+        settings = SolverSettings(linear_solver=solver, max_it=max_it)
+    return SolidFingerProblem(
+        finger, NeoHookean.from_young(MATERIAL.young_modulus, nu),
+        tendons=[TendonLoad(tension=tension)], discretization=Discretization("mixed"),
+        solver=settings, prefix=f"bench_up_{solver}_")
+
+
+def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = None) -> dict:
+    """One load step to UP_PROBE_TENSION from the straight finger (set-up not timed), or only
+    its first ``newton_cap`` Newton iterations: seconds per Newton iteration (the first
+    includes the solver set-up: MUMPS analysis, GAMG hierarchy), Krylov its per Newton."""
+    problem = up_problem(finger, solver, UP_PROBE_TENSION, nu, max_it=newton_cap)
+    snes = problem.snes_solver
+    problem.set_load_factor(1.0)
+    problem.comm.barrier()
+    started = time.perf_counter()
+    converged = True
+    try:
+        snes.solve()
+    except SolveFailed:
+        converged = False
+    seconds = time.perf_counter() - started
+    newton = max(snes.snes.getIterationNumber(), 1)
+    krylov = snes.snes.getLinearSolveIterations()
+    if not converged and newton_cap is None:
+        raise RuntimeError(f"{solver}: the probe step did not converge")
+    result = {"solver": solver, "resolved": problem.linear_solver, "nu": nu,
+              "dofs": dofs_of(problem), "ranks": problem.comm.size, "seconds": seconds,
+              "converged": converged, "newton_iterations": newton, "krylov_iterations": krylov,
+              "seconds_per_iteration": seconds / newton, "krylov_per_newton": krylov / newton,
+              "peak_rss_gib": peak_rss_gib(problem.comm)}
+    if converged:
+        result["tip_displacement"] = problem.tip_displacement().tolist()
+    snes.destroy()
+    return result
+
+
+def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2) -> dict:
+    """d. s / Newton iteration and Krylov its / Newton vs DOFs, fieldsplit (full step) and MUMPS
+    (its first ``mumps_newton`` iterations, skipped where predicted above ``mumps_cap`` s)."""
+    world = MPI.COMM_WORLD
+    runs, mumps = [], []
+    for size in sizes:
+        finger, meshing = mesh(size)
+        split = up_probe(finger, "fieldsplit")
+        runs.append({"size": size, "meshing_s": meshing} | split)
+        line = (f"  size {size:g} m, {split['dofs']} DOFs: fieldsplit "
+                f"{split['seconds_per_iteration']:.3g} s/it ({split['newton_iterations']} "
+                f"Newton, {split['krylov_per_newton']:.1f}"
+                f" Krylov/Newton, peak RSS {split['peak_rss_gib']['sum']:.2f} GiB)")
+        predicted = None
+        if len(mumps) >= 2:
+            slope = fit_exponent(*zip(*mumps[-2:], strict=True))
+            predicted = mumps[-1][1] * (split["dofs"] / mumps[-1][0]) ** slope
+        if predicted is not None and predicted > mumps_cap:
+            runs.append({"size": size, "solver": "mumps", "skipped": True,
+                         "predicted_seconds_per_iteration": predicted})
+            line += f"; MUMPS predicted {predicted:.0f} s/it, skipped"
+        else:
+            direct = up_probe(finger, "mumps", newton_cap=mumps_newton)
+            runs.append({"size": size, "meshing_s": meshing} | direct)
+            mumps.append((direct["dofs"], direct["seconds_per_iteration"]))
+            line += (f"; MUMPS {direct['seconds_per_iteration']:.3g} s/it (first "
+                     f"{direct['newton_iterations']} its), ratio "
+                     f"{direct['seconds_per_iteration'] / split['seconds_per_iteration']:.2f}")
+        if world.rank == 0:
+            print(line, flush=True)
+        del finger
+    exponents = {}
+    for solver in ("fieldsplit", "mumps"):
+        done = [r for r in runs if r["solver"] == solver and not r.get("skipped")]
+        if len(done) >= 2:
+            dofs = [r["dofs"] for r in done]
+            exponents[solver] = {
+                "time": fit_exponent(dofs, [r["seconds_per_iteration"] for r in done]),
+                "krylov_per_newton": fit_exponent(dofs, [max(r["krylov_per_newton"], 1e-9)
+                                                         for r in done])}
+    return {"ranks": world.size, "runs": runs, "exponents": exponents}
+
+
+def up_nu(size: float, nus=UP_NUS) -> dict:
+    """e. Krylov its per Newton iteration vs Poisson's ratio (fieldsplit, one probe step)."""
+    finger, _ = mesh(size)
+    runs = []
+    for nu in nus:
+        r = up_probe(finger, "fieldsplit", nu=nu)
+        runs.append(r)
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"  nu = {nu:g}: {r['newton_iterations']} Newton, "
+                  f"{r['krylov_per_newton']:.1f} Krylov/Newton, "
+                  f"{r['seconds_per_iteration']:.3g} s/it", flush=True)
+    return {"size": size, "dofs": runs[0]["dofs"], "ranks": MPI.COMM_WORLD.size, "runs": runs}
+
+
+def up_sweep(size: float, solver: str = "fieldsplit", newton_cap: int | None = None) -> dict:
+    """f. The issue's sweep: tendon 0 -> 5 N, UP_STEPS initial steps that grow after easy
+    steps up to STEP_GROWTH initial increments (`fe-beam solid` does not grow them)."""
+    finger, meshing = mesh(size)
+    problem = up_problem(finger, solver, UP_TENSION)
+    records = []
+
+    def on_step(step):
+        records.append({"tension": problem.tensions()[0], "newton": step.iterations,
+                        "krylov": step.linear_iterations, "seconds": step.wall_time_s,
+                        "tip_rotation": problem.tip_rotation()["angle"]})
+
+    stepping = LoadStepping(steps=UP_STEPS, max_increment=min(1.0, STEP_GROWTH / UP_STEPS))
+    problem.comm.barrier()
+    started = time.perf_counter()
+    run_load_stepping(problem.solver, problem.set_load_factor, stepping, on_converged=on_step,
+                      progress=False)
+    seconds = time.perf_counter() - started
+    newton = sum(r["newton"] for r in records)
+    krylov = sum(r["krylov"] for r in records)
+    result = {"size": size, "dofs": dofs_of(problem), "solver": solver,
+              "resolved": problem.linear_solver, "ranks": problem.comm.size,
+              "meshing_s": meshing, "seconds": seconds, "load_steps": len(records),
+              "newton_iterations": newton, "krylov_iterations": krylov, "steps": records,
+              "tip_displacement": problem.tip_displacement().tolist(),
+              "peak_rss_gib": peak_rss_gib(problem.comm)}
+    problem.snes_solver.destroy()
+    return result
+
+
+def up_main(args) -> int:
+    world = MPI.COMM_WORLD
+    root = world.rank == 0
+    out = {"ranks": world.size}
+    warm, _ = mesh(0.01, world)
+    up_probe(warm, "fieldsplit")
+    up_probe(warm, "mumps")
+    if "sweep" in args.up:
+        if root:
+            print(f"f. u-p sweep to {UP_TENSION:g} N, mesh {args.up_sweep_size:g} m, "
+                  f"{world.size} rank(s)", flush=True)
+        sweep = up_sweep(args.up_sweep_size)
+        out["sweep"] = sweep
+        # MUMPS: its first Newton iterations on the same mesh, extrapolated to the sweep
+        finger, _ = mesh(args.up_sweep_size)
+        direct = up_probe(finger, "mumps", newton_cap=args.mumps_newton)
+        del finger
+        out["sweep_mumps_probe"] = direct
+        out["sweep_mumps_extrapolated_s"] = (direct["seconds_per_iteration"]
+                                             * sweep["newton_iterations"])
+        if root:
+            print_sweep(sweep | {"solver": "fieldsplit"})
+            print(f"  MUMPS ({world.size} rank(s)): {direct['seconds_per_iteration']:.3g} s per "
+                  f"Newton iteration (first {direct['newton_iterations']}), x "
+                  f"{sweep['newton_iterations']} Newton its = "
+                  f"{out['sweep_mumps_extrapolated_s']:.0f} s extrapolated; fieldsplit "
+                  f"{sweep['seconds']:.1f} s; peak RSS {sweep['peak_rss_gib']['sum']:.2f} GiB",
+                  flush=True)
+    if "ranks" in args.up:
+        # 1 vs world.size ranks, one probe step on the sweep mesh, in one run (ratios)
+        size = args.up_sweep_size
+        serial = None
+        if root:
+            finger, _ = mesh(size, MPI.COMM_SELF)
+            serial = {s: up_probe(finger, s, newton_cap=None if s == "fieldsplit"
+                                  else args.mumps_newton) for s in ("fieldsplit", "mumps")}
+            del finger
+        idle_barrier(world)
+        serial = world.bcast(serial, root=0)
+        finger, _ = mesh(size, world)
+        parallel = {s: up_probe(finger, s, newton_cap=None if s == "fieldsplit"
+                                else args.mumps_newton) for s in ("fieldsplit", "mumps")}
+        out["ranks_probe"] = {"serial": serial, "parallel": parallel}
+        if root:
+            rows = [[s, serial[s]["dofs"], serial[s]["seconds_per_iteration"],
+                     parallel[s]["seconds_per_iteration"], serial[s]["krylov_per_newton"],
+                     parallel[s]["krylov_per_newton"]] for s in serial]
+            print(table(["solver", "DOFs", "1 rank s/it", f"{world.size} ranks s/it",
+                         "Krylov/Newton 1", f"Krylov/Newton {world.size}"], rows), flush=True)
+    if "scaling" in args.up:
+        if root:
+            print(f"d. u-p cost per Newton iteration vs DOFs, {world.size} rank(s)", flush=True)
+        out["scaling"] = up_scaling(args.up_sizes or UP_SIZES, args.mumps_cap, args.mumps_newton)
+        if root:
+            for solver, e in out["scaling"]["exponents"].items():
+                print(f"  exponent {solver}: time/it {e['time']:.2f}, Krylov/Newton "
+                      f"{e['krylov_per_newton']:.2f}")
+    if "nu" in args.up:
+        if root:
+            print(f"e. u-p Krylov its vs nu, mesh {args.up_nu_size:g} m", flush=True)
+        out["nu"] = up_nu(args.up_nu_size)
+    if root:
+        path = write_results("solid_up_" + "_".join(args.up) + f"_{world.size}ranks", out)
+        print(f"results: {path}")
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small meshes only (~1 min)")
@@ -286,7 +512,18 @@ def main(argv=None) -> int:
     parser.add_argument("--sweep-size", type=float, help="mesh size of part b [m]")
     parser.add_argument("--mumps-cap", type=float, default=15.0,
                         help="skip MUMPS where a Newton iteration is predicted to take longer")
+    parser.add_argument("--up", nargs="+", choices=("sweep", "ranks", "scaling", "nu"),
+                        help="u-p finger parts (issue 10): sweep = the 5 N sweep with fieldsplit "
+                        "and MUMPS extrapolated, ranks = 1 vs all ranks, scaling = s/it and "
+                        "Krylov its vs DOFs, nu = Krylov its vs nu")
+    parser.add_argument("--up-sweep-size", type=float, default=UP_SWEEP_SIZE)
+    parser.add_argument("--up-sizes", type=float, nargs="+", help="mesh sizes of --up scaling")
+    parser.add_argument("--up-nu-size", type=float, default=0.003)
+    parser.add_argument("--mumps-newton", type=int, default=2,
+                        help="--up: MUMPS Newton iterations timed (then extrapolated)")
     args = parser.parse_args(argv)
+    if args.up:
+        return up_main(args)
     world = MPI.COMM_WORLD
     root = world.rank == 0
     # JIT (FFCx forms are cached on disk), PETSc and gmsh warm-up on a tiny mesh

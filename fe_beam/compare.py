@@ -119,6 +119,7 @@ def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool
             comm.barrier()
         return summary
     summary["dofs"] = run.dofs
+    summary["linear_solver_resolved"] = run.problem.linear_solver
     files.start(current())  # status "running" from the start
     try:
         for factor in config.load_factors:

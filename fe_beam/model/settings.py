@@ -11,7 +11,9 @@ from dataclasses import dataclass, field, replace
 from numbers import Integral
 
 __all__ = [
+    "AUTO_DIRECT_MAX_DOFS",
     "LINEAR_SOLVERS",
+    "SOLID_LINEAR_SOLVERS",
     "LINE_SEARCHES",
     "SADDLE_POINT_WORKSPACE",
     "SCHEMES",
@@ -23,6 +25,12 @@ __all__ = [
 ]
 
 LINEAR_SOLVERS = ("auto", "mumps", "lu", "gamg", "gmres-ilu")
+#: [solid] solver: "fieldsplit" (the scalable solver of the 3D solid, see `resolve_solid_solver`)
+#: is set up by `fe_beam.solid.problem`, which gives PETSc the fields
+SOLID_LINEAR_SOLVERS = ("auto", "mumps", "gamg", "fieldsplit")
+#: "auto" for the 3D solid: MUMPS up to this many unknowns, the iterative solver above
+#: (measured with benchmarks/bench_solid.py --crossover: see `resolve_solid_solver`)
+AUTO_DIRECT_MAX_DOFS = 10_000
 LINE_SEARCHES = ("bt", "basic", "l2", "cp")
 
 
@@ -61,7 +69,7 @@ class SolverSettings:
                 f"solver.line_search must be one of {', '.join(LINE_SEARCHES)}; "
                 f"got {self.line_search!r}"
             )
-        if self.linear_solver not in LINEAR_SOLVERS:
+        if self.linear_solver not in LINEAR_SOLVERS + ("fieldsplit",):
             raise ValueError(
                 f"solver.linear_solver must be one of {', '.join(LINEAR_SOLVERS)}; "
                 f"got {self.linear_solver!r}"
@@ -102,6 +110,8 @@ class SolverSettings:
                 opts["pc_factor_mat_solver_type"] = "mumps"
         elif self.linear_solver == "gamg":
             opts |= {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 1000}
+        elif self.linear_solver == "fieldsplit":
+            opts |= FIELDSPLIT_OPTIONS | INEXACT_NEWTON
         else:
             # block Jacobi: ILU on each rank's block (plain ILU in serial; PETSc's ILU
             # would refuse a parallel matrix); ILU(0) breaks down on beam matrices, ILU(2) holds
@@ -110,6 +120,52 @@ class SolverSettings:
                      "ksp_rtol": 1e-12}
         opts |= {str(k): v for k, v in self.petsc_options.items()}
         return opts
+
+
+# Inexact Newton (Eisenstat-Walker, PETSc's version 2): the Krylov tolerance of each Newton
+# iteration follows the nonlinear convergence; capped at 0.1 so that every Newton step still
+# reduces the linearised residual tenfold (the convergence test of `fe_beam.solver.SNESSolver`
+# is on the nonlinear residual, as tight as with a direct solver).
+INEXACT_NEWTON = {"snes_ksp_ew": "true", "snes_ksp_ew_rtolmax": 0.1}
+
+# u-p (Taylor-Hood) saddle point: FGMRES, block lower-triangular Schur preconditioner
+# [[A, 0], [B, S]]^-1 with A^-1 ~ one GAMG V-cycle (rigid-body near-nullspace) and
+# S = -B A^-1 B^T - M/kappa ~ -(1/mu + 1/kappa) M_p (pressure mass matrix, given by
+# `fe_beam.solid.problem` as the user Schur preconditioner), applied by Jacobi.
+FIELDSPLIT_OPTIONS = {
+    "ksp_type": "fgmres",
+    "ksp_gmres_restart": 200,
+    "ksp_max_it": 1000,
+    "ksp_rtol": 1e-10,
+    "pc_type": "fieldsplit",
+    "pc_fieldsplit_type": "schur",
+    "pc_fieldsplit_schur_fact_type": "lower",
+    "fieldsplit_u_ksp_type": "preonly",
+    "fieldsplit_u_pc_type": "gamg",
+    "fieldsplit_p_ksp_type": "preonly",
+    "fieldsplit_p_pc_type": "jacobi",
+}
+
+
+def resolve_solid_solver(requested: str, mixed: bool, dofs: int,
+                         threshold: int = AUTO_DIRECT_MAX_DOFS) -> str:
+    """The linear solver of the 3D solid: "mumps", "gamg" (CG + GAMG, displacement
+    formulation) or "fieldsplit" (FGMRES + Schur fieldsplit, u-p formulation).
+
+    "auto": MUMPS up to ``threshold`` unknowns (a sparse LU is then fastest and exact), the
+    iterative solver of the formulation above. "fieldsplit" on the displacement formulation
+    (one field, nothing to split) is the GAMG path. "gamg" (CG) cannot solve the u-p saddle
+    point: ValueError. Other `LINEAR_SOLVERS` ("lu", "gmres-ilu") are returned as given."""
+    if requested not in SOLID_LINEAR_SOLVERS:
+        return requested
+    if requested == "gamg" and mixed:
+        raise ValueError("solver.linear_solver = 'gamg' is for the displacement formulation "
+                         "(use 'fieldsplit' for mixed u-p)")
+    if requested == "auto":
+        requested = "mumps" if dofs <= threshold else "iterative"
+    if requested == "mumps":
+        return "mumps"
+    return "fieldsplit" if mixed else "gamg"
 
 
 # MUMPS ICNTL(14): percentage by which the factorisation workspace may exceed its estimate

@@ -34,7 +34,7 @@ from fe_beam.material_laws import (  # noqa: F401
     _positive,
     hyperelastic_law,
 )
-from fe_beam.model.settings import LoadStepping, SolverSettings
+from fe_beam.model.settings import SOLID_LINEAR_SOLVERS, LoadStepping, SolverSettings
 from fe_beam.model.solid import (
     ANCHORS,
     Discretization,
@@ -55,7 +55,7 @@ __all__ = [
 ]
 
 FORMULATIONS = {"displacement": "displacement", "mixed-up": "mixed"}
-SOLVERS = ("mumps", "gamg")
+SOLVERS = SOLID_LINEAR_SOLVERS  # auto | mumps | gamg | fieldsplit
 #: a mesh estimated to have more tetrahedra than this is refused (a typo in mesh_size)
 MAX_CELLS = 5_000_000
 
@@ -76,7 +76,9 @@ SOLID_KEYS: dict[str, Key] = {
     "tendon_refinement": Key(NUMBER, 1.0, "element size near tendons = mesh_size / this (>= 1)"),
     "clamp_refinement": Key(NUMBER, 1.0, "element size near the clamp = mesh_size / this (>= 1)"),
     "refinement_distance": Key(NUMBER, None, "reach of the refinements [m] (default mesh_size)"),
-    "solver": Key((str,), "mumps", "mumps | gamg (gamg: displacement formulation only)"),
+    "solver": Key((str,), "auto", "auto | mumps | gamg | fieldsplit (auto: MUMPS on small "
+                  "meshes, else the iterative solver: gamg = CG + GAMG for displacement, "
+                  "fieldsplit = FGMRES + Schur fieldsplit for mixed-up)"),
     "petsc_options": Key((dict,), {}, "PETSc options of the 3D solve, without prefix"),
     "backbone_points": Key((int,), 21, "number of sections sampled along x for the backbone"),
     "anchor": Key((str,), "face", "face | point: a tendon ending on the tip face pulls on the "

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 import ufl
@@ -38,6 +39,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import compat
+from fe_beam.model.settings import INEXACT_NEWTON, resolve_solid_solver
 from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
     ANCHORS,
     FORMULATIONS,
@@ -60,6 +62,7 @@ __all__ = [
     "Discretization",
     "SolidFingerProblem",
     "TendonLoad",
+    "UPFieldSplit",
     "evaluate_at_points",
     "rigid_body_modes",
 ]
@@ -106,8 +109,6 @@ class SolidFingerProblem:
             raise ValueError(f"material {material.name!r} does not support the mixed formulation")
         if not mixed and math.isinf(material.kappa):
             raise ValueError("material.kappa = inf needs discretization.formulation = 'mixed'")
-        if mixed and self.settings.linear_solver == "gamg":
-            raise ValueError("solver.linear_solver = 'gamg' is for the displacement formulation")
         self.load_factor = 0.0
 
         self._spaces()
@@ -231,11 +232,22 @@ class SolidFingerProblem:
         if any(c.patch_dofs is not None for c in self.cables):
             # an anchor plate couples the whole tip face: entries outside the volume pattern
             self.problem.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        dofs = self.W.dofmap.index_map.size_global * self.W.dofmap.index_map_bs
+        #: the linear solver actually used ("mumps", "gamg" or "fieldsplit"; "auto" resolved)
+        self.linear_solver = resolve_solid_solver(self.settings.linear_solver, self.p is not None,
+                                                  dofs)
+        settings = replace(self.settings, linear_solver=self.linear_solver)
+        if self.linear_solver != "mumps":  # inexact Newton unless the user says otherwise
+            settings = replace(settings,
+                               petsc_options=INEXACT_NEWTON | dict(settings.petsc_options))
         nullspace = None
-        if self.p is None and self.settings.linear_solver == "gamg":
+        if self.linear_solver == "gamg":
             nullspace = rigid_body_modes(self.W)
-        self.snes_solver = SNESSolver(self.problem, self.settings, prefix, near_nullspace=nullspace,
+        self.snes_solver = SNESSolver(self.problem, settings, prefix, near_nullspace=nullspace,
                                       state_scale=self.finger.geometry.length)
+        if self.linear_solver == "fieldsplit":
+            self._fieldsplit = UPFieldSplit(self.W, self.material, self.dx)
+            self._fieldsplit.attach(self.snes_solver.snes.getKSP().getPC())
         controlled = [i for i, t in enumerate(self.tendon_loads) if t.controlled_by_pull_in]
         if controlled:
             self.solver = _PullInSolver(
@@ -621,3 +633,82 @@ def rigid_body_modes(space) -> PETSc.NullSpace:
             v.axpy(-v.dot(u), u)
         v.normalize()
     return PETSc.NullSpace().create(vectors=modes, comm=space.mesh.comm)
+
+
+class UPFieldSplit:
+    """The fields of the Taylor-Hood space W = (u, p) for PETSc's PCFIELDSPLIT: index sets of
+    the owned displacement and pressure dofs (global numbering of W), the rigid-body
+    near-nullspace of the displacement block (for GAMG) and the Schur-complement
+    preconditioner -(1/mu + 1/kappa) M_p (M_p the P1 pressure mass matrix, assembled once).
+
+    At small strain the Schur complement S = -B A^-1 B^T - M_p / kappa is spectrally equivalent
+    to -(1/mu + 1/kappa) M_p, uniformly in the mesh size and in kappa / mu (inf-sup stability
+    of P2-P1), so the Krylov iterations stay bounded under refinement and as nu -> 1/2.
+    """
+
+    def __init__(self, W, material: HyperelasticLaw, dx):
+        comm = W.mesh.comm
+        imap = W.dofmap.index_map
+        n_owned = imap.size_local * W.dofmap.index_map_bs
+        start = imap.local_range[0] * W.dofmap.index_map_bs
+        V0, u_map = compat.sub_space_collapsed(W, 0)
+        _, p_map = compat.sub_space_collapsed(W, 1)
+        u_map, p_map = np.asarray(u_map, dtype=np.int64), np.asarray(p_map, dtype=np.int64)
+        # V0's dofs come in nodes of 3 components: u_map[3 i + c] = W dof of node i, component c
+        bs = V0.dofmap.index_map_bs
+        nodes = u_map.reshape(-1, bs)
+        owned = nodes[:, 0] < n_owned
+        coordinates = V0.tabulate_dof_coordinates()[: len(nodes)][owned]
+        nodes = nodes[owned]
+        if np.any(nodes >= n_owned):
+            raise RuntimeError("fieldsplit: a displacement node's components on two ranks")
+        order = np.argsort(nodes[:, 0])
+        nodes, coordinates = nodes[order], coordinates[order]
+        u_dofs = nodes.reshape(-1)
+        blocked = bool(np.all(np.diff(nodes, axis=1) == 1))
+        p_dofs = np.sort(p_map[p_map < n_owned])
+        self.is_u = PETSc.IS().createGeneral((u_dofs + start).astype(PETSc.IntType), comm=comm)
+        self.is_p = PETSc.IS().createGeneral((p_dofs + start).astype(PETSc.IntType), comm=comm)
+        if blocked:
+            self.is_u.setBlockSize(bs)
+        self.near_nullspace = _rigid_body_modes_of(coordinates, comm)
+        self.is_u.compose("nearnullspace", self.near_nullspace)
+        # -(1/mu + 1/kappa) M_p on W (zero outside the p-p block), then its p-p block
+        scale = 1.0 / material.shear_modulus + (
+            0.0 if math.isinf(material.kappa) else 1.0 / material.kappa)
+        _, q = ufl.split(ufl.TestFunction(W))
+        _, p = ufl.split(ufl.TrialFunction(W))
+        full = compat.assemble_matrix(fem.form(-scale * p * q * dx))
+        full.assemble()
+        self.schur_preconditioner = full.createSubMatrix(self.is_p, self.is_p)
+        full.destroy()
+
+    def attach(self, pc: PETSc.PC) -> None:
+        """Give ``pc`` (of type fieldsplit, options from the solver settings) its fields and
+        the Schur preconditioner."""
+        pc.setFieldSplitIS(("u", self.is_u), ("p", self.is_p))
+        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER,
+                                     self.schur_preconditioner)
+
+
+def _rigid_body_modes_of(x: np.ndarray, comm) -> PETSc.NullSpace:
+    """Rigid-body modes of the nodes ``x`` (n, 3), vectors of (n * 3) interleaved components,
+    orthonormalised."""
+    n = len(x)
+    modes = []
+    for k in range(6):
+        a = np.zeros((n, 3))
+        if k < 3:
+            a[:, k] = 1.0
+        else:
+            i, j = [(0, 1), (1, 2), (2, 0)][k - 3]
+            a[:, i] = -x[:, j]
+            a[:, j] = x[:, i]
+        v = PETSc.Vec().createMPI((3 * n, PETSc.DETERMINE), comm=comm)
+        v.array[:] = a.reshape(-1)
+        modes.append(v)
+    for i, v in enumerate(modes):
+        for u in modes[:i]:
+            v.axpy(-v.dot(u), u)
+        v.normalize()
+    return PETSc.NullSpace().create(vectors=modes, comm=comm)

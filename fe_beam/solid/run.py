@@ -281,7 +281,8 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
     except RuntimeError as error:  # gmsh could not mesh (e.g. a tendon not on tet edges)
         summary |= {"status": "failed", "message": str(error)}
         return summary
-    summary |= {"dofs": run.dofs, "cells": run.cells}
+    summary |= {"dofs": run.dofs, "cells": run.cells,
+                "linear_solver_resolved": run.problem.linear_solver}
     writer = None
     if out is not None and config.output.xdmf:
         writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
