@@ -9,7 +9,6 @@ step growth on easy steps and a branch check. Nothing here writes files.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -29,7 +28,6 @@ from fe_beam.model.settings import (  # noqa: F401  (their home; re-exported)
     SolverSettings,
     check_option_names,
 )
-from fe_beam.progress import ProgressBar
 
 __all__ = [
     "LoadStepping",
@@ -47,7 +45,9 @@ class SolveFailed(RuntimeError):
 
 
 class LoadSteppingFailed(RuntimeError):
-    """Load stepping gave up; the state of ``last_load_factor`` has been restored."""
+    """Load stepping gave up; the state of ``last_load_factor`` has been restored. Raised by
+    the engine as its subclass `fe_beam.continuation.ContinuationFailed`, which carries the
+    cause in ``reason`` (never parse the message)."""
 
     def __init__(self, message: str, last_load_factor: float, results: list[StepResult]):
         super().__init__(message)
@@ -335,96 +335,22 @@ def run_load_stepping(
     progress: bool = True,
     label: str = "load",
 ) -> list[StepResult]:
-    """Ramp the load factor from 0 to 1, solving at each step.
+    """Ramp the load factor from 0 to 1, solving at each step: load control of
+    `fe_beam.continuation.Continuation` (`Continuation.load_control`) on ``solver`` and
+    ``set_load_factor``.
 
     The first guess of each step is the secant extrapolation of the last two converged states.
     ``reject_step(previous, current)`` (local dof arrays) may veto a converged step, e.g. one that
     jumped to another equilibrium branch; it is then cut back like a diverged step.
-    Raises `LoadSteppingFailed` (with the last converged state restored in ``w``) when the
-    increment falls below ``stepping.min_increment``.
+    Raises `LoadSteppingFailed` (a `fe_beam.continuation.ContinuationFailed`, with ``reason``;
+    the last converged state restored in ``w``) when the increment falls below
+    ``stepping.min_increment``.
     """
-    stepping = stepping or LoadStepping()
-    w = solver.problem.w
-    state = compat.local_array(w)
-    comm = w.function_space.mesh.comm
-    results: list[StepResult] = []
-    lam, increment = 0.0, 1.0 / stepping.steps
-    previous = state.copy()
-    before_previous, previous_increment = None, None
-    bar = ProgressBar(comm, total=1.0, label=label, enabled=progress)
-    failures: list[str] = []  # why the tries since the last converged step failed
-    try:
-        while lam < 1.0 - 1e-12:
-            increment = min(increment, 1.0 - lam)
-            # Summed increments drift (0.1 * 10 != 1.0): the last step lands exactly on 1.
-            target = 1.0 if lam + increment >= 1.0 - 1e-12 else lam + increment
-            set_load_factor(target)
-            if before_previous is not None:
-                # the residual of the plain load increment, before the predictor moves the state
-                reference = getattr(solver, "set_reference_residual", None)
-                if reference is not None:
-                    reference(solver.residual_norm())
-                state[:] = previous + (increment / previous_increment) * (
-                    previous - before_previous
-                )
-            started = time.perf_counter()
-            failure = None
-            try:
-                iterations = solver.solve()
-            except SolveFailed as error:
-                failure = str(error)
-            if failure is None and reject_step is not None:
-                failure = _agreed(comm, reject_step(previous, state))
-            if failure is not None:
-                state[:] = previous
-                set_load_factor(lam)
-                failures.append(failure)
-                if (
-                    not stepping.adaptive
-                    or increment * stepping.cut_factor < stepping.min_increment
-                ):
-                    raise LoadSteppingFailed(
-                        f"load stepping stopped at load factor {target:.6g} "
-                        f"({_failure_reasons(failures)}); last converged load factor {lam:.6g}",
-                        lam,
-                        results,
-                    )
-                increment *= stepping.cut_factor
-                bar.note(f"cut back to increment {increment:.3g} ({failure})")
-                continue
-            failures.clear()
-            before_previous, previous_increment = previous, increment
-            previous = state.copy()
-            lam = target
-            step = StepResult(
-                len(results) + 1,
-                lam,
-                iterations,
-                solver.linear_iterations,
-                time.perf_counter() - started,
-            )
-            results.append(step)
-            if on_converged is not None:
-                on_converged(step)
-            bar.update(lam, f"{label} factor {lam:.4f}, {iterations} Newton its")
-            if stepping.adaptive and iterations <= stepping.easy_iterations:
-                increment = min(increment * stepping.grow_factor, stepping.max_increment)
-    finally:
-        bar.close()
-    return results
+    from fe_beam.continuation import CallbackProblem, Continuation
 
-
-def _failure_reasons(failures: list[str]) -> str:
-    """The last failure, and the other kinds of failure of the larger tries before it (e.g. an
-    inadmissible state beyond a step that then no longer converged)."""
-    last = failures[-1]
-    kinds, earlier = {last.split(":")[0].split("(")[0]}, []
-    for reason in reversed(failures[:-1]):
-        kind = reason.split(":")[0].split("(")[0]
-        if kind not in kinds:
-            kinds.add(kind)
-            earlier.append(reason)
-    return last if not earlier else f"{last}; larger steps: {'; '.join(earlier[:2])}"
+    engine = Continuation(CallbackProblem(solver, set_load_factor, reject_step), 0.0)
+    return engine.load_control(1.0, stepping, on_converged=on_converged, progress=progress,
+                               label=label)
 
 
 def _agreed(comm, reason: str | None) -> str | None:

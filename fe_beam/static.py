@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +14,7 @@ from mpi4py import MPI
 from fe_beam import compat, exports, runctl
 from fe_beam.beam import BeamProblem, StrainWatch
 from fe_beam.config import StaticConfig
+from fe_beam.continuation import Continuation, NonlinearParameterProblem
 from fe_beam.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.solver import (
     LoadSteppingFailed,
@@ -21,7 +22,6 @@ from fe_beam.solver import (
     SNESSolver,
     StepResult,
     rotation_jump_check,
-    run_load_stepping,
 )
 from fe_beam.tendons import PullInSolver, TendonSet
 
@@ -110,31 +110,66 @@ class StaticContinuation:
 
     def advance(self, target: float, stepping, on_converged=None, progress: bool = False,
                 label: str = "load") -> None:
-        """Load-step from the current load factor to ``target``; ``on_converged(step)`` gets
-        the actual load factor. Raises `LoadSteppingFailed` with the last converged state kept
-        (and ``load_factor`` at its value)."""
-        start = float(self.load_factor)
-
-        def set_fraction(fraction: float) -> None:
-            self._set_load_factor(start + fraction * (target - start))
+        """Load-step from the current load factor to ``target`` (load control of the engine
+        `fe_beam.continuation.Continuation`); ``on_converged(step)`` gets the actual load
+        factor. Raises `LoadSteppingFailed` (a `fe_beam.continuation.ContinuationFailed`) with
+        the last converged state kept (and ``load_factor`` at its value)."""
+        engine = self.engine()
+        engine.parameter = float(self.load_factor)
 
         def converged(step: StepResult) -> None:
-            step = replace(step, load_factor=start + step.load_factor * (target - start))
             self.load_factor = step.load_factor
             if self._trial_range is not None:
                 self.watch.observe(self._trial_range)
             if on_converged is not None:
                 on_converged(step)
 
-        run_load_stepping(
-            self.solver,
-            set_fraction,
-            stepping,
-            on_converged=converged,
-            reject_step=self._step_check(),
-            progress=progress,
-            label=label,
-        )
+        engine.load_control(target, stepping, on_converged=converged, progress=progress,
+                            label=label)
+
+    def parameter_problem(self, parameter: str = "load_factor", tendon: int = 0
+                          ) -> NonlinearParameterProblem:
+        """This problem as a `fe_beam.continuation.ParameterProblem`: the parameter is the load
+        factor (every load, tension-controlled tendon and prescribed end value scaled by it:
+        with prescribed end values only, this is displacement control) or, with
+        ``parameter="tension"``, the tension [N] of tendon ``tendon`` alone (the other tendons
+        keep their tensions). The arc metric weighs u and v by 1/L^2, theta by 1 and the
+        multipliers by 0; the step check vetoes rotation jumps and inadmissible states.
+        Pull-in controlled tendons: load control only."""
+        if parameter == "load_factor":
+            setter = self._set_load_factor
+        elif parameter == "tension":
+            if not self.tendons or not 0 <= tendon < len(self.tendons.tendons):
+                raise ValueError(f"parameter 'tension': no tendon {tendon}")
+            if self.tendons.tendons[tendon].controlled_by_pull_in:
+                raise ValueError(f"parameter 'tension': tendon {tendon} is pull-in controlled")
+            constant = self.tendons.tensions[tendon]
+
+            def setter(value: float) -> None:
+                constant.value = float(value)
+        else:
+            raise ValueError(f"parameter must be 'load_factor' or 'tension', got {parameter!r}")
+        adapter = NonlinearParameterProblem(self.solver, setter, check_step=self._step_check(),
+                                            metric=self._metric())
+        adapter.arc_length_ready = not (self.tendons and any(
+            t.controlled_by_pull_in for t in self.tendons.tendons))
+        return adapter
+
+    def engine(self) -> Continuation:
+        """The continuation engine of the load factor (built once; its state is this problem's)."""
+        if getattr(self, "_engine", None) is None:
+            self._engine = Continuation(self.parameter_problem(), self.load_factor)
+        return self._engine
+
+    def _metric(self):
+        metric = compat.vector_of(self.problem.w).duplicate()
+        weights = np.zeros(metric.getLocalSize())
+        length = self.config.model.length
+        for name, weight in (("u", 1 / length**2), ("v", 1 / length**2), ("theta", 1.0)):
+            dofs = self.problem.component_dofs(name)
+            weights[dofs] = weight
+        metric.getArray()[:] = weights
+        return metric
 
     def _step_check(self):
         """Reject a converged step that jumped branch (rotation jump) or is inadmissible

@@ -8,9 +8,8 @@ the anchor point load and the distributed centripetal load of a curved path auto
 (the chapter's loop: left and right branches joined across the tip); l is then their sum.
 
 Tension control: tau = load factor * tension. Displacement control: the pull-in
-l_0 - l = load factor * pull_in is prescribed and tau is an unknown found by Newton's method on
-the tendon lengths with the exact sensitivity dl_i/dtau_j = -g_i^T K^{-1} g_j (g_i = dl_i/dw,
-K the tangent of the beam at equilibrium).
+l_0 - l = load factor * pull_in is prescribed and tau is a global unknown of the same Newton
+system as the beam (bordered with g_i = dl_i/dw: `PullInSolver`).
 """
 
 from __future__ import annotations
@@ -25,7 +24,7 @@ from petsc4py import PETSc
 from fe_beam import compat
 from fe_beam.model.tendons import Path, Tendon, looped_tendon  # noqa: F401  (re-exported)
 from fe_beam.mpi import assemble_scalar
-from fe_beam.solver import SADDLE_POINT_WORKSPACE, SNESSolver, SolveFailed
+from fe_beam.solver import SNESSolver
 
 __all__ = ["PullInSolver", "Tendon", "TendonSet", "looped_tendon", "tendon_length_density"]
 
@@ -216,12 +215,16 @@ class TendonSet:
 
 
 class PullInSolver:
-    """SNES for the beam inside a Newton iteration on the unknown tensions of pull-in
-    controlled tendons; same interface as `SNESSolver` so load stepping drives it unchanged."""
+    """Pull-in control: the tensions of the pull-in controlled tendons are global unknowns of the
+    beam's Newton system, with the constraints l_i(w) = l_i^0 - load factor * pull_in_i
+    (`fe_beam.continuation.BorderedConstraintSolver`: one bordered solve per iteration). Same
+    interface as `SNESSolver` so load stepping and time stepping drive it unchanged."""
 
     def __init__(
         self, solver: SNESSolver, tendons: TendonSet, tolerance: float = 1e-10, max_it: int = 20
     ):
+        from fe_beam.continuation import BorderedConstraintSolver
+
         self.solver = solver
         self.problem = solver.problem
         self.tendons = tendons
@@ -229,7 +232,25 @@ class PullInSolver:
         self.tolerance = tolerance * tendons.length
         self.max_it = max_it
         self.load_factor = 0.0
-        self.linear_iterations = 0
+        self._bordered = BorderedConstraintSolver(
+            solver, self._get_tensions, self._set_tensions,
+            lambda x: self.tendons.lengths()[self.controlled],
+            lambda x: [self.tendons.gradient(i, self.problem.bcs) for i in self.controlled],
+            self.targets, self.tolerance, max(max_it, solver.settings.max_it),
+        )
+
+    @property
+    def linear_iterations(self) -> int:
+        if self.controlled:
+            return self._bordered.linear_iterations
+        return self.solver.linear_iterations
+
+    def _get_tensions(self) -> np.ndarray:
+        return np.array([float(self.tendons.tensions[i].value) for i in self.controlled])
+
+    def _set_tensions(self, values) -> None:
+        for i, value in zip(self.controlled, values, strict=True):
+            self.tendons.tensions[i].value = float(value)
 
     def residual_norm(self) -> float:
         return self.solver.residual_norm()
@@ -239,6 +260,7 @@ class PullInSolver:
 
     def set_reference_residual(self, value: float | None) -> None:
         self.solver.set_reference_residual(value)
+        self._bordered.set_reference_residual(value)
 
     def set_load_factor(self, value) -> None:
         """Pull-ins are value * pull_in: one factor, or an array (one per controlled tendon)."""
@@ -251,53 +273,8 @@ class PullInSolver:
     def solve(self) -> int:
         if not self.controlled:
             return self.solver.solve()
-        start = self.tendons.tension_values()
-        try:
-            return self._solve_tensions()
-        except SolveFailed:
-            for constant, value in zip(self.tendons.tensions, start, strict=True):
-                constant.value = value
-            raise
-
-    def _solve_tensions(self) -> int:
-        iterations = 0
-        for _ in range(self.max_it):
-            iterations += self.solver.solve()
-            mismatch = self.tendons.lengths()[self.controlled] - self.targets()
-            if np.max(np.abs(mismatch)) < self.tolerance:
-                self.linear_iterations = self.solver.linear_iterations
-                return iterations
-            sensitivity = self._sensitivity()
-            step = np.linalg.solve(sensitivity, mismatch)
-            for i, change in zip(self.controlled, step, strict=True):
-                self.tendons.tensions[i].value = float(self.tendons.tensions[i].value) - change
-        raise SolveFailed(
-            f"pull-in control: tendon lengths did not converge in {self.max_it} tension updates"
-        )
-
-    def _sensitivity(self) -> np.ndarray:
-        """S_ij = dl_i/dtau_j = -g_i . K^{-1} g_j at the current equilibrium."""
-        problem, snes = self.problem, self.solver.snes
-        x = compat.vector_of(problem.w).copy()
-        problem.jacobian(snes, x, problem.A, problem.A)
-        ksp = PETSc.KSP().create(problem.A.getComm())
-        ksp.setOperators(problem.A)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
-        # multiplier rows (constraints) need pivoting beyond MUMPS's default workspace
-        ksp.getPC().setFactorSetUpSolverType()
-        ksp.getPC().getFactorMatrix().setMumpsIcntl(14, SADDLE_POINT_WORKSPACE[1])
-        gradients = [self.tendons.gradient(i, problem.bcs) for i in self.controlled]
-        response = gradients[0].duplicate()
-        size = len(self.controlled)
-        sensitivity = np.zeros((size, size))
-        for j, g_j in enumerate(gradients):
-            ksp.solve(g_j, response)
-            for i, g_i in enumerate(gradients):
-                sensitivity[i, j] = -g_i.dot(response)
-        ksp.destroy()
-        return sensitivity
+        self.solver.set_reference_residual(None)
+        return self._bordered.solve()
 
 
 def tension_for_target(

@@ -52,9 +52,7 @@ from fe_beam.solver import (
     LoadStepping,
     NonlinearProblem,
     SNESSolver,
-    SolveFailed,
     SolverSettings,
-    run_load_stepping,
 )
 
 __all__ = [
@@ -291,7 +289,7 @@ class SolidFingerProblem:
         progress: bool = False,
         record_steps: bool = True,
     ) -> dict:
-        """Ramp the load factor 0 -> 1 (`fe_beam.solver.run_load_stepping`) from the current
+        """Ramp the load factor 0 -> 1 (load control of `engine`) from the current
         state; returns ``{"steps": [...], **self.summary()}`` (plain Python data).
 
         Raises `fe_beam.solver.LoadSteppingFailed` when the ramp stalls.
@@ -313,11 +311,42 @@ class SolidFingerProblem:
                 }
             )
 
-        run_load_stepping(
-            self.solver, self.set_load_factor, stepping or LoadStepping(steps=5),
-            on_converged=on_converged, progress=progress, label="solid",
-        )
+        engine = self.engine()
+        engine.parameter = 0.0  # a ramp 0 -> 1 from the current state, as always
+        engine.load_control(1.0, stepping or LoadStepping(steps=5), on_converged=on_converged,
+                            progress=progress, label="solid")
         return {"steps": steps, **self.summary()}
+
+    def parameter_problem(self):
+        """This problem as a `fe_beam.continuation.ParameterProblem` of the load factor
+        (`set_load_factor`): its residual is affine in it (tip traction, cable tensions), the
+        arc metric weighs the displacement by 1/L^2 and the pressure by 0. Under pull-in
+        control: load control only."""
+        from fe_beam.continuation import NonlinearParameterProblem
+
+        metric = compat.vector_of(self.w).duplicate()
+        weights = np.zeros(metric.getLocalSize())
+        owned = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
+        if self.p is None:
+            weights[:] = 1.0
+        else:
+            dofs = np.asarray(compat.sub_space_collapsed(self.W, 0)[1])
+            weights[dofs[dofs < owned]] = 1.0
+        metric.getArray()[:] = weights / self.finger.geometry.length**2
+        adapter = NonlinearParameterProblem(self.solver, self.set_load_factor, metric=metric,
+                                            parameter=self.load_factor)
+        adapter.arc_length_ready = self.solver is self.snes_solver
+        return adapter
+
+    def engine(self):
+        """The continuation engine of the load factor (`fe_beam.continuation.Continuation`,
+        built once); its parameter follows ``load_factor``."""
+        from fe_beam.continuation import Continuation
+
+        if getattr(self, "_engine", None) is None:
+            self._engine = Continuation(self.parameter_problem(), self.load_factor)
+        self._engine.parameter = self.load_factor
+        return self._engine
 
     # --- post-processing --------------------------------------------------------------------
 
@@ -478,27 +507,53 @@ def bulk_mask(points: np.ndarray, chains: Sequence[np.ndarray], geometry) -> np.
 
 
 class _PullInSolver:
-    """Tension of pull-in-controlled cables as outer unknowns: Newton on
-
-        r_i(tau) = (l_i^0 - l_i(u(tau))) - target_i = 0,   dr_i/dtau_j = g_i . K^-1 g_j,
-
-    with g_i = dl_i/du (Dirichlet rows zeroed) and K the Jacobian at the converged u(tau).
-    When nothing is loaded (the first step) the state is set to the known equilibrium u = 0
-    instead of asking SNES to reduce a round-off residual.
+    """Pull-in control of cables: their tensions are global unknowns of the Newton system with
+    the constraints l_i^0 - l_i(u) = target_i (`fe_beam.continuation.BorderedConstraintSolver`:
+    [[K, dR/dtau], [g^T, 0]], g_i = dl_i/du with Dirichlet rows zeroed, one bordered solve per
+    iteration; tensions clipped at 0). When nothing is loaded and no pull-in is asked (the
+    first step) the state is set to the known equilibrium u = 0 instead of asking Newton to
+    reduce a round-off residual.
     """
 
     def __init__(self, inner: SNESSolver, cables: list[TendonCable], unloaded,
                  rtol: float = 1e-10, max_it: int = 30):
+        from fe_beam.continuation import BorderedConstraintSolver
+
         self.inner = inner
+        self.solver = inner
         self.unloaded = unloaded
         self.problem = inner.problem
         self.cables = cables
         self.rtol, self.max_it = rtol, max_it
-        self.linear_iterations = 0
         for c in cables:
             c.target_pull_in = 0.0
         start = self.problem.b.getOwnershipRange()[0]
         self._bc_rows = (compat.owned_bc_dofs(self.problem.bcs) + start).astype(PETSc.IntType)
+        scale = max(c.reference_length for c in cables)
+        self._bordered = BorderedConstraintSolver(
+            inner, lambda: [c.tension for c in self.cables], self._set_tensions,
+            lambda x: np.array([c.length(x) for c in self.cables]), self._gradient_vectors,
+            lambda: np.array([c.reference_length - c.target_pull_in for c in self.cables]),
+            rtol * scale, max_it, nonnegative=True,
+            unloaded=lambda: self.unloaded() and all(c.target_pull_in == 0 for c in self.cables),
+        )
+
+    @property
+    def linear_iterations(self) -> int:
+        return self._bordered.linear_iterations
+
+    def _set_tensions(self, values) -> None:
+        for c, value in zip(self.cables, values, strict=True):
+            c.tension = float(value)
+
+    def residual_norm(self) -> float:
+        return self.inner.residual_norm()
+
+    def set_reference_residual(self, value) -> None:
+        self._bordered.set_reference_residual(value)
+
+    def destroy(self) -> None:
+        self.inner.destroy()
 
     def _gradient_vectors(self, x: PETSc.Vec) -> list[PETSc.Vec]:
         vectors = []
@@ -516,42 +571,7 @@ class _PullInSolver:
         return vectors
 
     def solve(self) -> int:
-        tau0 = [c.tension for c in self.cables]
-        total = 0
-        try:
-            for _ in range(self.max_it):
-                x = compat.vector_of(self.problem.w)
-                if self.unloaded():
-                    x.set(0.0)
-                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-                else:
-                    total += self.inner.solve()
-                r = np.array([c.reference_length - c.length(x) - c.target_pull_in
-                              for c in self.cables])
-                scale = max(c.reference_length for c in self.cables)
-                if np.all(np.abs(r) <= self.rtol * scale):
-                    return total
-                A = self.problem.A
-                self.problem.jacobian(None, x, A, A)
-                ksp = self.inner.snes.getKSP()
-                ksp.setOperators(A)
-                g = self._gradient_vectors(x)
-                z = [v.duplicate() for v in g]
-                for gi, zi in zip(g, z, strict=True):
-                    ksp.solve(gi, zi)
-                S = np.array([[gi.dot(zj) for zj in z] for gi in g])
-                step = np.linalg.solve(S, r)
-                for c, dt in zip(self.cables, step, strict=True):
-                    c.tension = max(c.tension - dt, 0.0)
-                for v in g + z:
-                    v.destroy()
-        except (SolveFailed, np.linalg.LinAlgError) as error:
-            for c, t in zip(self.cables, tau0, strict=True):
-                c.tension = t
-            raise SolveFailed(f"pull-in control: {error}") from error
-        for c, t in zip(self.cables, tau0, strict=True):
-            c.tension = t
-        raise SolveFailed(f"pull-in control: no convergence in {self.max_it} tension updates")
+        return self._bordered.solve()
 
 
 def evaluate_at_points(function: fem.Function, points: np.ndarray) -> np.ndarray:

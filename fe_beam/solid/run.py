@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import re
 import time
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import runctl
+from fe_beam.continuation import ContinuationFailed
 from fe_beam.exports import (
     Column,
     CSVExport,
@@ -31,7 +31,7 @@ from fe_beam.solid.export import DisplacementXDMF
 from fe_beam.solid.geometry import create_finger_mesh
 from fe_beam.solid.problem import SolidFingerProblem, stretch_keys
 from fe_beam.solid.rod import backbone_distance, run_rod, write_rod_xdmf
-from fe_beam.solver import LoadStepping, LoadSteppingFailed, run_load_stepping
+from fe_beam.solver import LoadStepping, LoadSteppingFailed
 from fe_beam.static import beam_dofs_estimate
 
 
@@ -55,9 +55,9 @@ _RUNS = itertools.count(1)
 class SolidRun:
     """The meshed 3D finger and its problem, advanced along the load factor in segments.
 
-    ``advance(target)`` ramps the load factor from its current value to ``target`` with
-    `fe_beam.solver.run_load_stepping` (cut-back on divergence) and calls ``on_step(record)``
-    after each converged step with the plain-data `record`.
+    ``advance(target)`` ramps the load factor from its current value to ``target`` with the
+    load control of `fe_beam.continuation.Continuation` (cut-back on divergence) and calls
+    ``on_step(record)`` after each converged step with the plain-data `record`.
     """
 
     def __init__(self, config: SolidConfig, comm: MPI.Comm = MPI.COMM_WORLD):
@@ -105,33 +105,25 @@ class SolidRun:
             adaptive=stepping.adaptive,
         )
 
-        attempted = [start]
-
-        def set_factor(s: float) -> None:
-            value = start + s * span
-            if value > self.load_factor:
-                attempted[0] = value
-            self.problem.set_load_factor(value)
+        engine = self.problem.engine()
+        engine.parameter = start
 
         def converged(step) -> None:
-            self.load_factor = float(target) if step.load_factor == 1.0 else (
-                start + step.load_factor * span
-            )
+            self.load_factor = float(target) if step.fraction == 1.0 else step.load_factor
             record = self.record(step.iterations, step.linear_iterations)
             if on_step is not None:
                 on_step(record)
 
         try:
-            run_load_stepping(self.problem.solver, set_factor, segment, on_converged=converged,
-                              progress=progress, label=label)
-        except LoadSteppingFailed as failure:
+            engine.load_control(target, segment, on_converged=converged, progress=progress,
+                                label=label)
+        except ContinuationFailed as failure:
             self.problem.set_load_factor(self.load_factor)
-            found = re.search(r"\((.*)\); last converged", str(failure))
-            reason = found.group(1) if found else str(failure)
-            raise LoadSteppingFailed(
-                f"load stepping stopped at load factor {attempted[0]:.6g} ({reason}); "
-                f"last converged load factor {self.load_factor:.6g}",
-                self.load_factor, failure.results,
+            raise ContinuationFailed(
+                f"load stepping stopped at load factor {failure.attempted:.6g} "
+                f"({failure.reason}); last converged load factor {self.load_factor:.6g}",
+                self.load_factor, failure.results, reason=failure.reason, kind=failure.kind,
+                parameter=self.load_factor, attempted=failure.attempted,
             ) from None
 
     def tip(self) -> dict:
