@@ -84,3 +84,32 @@ def test_pinned_pinned_bifurcation_and_post_buckling():
     crossing = brentq(lambda a: elastica_pinned_pinned(a).shortening - 1.0, 1.0, 3.0)
     assert later[0].load_factor == pytest.approx(elastica_pinned_pinned(crossing).load_ratio,
                                                  rel=1e-4)
+
+
+def test_limit_point_of_the_nonstandard_law_under_a_tip_moment():
+    """Unconstrained non-standard law, rectangle, pure bending: M = EI kappa (1 - 0.3 h^2
+    kappa^2) (docs/theory.md), whose maximum 2 / (3 sqrt(0.9)) EI / h is a limit point of the
+    tip-moment path: located to 1e-6, traced through (lambda turns, the branch beyond it is
+    unstable)."""
+    from fe_beam.static import StaticContinuation
+
+    h = 0.2
+    EI = bending_stiffness(h)
+    model = cantilever(h=h, law="nonstandard", constraint="none", elements=8,
+                       tip_moment=0.5 * EI / h)
+    run = StaticContinuation(StaticConfig(model, SolverSettings(), LoadStepping(steps=4)))
+    try:
+        result = follow_path(run, ArcLength(increment=0.1, max_load_factor=2.0, max_steps=24,
+                                            max_arc_length=1.0), "none")
+    finally:
+        run.destroy()
+    assert result.status == "converged", result.message
+    (point,) = result.critical_points
+    assert point.kind == "limit"
+    expected = 2 / (3 * math.sqrt(0.9)) / 0.5
+    assert point.load_factor == pytest.approx(expected, rel=1e-6)
+    assert abs(point.bracket[1] - point.bracket[0]) <= 1e-6 * expected
+    assert max(p["load_factor"] for p in result.path) <= point.load_factor + 1e-9
+    turned = [p for p in result.path if not p["stable"]]
+    assert turned and turned[-1]["load_factor"] < result.path[-1]["load_factor"] + 1e-12
+    assert all(p["stable"] == (p["tip"]["theta"] < point.tip["theta"]) for p in result.path)
