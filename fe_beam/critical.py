@@ -33,6 +33,7 @@ import scipy.sparse
 
 from fe_beam import compat
 from fe_beam.continuation import ContinuationFailed, Snapshot
+from fe_beam.static import STABILITY_ZERO
 
 __all__ = [
     "CriticalPoint",
@@ -43,10 +44,7 @@ __all__ = [
     "switch_branch",
 ]
 
-# relative size (to the largest) below which an eigenvalue of the Jacobi-scaled tangent counts
-# as zero: the buckling eigenvalue of a slender rod is ~1e-8 of the axial ones at L/h = 100 and
-# moves by ~1e-7 per unit load factor (measured), round-off is ~1e-15
-ZERO = 1e-13
+ZERO = STABILITY_ZERO  # an eigenvalue that counts as zero (fe_beam.static)
 
 
 @dataclass

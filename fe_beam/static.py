@@ -69,6 +69,11 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
 
 # the stability check is a dense eigenvalue problem: O(n^3), a few tenths of a second here
 STABILITY_MAX_DOFS = 1500
+# relative size (to the largest) below which an eigenvalue of the Jacobi-scaled tangent counts
+# as zero. The buckling eigenvalue of a slender column is ~1e-8 of the axial ones at L/h = 100
+# and passes zero at the critical load; round-off is ~1e-15. (1e-9 called a column 1.4% past
+# its Euler load at L/h = 100 stable.)
+STABILITY_ZERO = 1e-13
 
 
 class StaticContinuation:
@@ -229,7 +234,7 @@ class StaticContinuation:
             basis = scipy.linalg.null_space(constraints)
             stiffness = basis.T @ stiffness @ basis
         eigenvalues = np.linalg.eigvalsh(stiffness)
-        unstable = int(np.sum(eigenvalues < -1e-9 * np.abs(eigenvalues).max()))
+        unstable = int(np.sum(eigenvalues < -STABILITY_ZERO * np.abs(eigenvalues).max()))
         return {"stable": unstable == 0, "energy_decreasing_directions": unstable}
 
     def restart(self) -> None:

@@ -27,7 +27,8 @@ def final_stability(model):
 
 
 @pytest.mark.parametrize("constraint", ["none", "inextensible-unshearable", "unshearable"])
-@pytest.mark.parametrize(("factor", "modes"), [(0.5, 0), (3.0, 1), (15.0, 2), (30.0, 3)])
+@pytest.mark.parametrize(("factor", "modes"), [(0.5, 0), (0.99, 0), (1.01, 1), (3.0, 1),
+                                              (15.0, 2), (30.0, 3)])
 def test_compressed_column_counts_the_buckling_modes_passed(constraint, factor, modes):
     """Critical loads (2n - 1)^2 P_E: 1, 9, 25, 49 P_E. Without an imperfection Newton stays
     on the straight (trivial) branch, which has one falling direction per mode passed."""
