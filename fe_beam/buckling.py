@@ -210,6 +210,13 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
                      "factor(s) found (the loads may not compress the structure enough)")
     p = problem.load_factor
+    passed = sorted(p + mu for mu in negative if 0 < p + mu < p)
+    if passed:  # the prestate is past a critical point: the factors above p are not the first
+        notes.append(f"[buckling] prestress = {p:g} is past the critical load factor "
+                     f"{passed[0]:.6g} (in reversed_load_factors): the state linearised about "
+                     "is beyond a bifurcation or limit of the path from 0, and load_factors "
+                     "(above the prestress only) do not start with the first buckling load; "
+                     "use a prestress below it")
     for index, (_, shape) in enumerate(chosen, start=1):
         _normalise(shape, problem.displacement_dofs, problem.comm)
         shape.name = f"buckling_mode_{index}"
