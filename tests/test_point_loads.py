@@ -136,6 +136,9 @@ def test_static_command_records_the_reaction(tmp_path):
     ({"end_rotation": 0.5, "tip_moment": 1.0}, "tip_moment"),
     ({"end_rotation": "a lot"}, "end_rotation"),
     ({"end_rotation": 0.5, "prescribed_xL": {"theta": 1.0}}, "prescribed_xL"),
+    ({"end_displacement": [0.0, 0.1], "point_forces": [[L, 0.0, 1.0]]}, "point_forces"),
+    ({"end_displacement": [0.0, 0.1], "point_forces": [[L * (1 - 1e-12), 1.0, 0.0]]},
+     "point_forces"),
 ])
 def test_bad_point_loads_exit_2(tmp_path, capsys, loads, key):
     from tomlio import dump_toml
