@@ -451,6 +451,12 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
                            {"load_factor": float(run.load_factor),
                             "tip": problem.end_values("xL")}, out, comm)
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
+        if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
+            result.notes.append(
+                "follower tip force: a non-conservative load loses stability by flutter "
+                "(complex eigenvalues of the dynamic problem), which linear buckling does not "
+                "find; an empty or short load_factors list does not mean stable: check with "
+                "fe-beam modes (prestress = true) at the loads of interest")
         if run.tendons:
             for record, factor in zip(critical, result.load_factors, strict=True):
                 record["tensions"] = [factor * t.tension for t in static.tendons]

@@ -361,3 +361,22 @@ def test_prestress_past_the_first_load_says_so():
         assert not any("past the critical" in n for n in below.notes)
     finally:
         run.destroy()
+
+
+def test_follower_force_warns_of_flutter(tmp_path, capsys):
+    """Beck's column (clamped-free, follower compression): no divergence load, it flutters at
+    20.05 EI / L^2; the empty load_factors list must not read as 'stable' (was: only 'the loads
+    may not compress the structure enough')."""
+    from tomlio import dump_toml
+
+    cfg = {"beam": {"length": L}, "section": {"shape": "rectangle", "b": B, "h": B},
+           "material": {"E": E, "nu": NU}, "model": {"law": "reissner"},
+           "mesh": {"elements": 8, "degree": 2}, "supports": {"x0": "clamped", "xL": "free"},
+           "loads": {"tip_force": [-1000.0, 0.0], "follower": True, "steps": 2},
+           "buckling": {"count": 2}}
+    path = tmp_path / "beck.toml"
+    path.write_text(dump_toml(cfg))
+    assert main(["buckling", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["load_factors"] == []
+    assert any("flutter" in note for note in summary["notes"]), summary["notes"]
