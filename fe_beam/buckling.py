@@ -210,6 +210,13 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
                      "factor(s) found (the loads may not compress the structure enough)")
     p = problem.load_factor
+    passed = sorted(p + mu for mu in negative if 0 < p + mu < p)
+    if passed:  # the prestate is past a critical point: the factors above p are not the first
+        notes.append(f"[buckling] prestress = {p:g} is past the critical load factor "
+                     f"{passed[0]:.6g} (in reversed_load_factors): the state linearised about "
+                     "is beyond a bifurcation or limit of the path from 0, and load_factors "
+                     "(above the prestress only) do not start with the first buckling load; "
+                     "use a prestress below it")
     for index, (_, shape) in enumerate(chosen, start=1):
         _normalise(shape, problem.displacement_dofs, problem.comm)
         shape.name = f"buckling_mode_{index}"
@@ -444,6 +451,12 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
                            {"load_factor": float(run.load_factor),
                             "tip": problem.end_values("xL")}, out, comm)
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
+        if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
+            result.notes.append(
+                "follower tip force: a non-conservative load loses stability by flutter "
+                "(complex eigenvalues of the dynamic problem), which linear buckling does not "
+                "find; an empty or short load_factors list does not mean stable: check with "
+                "fe-beam modes (prestress = true) at the loads of interest")
         if run.tendons:
             for record, factor in zip(critical, result.load_factors, strict=True):
                 record["tensions"] = [factor * t.tension for t in static.tendons]

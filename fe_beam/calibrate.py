@@ -529,7 +529,10 @@ def _load_factors(model, data: CalibrationData, spec: CalibrationSpec) -> np.nda
     others = [f"loads.{name}" for name, value in (
         ("tip_force", loads.tip_force), ("tip_moment", loads.tip_moment),
         ("distributed", loads.distributed),
-        ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0))
+        ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0),
+        ("point_forces", [f[1:] for f in loads.point_forces] or 0.0),
+        ("end_displacement", loads.end_displacement or 0.0),
+        ("end_rotation", loads.end_rotation or 0.0))
         if np.any(np.asarray(value, dtype=float) != 0)]
     others += [f"tendons.{i}" for i, t in enumerate(tendons.tendons) if i > 0 and (
         t.controlled_by_pull_in or t.tension)]

@@ -263,6 +263,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     loads = model.loads
     if loads.follower or any(loads.gravity):
         raise ConfigError("[time] scheme = fd-*: no follower loads or gravity")
+    if loads.point_forces:  # fd_rk takes tip and distributed loads only: would drop them
+        raise ConfigError("[time] scheme = fd-* takes no [loads] point_forces; use scheme = "
+                          "\"generalized-alpha\"")
     notes = check_beam_work(config.static, config.time.t_end / config.time.dt, comm,
                             " of time stepping (output times)", quiet=out is None)
     stiffness = model.stiffness_at(0.0)

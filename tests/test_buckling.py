@@ -344,3 +344,39 @@ def test_solid_column_two_ranks_equal_serial():
     if MPI.COMM_WORLD.size == 1:
         pytest.skip("the same run twice on one rank")
     assert solid_factor() == pytest.approx(solid_factor(MPI.COMM_SELF), rel=1e-7)
+
+
+def test_prestress_past_the_first_load_says_so():
+    """Prestress beyond Euler's first load: load_factors start at the second (the first is below
+    p); the result must say the prestate is past a critical load (was: silent, the second load
+    reported as mode 1 with no note). Below the first load: no such note."""
+    run = column("reissner", "inextensible-unshearable", "pinned-pinned", L / 100, 16)
+    try:
+        first = math.pi**2 * stiffness(L / 100)[2] / L**2
+        beyond = rod_buckling(run, 1, prestress=1.2 * first)
+        assert beyond.load_factors[0] == pytest.approx(4 * first, rel=1e-3)
+        assert any("past the critical load factor" in n for n in beyond.notes), beyond.notes
+        assert min(beyond.negative, key=lambda f: abs(f - first)) == pytest.approx(first, 1e-3)
+        below = rod_buckling(run, 1, prestress=0.8 * first)
+        assert not any("past the critical" in n for n in below.notes)
+    finally:
+        run.destroy()
+
+
+def test_follower_force_warns_of_flutter(tmp_path, capsys):
+    """Beck's column (clamped-free, follower compression): no divergence load, it flutters at
+    20.05 EI / L^2; the empty load_factors list must not read as 'stable' (was: only 'the loads
+    may not compress the structure enough')."""
+    from tomlio import dump_toml
+
+    cfg = {"beam": {"length": L}, "section": {"shape": "rectangle", "b": B, "h": B},
+           "material": {"E": E, "nu": NU}, "model": {"law": "reissner"},
+           "mesh": {"elements": 8, "degree": 2}, "supports": {"x0": "clamped", "xL": "free"},
+           "loads": {"tip_force": [-1000.0, 0.0], "follower": True, "steps": 2},
+           "buckling": {"count": 2}}
+    path = tmp_path / "beck.toml"
+    path.write_text(dump_toml(cfg))
+    assert main(["buckling", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["load_factors"] == []
+    assert any("flutter" in note for note in summary["notes"]), summary["notes"]

@@ -136,6 +136,9 @@ def test_static_command_records_the_reaction(tmp_path):
     ({"end_rotation": 0.5, "tip_moment": 1.0}, "tip_moment"),
     ({"end_rotation": "a lot"}, "end_rotation"),
     ({"end_rotation": 0.5, "prescribed_xL": {"theta": 1.0}}, "prescribed_xL"),
+    ({"end_displacement": [0.0, 0.1], "point_forces": [[L, 0.0, 1.0]]}, "point_forces"),
+    ({"end_displacement": [0.0, 0.1], "point_forces": [[L * (1 - 1e-12), 1.0, 0.0]]},
+     "point_forces"),
 ])
 def test_bad_point_loads_exit_2(tmp_path, capsys, loads, key):
     from tomlio import dump_toml
@@ -148,3 +151,93 @@ def test_bad_point_loads_exit_2(tmp_path, capsys, loads, key):
     assert main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     error = capsys.readouterr().err.strip()
     assert key in error and error.count("\n") == 0 and "Traceback" not in error
+
+
+@pytest.mark.parametrize("a", [1e-12, 1e-9])
+def test_force_within_round_off_of_x0_is_applied(a):
+    """x0 free, xL clamped, P at x = a ~ 0: the mesh puts no round-off element there, so the
+    force sits on the end vertex x = 0 (a boundary facet; was: silently dropped, v(0) = 0 with
+    exit 0). v(0) = P b^2 (3L - b) / (6 EI) + P b / GA with b = L - a."""
+    P = 1e-6 * EI / L**2
+    cfg = config(point_forces=[[a, 0.0, P]])
+    cfg["supports"] = {"x0": "free", "xL": "clamped"}
+    run = solved(cfg)
+    b = L - a
+    assert run.problem.end_values("x0")["v"] == pytest.approx(
+        P * b**2 * (3 * L - b) / (6 * EI) + P * b / GA, rel=1e-8)
+    run.destroy()
+
+
+@pytest.mark.parametrize("loads, key", [
+    ({"point_forces": [[0.05, 0.0, 0.1]]}, "point_forces"),
+    ({"end_displacement": [0.0, 0.0]}, "end_displacement"),
+    ({"end_rotation": 0.1}, "end_rotation"),
+])
+def test_solid_refuses_rod_only_end_loads(loads, key):
+    """The 3D solid takes tip_force and tendons only: the rod run beside it took these keys
+    and the solid dropped them (a 1D-vs-3D comparison of two different problems, exit 0)."""
+    from fe_beam.solid.config import parse_solid
+
+    raw = {"beam": {"length": 0.1}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.02},
+           "material": {"E": 0.6e6, "nu": 0.45, "rho": 1070.0}, "model": {"law": "reissner"},
+           "mesh": {"elements": 4, "degree": 2}, "loads": {"steps": 1, **loads},
+           "solid": {"mesh_size": 0.01}}
+    with pytest.raises(ConfigError, match=f"loads\\] {key} is not supported by the 3D solid"):
+        parse_solid(raw)
+
+
+def test_fd_dynamics_refuses_point_forces():
+    """The FD + Runge-Kutta baseline takes tip and distributed loads only (it dropped them)."""
+    from fe_beam.model.transient import parse_dynamic
+    from fe_beam.transient import _run_finite_differences
+
+    cfg = config(point_forces=[[0.5, 0.0, 1.0]])
+    cfg["material"]["rho"] = 7850.0
+    cfg["time"] = {"t_end": 1e-3, "dt": 1e-4, "scheme": "fd-rk45"}
+    with pytest.raises(ConfigError, match="point_forces"):
+        _run_finite_differences(parse_dynamic(cfg), None, MPI.COMM_WORLD)
+
+
+@pytest.mark.parametrize("loads, named", [
+    ({"point_forces": [[0.05, 0.0, 0.01]]}, "loads.point_forces"),
+    ({"end_rotation": 0.1}, "loads.end_rotation"),
+])
+def test_calibration_tension_column_refuses_point_loads(loads, named):
+    """A tension data column scales every load with tendon 0's tension: point forces and
+    end motions were scaled silently."""
+    import numpy as np
+
+    from fe_beam.calibrate import CalibrationData, CalibrationSpec, _load_factors
+    from fe_beam.sensitivity import RodSensitivity
+
+    raw = {"beam": {"length": 0.1},
+           "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
+           "material": {"E": 0.6e6, "nu": 0.45}, "mesh": {"elements": 4, "degree": 2},
+           "loads": {"steps": 2, **loads},
+           "tendons": [{"offset_base": 0.008, "offset_tip": 0.004, "tension": 2.0}]}
+    model = RodSensitivity(raw, ("material.E",))
+    try:
+        data = CalibrationData("tension", np.array([1.0, 2.0]),
+                               {"tip_theta": np.array([0.2, 0.4])})
+        with pytest.raises(ConfigError, match=f"{named} included"):
+            _load_factors(model, data, CalibrationSpec(("material.E",)))
+    finally:
+        model.destroy()
+
+
+def test_many_point_forces_superpose_quickly():
+    """300 forces (at 300 inserted vertices, some at x = L and repeated x): the sum of the
+    closed forms; one nodal force field (was: one integral each, ~2 min for 1000 forces)."""
+    import time
+
+    import numpy as np
+
+    rng = np.random.default_rng(3)
+    xs = np.round(rng.uniform(0.01, 1.0, 296), 6).tolist() + [L, L, 0.5, 0.5]
+    P = 1e-8 * EI / L**2
+    started = time.perf_counter()
+    run = solved(config(point_forces=[[x, 0.0, P] for x in xs]))
+    assert time.perf_counter() - started < 30
+    expected = sum(P * a**2 * (3 * L - a) / (6 * EI) + P * a / GA for a in xs)
+    assert run.problem.end_values("xL")["v"] == pytest.approx(expected, rel=1e-7)
+    run.destroy()

@@ -320,6 +320,13 @@ class BeamModel:
             if not 0 < x <= self.length:
                 raise ValueError(f"loads.point_forces[{index}]: x = {x!r} is outside the beam "
                                  f"(0 < x <= L = {self.length!r})")
+        for index, (x, px, py) in enumerate(self.loads.point_forces):
+            # as loads.tip_force: at the prescribed end the support would take the force
+            if self.loads.end_displacement is not None and self.length - x <= 1e-9 * \
+                    self.length and (px or py):
+                raise ValueError(f"loads.end_displacement prescribes the tip: loads.point_"
+                                 f"forces[{index}] at x = L would be taken by the support; "
+                                 "give one or the other")
         motion = self.loads.end_motion()
         if motion:
             object.__setattr__(self, "supports", _with_end_motion(self.supports, motion))

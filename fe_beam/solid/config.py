@@ -91,6 +91,7 @@ MATERIAL_KEYS = SCHEMA["material"] | {
 UNSUPPORTED_LOADS = (
     "tip_moment", "follower", "distributed", "gravity", "prescribed_x0", "prescribed_xL",
     "time_function", "time_table", "motion_function",
+    "point_forces", "end_displacement", "end_rotation",  # rod only: the solid would drop them
 )
 #: tables that configure only the 3D model or other commands (removed from the rod's config)
 SOLID_ONLY_TABLES = ("solid", "compare", "refine")
