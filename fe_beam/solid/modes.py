@@ -336,6 +336,10 @@ def run_solid_modes(run, config, out, comm) -> dict:
         "shapes": None,
         "notes": list(result.notes),
     }
+    if config.discretization.degree == 1:
+        entry["notes"].append("[solid] order = 1: linear tetrahedra lock in bending, so the "
+                              "bending frequencies come out too high (far too high on a coarse "
+                              "mesh); use order = 2 for modes")
     if about == "loaded" and any(t.controlled_by_pull_in for t in config.tendon_loads):
         entry["notes"].append("tendons under pull-in control: the modes hold their converged "
                               "tensions constant (a motor holding the force, not the length)")

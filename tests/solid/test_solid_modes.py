@@ -262,3 +262,15 @@ def test_two_ranks_match_serial():
     assert dofs == serial_dofs
     assert parallel.kinds == serial.kinds
     assert np.allclose(parallel.frequencies_hz, serial.frequencies_hz, rtol=1e-8)
+
+
+def test_linear_tetrahedra_get_a_locking_note(tmp_path):
+    """order = 1 locks in bending (a coarse P1 bar's first bending frequency came out 1.7x
+    Euler-Bernoulli's): the frequencies are reported with a note saying so."""
+    config = bar(solid__mesh_size=H, solid__order=1, modes__count=2)
+    code, _, stderr, out = run_cli("solid", shared_folder(tmp_path), config)
+    assert code == 0, stderr
+    if MPI.COMM_WORLD.rank == 0:
+        modes = json.loads((out / "summary.json").read_text())["modes"]
+        assert any("order = 1" in note and "lock" in note for note in modes["notes"])
+        assert modes["frequencies_hz"][0] > references()["bending_z"]
