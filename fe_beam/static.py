@@ -7,8 +7,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse
 from mpi4py import MPI
 
 from fe_beam import compat, exports, runctl
@@ -201,41 +199,12 @@ class StaticContinuation:
         constraints. A negative eigenvalue is a direction in which the energy decreases: the
         beam would buckle or snap away from this state.
         """
-        problem, nonlinear = self.problem, self.snes.problem
-        pull_in = self.tendons is not None and any(
-            t.controlled_by_pull_in for t in self.tendons.tendons)
-        size = problem.global_dofs
-        if (problem.comm.size > 1 or size > STABILITY_MAX_DOFS or pull_in
-                or self.config.model.loads.follower):
+        from fe_beam.critical import spectrum  # the dense inertia (critical imports static)
+
+        result = spectrum(self)
+        if result is None:
             return None
-        state = compat.vector_of(nonlinear.w).copy()
-        try:
-            nonlinear.jacobian(None, state, nonlinear.A, nonlinear.A)
-            rows, columns, values = nonlinear.A.getValuesCSR()
-        finally:
-            state.destroy()
-        tangent = scipy.sparse.csr_matrix((values, columns, rows), shape=(size, size)).toarray()
-        tangent = 0.5 * (tangent + tangent.T)
-        multiplier = np.zeros(size, dtype=bool)
-        multiplier[problem.multiplier_dofs()] = True
-        stiffness = tangent[~multiplier][:, ~multiplier]
-        # Jacobi scaling is a congruence (same inertia) that brings the axial and bending
-        # scales together: unscaled, a buckling direction sits below the round-off of the
-        # axial stiffness (EA / h ~ 1e10 against ~ 1)
-        scale = np.sqrt(np.abs(np.diag(stiffness)))
-        scale[scale == 0.0] = 1.0
-        stiffness /= scale[:, None] * scale[None, :]
-        if multiplier.any():
-            # the energy on the constraint-preserving directions (null space of the
-            # constraint rows): its negative eigenvalues are the unstable directions
-            constraints = tangent[multiplier][:, ~multiplier] / scale[None, :]
-            norms = np.linalg.norm(constraints, axis=1)
-            constraints = constraints[norms > 0] / norms[norms > 0, None]
-            basis = scipy.linalg.null_space(constraints)
-            stiffness = basis.T @ stiffness @ basis
-        eigenvalues = np.linalg.eigvalsh(stiffness)
-        unstable = int(np.sum(eigenvalues < -STABILITY_ZERO * np.abs(eigenvalues).max()))
-        return {"stable": unstable == 0, "energy_decreasing_directions": unstable}
+        return {"stable": result.unstable == 0, "energy_decreasing_directions": result.unstable}
 
     def restart(self) -> None:
         """Back to the unloaded reference state."""
