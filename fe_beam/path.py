@@ -98,3 +98,159 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
         run.load_factor = engine.parameter
         result.status, result.message = "failed", str(failure)
     return result
+
+
+# --- the command `fe-beam path` -----------------------------------------------------------------
+PATH_CSV = ("index", "branch", "load_factor", "tension", "tip_u", "tip_v", "tip_theta", "stable",
+            "energy_decreasing_directions")
+
+
+def _path_plot(out, summary: dict) -> None:
+    """Load factor vs tip u, v, theta: stable solid, unstable dashed, critical points marked."""
+    from fe_beam.outputs import figure
+
+    points = summary.get("path") or []
+    if not points:
+        return
+    with figure(out / "path.png", 1, 3, figsize=(11, 3.6)) as (_, axes):
+        for ax, key, label in zip(axes, ("u", "v", "theta"), ("tip u [m]", "tip v [m]",
+                                                              "tip theta [rad]"), strict=True):
+            for a, b in zip(points[:-1], points[1:], strict=True):
+                if a["branch"] != b["branch"]:
+                    continue
+                unstable = a["stable"] is False or b["stable"] is False
+                ax.plot([a["tip"][key], b["tip"][key]], [a["load_factor"], b["load_factor"]],
+                        "--" if unstable else "-", color=f"C{b['branch'] % 10}", lw=1.3)
+            for kind, marker in (("limit", "s"), ("bifurcation", "o")):
+                found = [c for c in summary.get("critical_points", []) if c["kind"] == kind]
+                if found:
+                    ax.plot([c["tip"][key] for c in found], [c["load_factor"] for c in found],
+                            marker, color="k", ms=5, ls="none", label=kind)
+            ax.set_xlabel(label)
+            ax.set_ylabel("load factor")
+            ax.grid(alpha=0.3)
+        if summary.get("critical_points"):
+            axes[0].legend(fontsize=7)
+
+
+def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
+    """`fe-beam path` on a validated configuration (rod or finger): arc-length continuation
+    with critical points (`follow_path`); writes summary.json (after every point), path.csv,
+    path.png, path.xdmf (states) and critical_modes.xdmf into ``out`` and returns the summary.
+    Status "converged" (max_load_factor or max_steps reached), "failed" (exit 3: the last good
+    point kept, the reason in ``message``) or "interrupted" (re-raised)."""
+    import time
+
+    from mpi4py import MPI
+
+    from fe_beam import compat, exports, runctl
+    from fe_beam.continuation import Continuation, NonlinearParameterProblem
+    from fe_beam.model.path import parse_path
+    from fe_beam.outputs import BeamXDMFWriter
+    from fe_beam.progress import ProgressBar
+    from fe_beam.static import StaticContinuation, check_beam_work
+
+    comm = comm or MPI.COMM_WORLD
+    started = time.perf_counter()
+    _, static, settings = parse_path(config)
+    notes = check_beam_work(static, settings.max_steps, comm, " of path following",
+                            quiet=out is None)
+    loads = static.model.loads
+    if loads.follower or comm.size > 1:
+        notes.append("stability is not checked (follower loads or a parallel run): 'stable' and "
+                      "'energy_decreasing_directions' are null and bifurcations are not detected")
+    run = StaticContinuation(static, comm, prefix="fe_beam_path_")
+    problem = run.problem
+    summary: dict = {"status": "running", "message": "", "parameter": settings.parameter,
+                     "max_load_factor": settings.max_load_factor, "path": [],
+                     "critical_points": [], "dofs": problem.global_dofs, "notes": notes,
+                     "wall_time_s": 0.0}
+    tension = None
+    if settings.parameter == "tension":
+        tension = float(static.tendons[settings.tendon].tension)
+        summary["tendon"] = {"index": settings.tendon,
+                             "name": static.tendons[settings.tendon].name, "tension": tension}
+    writing = out is not None
+    if writing and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    xdmf = writing and static.output.xdmf
+    writer = BeamXDMFWriter(problem, out / "path.xdmf") if xdmf else None
+    columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
+                                     else r["tip"][n[4:]])) for name in PATH_CSV]
+
+    def content() -> dict:
+        summary["wall_time_s"] = time.perf_counter() - started
+        return summary
+
+    files = exports.Exports(
+        ([exports.XDMFExport(writer, "index")] if writer is not None else [])
+        + ([exports.CSVExport(out / "path.csv", columns),
+            exports.SummaryExport(out / "summary.json", content),
+            exports.PlotExport(lambda s: _path_plot(out, s) if static.output.plots else None)]
+           if writing else []), comm, throttle=False)
+    files.start(content())
+    bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
+
+    def on_point(entry: dict, result: PathResult) -> None:
+        record = dict(entry)
+        record["index"] = len(summary["path"])
+        record["tension"] = None if tension is None else entry["load_factor"] * tension
+        summary["path"].append(record)
+        summary["critical_points"] = [c.summary() for c in result.critical_points]
+        files.on_step(record)
+        bar.update(min(len(summary["path"]) - 1, settings.max_steps),
+                   f"load factor {entry['load_factor']:.4g}")
+
+    if tension is not None:
+        constant = run.tendons.tensions[settings.tendon]
+
+        def hold(factor: float) -> None:  # everything else at `factor`, this tendon at 0
+            run._set_load_factor(factor)
+            constant.value = 0.0
+
+        def pull(factor: float) -> None:  # everything else in full, this tendon at factor T
+            run._set_load_factor(1.0)
+            constant.value = factor * tension
+
+        others = (any(t.tension for i, t in enumerate(static.tendons) if i != settings.tendon)
+                  or any(loads.tip_force) or loads.tip_moment or any(loads.distributed)
+                  or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
+                  or loads.end_displacement is not None or loads.end_rotation is not None)
+        if others:  # the state with the tendon slack: load-stepped from the undeformed one
+            Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
+                1.0, static.stepping, progress=progress, label="path pre-state")
+        run._engine = Continuation(NonlinearParameterProblem(
+            run.solver, pull, check_step=run._step_check(), metric=run._metric()), 0.0)
+        pull(0.0)
+    from fe_beam.continuation import ArcLength
+
+    arc = ArcLength(**settings.arc_length_settings())
+    result = None
+    try:
+        result = follow_path(run, arc, settings.branch_switch, settings.tolerance, on_point)
+        summary["status"], summary["message"] = result.status, result.message
+        if result.status == "failed":
+            summary["message"] = (f"path stopped at load factor {run.load_factor:.6g}: "
+                                  f"{result.message}")
+    except runctl.Interrupted as stop:
+        last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
+        status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+        summary["status"], summary["message"] = status["status"], status["message"]
+        raise
+    finally:
+        bar.close()
+        if result is not None and writing and static.output.xdmf:
+            modes = [(i, c) for i, c in enumerate(result.critical_points) if c.mode is not None]
+            state = compat.local_array(problem.w).copy()
+            modes_writer = BeamXDMFWriter(problem, out / "critical_modes.xdmf")
+            for number, (index, point) in enumerate(modes, start=1):
+                compat.local_array(problem.w)[:] = point.mode
+                modes_writer.write(float(number))
+                summary["critical_points"][index]["mode"] = {"file": "critical_modes.xdmf",
+                                                             "index": number}
+            modes_writer.close()
+            compat.local_array(problem.w)[:] = state
+        files.finish(content())
+        run.destroy()
+    return summary
