@@ -1,0 +1,148 @@
+"""`fe-beam path` (fe_beam.path.run_path, fe_beam.model.path): the clamped-free elastica example
+against the elliptic-integral solution, a finger's tendon-tension path against fe-beam finger,
+outputs that agree with each other, and one-sentence exit 2 for bad [path] input."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+from tomlio import dump_toml
+
+from fe_beam.analytic import elastica_clamped_free
+from fe_beam.cli import main
+from fe_beam.config import load_config
+
+pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="dense stability: serial")
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _write(path: Path, config: dict) -> Path:
+    path.write_text(dump_toml(config))
+    return path
+
+
+@pytest.fixture(scope="module")
+def elastica(tmp_path_factory):
+    out = tmp_path_factory.mktemp("elastica") / "out"
+    assert main(["path", str(EXAMPLES / "elastica_path.toml"), "--out", str(out),
+                 "--quiet"]) == 0
+    return out, json.loads((out / "summary.json").read_text())
+
+
+def test_elastica_example_bifurcates_at_euler_and_follows_the_elastica(elastica):
+    out, summary = elastica
+    config = load_config(EXAMPLES / "elastica_path.toml")
+    E, b, h = config["material"]["E"], config["section"]["b"], config["section"]["h"]
+    L, force = config["beam"]["length"], -config["loads"]["tip_force"][0]
+    euler = math.pi**2 * E * b * h**3 / 12 / (4 * L**2)
+    assert summary["status"] == "converged", summary["message"]
+    (point,) = summary["critical_points"]
+    assert point["kind"] == "bifurcation"
+    assert point["load_factor"] == pytest.approx(euler / force, rel=1e-5)
+    assert point["mode"] == {"file": "critical_modes.xdmf", "index": 1}
+    fundamental = [p for p in summary["path"] if p["branch"] == 0]
+    assert all(p["stable"] == (p["load_factor"] < euler / force) for p in fundamental)
+    assert all(p["energy_decreasing_directions"] == (0 if p["stable"] else 1)
+               for p in fundamental)
+    buckled = [p for p in summary["path"] if p["branch"] == 1]
+    assert len(buckled) > 10 and all(p["stable"] for p in buckled)
+    largest = 0.0
+    for p in buckled:
+        alpha = abs(p["tip"]["theta"])
+        largest = max(largest, math.degrees(alpha))
+        exact = elastica_clamped_free(alpha)
+        assert p["load_factor"] * force / euler == pytest.approx(exact.load_ratio, rel=1e-4)
+        assert -p["tip"]["u"] / L == pytest.approx(exact.shortening, abs=1e-4)
+        assert abs(p["tip"]["v"]) / L == pytest.approx(exact.deflection, abs=1e-4)
+    assert largest > 150
+    for name in ("path.csv", "path.png", "path.xdmf", "critical_modes.xdmf"):
+        assert (out / name).is_file(), name
+
+
+def test_csv_and_summary_agree(elastica):
+    out, summary = elastica
+    with open(out / "path.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == len(summary["path"])
+    for row, point in zip(rows, summary["path"], strict=True):
+        assert int(row["index"]) == point["index"] and int(row["branch"]) == point["branch"]
+        assert float(row["load_factor"]) == point["load_factor"]
+        for key in ("u", "v", "theta"):
+            assert float(row[f"tip_{key}"]) == point["tip"][key]
+        assert row["stable"] == str(point["stable"])
+
+
+def _finger(tmp_path, **path):
+    config = load_config(EXAMPLES / "finger.toml")
+    config.pop("inverse")
+    config["path"] = {"parameter": "tension", "max_load_factor": 1.0, "arc_length": 0.2,
+                      "max_steps": 30} | path
+    return config
+
+
+def test_tendon_tension_path_equals_fe_beam_finger(tmp_path):
+    from fe_beam.config import validate
+    from fe_beam.finger import run_finger
+
+    config = _finger(tmp_path)
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "finger.toml", config)), "--out", str(out),
+                 "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["critical_points"] == []
+    path = summary["path"]
+    assert path[-1]["load_factor"] == 1.0 and path[-1]["tension"] == 2.0
+    assert all(p["stable"] and p["energy_decreasing_directions"] == 0 for p in path)
+    assert len(path) >= 4
+    for point in (path[len(path) // 2], path[-1]):
+        finger = json.loads(json.dumps(config))
+        finger.pop("path")
+        finger["tendons"][0]["tension"] = point["tension"]
+        result, _ = run_finger(validate("finger", finger).parsed[0], None, progress=False)
+        tip = result.steps[-1]["tip"]
+        for key in ("u", "v", "theta"):
+            assert point["tip"][key] == pytest.approx(tip[key], abs=1e-8 * max(1.0, abs(
+                tip[key]))), key
+    assert path[len(path) // 2]["tip"]["theta"] > 0.05  # the finger bends
+
+
+@pytest.mark.parametrize("changes, key", [
+    ({"path": {"arc_length": 0.0}}, "arc_length"),
+    ({"path": {"arc_length": -0.1}}, "arc_length"),
+    ({"path": {"max_steps": 0}}, "max_steps"),
+    ({"path": {"max_steps": 2.5}}, "max_steps"),
+    ({"path": {"max_load_factor": "big"}}, "max_load_factor"),
+    ({"path": {"parameter": "time"}}, "parameter"),
+    ({"path": {"branch_switch": "sideways"}}, "branch_switch"),
+    ({"path": {"arc_lenght": 0.1}}, "arc_lenght"),
+    ({"path": {"parameter": "tension"}}, "tendons"),
+    ({"path": {"parameter": "end_displacement"}}, "end_displacement"),
+    ({"loads": {"tip_force": [0.0, 0.0]}}, "[loads]"),
+    ({"loads": {"tip_force": [-0.02, 0.0], "follower": True}}, "stability is not checked"),
+    ({"solid": {"mesh_size": 0.01}}, "not available yet"),
+    ({"tendons": [{"name": "t", "offset_base": 0.002, "offset_tip": 0.002,
+                   "pull_in": 0.001}]}, "pull-in"),
+])
+def test_bad_path_input_exits_2(tmp_path, capsys, changes, key):
+    config = load_config(EXAMPLES / "elastica_path.toml")
+    for table, values in changes.items():
+        if isinstance(values, dict):
+            config.setdefault(table, {}).update(values)
+        else:
+            config[table] = values
+    path = _write(tmp_path / "bad.toml", config)
+    assert main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert key in error and "Traceback" not in error and error.count("\n") == 0, error
+    assert not (tmp_path / "out" / "summary.json").exists()
+
+
+def test_tension_path_of_a_missing_tendon_exits_2(tmp_path, capsys):
+    config = _finger(tmp_path, tendon=3)
+    assert main(["path", str(_write(tmp_path / "f.toml", config)), "--out",
+                 str(tmp_path / "out"), "--quiet"]) == 2
+    assert "tendon = 3" in capsys.readouterr().err
