@@ -36,7 +36,8 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
     bifurcation point (change of the count of energy-decreasing directions) to ``tol`` in the
     load factor. ``branch_switch``: "none" (stay on the path), "positive" / "negative" (at the
     first bifurcation, switch onto the bifurcated branch along + / - its critical mode and
-    follow it). ``on_point(record, result)`` after every accepted point. Stops at
+    follow it; "both": the positive branch, then the negative one, with ``max_steps`` more
+    points). ``on_point(record, result)`` after every accepted point. Stops at
     ``settings.max_steps`` points or beyond ``settings.max_load_factor``; a failure sets
     status "failed" with the last good state kept."""
     engine = run.engine()
@@ -62,37 +63,51 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
 
     last = record(engine.parameter)
     switched = False
+    pending = []  # "both": (bifurcation, size) whose negative branch follows the positive one
+    limit = settings.max_steps
     try:
-        while len(result.path) <= settings.max_steps:
-            before = engine.snapshot()
-            points = engine.arc_length_path(one)
-            point = points[-1]
-            run.load_factor = engine.parameter
-            previous_count = last["energy_decreasing_directions"]
-            entry_after = engine.snapshot()
-            found = []
-            if (before.tangent is not None and point.tangent_parameter is not None
-                    and before.tangent[1] * point.tangent_parameter < 0):
-                found.append(locate_limit(run, engine, before, point.arc_length, tol))
-            current = spectrum(run)
-            if (current is not None and previous_count is not None
-                    and current.unstable != previous_count and not found):
-                found.append(locate_bifurcation(run, engine, before, entry_after,
-                                                previous_count, tol))
-            result.critical_points.extend(found)
-            last = record(engine.parameter)
-            beyond = abs(engine.parameter) >= settings.max_load_factor * (1 - 1e-12)
-            bifurcations = [c for c in found if c.kind == "bifurcation"]
-            if bifurcations and branch_switch in ("positive", "negative") and not switched:
-                switched = True
-                branch += 1
-                size = switch_size or (engine.arc_length or 0.05)
-                switch_branch(run, engine, bifurcations[0], size,
-                              1 if branch_switch == "positive" else -1)
+        while True:
+            while len(result.path) <= limit:
+                before = engine.snapshot()
+                points = engine.arc_length_path(one)
+                point = points[-1]
+                run.load_factor = engine.parameter
+                previous_count = last["energy_decreasing_directions"]
+                entry_after = engine.snapshot()
+                found = []
+                if (before.tangent is not None and point.tangent_parameter is not None
+                        and before.tangent[1] * point.tangent_parameter < 0):
+                    found.append(locate_limit(run, engine, before, point.arc_length, tol))
+                current = spectrum(run)
+                if (current is not None and previous_count is not None
+                        and current.unstable != previous_count and not found):
+                    found.append(locate_bifurcation(run, engine, before, entry_after,
+                                                    previous_count, tol))
+                result.critical_points.extend(found)
                 last = record(engine.parameter)
-                continue
-            if beyond or (points and math.isnan(point.load_factor)):
+                beyond = abs(engine.parameter) >= settings.max_load_factor * (1 - 1e-12)
+                bifurcations = [c for c in found if c.kind == "bifurcation"]
+                if (bifurcations and branch_switch in ("positive", "negative", "both")
+                        and not switched):
+                    switched = True
+                    branch += 1
+                    size = switch_size or (engine.arc_length or 0.05)
+                    if branch_switch == "both":
+                        pending.append((bifurcations[0], size))
+                    switch_branch(run, engine, bifurcations[0], size,
+                                  -1 if branch_switch == "negative" else 1)
+                    last = record(engine.parameter)
+                    continue
+                if beyond or (points and math.isnan(point.load_factor)):
+                    break
+            if not pending:
                 break
+            # "both": the branch along - the critical mode, with max_steps points of its own
+            critical, size = pending.pop()
+            branch += 1
+            switch_branch(run, engine, critical, size, -1)
+            last = record(engine.parameter)
+            limit = len(result.path) + settings.max_steps
         result.status = "converged"
     except ContinuationFailed as failure:
         run.load_factor = engine.parameter

@@ -184,3 +184,68 @@ def test_interrupted_path_leaves_a_readable_summary(tmp_path):
     with open(out / "path.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
     assert [float(r["load_factor"]) for r in rows] == [p["load_factor"] for p in summary["path"]]
+
+
+def test_both_branches_are_mirror_images_on_the_elastica(tmp_path):
+    """branch_switch = "both": the column buckles to +v (branch 1) and to -v (branch 2), each
+    on the elastica (load vs |end rotation|)."""
+    config = load_config(EXAMPLES / "elastica_path.toml")
+    config["path"] |= {"branch_switch": "both", "max_steps": 30, "max_load_factor": 1.2}
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "both.toml", config)), "--out", str(out),
+                 "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged", summary["message"]
+    assert [c["kind"] for c in summary["critical_points"]] == ["bifurcation"]
+    euler = math.pi**2 * 1e7 * 0.01**4 / 12 / 4 / 0.02
+    signs = {}
+    for branch in (1, 2):
+        points = [p for p in summary["path"] if p["branch"] == branch]
+        assert len(points) > 3
+        signs[branch] = {math.copysign(1.0, p["tip"]["v"]) for p in points}
+        for p in points:
+            exact = elastica_clamped_free(abs(p["tip"]["theta"]))
+            assert p["load_factor"] / euler == pytest.approx(exact.load_ratio, rel=2e-5)
+            assert p["stable"]
+        assert points[-1]["load_factor"] == pytest.approx(1.2, abs=1e-12)
+    assert len(signs[1]) == len(signs[2]) == 1 and signs[1] == {-s for s in signs[2]}
+    one, two = ([p for p in summary["path"] if p["branch"] == b] for b in (1, 2))
+    for a, b in zip(one, two, strict=False):  # the same steps, mirrored
+        assert b["load_factor"] == pytest.approx(a["load_factor"], rel=1e-9)
+        assert b["tip"]["v"] == pytest.approx(-a["tip"]["v"], abs=1e-9)
+
+
+def test_a_path_that_cannot_go_on_exits_3_with_the_last_good_point(tmp_path, capsys):
+    """A stocky extensible column kept on its straight (unstable) path is squeezed until
+    1 + e = 0 (axial force EA at load factor 2): exit 3, the reason in the message, the points
+    up to there in summary.json and path.csv."""
+    config = load_config(EXAMPLES / "elastica_path.toml")
+    config["model"]["constraint"] = "none"
+    config["section"] |= {"b": 0.1, "h": 0.1}
+    config["loads"]["tip_force"] = [-0.5 * 1e7 * 0.01, 0.0]  # EA / 2
+    config["path"] |= {"branch_switch": "none", "max_load_factor": 10.0, "arc_length": 0.2}
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "stocky.toml", config)), "--out", str(out),
+                 "--quiet"]) == 3
+    error = capsys.readouterr().err
+    assert "inadmissible" in error and "Traceback" not in error
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and "1 + e" in summary["message"]
+    last = summary["path"][-1]
+    assert 1.9 < last["load_factor"] < 2.0  # Reissner: N = EA e, e -> -1 at lambda = 2
+    with open(out / "path.csv", newline="") as handle:
+        assert len(list(csv.DictReader(handle))) == len(summary["path"])
+    assert (out / "path.png").is_file()
+
+
+def test_path_model_layer_imports_no_fe_stack():
+    import subprocess
+    import sys
+
+    code = ("import sys, fe_beam.model.path; from fe_beam.config import validate, load_config;"
+            f"validate('path', load_config({str(EXAMPLES / 'elastica_path.toml')!r}));"
+            "print([m for m in ('dolfinx', 'petsc4py', 'mpi4py', 'ufl') if m in sys.modules])")
+    root = Path(__file__).resolve().parents[1]
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            cwd=root, env={"PYTHONPATH": str(root)}, check=True)
+    assert result.stdout.strip() == "[]"

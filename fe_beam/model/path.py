@@ -12,7 +12,7 @@ from fe_beam.config import NUMBER, ConfigError, Key, table
 __all__ = ["PARAMETERS", "PATH_KEYS", "PathSettings", "parse_path"]
 
 PARAMETERS = ("load_factor", "tension", "end_displacement")
-BRANCH_SWITCHES = ("none", "positive", "negative")
+BRANCH_SWITCHES = ("none", "positive", "negative", "both")
 MAX_PATH_STEPS = 100_000
 
 PATH_KEYS = {
@@ -23,8 +23,9 @@ PATH_KEYS = {
     "max_arc_length": Key(NUMBER, 0.0, "largest arc length as a multiple of the first (0: "
                           "10 times the first)"),
     "max_steps": Key((int,), 100, "largest number of path points (>= 1)"),
-    "branch_switch": Key((str,), "none", "none | positive | negative: at the first "
-                         "bifurcation, follow the bifurcated branch along +/- the critical mode"),
+    "branch_switch": Key((str,), "none", "none | positive | negative | both: at the "
+                         "first bifurcation, follow the bifurcated branch along +/- the critical "
+                         "mode (both: + then -)"),
     "tendon": Key((int,), 0, "parameter = tension: index of the tendon (0: the first)"),
     "tolerance": Key(NUMBER, 1e-6, "critical points located to this relative load factor"),
 }
