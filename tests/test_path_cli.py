@@ -84,11 +84,16 @@ def _finger(tmp_path, **path):
     return config
 
 
-def test_tendon_tension_path_equals_fe_beam_finger(tmp_path):
+@pytest.mark.parametrize("tip_force", [None, [0.0, -0.3]])
+def test_tendon_tension_path_equals_fe_beam_finger(tmp_path, tip_force):
+    """The tension of the flexor from 0 to 2 N (with a tip force: held in full, the path
+    starting from the state it bends alone) equals fe-beam finger at the path's tensions."""
     from fe_beam.config import validate
     from fe_beam.finger import run_finger
 
     config = _finger(tmp_path)
+    if tip_force:
+        config.setdefault("loads", {})["tip_force"] = tip_force
     out = tmp_path / "out"
     assert main(["path", str(_write(tmp_path / "finger.toml", config)), "--out", str(out),
                  "--quiet"]) == 0
@@ -107,7 +112,31 @@ def test_tendon_tension_path_equals_fe_beam_finger(tmp_path):
         for key in ("u", "v", "theta"):
             assert point["tip"][key] == pytest.approx(tip[key], abs=1e-8 * max(1.0, abs(
                 tip[key]))), key
-    assert path[len(path) // 2]["tip"]["theta"] > 0.05  # the finger bends
+    assert path[-1]["tip"]["theta"] - path[0]["tip"]["theta"] > 0.05  # the tendon bends it
+    if tip_force:
+        assert path[0]["tip"]["theta"] < -0.1  # the tip force alone, tendon slack
+
+
+def test_end_displacement_path_equals_fe_beam_static(tmp_path):
+    """parameter = "end_displacement": the prescribed tip deflection scaled from 0 to 1 ends
+    where fe-beam static (load stepping) ends."""
+    from fe_beam.config import validate
+    from fe_beam.static import solve_static
+
+    config = load_config(EXAMPLES / "elastica_path.toml")
+    config["model"]["constraint"] = "none"
+    config["loads"] = {"end_displacement": [-0.05, 0.3]}
+    config["path"] = {"parameter": "end_displacement", "arc_length": 0.25, "max_steps": 30}
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "d.toml", config)), "--out", str(out),
+                 "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["path"][-1]["load_factor"] == 1.0
+    config.pop("path")
+    tip = solve_static(validate("static", config).parsed, None, progress=False).steps[-1]["tip"]
+    assert tip["theta"] > 0.2
+    for key in ("u", "v", "theta"):
+        assert summary["path"][-1]["tip"][key] == pytest.approx(tip[key], abs=1e-9), key
 
 
 @pytest.mark.parametrize("changes, key", [
