@@ -130,9 +130,15 @@ def _path_plot(out, summary: dict) -> None:
     with figure(out / "path.png", 1, 3, figsize=(11, 3.6)) as (_, axes):
         for ax, key, label in zip(axes, ("u", "v", "theta"), ("tip u [m]", "tip v [m]",
                                                               "tip theta [rad]"), strict=True):
+            forks = [c for c in summary.get("critical_points", [])
+                     if c["kind"] == "bifurcation"]
             for a, b in zip(points[:-1], points[1:], strict=True):
                 if a["branch"] != b["branch"]:
-                    continue
+                    if not forks:
+                        continue
+                    # a switched branch starts at the bifurcation it left
+                    a = {"tip": forks[0]["tip"], "load_factor": forks[0]["load_factor"],
+                         "stable": b["stable"]}
                 unstable = a["stable"] is False or b["stable"] is False
                 ax.plot([a["tip"][key], b["tip"][key]], [a["load_factor"], b["load_factor"]],
                         "--" if unstable else "-", color=f"C{b['branch'] % 10}", lw=1.3)
@@ -144,8 +150,9 @@ def _path_plot(out, summary: dict) -> None:
             ax.set_xlabel(label)
             ax.set_ylabel("load factor")
             ax.grid(alpha=0.3)
-        if summary.get("critical_points"):
-            axes[0].legend(fontsize=7)
+        axes[0].plot([], [], "-", color="0.3", label="stable")
+        axes[0].plot([], [], "--", color="0.3", label="unstable")
+        axes[0].legend(fontsize=7)
 
 
 def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
@@ -159,11 +166,17 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
     from mpi4py import MPI
 
     from fe_beam import compat, exports, runctl
+    from fe_beam.config import ConfigError
     from fe_beam.continuation import Continuation, NonlinearParameterProblem
     from fe_beam.model.path import parse_path
     from fe_beam.outputs import BeamXDMFWriter
     from fe_beam.progress import ProgressBar
-    from fe_beam.static import StaticContinuation, check_beam_work
+    from fe_beam.static import (
+        STABILITY_MAX_DOFS,
+        StaticContinuation,
+        beam_dofs_estimate,
+        check_beam_work,
+    )
 
     comm = comm or MPI.COMM_WORLD
     started = time.perf_counter()
@@ -171,9 +184,19 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
     notes = check_beam_work(static, settings.max_steps, comm, " of path following",
                             quiet=out is None)
     loads = static.model.loads
-    if loads.follower or comm.size > 1:
-        notes.append("stability is not checked (follower loads or a parallel run): 'stable' and "
-                      "'energy_decreasing_directions' are null and bifurcations are not detected")
+    dofs = beam_dofs_estimate(static)
+    if comm.size > 1 or dofs > STABILITY_MAX_DOFS:
+        why = (f"on {comm.size} MPI ranks" if comm.size > 1 else
+               f"with {dofs} dofs (more than {STABILITY_MAX_DOFS})")
+        if settings.branch_switch != "none":
+            raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the stability "
+                              f"is not checked {why}, so no bifurcation is detected; run on one "
+                              "rank with a smaller [mesh], or use branch_switch = \"none\"")
+        notes.append(f"stability is not checked {why}: 'stable' and "
+                     "'energy_decreasing_directions' are null and bifurcations are not detected")
+    elif loads.follower:
+        notes.append("stability is not checked (follower loads): 'stable' and "
+                     "'energy_decreasing_directions' are null and bifurcations are not detected")
     run = StaticContinuation(static, comm, prefix="fe_beam_path_")
     problem = run.problem
     summary: dict = {"status": "running", "message": "", "parameter": settings.parameter,
