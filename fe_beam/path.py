@@ -180,7 +180,9 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
 
     comm = comm or MPI.COMM_WORLD
     started = time.perf_counter()
-    _, static, settings = parse_path(config)
+    kind, static, settings = parse_path(config)
+    if kind == "solid":
+        return _run_solid_path(static, settings, out, comm, progress, started)
     notes = check_beam_work(static, settings.max_steps, comm, " of path following",
                             quiet=out is None)
     loads = static.model.loads
@@ -291,4 +293,76 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
             compat.local_array(problem.w)[:] = state
         files.finish(content())
         run.destroy()
+    return summary
+
+
+def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
+    """`fe-beam path` of the 3D solid: arc length in the load factor (tip force and tensions
+    scaled together) from the undeformed state; no stability check, no critical points."""
+    import time
+
+    from fe_beam import exports, runctl
+    from fe_beam.continuation import ArcLength
+    from fe_beam.progress import ProgressBar
+    from fe_beam.solid.export import DisplacementXDMF
+    from fe_beam.solid.run import SolidRun, check_solid_work
+
+    notes = check_solid_work(config, comm, quiet=out is None)
+    notes.append("the 3D solid's stability is not checked along the path: 'stable' and "
+                 "'energy_decreasing_directions' are null and critical points are not located")
+    run = SolidRun(config, comm)
+    summary: dict = {"status": "running", "message": "", "model": "solid",
+                     "parameter": "load_factor", "max_load_factor": settings.max_load_factor,
+                     "path": [], "critical_points": [], "dofs": run.dofs, "notes": notes,
+                     "wall_time_s": 0.0}
+    writing = out is not None
+    if writing and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    writer = (DisplacementXDMF(run.problem, out / "path.xdmf")
+              if writing and config.output.xdmf else None)
+    columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
+                                     else r["tip"][n[4:]])) for name in PATH_CSV]
+
+    def content() -> dict:
+        summary["wall_time_s"] = time.perf_counter() - started
+        return summary
+
+    files = exports.Exports(
+        ([exports.XDMFExport(writer, "index")] if writer is not None else [])
+        + ([exports.CSVExport(out / "path.csv", columns),
+            exports.SummaryExport(out / "summary.json", content),
+            exports.PlotExport(lambda s: _path_plot(out, s) if config.output.plots else None)]
+           if writing else []), comm, throttle=False)
+    files.start(content())
+    bar = ProgressBar(comm, total=settings.max_steps, label="path (3D)", enabled=progress)
+
+    def record(load_factor: float) -> None:
+        run.load_factor = float(load_factor)
+        entry = {"load_factor": float(load_factor), "tip": run.tip(), "stable": None,
+                 "energy_decreasing_directions": None, "branch": 0,
+                 "index": len(summary["path"]), "tension": None}
+        summary["path"].append(entry)
+        files.on_step(entry)
+        bar.update(min(len(summary["path"]) - 1, settings.max_steps),
+                   f"load factor {load_factor:.4g}")
+
+    engine = run.problem.engine()
+    engine.parameter = 0.0
+    try:
+        record(0.0)
+        engine.arc_length_path(ArcLength(**settings.arc_length_settings()),
+                               on_converged=lambda point: record(point.load_factor))
+        summary["status"] = "converged"
+    except ContinuationFailed as failure:
+        summary["status"] = "failed"
+        summary["message"] = f"path stopped at load factor {run.load_factor:.6g}: {failure}"
+    except runctl.Interrupted as stop:
+        last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
+        status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+        summary["status"], summary["message"] = status["status"], status["message"]
+        raise
+    finally:
+        bar.close()
+        files.finish(content())
     return summary

@@ -152,7 +152,7 @@ def test_end_displacement_path_equals_fe_beam_static(tmp_path):
     ({"path": {"parameter": "end_displacement"}}, "end_displacement"),
     ({"loads": {"tip_force": [0.0, 0.0]}}, "[loads]"),
     ({"loads": {"tip_force": [-0.02, 0.0], "follower": True}}, "stability is not checked"),
-    ({"solid": {"mesh_size": 0.01}}, "not available yet"),
+    ({"solid": {"mesh_size": 0.01}}, "stability of the 3D solid is not checked"),
     ({"mesh": {"elements": 200}}, "stability is not checked with"),
     ({"tendons": [{"name": "t", "offset_base": 0.002, "offset_tip": 0.002,
                    "pull_in": 0.001}]}, "pull-in"),
@@ -280,3 +280,29 @@ def test_path_model_layer_imports_no_fe_stack():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             cwd=root, env={"PYTHONPATH": str(root)}, check=True)
     assert result.stdout.strip() == "[]"
+
+
+def test_solid_path_ends_where_fe_beam_solid_ends(tmp_path):
+    """The 3D finger (coarse, linear elements): the arc-length path in the load factor ends at
+    load factor 1 on the state `fe-beam solid` reaches by load stepping; stability not
+    checked (null, with a note)."""
+    config = load_config(EXAMPLES / "finger_solid.toml")
+    config.pop("compare")
+    config["solid"] |= {"mesh_size": 0.02, "order": 1}
+    config["mesh"]["elements"] = 8
+    solid = _write(tmp_path / "solid.toml", config)
+    assert main(["solid", str(solid), "--out", str(tmp_path / "solid"), "--quiet"]) == 0
+    reference = json.loads((tmp_path / "solid" / "summary.json").read_text())["steps"][-1]
+    config["path"] = {"arc_length": 0.25, "max_steps": 20}
+    path = _write(tmp_path / "path.toml", config)
+    assert main(["path", str(path), "--out", str(tmp_path / "path"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "path" / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["model"] == "solid"
+    last = summary["path"][-1]
+    assert last["load_factor"] == reference["load_factor"] == 1.0
+    assert len(summary["path"]) >= 3 and last["stable"] is None
+    assert any("not checked" in note for note in summary["notes"])
+    assert reference["tip"]["theta"] > 0.05
+    for key in ("u", "v", "theta"):
+        assert last["tip"][key] == pytest.approx(reference["tip"][key], abs=1e-9), key
+    assert (tmp_path / "path" / "path.xdmf").is_file()

@@ -77,13 +77,13 @@ class PathSettings:
 
 def parse_path(config: dict):
     """("rod", StaticConfig, PathSettings): [[tendons]] make it a finger (tension-controlled
-    tendons only), otherwise the statics configuration. ConfigError (one sentence naming the
+    tendons only), otherwise the statics configuration; ("solid", SolidConfig, PathSettings)
+    with [solid] (load factor only, no stability check). ConfigError (one sentence naming the
     key) for what the path cannot follow."""
     settings = PathSettings(**table(config, "path", PATH_KEYS))
     rest = {key: value for key, value in config.items() if key != "path"}
     if "solid" in rest:
-        raise ConfigError("[solid]: fe-beam path of the 3D solid is not available yet; leave out "
-                          "[solid] to follow the rod's path")
+        return "solid", _solid(rest, settings), settings
     if rest.get("tendons"):
         from fe_beam.model.finger import parse_finger
 
@@ -131,3 +131,30 @@ def parse_path(config: dict):
         raise ConfigError("[loads] are all zero: fe-beam path needs a load to follow "
                           "(tip_force, point_forces, end_displacement, ... or tendon tensions)")
     return "rod", static, settings
+
+
+def _solid(rest: dict, settings: PathSettings):
+    """The 3D solid's configuration: the load factor scales the tip force and the tendon
+    tensions; its stability is not checked (no critical points, no branch switching)."""
+    from fe_beam.solid.config import parse_solid
+
+    if settings.parameter != "load_factor":
+        raise ConfigError(f"[path] parameter = {settings.parameter!r}: the path of the 3D solid "
+                          "takes parameter = \"load_factor\" only (tip force and tensions "
+                          "scaled together); leave out [solid] for the rod's")
+    if settings.branch_switch != "none":
+        raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the stability of "
+                          "the 3D solid is not checked along the path, so no bifurcation is "
+                          "detected; use branch_switch = \"none\", or leave out [solid] for the "
+                          "rod's path")
+    solid = parse_solid(rest)
+    pulled = [name for name, load in zip(solid.tendon_names, solid.tendon_loads, strict=False)
+              if load.pull_in]
+    if pulled:
+        raise ConfigError(f"[[tendons]] {pulled[0]!r} is pull-in controlled: fe-beam path "
+                          "follows tensions only (arc length does not take pull-in control); "
+                          "give the tendon a tension instead of pull_in")
+    if not (any(solid.tip_force) or any(load.tension for load in solid.tendon_loads)):
+        raise ConfigError("[loads] tip_force and the tendon tensions are all zero: fe-beam path "
+                          "of the 3D solid needs a load to follow")
+    return solid
