@@ -50,7 +50,7 @@ COMMANDS = {
     "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
                  "points (--data DATA.csv), with standard errors",
     "buckling": "linear buckling load factors and modes of the rod or the 3D solid ([buckling])",
-    "path": "arc-length path following with limit and bifurcation points of the rod ([path])",
+    "path": "arc-length path following with limit and bifurcation points ([path])",
 }
 
 

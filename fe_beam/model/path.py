@@ -1,5 +1,5 @@
-"""The [path] table of `fe-beam path` and the parsing of a path-following configuration (rod or
-finger), without the finite-element stack (docs/theory.md, Path following from the command
+"""The [path] table of `fe-beam path` and the parsing of a path-following configuration (rod,
+finger or 3D solid), without the finite-element stack (docs/theory.md, Path following from the command
 line)."""
 
 from __future__ import annotations
