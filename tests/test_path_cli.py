@@ -342,3 +342,30 @@ def test_path_on_two_ranks_equals_the_serial_path(tmp_path_factory):
     if comm.size > 1:
         assert all(p["stable"] is None for p in summary["path"])
         assert any("not checked" in note for note in summary["notes"])
+
+
+@serial
+def test_limit_point_of_the_nonstandard_law_is_reported(tmp_path):
+    """Pure bending of the unconstrained non-standard law, M = EI kappa (1 - 0.3 h^2 kappa^2):
+    the tip moment's maximum 2 / (3 sqrt(0.9)) EI / h is a limit point, reported with kind
+    "limit" at that load factor (1e-6); the path beyond it is unstable."""
+    E, h = 1.0e7, 0.2
+    EI = E * h**4 / 12
+    config = {
+        "beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": h, "h": h},
+        "material": {"E": E, "nu": 0.3}, "model": {"law": "nonstandard"},
+        "mesh": {"elements": 8, "degree": 2}, "loads": {"tip_moment": 0.5 * EI / h},
+        "path": {"max_load_factor": 2.0, "arc_length": 0.1, "max_arc_length": 10.0,
+                 "max_steps": 24},
+    }
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "m.toml", config)), "--out", str(out),
+                 "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    (point,) = summary["critical_points"]
+    assert point["kind"] == "limit" and "mode" not in point
+    assert point["load_factor"] == pytest.approx(2 / (3 * math.sqrt(0.9)) / 0.5, rel=1e-6)
+    beyond = [p for p in summary["path"] if p["tip"]["theta"] > point["tip"]["theta"]]
+    assert beyond and not any(p["stable"] for p in beyond)
+    assert all(p["stable"] for p in summary["path"] if p not in beyond)
+    assert (out / "path.png").is_file()
