@@ -50,6 +50,7 @@ COMMANDS = {
     "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
                  "points (--data DATA.csv), with standard errors",
     "buckling": "linear buckling load factors and modes of the rod or the 3D solid ([buckling])",
+    "path": "arc-length path following with limit and bifurcation points ([path])",
 }
 
 
@@ -304,6 +305,27 @@ def run_buckling_command(args, config: dict, comm) -> int:
 
 
 RUNNERS["buckling"] = run_buckling_command
+
+
+def run_path_command(args, config: dict, comm) -> int:
+    from fe_beam.path import run_path
+
+    summary = run_path(config, args.out, comm, progress=not args.quiet)
+    for note in summary.get("notes", []):
+        _say(comm, f"fe-beam path: note: {note}", sys.stderr)
+    for point in summary["critical_points"]:
+        tip = point["tip"]
+        _say(comm, f"{point['kind']} point at load factor {point['load_factor']:.8g}: tip u = "
+                   f"{tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+    _say(comm, f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
+               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
+    if summary["status"] != "converged":
+        _say(comm, f"fe-beam path: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+RUNNERS["path"] = run_path_command
 
 
 def run_solid_command(args, config: dict, comm) -> int:

@@ -138,6 +138,7 @@ OTHER_TABLES = (
     "calibrate",
     "buckling",
     "validity",
+    "path",
 )
 
 
@@ -564,6 +565,7 @@ COMMAND_TABLES = {
     "calibrate": ("tendons", "inverse", "calibrate"),
     "buckling": ("tendons", "solid", "buckling"),
     "validity": ("tendons", "solid", "compare", "validity"),
+    "path": ("tendons", "solid", "path"),
 }
 REFUSED_UNUSED = ("tendons", "inverse")
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
@@ -666,7 +668,7 @@ class Validated:
 
 
 COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
-            "design", "buckling", "validity")
+            "design", "buckling", "validity", "path")
 
 
 def _solver_settings(parsed) -> list:
@@ -718,6 +720,10 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         from fe_beam.model.validity import parse_validity
 
         parsed = parse_validity(config)
+    elif command == "path":
+        from fe_beam.model.path import parse_path
+
+        parsed = parse_path(config)
     elif command == "calibrate":
         from fe_beam.calibrate import parse_calibrate
         from fe_beam.model.finger import parse_finger
