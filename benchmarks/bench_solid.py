@@ -420,15 +420,17 @@ def up_sweep(size: float, solver: str = "fieldsplit", newton_cap: int | None = N
 
     stepping = LoadStepping(steps=UP_STEPS, max_increment=min(1.0, STEP_GROWTH / UP_STEPS))
     problem.comm.barrier()
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     run_load_stepping(problem.solver, problem.set_load_factor, stepping, on_converged=on_step,
                       progress=False)
     seconds = time.perf_counter() - started
+    cpu = problem.comm.allreduce(time.process_time() - cpu, op=MPI.MAX)
     newton = sum(r["newton"] for r in records)
     krylov = sum(r["krylov"] for r in records)
     result = {"size": size, "dofs": dofs_of(problem), "solver": solver,
               "resolved": problem.linear_solver, "ranks": problem.comm.size,
-              "meshing_s": meshing, "seconds": seconds, "load_steps": len(records),
+              "meshing_s": meshing, "seconds": seconds, "cpu_s_max_rank": cpu,
+              "load_steps": len(records),
               "newton_iterations": newton, "krylov_iterations": krylov, "steps": records,
               "tip_displacement": problem.tip_displacement().tolist(),
               "peak_rss_gib": peak_rss_gib(problem.comm)}

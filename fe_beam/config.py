@@ -421,6 +421,9 @@ def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
     solver.pop("allow_large")  # read from the raw table by the drivers (fe_beam.runctl)
     if not jump > 0:
         raise ConfigError(f"[solver] max_rotation_jump must be > 0; got {jump!r}")
+    if solver.get("linear_solver") == "fieldsplit":  # the solid's u-p solver: rods have no blocks
+        raise ConfigError("[solver] linear_solver = \"fieldsplit\" is the 3D solid's u-p solver "
+                          "([solid] solver); the rod takes auto | mumps | lu | gamg | gmres-ilu")
     return _wrap(SolverSettings, **solver), stepping, float(jump)
 
 

@@ -136,6 +136,7 @@ CASES = {
         {"solver.linear_solver": "gamg", "model.constraint": "inextensible"},
         ("solver", "linear_solver"),
     ),
+    "fieldsplit for the rod": ({"solver.linear_solver": "fieldsplit"}, ("solver", "linear_solver")),
     "PETSc LU with multipliers": (
         {"solver.linear_solver": "lu", "model.constraint": "unshearable"},
         ("solver", "linear_solver"),

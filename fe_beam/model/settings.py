@@ -132,7 +132,11 @@ INEXACT_NEWTON = {"snes_ksp_ew": "true", "snes_ksp_ew_rtolmax": 0.1}
 # [[A, 0], [B, S]]^-1 with A^-1 ~ one GAMG V-cycle (rigid-body near-nullspace) and
 # S = -B A^-1 B^T - M/kappa ~ -(1/mu + 1/kappa) M_p (pressure mass matrix, given by
 # `fe_beam.solid.problem` as the user Schur preconditioner), applied by Jacobi.
+# The preconditioner (GAMG hierarchy, extracted blocks) is rebuilt every 3rd Newton iteration
+# of a load step: FGMRES still runs on the current Jacobian, so the Newton steps and the
+# equilibrium are unchanged, and the Krylov count barely moves (measured, benchmarks/README.md).
 FIELDSPLIT_OPTIONS = {
+    "snes_lag_preconditioner": 3,
     "ksp_type": "fgmres",
     "ksp_gmres_restart": 200,
     "ksp_max_it": 1000,
