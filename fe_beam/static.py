@@ -302,11 +302,31 @@ def solve_static(
         raise
     finally:
         realtime.release(run)
-        result.notes = run.watch.notes()
+        result.notes = run.watch.notes() + compressed_tendon_notes(tendons, result.steps)
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
+
+
+def compressed_tendon_notes(tendons, steps: list[dict]) -> list[str]:
+    """A note per pull-in controlled tendon that needed a compressive (negative) tension at
+    some converged step: a tendon cannot push (it would go slack), so those states are not
+    the tendon-driven rod's."""
+    notes = []
+    for i, tendon in enumerate(getattr(tendons, "tendons", None) or ()):
+        if not tendon.controlled_by_pull_in:
+            continue
+        values = [(s["tensions"][i], s["load_factor"]) for s in steps if "tensions" in s]
+        scale = max([abs(t) for t, _ in values] + [1e-300])
+        pushed = [(t, f) for t, f in values if t < -1e-9 * scale]
+        if pushed:
+            low, factor = min(pushed)
+            notes.append(
+                f"tendon '{tendon.name}': its pull_in needs a compressive tension (down to "
+                f"{low:.4g} N at load factor {factor:.4g}); a tendon cannot push (it would go "
+                "slack), so those states hold only for a rod pushed along the tendon's path")
+    return notes
 
 
 def beam_dofs_estimate(config: StaticConfig) -> int:

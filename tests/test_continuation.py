@@ -442,3 +442,27 @@ def test_arc_length_refuses_pull_in_control_and_the_bordered_pull_in_keeps_the_l
             run.engine().arc_length_path(ArcLength())
     finally:
         run.destroy()
+
+
+@pytest.mark.parametrize("offset, compressed", [(0.004, True), (-0.004, False)])
+def test_pull_in_needing_a_compressive_tension_is_noted(offset, compressed):
+    """A tip force bending the rod toward the tendon shortens its path: holding pull_in = 0 then
+    needs a pushing (negative) tension, which a tendon cannot give. The bordered pull-in solves
+    it (exit 0, formerly without a word); summary notes say so. Away from the tendon: a pulling
+    tension and no note."""
+    from beam_cases import cantilever
+
+    from fe_beam import SolverSettings
+    from fe_beam.config import StaticConfig
+    from fe_beam.static import solve_static
+    from fe_beam.tendons import Tendon
+
+    tendon = Tendon(paths=(((0.0, offset), (1.0, offset)),), pull_in=0.0)
+    model = cantilever(elements=8, constraint="none", tip_force=(0.0, 1e-3))
+    config = StaticConfig(model, SolverSettings(), LoadStepping(steps=2), tendons=(tendon,))
+    result = solve_static(config, out=None, progress=False)
+    assert result.status == "converged"
+    tension = result.steps[-1]["tensions"][0]
+    assert (tension < 0) == compressed and abs(tension) > 1e-3
+    notes = [n for n in result.notes if "compressive tension" in n]
+    assert len(notes) == int(compressed)

@@ -90,6 +90,9 @@ BAD = [
     ({"second_mesh_ratio": 1.0}, "second_mesh_ratio"),
     ({"lawz": ["reissner"]}, "[validity] unknown key"),
     ({"laws": ["euler"]}, "[validity] laws"),
+    # refused up front (parsing 300 x 300 points alone took over 15 min, deaf to one SIGTERM)
+    ({"x_values": [1 + k / 1000 for k in range(300)],
+      "y_values": [0.3 + k / 1e4 for k in range(300)]}, "90000 points"),
 ]
 
 

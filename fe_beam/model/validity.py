@@ -53,6 +53,8 @@ VALIDITY_KEYS = {
                    "under mpirun the ranks share the points)"),
 }
 MAX_WORKERS = 64
+#: the most points a map may have (every point is a 3D solve; refused before any is parsed)
+MAX_POINTS = 1000
 #: tables a map axis cannot name (they configure the map itself or are replaced per point)
 NOT_AXES = ("validity", "compare", "refine", "output")
 #: keys of the 3D solid's tables beyond `SCHEMA` (their defaults exist without being written)
@@ -257,6 +259,10 @@ def parse_validity(raw: dict) -> ValidityConfig:
         if y == given["x"]:
             raise ConfigError(f"[validity] y = {y!r} is the same key as x; choose another")
         y_values = _values("y_values", given["y_values"])
+    count = len(x_values) * len(y_values or (None,))
+    if count > MAX_POINTS:
+        raise ConfigError(f"[validity] x_values and y_values make {count} points; a map takes at "
+                          f"most {MAX_POINTS} (every point is a 3D solve)")
     laws = given["laws"]
     from fe_beam.model.compare import RODS
 
