@@ -1,6 +1,6 @@
 """The [path] table of `fe-beam path` and the parsing of a path-following configuration (rod,
-finger or 3D solid), without the finite-element stack (docs/theory.md, Path following from the command
-line)."""
+finger or 3D solid), without the finite-element stack (docs/theory.md, Path following from the
+command line)."""
 
 from __future__ import annotations
 

@@ -340,6 +340,14 @@ def parse_solid(raw: dict) -> SolidConfig:
     )
     rod = _rod_static(raw, law, section, tip_force)
     paths, tendon_loads, owners, names = _cables(rod, b)
+    pulled = [name for name, load in zip(names, tendon_loads, strict=True)
+              if load.controlled_by_pull_in]
+    if pulled and solid["solver"] in ("gamg", "fieldsplit"):
+        # the pull-in constraint's bordered Newton stalls with the Krylov solvers (hundreds of
+        # tiny load steps, measured); "auto" takes MUMPS for it
+        raise ConfigError(f"[solid] solver = \"{solid['solver']}\" does not work with pull-in "
+                          f"control yet ([[tendons]] {pulled[0]!r} has pull_in): use solver = "
+                          "\"auto\" or \"mumps\", or give the tendon a tension")
     try:
         geometry = FingerGeometry(length, b, h, h_tip, tendons=paths)
     except ValueError as error:

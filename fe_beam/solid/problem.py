@@ -234,10 +234,15 @@ class SolidFingerProblem:
             self.problem.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         dofs = self.W.dofmap.index_map.size_global * self.W.dofmap.index_map_bs
         #: the linear solver actually used ("mumps", "gamg" or "fieldsplit"; "auto" resolved)
-        self.linear_solver = resolve_solid_solver(self.settings.linear_solver, self.p is not None,
-                                                  dofs)
+        pull_in = any(t.controlled_by_pull_in for t in self.tendon_loads)
+        # pull-in control solves bordered systems with the Newton's KSP (tension updates from
+        # extra solves): an inexact Krylov solve there stalls it (hundreds of tiny steps,
+        # measured), so "auto" keeps MUMPS and an iterative solver runs without inexact Newton
+        self.linear_solver = resolve_solid_solver(
+            self.settings.linear_solver, self.p is not None,
+            dofs if not pull_in or self.settings.linear_solver != "auto" else 0)
         settings = replace(self.settings, linear_solver=self.linear_solver)
-        if self.linear_solver != "mumps":  # inexact Newton unless the user says otherwise
+        if self.linear_solver != "mumps" and not pull_in:  # inexact Newton unless told otherwise
             settings = replace(settings,
                                petsc_options=INEXACT_NEWTON | dict(settings.petsc_options))
         nullspace = None

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
-from test_solid_driver import FINGER, assert_usage_error, edited, run_cli, shared_folder
+from test_solid_driver import DROP, FINGER, assert_usage_error, edited, run_cli, shared_folder
 
 from fe_beam import compat
 from fe_beam.model.settings import (
@@ -159,4 +159,17 @@ def test_bad_solver_exits_2_naming_the_key_and_the_choices(tmp_path, value):
     if MPI.COMM_WORLD.rank == 0:
         assert all(name in stderr for name in SOLID_LINEAR_SOLVERS), stderr
         assert repr(value) in stderr
+    assert not (out / "summary.json").exists()
+
+
+@pytest.mark.parametrize("value", ["fieldsplit", "gamg"])
+def test_krylov_solver_with_pull_in_control_exits_2(tmp_path, value):
+    """The pull-in constraint's bordered Newton stalled with the Krylov solvers (140 tiny load
+    steps in 200 s where MUMPS takes 8 in 9 s): refused, naming the key and the tendon."""
+    config = edited(FINGER, {"solid.solver": value, "tendons.tension": DROP,
+                             "tendons.pull_in": 0.003})
+    code, _, stderr, out = run_cli("solid", shared_folder(tmp_path), config)
+    assert_usage_error(code, stderr, "solid", "[solid] solver")
+    if MPI.COMM_WORLD.rank == 0:
+        assert "pull_in" in stderr and "auto" in stderr, stderr
     assert not (out / "summary.json").exists()
