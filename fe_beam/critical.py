@@ -19,7 +19,9 @@ Built on the continuation engine `fe_beam.continuation.Continuation` (its ``snap
 
 The tangent's inertia comes from a dense eigenvalue problem (serial, up to
 `fe_beam.static.STABILITY_MAX_DOFS` dofs, the same restriction to constraint-preserving
-directions and Jacobi scaling as `fe_beam.static.StaticContinuation.stability`).
+directions and Jacobi scaling as `fe_beam.static.StaticContinuation.stability`); on several
+ranks or beyond that size from a sparse MUMPS LDL^T factorisation (`fe_beam.inertia`): the
+count only (no eigenvalues, no mode), and bisection then decides on the counts.
 """
 
 from __future__ import annotations
@@ -54,7 +56,8 @@ class Spectrum:
     ``unstable``: count of negative eigenvalues (energy-decreasing directions); ``values``:
     the eigenvalues (Jacobi-scaled, ascending); ``mode``: the eigenvector of the eigenvalue of
     smallest magnitude as local dofs of the state (multipliers 0), scaled to unit max over
-    the u, v, theta dofs."""
+    the u, v, theta dofs. From the sparse inertia (parallel, large): ``values`` empty and
+    ``mode`` None."""
 
     unstable: int
     values: np.ndarray
@@ -84,17 +87,21 @@ class CriticalPoint:
 
 def spectrum(run, with_mode: bool = False) -> Spectrum | None:
     """The tangent's spectrum at ``run``'s current state (a `fe_beam.static.StaticContinuation`);
-    None when not available (parallel, too large, follower loads or pull-in control: the
-    cases `StaticContinuation.stability` declines)."""
+    None when not available (follower loads or pull-in control: the tangent is not that of an
+    energy). On several ranks or beyond STABILITY_MAX_DOFS dofs: the count from the sparse
+    inertia (`fe_beam.inertia.rod_unstable_count`), no eigenvalues, no mode."""
     from fe_beam.static import STABILITY_MAX_DOFS
 
     problem, nonlinear = run.problem, run.snes.problem
     pull_in = run.tendons is not None and any(
         t.controlled_by_pull_in for t in run.tendons.tendons)
     size = problem.global_dofs
-    if (problem.comm.size > 1 or size > STABILITY_MAX_DOFS or pull_in
-            or run.config.model.loads.follower):
+    if pull_in or run.config.model.loads.follower:
         return None
+    if problem.comm.size > 1 or size > STABILITY_MAX_DOFS:
+        from fe_beam.inertia import rod_unstable_count
+
+        return Spectrum(rod_unstable_count(run), np.empty(0), None)
     state = compat.vector_of(nonlinear.w).copy()
     try:
         nonlinear.jacobian(None, state, nonlinear.A, nonlinear.A)
@@ -166,8 +173,12 @@ def locate_bifurcation(run, engine, before: Snapshot, after: Snapshot, unstable_
             break
         middle = 0.5 * (low + high)
         engine.solve_at(middle, low_state, emit=False)
-        values = spectrum(run).values
-        if (values[index] < 0) != negative_after:
+        trial = spectrum(run)
+        if trial.values.size:
+            crossed = (trial.values[index] < 0) == negative_after
+        else:  # the sparse inertia: the count alone (one eigenvalue crosses in the bracket)
+            crossed = trial.unstable != unstable_before
+        if not crossed:
             low, low_state = middle, engine.snapshot()
         else:
             high, high_state = middle, engine.snapshot()

@@ -191,11 +191,12 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         why = (f"on {comm.size} MPI ranks" if comm.size > 1 else
                f"with {dofs} dofs (more than {STABILITY_MAX_DOFS})")
         if settings.branch_switch != "none":
-            raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the stability "
-                              f"is not checked {why}, so no bifurcation is detected; run on one "
-                              "rank with a smaller [mesh], or use branch_switch = \"none\"")
-        notes.append(f"stability is not checked {why}: 'stable' and "
-                     "'energy_decreasing_directions' are null and bifurcations are not detected")
+            raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the critical "
+                              f"mode is not computed {why} (the stability is a sparse count "
+                              "only); run on one rank with a smaller [mesh], or use "
+                              "branch_switch = \"none\"")
+        notes.append(f"stability from the sparse inertia {why}: bifurcations are located, "
+                     "without their critical mode")
     elif loads.follower:
         notes.append("stability is not checked (follower loads): 'stable' and "
                      "'energy_decreasing_directions' are null and bifurcations are not detected")

@@ -191,15 +191,16 @@ class StaticContinuation:
         return check
 
     def stability(self) -> dict | None:
-        """Is the current equilibrium stable? The inertia of the tangent stiffness (dense, so
-        only for serial problems up to STABILITY_MAX_DOFS dofs; None when not checked, or when
-        the loads are not conservative: follower forces, pull-in control).
+        """Is the current equilibrium stable? The inertia of the tangent stiffness (dense for
+        serial problems up to STABILITY_MAX_DOFS dofs, else a sparse parallel MUMPS LDL^T:
+        `fe_beam.inertia`); None when the loads are not conservative (follower forces, pull-in
+        control).
 
         With multipliers, the tangent stiffness is restricted to the directions that keep the
         constraints. A negative eigenvalue is a direction in which the energy decreases: the
         beam would buckle or snap away from this state.
         """
-        from fe_beam.critical import spectrum  # the dense inertia (critical imports static)
+        from fe_beam.critical import spectrum  # the inertia (critical imports static)
 
         result = spectrum(self)
         if result is None:
