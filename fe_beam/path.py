@@ -299,18 +299,22 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
 
 def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
     """`fe-beam path` of the 3D solid: arc length in the load factor (tip force and tensions
-    scaled together) from the undeformed state; no stability check, no critical points."""
+    scaled together) from the undeformed state; the stability from the sparse inertia (tip force
+    only), no critical points."""
     import time
 
     from fe_beam import exports, runctl
     from fe_beam.continuation import ArcLength
+    from fe_beam.inertia import solid_unstable_count
     from fe_beam.progress import ProgressBar
     from fe_beam.solid.export import DisplacementXDMF
     from fe_beam.solid.run import SolidRun, check_solid_work
 
     notes = check_solid_work(config, comm, quiet=out is None)
-    notes.append("the 3D solid's stability is not checked along the path: 'stable' and "
-                 "'energy_decreasing_directions' are null and critical points are not located")
+    notes.append("the 3D solid's stability is the sparse inertia of its potential's Hessian "
+                 "(fe_beam.inertia.solid_unstable_count), not checked while a tendon is "
+                 "tensioned (null: the cable stiffness is not in it); critical points are not "
+                 "located")
     run = SolidRun(config, comm)
     summary: dict = {"status": "running", "message": "", "model": "solid",
                      "parameter": "load_factor", "max_load_factor": settings.max_load_factor,
@@ -340,8 +344,10 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
 
     def record(load_factor: float) -> None:
         run.load_factor = float(load_factor)
-        entry = {"load_factor": float(load_factor), "tip": run.tip(), "stable": None,
-                 "energy_decreasing_directions": None, "branch": 0,
+        count = solid_unstable_count(run.problem)
+        entry = {"load_factor": float(load_factor), "tip": run.tip(),
+                 "stable": None if count is None else count == 0,
+                 "energy_decreasing_directions": count, "branch": 0,
                  "index": len(summary["path"]), "tension": None}
         summary["path"].append(entry)
         files.on_step(entry)

@@ -200,3 +200,22 @@ def test_3d_column_count_on_all_ranks():
     first = _factors("mixed-up")[0]
     run = _solid_at(_column("mixed-up"), 1.1 * first, MPI.COMM_WORLD)
     assert solid_unstable_count(run.problem) == 1
+
+
+@pytest.mark.mpi
+def test_3d_column_path_reports_stability():
+    """`fe-beam path` of the 3D column (tip force only): stable below `fe-beam buckling`'s
+    first load factor, one energy-decreasing direction past it (on any number of ranks)."""
+    from fe_beam.path import run_path
+
+    first, second = _factors("displacement")
+    config = _column()
+    config.pop("buckling")
+    config["path"] = {"arc_length": 0.1, "max_steps": 30, "max_load_factor": 1.3 * first}
+    summary = run_path(config, None, MPI.COMM_WORLD, progress=False)
+    assert summary["status"] == "converged"
+    counts = [(p["load_factor"], p["energy_decreasing_directions"], p["stable"])
+              for p in summary["path"]]
+    assert all(n == (0 if f < first else 1) and s == (n == 0) for f, n, s in counts
+               if f < second), counts
+    assert {n for _, n, _ in counts} == {0, 1}
