@@ -219,3 +219,26 @@ def test_3d_column_path_reports_stability():
     assert all(n == (0 if f < first else 1) and s == (n == 0) for f, n, s in counts
                if f < second), counts
     assert {n for _, n, _ in counts} == {0, 1}
+
+
+@pytest.mark.mpi
+def test_bifurcation_located_from_counts_on_all_ranks():
+    """A perfect column on the ranks of COMM_WORLD (sparse counts in parallel: bisection on
+    the count alone) locates the same bifurcation as on one rank (dense eigenvalue sign)."""
+    from pathlib import Path
+
+    from fe_beam.config import load_config
+    from fe_beam.path import run_path
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    config = load_config(examples / "elastica_path.toml")
+    config["loads"]["tip_force"] = [-0.02, 0.0]
+    config["path"] |= {"branch_switch": "none", "max_load_factor": 1.5, "max_steps": 30}
+    reference = run_path(config, None, MPI.COMM_SELF, progress=False)
+    summary = run_path(config, None, MPI.COMM_WORLD, progress=False)
+    (expected,) = [c for c in reference["critical_points"] if c["kind"] == "bifurcation"]
+    (found,) = [c for c in summary["critical_points"] if c["kind"] == "bifurcation"]
+    assert found["load_factor"] == pytest.approx(expected["load_factor"], rel=2e-6)
+    # (the step sizes may differ: Newton's iteration counts on the straight branch do)
+    assert all(p["energy_decreasing_directions"] == (p["load_factor"] > found["load_factor"])
+               for p in summary["path"])
