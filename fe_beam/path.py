@@ -276,6 +276,9 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         record = dict(entry)
         record["index"] = len(summary["path"])
         record["tension"] = None if tension is None else entry["load_factor"] * tension
+        if settings.parameter == "point_force":  # where the (first) point force pushes
+            at = loads.point_forces[0][0]
+            record["point"] = {"x": at, **problem.point_values(at)}
         summary["path"].append(record)
         summary["critical_points"] = [c.summary() for c in result.critical_points]
         files.on_step(record)
@@ -303,13 +306,24 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         run._engine = Continuation(NonlinearParameterProblem(
             run.solver, pull, check_step=run._step_check(), metric=run._metric()), 0.0)
         pull(0.0)
+    unreached = None
     if settings.parameter == "point_force":
-        point_force_control(run, static, progress=progress)
+        try:
+            point_force_control(run, static, progress=progress)
+        except ContinuationFailed as failure:  # exit 3 with the reason, not a traceback
+            unreached = f"the state without the point forces was not reached: {failure}"
+            if "inextensible" in static.model.options.constraint:
+                unreached += (" (an inextensible beam cannot start from a straight shortened "
+                              "state; use constraint = \"unshearable\" or \"none\" and an "
+                              "imperfection)")
     from fe_beam.continuation import ArcLength
 
     arc = ArcLength(**settings.arc_length_settings())
     result = None
     try:
+        if unreached is not None:
+            summary["status"], summary["message"] = "failed", unreached
+            return summary
         result = follow_path(run, arc, settings.branch_switch, settings.tolerance, on_point)
         summary["status"], summary["message"] = result.status, result.message
         if result.status == "failed":

@@ -104,7 +104,7 @@ def _snap_path(elements: int, max_steps: int = 70):
 def reference():
     from fe_beam.analytic import snap_through_symmetric
 
-    return snap_through_symmetric(SHORTENING, points=31)
+    return snap_through_symmetric(SHORTENING, points=25)
 
 
 def test_snap_through_limit_point_and_path_against_elastica(reference):
@@ -173,3 +173,64 @@ def test_snap_through_load_control_agrees_with_arc_length_on_the_stable_part():
             assert np.linalg.norm(engine.state - state) <= 1e-8 * np.linalg.norm(state)
     finally:
         run.destroy()
+
+
+def _cli_config(tmp_path, name: str, changes: dict):
+    from pathlib import Path
+
+    from tomlio import dump_toml
+
+    from fe_beam.config import load_config
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    config = load_config(examples / name)
+    for key, values in changes.items():
+        config.setdefault(key, {}).update(values)
+    path = tmp_path / "config.toml"
+    path.write_text(dump_toml(config))
+    return path
+
+
+def test_snap_through_example_runs_through_and_back(tmp_path):
+    """examples/snap_through.toml (shortened): `fe-beam path` with parameter = "point_force"
+    holds the end shortening while the point force grows: the midspan starts on the upper
+    buckled state at zero force, the force turns at a limit point, and the beam ends on the
+    lower side; summary.json "point" is the midspan."""
+    import json
+
+    from fe_beam.cli import main
+
+    path = _cli_config(tmp_path, "snap_through.toml", {"path": {"max_steps": 20}})
+    out = tmp_path / "out"
+    assert main(["path", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged" and summary["parameter"] == "point_force"
+    points = summary["path"]
+    assert points[0]["load_factor"] == 0.0 and points[0]["point"]["x"] == 0.5
+    assert points[0]["point"]["v"] > 0.05 and points[0]["stable"]
+    assert points[0]["tip"]["u"] == pytest.approx(-0.01, abs=1e-12)  # held in full
+    assert points[-1]["point"]["v"] < 0 and points[-1]["load_factor"] < 0
+    assert [c["kind"] for c in summary["critical_points"]].count("limit") >= 1
+
+
+@pytest.mark.parametrize("changes, key", [
+    ({"loads": {"point_forces": []}}, "point_forces"),
+    ({"loads": {"point_forces": [[0.5, 0.0, 0.0]]}}, "point_forces"),
+])
+def test_point_force_parameter_without_point_forces_exits_2(tmp_path, capsys, changes, key):
+    from fe_beam.cli import main
+
+    path = _cli_config(tmp_path, "snap_through.toml", changes)
+    assert main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert key in error and "Traceback" not in error and error.count("\n") == 0, error
+
+
+def test_inextensible_straight_start_exits_3_with_the_reason(tmp_path, capsys):
+    """The straight shortened inextensible beam is no start for Newton: exit 3 naming why."""
+    from fe_beam.cli import main
+
+    path = _cli_config(tmp_path, "snap_through.toml", {
+        "model": {"constraint": "inextensible-unshearable"}, "loads": {"steps": 4}})
+    assert main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    assert "inextensible beam cannot start" in capsys.readouterr().err
