@@ -95,8 +95,8 @@ def _snap_path(elements: int, max_steps: int = 70):
                        engine.state.copy()))
 
     settings = ArcLength(increment=0.05, max_load_factor=1.0, max_steps=max_steps,
-                         max_arc_length=0.1)
-    result = follow_path(run, settings, "none", 1e-7, on_point)
+                         max_arc_length=0.2)
+    result = follow_path(run, settings, "none", 1e-4, on_point)
     return points, result, run, start
 
 
@@ -124,7 +124,7 @@ def test_snap_through_limit_point_and_path_against_elastica(reference):
     force_at = CubicSpline(-np.asarray(reference.deflection), np.asarray(reference.force))
     low, high = float(reference.deflection[-1]), float(reference.deflection[0])
     errors = {}
-    for elements, steps in ((16, 9), (32, 28)):
+    for elements, steps in ((16, 7), (32, 18)):
         points, result, run, _ = _snap_path(elements, max_steps=steps)
         run.destroy()
         assert result.status == "converged", result.message
@@ -140,7 +140,7 @@ def test_snap_through_limit_point_and_path_against_elastica(reference):
     assert forces[0] == 0.0 and forces.max() > 0.99 * reference.limit_force
     assert heights[-1] < low and forces[-1] < 0.9 * float(reference.force[-1])
     inside = (heights >= low) & (heights <= float(reference.deflection[1]))
-    assert inside.sum() >= 12, heights
+    assert inside.sum() >= 8, heights
     # distance to the reference curve in (F / F_limit, Y / Y0)
     dense = np.linspace(low, high, 20001)
     curve = np.column_stack([force_at(-dense) / reference.limit_force, dense / high])
