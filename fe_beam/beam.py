@@ -376,6 +376,7 @@ class BeamProblem:
                 at.add("start")
             else:
                 interior.append(compat.locate_entities(self.mesh, 0, self.point_marker(x)))
+        self.point_force_fields = nodal  # scaled alone by `fe-beam path` parameter point_force
         force = ufl.as_vector(nodal)
         if interior:
             self.mesh.topology.create_connectivity(0, 1)

@@ -15,7 +15,7 @@ from fe_beam.critical import (
     switch_branch,
 )
 
-__all__ = ["PathResult", "follow_path"]
+__all__ = ["PathResult", "follow_path", "point_force_control"]
 
 
 @dataclass
@@ -113,6 +113,46 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
         run.load_factor = engine.parameter
         result.status, result.message = "failed", str(failure)
     return result
+
+
+def point_force_control(run, static, progress: bool = False, prestate: bool = True):
+    """Make the load factor of ``run`` (a `fe_beam.static.StaticContinuation`) scale the point
+    forces alone: every other load, tendon tension and prescribed end value is first reached by
+    load stepping with the point forces at zero (``prestate``; skipped when there is nothing
+    else, or when the caller has put ``run`` at that state itself) and then held in full.
+    Installs the engine (``run.engine()``) at load factor 0 and returns the setter
+    ``push(factor)`` (``[path] parameter = "point_force"``; docs/theory.md, Snap-through)."""
+    from fe_beam.continuation import Continuation, NonlinearParameterProblem
+
+    loads = static.model.loads
+    nodal = run.problem.point_force_fields
+    full = [f.x.array.copy() for f in nodal]
+
+    def forces(factor: float) -> None:
+        for function, value in zip(nodal, full, strict=True):
+            function.x.array[:] = factor * value
+
+    def hold(factor: float) -> None:  # everything else at `factor`, the point forces at 0
+        run._set_load_factor(factor)
+        forces(0.0)
+
+    def push(factor: float) -> None:  # everything else in full, the point forces at factor
+        run._set_load_factor(1.0)
+        forces(factor)
+
+    supports = static.model.supports
+    others = (any(t.tension for t in static.tendons or ()) or any(loads.tip_force)
+              or loads.tip_moment or any(loads.distributed) or any(loads.gravity)
+              or loads.end_displacement is not None or loads.end_rotation is not None
+              or any(supports.prescribed_x0.values()) or any(supports.prescribed_xL.values()))
+    if prestate and others:  # the state without the point forces, from the undeformed one
+        Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
+            1.0, static.stepping, progress=progress, label="path pre-state")
+    run._engine = Continuation(NonlinearParameterProblem(
+        run.solver, push, check_step=run._step_check(), metric=run._metric()), 0.0)
+    run.load_factor = 0.0
+    push(0.0)
+    return push
 
 
 # --- the command `fe-beam path` -----------------------------------------------------------------
@@ -237,6 +277,9 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         record = dict(entry)
         record["index"] = len(summary["path"])
         record["tension"] = None if tension is None else entry["load_factor"] * tension
+        if settings.parameter == "point_force":  # where the (first) point force pushes
+            at = loads.point_forces[0][0]
+            record["point"] = {"x": at, **problem.point_values(at)}
         summary["path"].append(record)
         summary["critical_points"] = [c.summary() for c in result.critical_points]
         files.on_step(record)
@@ -264,11 +307,24 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         run._engine = Continuation(NonlinearParameterProblem(
             run.solver, pull, check_step=run._step_check(), metric=run._metric()), 0.0)
         pull(0.0)
+    unreached = None
+    if settings.parameter == "point_force":
+        try:
+            point_force_control(run, static, progress=progress)
+        except ContinuationFailed as failure:  # exit 3 with the reason, not a traceback
+            unreached = f"the state without the point forces was not reached: {failure}"
+            if "inextensible" in static.model.options.constraint:
+                unreached += (" (an inextensible beam cannot start from a straight shortened "
+                              "state; use constraint = \"unshearable\" or \"none\" and an "
+                              "imperfection)")
     from fe_beam.continuation import ArcLength
 
     arc = ArcLength(**settings.arc_length_settings())
     result = None
     try:
+        if unreached is not None:
+            summary["status"], summary["message"] = "failed", unreached
+            return summary
         result = follow_path(run, arc, settings.branch_switch, settings.tolerance, on_point)
         summary["status"], summary["message"] = result.status, result.message
         if result.status == "failed":

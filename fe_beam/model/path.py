@@ -11,12 +11,13 @@ from fe_beam.config import NUMBER, ConfigError, Key, table
 
 __all__ = ["PARAMETERS", "PATH_KEYS", "PathSettings", "parse_path"]
 
-PARAMETERS = ("load_factor", "tension", "end_displacement")
+PARAMETERS = ("load_factor", "tension", "end_displacement", "point_force")
 BRANCH_SWITCHES = ("none", "positive", "negative", "both")
 MAX_PATH_STEPS = 100_000
 
 PATH_KEYS = {
-    "parameter": Key((str,), "load_factor", "load_factor | tension | end_displacement"),
+    "parameter": Key((str,), "load_factor", "load_factor | tension | end_displacement | "
+                     "point_force (the point forces alone; the other loads held in full)"),
     "max_load_factor": Key(NUMBER, 1.0, "the path ends where |load factor| reaches it (> 0; "
                            "tension: a multiple of the tendon's tension)"),
     "arc_length": Key(NUMBER, 0.1, "load-factor increment of the first arc-length step (> 0)"),
@@ -127,6 +128,11 @@ def parse_path(config: dict):
             raise ConfigError("[path] parameter = \"end_displacement\" scales the prescribed "
                               "end values alone, and [loads] or [[tendons]] also give loads; "
                               "use parameter = \"load_factor\" to scale them all together")
+    elif settings.parameter == "point_force":
+        if not any(f[1] or f[2] for f in loads.point_forces):
+            raise ConfigError("[path] parameter = \"point_force\" needs [loads] point_forces "
+                              "with a nonzero force (none given); use parameter = "
+                              "\"load_factor\"")
     elif not (others or prescribed or any(t.tension for t in tendons)):
         raise ConfigError("[loads] are all zero: fe-beam path needs a load to follow "
                           "(tip_force, point_forces, end_displacement, ... or tendon tensions)")
