@@ -286,6 +286,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         bar.update(min(len(summary["path"]) - 1, settings.max_steps),
                    f"load factor {entry['load_factor']:.4g}")
 
+    unreached = None
     if tension is not None:
         constant = run.tendons.tensions[settings.tendon]
 
@@ -302,12 +303,15 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
                   or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
                   or loads.end_displacement is not None or loads.end_rotation is not None)
         if others:  # the state with the tendon slack: load-stepped from the undeformed one
-            Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
-                1.0, static.stepping, progress=progress, label="path pre-state")
+            try:
+                Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
+                    1.0, static.stepping, progress=progress, label="path pre-state")
+            except ContinuationFailed as failure:  # exit 3 with the reason, not a traceback
+                unreached = ("the state with the other loads and this tendon slack was not "
+                             f"reached: {failure}")
         run._engine = Continuation(NonlinearParameterProblem(
             run.solver, pull, check_step=run._step_check(), metric=run._metric()), 0.0)
         pull(0.0)
-    unreached = None
     if settings.parameter == "point_force":
         try:
             point_force_control(run, static, progress=progress)

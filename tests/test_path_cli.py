@@ -185,6 +185,20 @@ def test_tension_path_of_a_missing_tendon_exits_2(tmp_path, capsys):
 
 
 @serial
+def test_tension_path_whose_pre_state_fails_exits_3_with_the_reason(tmp_path, capsys):
+    """The other loads (a tip force far beyond what the finger carries) are load-stepped first:
+    when that fails the run ends with exit 3 and the reason (it was an internal error)."""
+    config = _finger(tmp_path)
+    config.setdefault("loads", {})["tip_force"] = [0.0, 1e5]
+    out = tmp_path / "out"
+    assert main(["path", str(_write(tmp_path / "f.toml", config)), "--out", str(out),
+                 "--quiet"]) == 3
+    assert "tendon slack was not reached" in capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["path"] == []
+
+
+@serial
 def test_interrupted_path_leaves_a_readable_summary(tmp_path):
     """SIGINT between path points: exit 130, summary.json says "interrupted" and holds the
     points so far, path.csv the same points."""
