@@ -195,6 +195,32 @@ def _path_plot(out, summary: dict) -> None:
         axes[0].legend(fontsize=7)
 
 
+def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
+    """The export objects of a path run (rod or solid), started: path.xdmf (``writer``, by
+    point index), path.csv, summary.json and path.png, each after every point; nothing but
+    the XDMF writer when ``out`` is None. Returns (files, content): ``content()`` is the
+    summary with its wall time brought up to date."""
+    import time
+
+    from fe_beam import exports
+
+    columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
+                                     else r["tip"][n[4:]])) for name in PATH_CSV]
+
+    def content() -> dict:
+        summary["wall_time_s"] = time.perf_counter() - started
+        return summary
+
+    files = exports.Exports(
+        ([exports.XDMFExport(writer, "index")] if writer is not None else [])
+        + ([exports.CSVExport(out / "path.csv", columns),
+            exports.SummaryExport(out / "summary.json", content),
+            exports.PlotExport(lambda s: _path_plot(out, s) if plots else None)]
+           if out is not None else []), comm, throttle=False)
+    files.start(content())
+    return files, content
+
+
 def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
     """`fe-beam path` on a validated configuration (rod or finger): arc-length continuation
     with critical points (`follow_path`); writes summary.json (after every point), path.csv,
@@ -205,7 +231,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
 
     from mpi4py import MPI
 
-    from fe_beam import compat, exports, runctl
+    from fe_beam import compat, runctl
     from fe_beam.config import ConfigError
     from fe_beam.continuation import Continuation, NonlinearParameterProblem
     from fe_beam.model.path import parse_path
@@ -257,20 +283,8 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
     comm.barrier()
     xdmf = writing and static.output.xdmf
     writer = BeamXDMFWriter(problem, out / "path.xdmf") if xdmf else None
-    columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
-                                     else r["tip"][n[4:]])) for name in PATH_CSV]
-
-    def content() -> dict:
-        summary["wall_time_s"] = time.perf_counter() - started
-        return summary
-
-    files = exports.Exports(
-        ([exports.XDMFExport(writer, "index")] if writer is not None else [])
-        + ([exports.CSVExport(out / "path.csv", columns),
-            exports.SummaryExport(out / "summary.json", content),
-            exports.PlotExport(lambda s: _path_plot(out, s) if static.output.plots else None)]
-           if writing else []), comm, throttle=False)
-    files.start(content())
+    files, content = _path_files(out if writing else None, writer, summary, started,
+                                 static.output.plots, comm)
     bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
 
     def on_point(entry: dict, result: PathResult) -> None:
@@ -361,9 +375,8 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
     """`fe-beam path` of the 3D solid: arc length in the load factor (tip force and tensions
     scaled together) from the undeformed state; the stability from the sparse inertia (tip force
     only), no critical points."""
-    import time
 
-    from fe_beam import exports, runctl
+    from fe_beam import runctl
     from fe_beam.continuation import ArcLength
     from fe_beam.inertia import solid_unstable_count
     from fe_beam.progress import ProgressBar
@@ -386,20 +399,8 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
     comm.barrier()
     writer = (DisplacementXDMF(run.problem, out / "path.xdmf")
               if writing and config.output.xdmf else None)
-    columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
-                                     else r["tip"][n[4:]])) for name in PATH_CSV]
-
-    def content() -> dict:
-        summary["wall_time_s"] = time.perf_counter() - started
-        return summary
-
-    files = exports.Exports(
-        ([exports.XDMFExport(writer, "index")] if writer is not None else [])
-        + ([exports.CSVExport(out / "path.csv", columns),
-            exports.SummaryExport(out / "summary.json", content),
-            exports.PlotExport(lambda s: _path_plot(out, s) if config.output.plots else None)]
-           if writing else []), comm, throttle=False)
-    files.start(content())
+    files, content = _path_files(out if writing else None, writer, summary, started,
+                                 config.output.plots, comm)
     bar = ProgressBar(comm, total=settings.max_steps, label="path (3D)", enabled=progress)
 
     def record(load_factor: float) -> None:
