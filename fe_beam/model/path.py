@@ -141,7 +141,8 @@ def parse_path(config: dict):
 
 def _solid(rest: dict, settings: PathSettings):
     """The 3D solid's configuration: the load factor scales the tip force and the tendon
-    tensions; its stability is not checked (no critical points, no branch switching)."""
+    tensions; its stability is counted at every point (sparse inertia; tip force only), but
+    critical points are not located and branches not switched."""
     from fe_beam.solid.config import parse_solid
 
     if settings.parameter != "load_factor":
@@ -149,10 +150,9 @@ def _solid(rest: dict, settings: PathSettings):
                           "takes parameter = \"load_factor\" only (tip force and tensions "
                           "scaled together); leave out [solid] for the rod's")
     if settings.branch_switch != "none":
-        raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the stability of "
-                          "the 3D solid is not checked along the path, so no bifurcation is "
-                          "detected; use branch_switch = \"none\", or leave out [solid] for the "
-                          "rod's path")
+        raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: the 3D solid's "
+                          "path locates no bifurcation (it only counts unstable directions); "
+                          "use branch_switch = \"none\"")
     solid = parse_solid(rest)
     pulled = [name for name, load in zip(solid.tendon_names, solid.tendon_loads, strict=False)
               if load.pull_in]
