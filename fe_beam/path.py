@@ -195,6 +195,13 @@ def _path_plot(out, summary: dict) -> None:
         axes[0].legend(fontsize=7)
 
 
+def _interrupted(summary: dict, stop) -> None:
+    """The summary's status and message of a path stopped by a signal after its last point."""
+    last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
+    status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+    summary["status"], summary["message"] = status["status"], status["message"]
+
+
 def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
     """The export objects of a path run (rod or solid), started: path.xdmf (``writer``, by
     point index), path.csv, summary.json and path.png, each after every point; nothing but
@@ -349,9 +356,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
             summary["message"] = (f"path stopped at load factor {run.load_factor:.6g}: "
                                   f"{result.message}")
     except runctl.Interrupted as stop:
-        last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
-        status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
-        summary["status"], summary["message"] = status["status"], status["message"]
+        _interrupted(summary, stop)
         raise
     finally:
         bar.close()
@@ -426,9 +431,7 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
         summary["status"] = "failed"
         summary["message"] = f"path stopped at load factor {run.load_factor:.6g}: {failure}"
     except runctl.Interrupted as stop:
-        last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
-        status = stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
-        summary["status"], summary["message"] = status["status"], status["message"]
+        _interrupted(summary, stop)
         raise
     finally:
         bar.close()
