@@ -230,7 +230,8 @@ class SolidFingerProblem:
     def _nonlinear_solver(self, prefix: str) -> None:
         self.problem = NonlinearProblem(self.residual, self.w, self.bcs, contributions=self.cables)
         if any(c.patch_dofs is not None for c in self.cables):
-            # an anchor plate couples the whole tip face: entries outside the volume pattern
+            # an anchor plate couples the whole tip face: preallocated by NonlinearProblem
+            # (`TendonCable.jacobian_couplings`); a missed entry would cost time, not fail
             self.problem.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         dofs = self.W.dofmap.index_map.size_global * self.W.dofmap.index_map_bs
         #: the linear solver actually used ("mumps", "gamg" or "fieldsplit"; "auto" resolved)
