@@ -1,6 +1,8 @@
 """Speed of the 3D solid (issue 10) without changing its answers: the tendon anchor plate's
 Jacobian entries are preallocated (no PETSc malloc at the first assembly, same matrix)."""
 
+import json
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -95,3 +97,64 @@ def test_preallocated_matrix_holds_exactly_the_pattern_and_the_groups():
     assert dense.sum() == A.getInfo()["nz_used"]
     assert np.all(dense[np.ix_(group, group)] == 1)
     assert dense.sum() <= (3 * n - 2) + 9
+
+
+# --- load steps that grow: `[solver] max_increment` and the engine's branch-jump guard --------
+def svk_bar(tip_force: float, **solver) -> dict:
+    """A square SVK bar (nu = 0: uniaxial, the rod's model) under an axial dead tip force."""
+    h = 0.05
+    return {
+        "beam": {"length": 0.1}, "section": {"b": h, "h": h},
+        "material": {"E": 1.0e6, "nu": 0.0}, "mesh": {"elements": 4},
+        "loads": {"tip_force": [tip_force * 1.0e6 * h * h, 0.0], "steps": 4},
+        "solver": {"max_it": 8, "min_increment": 0.05, **solver},
+        "solid": {"material": "svk", "mesh_size": h}, "output": {"plots": False},
+    }
+
+
+def run(tmp_path, config):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent / "solid"))
+    from test_solid_driver import run_cli, shared_folder
+
+    code, _, stderr, out = run_cli("solid", shared_folder(tmp_path), config)
+    summary = json.loads((out / "summary.json").read_text()) if code != 2 else None
+    return code, stderr, summary
+
+
+@pytest.mark.mpi
+def test_grown_steps_do_not_jump_past_a_limit_point(tmp_path):
+    """SVK under compression has no equilibrium beyond 0.19 E A (stretch 1/sqrt 3): steps
+    allowed to grow to the whole ramp jump past that limit load onto another branch and
+    converge (exit 0 with a wrong state, without the guard); the guard cuts them back, the run
+    ends with exit 3 below the limit load."""
+    code, stderr, summary = run(tmp_path, svk_bar(-0.3, max_increment=1.0))
+    assert code == 3, stderr
+    last = summary["steps"][-1]["load_factor"]
+    assert 0 < last < 0.19245 / 0.3  # the limit load 2 / (3 sqrt 3) E A of uniaxial SVK
+    assert "branch jump" in summary["message"]
+
+
+@pytest.mark.mpi
+def test_grown_steps_reach_the_fixed_step_equilibrium_in_fewer_steps(tmp_path):
+    """A stretched SVK bar: steps grown up to the whole ramp end at the equilibrium of the
+    fixed-step run (to the Newton tolerance), in fewer steps, with no branch-jump veto."""
+    fixed = run(tmp_path / "fixed", svk_bar(0.2))
+    grown = run(tmp_path / "grown", svk_bar(0.2, max_increment=1.0))
+    assert fixed[0] == grown[0] == 0, fixed[1] + grown[1]
+    assert len(grown[2]["steps"]) < len(fixed[2]["steps"]) == 4
+    a, b = fixed[2]["steps"][-1], grown[2]["steps"][-1]
+    assert a["load_factor"] == b["load_factor"] == 1.0
+    assert b["tip"]["u"] == pytest.approx(a["tip"]["u"], rel=1e-8)
+    assert a["tip"]["u"] > 0.01  # a real stretch, not a trivial state
+
+
+@pytest.mark.parametrize("value", [0.1, 1.5, 0.0])
+def test_max_increment_outside_one_step_and_the_ramp_is_a_usage_error(tmp_path, value):
+    code, stderr, _ = run(tmp_path, svk_bar(0.2, max_increment=value))
+    assert code == 2, stderr
+    if MPI.COMM_WORLD.rank == 0:
+        assert "max_increment" in stderr and "Traceback" not in stderr
+        assert len(stderr.strip().splitlines()) == 1
