@@ -103,7 +103,7 @@ class SolidRun:
                            else min(1.0, max(stepping.max_increment / span, 1.0 / steps))),
             cut_factor=stepping.cut_factor,
             grow_factor=stepping.grow_factor,
-            easy_iterations=stepping.easy_iterations,
+            easy_iterations=stepping.easy_iterations + self.problem.extra_easy_iterations,
             adaptive=stepping.adaptive,
         )
 
