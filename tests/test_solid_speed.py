@@ -14,12 +14,18 @@ from fe_beam.solid import (
     FingerGeometry,
     MeshSizes,
     NeoHookean,
+    SaintVenantKirchhoff,
     SolidFingerProblem,
     TendonLoad,
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solver import SolverSettings, preallocated_matrix
+from fe_beam.solver import (
+    LoadStepping,
+    LoadSteppingFailed,
+    SolverSettings,
+    preallocated_matrix,
+)
 
 GEOMETRY = FingerGeometry(0.1, 0.02, 0.02, 0.01,
                           tendons=(TendonPath.from_offsets(0.1, 0.008, 0.004),))
@@ -124,31 +130,50 @@ def run(tmp_path, config):
     return code, stderr, summary
 
 
-@pytest.mark.mpi
-def test_grown_steps_do_not_jump_past_a_limit_point(tmp_path):
-    """SVK under compression has no equilibrium beyond 0.19 E A (stretch 1/sqrt 3): steps
-    allowed to grow to the whole ramp jump past that limit load onto another branch and
-    converge (exit 0 with a wrong state, without the guard); the guard cuts them back, the run
-    ends with exit 3 below the limit load."""
-    code, stderr, summary = run(tmp_path, svk_bar(-0.3, max_increment=1.0))
-    assert code == 3, stderr
-    last = summary["steps"][-1]["load_factor"]
-    assert 0 < last < 0.19245 / 0.3  # the limit load 2 / (3 sqrt 3) E A of uniaxial SVK
-    assert "branch jump" in summary["message"]
+@pytest.fixture(scope="module")
+def bar():
+    """A square bar (h = 0.05, L = 0.1), one element across."""
+    geometry = FingerGeometry(0.1, 0.05, 0.05, 0.05, tendons=())
+    return create_finger_mesh(geometry, MeshSizes(0.05), MPI.COMM_WORLD)
+
+
+def svk_solve(bar, tip_force: float, **stepping):
+    """The SVK bar (nu = 0: uniaxial) under an axial dead tip force tip_force * E A."""
+    h, E = 0.05, 1.0e6
+    problem = SolidFingerProblem(
+        bar, SaintVenantKirchhoff.from_young(E, 0.0), tip_force=(tip_force * E * h * h, 0, 0),
+        solver=SolverSettings(linear_solver="mumps", max_it=8),
+        prefix=f"speed_svk_{len(stepping)}_")
+    try:
+        return problem, problem.solve(LoadStepping(steps=4, min_increment=0.05, **stepping))
+    finally:
+        problem.snes_solver.destroy()
 
 
 @pytest.mark.mpi
-def test_grown_steps_reach_the_fixed_step_equilibrium_in_fewer_steps(tmp_path):
+def test_grown_steps_do_not_jump_past_a_limit_point(bar):
+    """SVK under compression has no equilibrium beyond 2 / (3 sqrt 3) E A = 0.19245 E A
+    (stretch 1/sqrt 3): steps allowed to grow to the whole ramp jump past that limit load onto
+    another branch and converge (load factor 1 reached, without the guard); the guard cuts
+    them back and the ramp stops below the limit load."""
+    with pytest.raises(LoadSteppingFailed) as failure:
+        svk_solve(bar, -0.3, max_increment=1.0)
+    assert 0 < failure.value.last_load_factor < 0.19245 / 0.3
+    assert "branch jump" in failure.value.reason
+
+
+@pytest.mark.mpi
+def test_grown_steps_reach_the_fixed_step_equilibrium_in_fewer_steps(bar):
     """A stretched SVK bar: steps grown up to the whole ramp end at the equilibrium of the
     fixed-step run (to the Newton tolerance), in fewer steps, with no branch-jump veto."""
-    fixed = run(tmp_path / "fixed", svk_bar(0.2))
-    grown = run(tmp_path / "grown", svk_bar(0.2, max_increment=1.0))
-    assert fixed[0] == grown[0] == 0, fixed[1] + grown[1]
-    assert len(grown[2]["steps"]) < len(fixed[2]["steps"]) == 4
-    a, b = fixed[2]["steps"][-1], grown[2]["steps"][-1]
-    assert a["load_factor"] == b["load_factor"] == 1.0
-    assert b["tip"]["u"] == pytest.approx(a["tip"]["u"], rel=1e-8)
-    assert a["tip"]["u"] > 0.01  # a real stretch, not a trivial state
+    _, fixed = svk_solve(bar, 0.2)
+    _, grown = svk_solve(bar, 0.2, max_increment=1.0)
+    assert len(grown["steps"]) < len(fixed["steps"]) == 4
+    a, b = fixed["tip_displacement"], grown["tip_displacement"]
+    assert np.allclose(b, a, rtol=0, atol=1e-8 * np.linalg.norm(a))
+    # uniaxial SVK: N = E A (lambda^2 - 1) lambda / 2 with lambda = 1 + u / L
+    stretch = 1 + a[0] / 0.1
+    assert 0.5 * (stretch**2 - 1) * stretch == pytest.approx(0.2, rel=1e-6)
 
 
 @pytest.mark.parametrize("value", [0.1, 1.5, 0.0])
