@@ -183,3 +183,19 @@ def test_max_increment_outside_one_step_and_the_ramp_is_a_usage_error(tmp_path, 
     if MPI.COMM_WORLD.rank == 0:
         assert "max_increment" in stderr and "Traceback" not in stderr
         assert len(stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.mpi
+def test_solid_run_steps_grow_up_to_max_increment():
+    """`[solver] max_increment` reaches the solid's load stepping (`parse_solid`,
+    `SolidRun.advance`): the stretched SVK bar takes fewer steps than `loads.steps` to 1."""
+    from fe_beam.solid.config import parse_solid
+    from fe_beam.solid.run import SolidRun
+
+    config = parse_solid(svk_bar(0.2, max_increment=1.0))
+    assert config.stepping.max_increment == 1.0
+    run = SolidRun(config)
+    records = []
+    run.advance(1.0, config.stepping, on_step=records.append)
+    assert 1 < len(records) < 4 and run.load_factor == 1.0
+    run.problem.snes_solver.destroy()
