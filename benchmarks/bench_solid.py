@@ -292,8 +292,8 @@ def ranks(sizes_solvers) -> dict:
 UP_TENSION = 5.0  # N, the issue's sweep
 UP_SWEEP_SIZE = 0.002  # m: ~92k DOFs
 UP_STEPS = 10
-# easy steps may grow to this many initial increments (`fe-beam solid` keeps LoadStepping's
-# cap of one increment: growth let an SVK bar jump past its limit load, see the README)
+# easy steps may grow to this many initial increments (`fe-beam solid`: `[solver]
+# max_increment`; its default keeps the steps at one increment)
 STEP_GROWTH = 4.0
 UP_PROBE_TENSION = 1.0  # N, the one load step of the per-iteration timings
 # mesh size [m] -> u-p DOFs: 0.006: 6.9k, 0.005: 9.8k, 0.004: 16.7k, 0.003: 36k, 0.002: 92k,
@@ -408,7 +408,8 @@ def up_nu(size: float, nus=UP_NUS) -> dict:
 
 def up_sweep(size: float, solver: str = "fieldsplit", newton_cap: int | None = None) -> dict:
     """f. The issue's sweep: tendon 0 -> 5 N, UP_STEPS initial steps that grow after easy
-    steps up to STEP_GROWTH initial increments (`fe-beam solid` does not grow them)."""
+    steps (inexact Newton: 2 iterations more than `LoadStepping.easy_iterations`) up to
+    STEP_GROWTH initial increments (`fe-beam solid`: ``[solver] max_increment``)."""
     finger, meshing = mesh(size)
     problem = up_problem(finger, solver, UP_TENSION)
     records = []
@@ -418,7 +419,9 @@ def up_sweep(size: float, solver: str = "fieldsplit", newton_cap: int | None = N
                         "krylov": step.linear_iterations, "seconds": step.wall_time_s,
                         "tip_rotation": problem.tip_rotation()["angle"]})
 
-    stepping = LoadStepping(steps=UP_STEPS, max_increment=min(1.0, STEP_GROWTH / UP_STEPS))
+    stepping = LoadStepping(steps=UP_STEPS, max_increment=min(1.0, STEP_GROWTH / UP_STEPS),
+                            easy_iterations=LoadStepping.easy_iterations
+                            + problem.extra_easy_iterations)
     problem.comm.barrier()
     started, cpu = time.perf_counter(), time.process_time()
     run_load_stepping(problem.solver, problem.set_load_factor, stepping, on_converged=on_step,

@@ -113,6 +113,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "petsc_options": Key((dict,), {}, "any PETSc option, without prefix"),
         "adaptive": Key((bool,), True, "cut back / grow load steps"),
         "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
+        "max_increment": Key(NUMBER, None, "largest load-factor increment: easy steps grow up "
+                             "to it (default 1/steps: never beyond the first increment)"),
         "max_rotation_jump": Key(NUMBER, 1.0, "branch check: largest rotation change per step"),
         "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
                            "memory; fe_beam.runctl)"),
@@ -411,11 +413,17 @@ def _support(spec):
 def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
     solver = table(config, "solver")
     steps = table(config, "loads")["steps"]
+    largest = solver.pop("max_increment")
+    if largest is not None and not (isinstance(steps, int) and steps >= 1
+                                    and 1.0 / steps <= largest <= 1.0):
+        raise ConfigError(f"[solver] max_increment must be between 1/steps (loads.steps = "
+                          f"{steps!r}) and 1; got {largest!r}")
     stepping = _wrap(
         LoadStepping,
         steps=steps,
         adaptive=solver.pop("adaptive"),
         min_increment=min(solver.pop("min_increment"), 1.0 / max(steps, 1)),
+        max_increment=largest,
     )
     jump = solver.pop("max_rotation_jump")
     solver.pop("allow_large")  # read from the raw table by the drivers (fe_beam.runctl)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import compat
@@ -622,6 +623,9 @@ class Continuation:
                          stepping.cut_factor, stepping.grow_factor, stepping.easy_iterations,
                          stepping.adaptive)
         self._tangent = None
+        # steps that may grow beyond the first increment could jump past a limit point onto
+        # another branch and still converge: checked against the secant predictor
+        guarded = stepping.adaptive and size.largest > increment * (1 + 1e-9)
         try:
             while lam < 1.0 - 1e-12:
                 increment = size.value = min(size.value, 1.0 - lam)
@@ -644,6 +648,9 @@ class Continuation:
                     failure = str(error)
                 if failure is None:
                     failure = _agreed(self.comm, problem.check_step(previous, state))
+                if failure is None and guarded and before_previous is not None:
+                    failure = self._branch_jump(before_previous, previous, state,
+                                                increment / previous_increment)
                 if failure is not None:
                     state[:] = previous
                     problem.set_parameter(value(lam))
@@ -675,6 +682,32 @@ class Continuation:
         finally:
             bar.close()
         return results
+
+    def _branch_jump(self, before_previous: np.ndarray, previous: np.ndarray,
+                     current: np.ndarray, ratio: float) -> str | None:
+        """Veto (reason) of a converged load step that left the path: its change of state
+        deviates from the secant predictor ratio (previous - before_previous) by more than
+        `BRANCH_JUMP` times the predictor's size (in the arc metric; owned entries). On a
+        smooth path the deviation is O(increment) of the predictor (it vanishes for a linear
+        problem); a state that jumped past a limit point onto another branch deviates by far
+        more. No verdict after a step that did not move the state (nothing to compare with:
+        e.g. a slack tendon's first steps)."""
+        n = self.problem.state_vector.getLocalSize()
+        metric = self.problem.metric
+        weights = 1.0 if metric is None else metric.getArray(readonly=True)[:n]
+        predicted = ratio * (previous[:n] - before_previous[:n])
+        deviation = current[:n] - previous[:n] - predicted
+        sums = np.array([np.sum(weights * predicted**2), np.sum(weights * deviation**2),
+                         np.sum(weights * previous[:n] ** 2)])
+        sums = self.comm.allreduce(sums, op=MPI.SUM)
+        predicted_norm, deviation_norm, state_norm = np.sqrt(sums)
+        if not predicted_norm > 1e-12 * state_norm or predicted_norm == 0:
+            return None
+        if deviation_norm > BRANCH_JUMP * predicted_norm:
+            return (f"branch jump: the step's change of state deviates from the secant "
+                    f"predictor by {deviation_norm / predicted_norm:.3g} times its size "
+                    f"(> {BRANCH_JUMP:g})")
+        return None
 
     # --- fixed parameter ----------------------------------------------------------------------
     def solve_at(self, parameter: float, snapshot: Snapshot | None = None,
@@ -999,6 +1032,12 @@ def _ghost_update(x: PETSc.Vec) -> None:
 def _has_arc_interface(problem) -> bool:
     return getattr(problem, "arc_length_ready", True) and hasattr(
         problem, "parameter_derivative")
+
+
+#: a grown load step whose change of state deviates from the secant predictor by more than
+#: this multiple of the predictor (arc metric) is taken for a jump to another branch and cut
+#: back (`Continuation.load_control`, only when steps may grow beyond the first increment)
+BRANCH_JUMP = 1.0
 
 
 class _StepSize:

@@ -127,6 +127,10 @@ class SolverSettings:
 # reduces the linearised residual tenfold (the convergence test of `fe_beam.solver.SNESSolver`
 # is on the nonlinear residual, as tight as with a direct solver).
 INEXACT_NEWTON = {"snes_ksp_ew": "true", "snes_ksp_ew_rtolmax": 0.1}
+# ... whose loose early linear solves cost a step about 2 Newton iterations more than exact ones
+# (u-p finger at 0.05 load steps: 5-6 with fieldsplit, 3-4 with MUMPS): a load step counts as
+# easy (`LoadStepping.easy_iterations`, grow the next one) with that many more iterations
+INEXACT_NEWTON_EXTRA_ITERATIONS = 2
 
 # u-p (Taylor-Hood) saddle point: FGMRES, block lower-triangular Schur preconditioner
 # [[A, 0], [B, S]]^-1 with A^-1 ~ one GAMG V-cycle (rigid-body near-nullspace) and

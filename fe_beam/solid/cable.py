@@ -196,6 +196,18 @@ class TendonCable:
                 rows[mine].astype(PETSc.IntType), g.ravel()[mine], addv=PETSc.InsertMode.ADD_VALUES
             )
 
+    def jacobian_couplings(self) -> list[np.ndarray]:
+        """Groups of global dofs coupled all-to-all by `add_to_jacobian` (at any state and
+        tension): each segment's two vertices, the last one's first vertex with the anchor
+        patch (for `fe_beam.solver.NonlinearProblem`'s preallocation)."""
+        groups = []
+        for k in range(len(self.dofs) - 1):
+            if k == len(self.dofs) - 2 and self.patch_dofs is not None:
+                groups.append(np.concatenate([self.dofs[k], self.patch_dofs.ravel()]))
+            else:
+                groups.append(np.concatenate([self.dofs[k], self.dofs[k + 1]]))
+        return groups
+
     def add_to_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """A += tau d2l/du2 (segment blocks [[K, -K], [-K, K]]) on the rows this rank owns."""
         if self.tension == 0.0:

@@ -39,7 +39,11 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import compat
-from fe_beam.model.settings import INEXACT_NEWTON, resolve_solid_solver
+from fe_beam.model.settings import (
+    INEXACT_NEWTON,
+    INEXACT_NEWTON_EXTRA_ITERATIONS,
+    resolve_solid_solver,
+)
 from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
     ANCHORS,
     FORMULATIONS,
@@ -230,7 +234,8 @@ class SolidFingerProblem:
     def _nonlinear_solver(self, prefix: str) -> None:
         self.problem = NonlinearProblem(self.residual, self.w, self.bcs, contributions=self.cables)
         if any(c.patch_dofs is not None for c in self.cables):
-            # an anchor plate couples the whole tip face: entries outside the volume pattern
+            # an anchor plate couples the whole tip face: preallocated by NonlinearProblem
+            # (`TendonCable.jacobian_couplings`); a missed entry would cost time, not fail
             self.problem.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         dofs = self.W.dofmap.index_map.size_global * self.W.dofmap.index_map_bs
         #: the linear solver actually used ("mumps", "gamg" or "fieldsplit"; "auto" resolved)
@@ -242,9 +247,13 @@ class SolidFingerProblem:
             self.settings.linear_solver, self.p is not None,
             dofs if not pull_in or self.settings.linear_solver != "auto" else 0)
         settings = replace(self.settings, linear_solver=self.linear_solver)
+        #: Newton iterations a load step may take beyond `LoadStepping.easy_iterations` and
+        #: still count as easy (inexact Newton takes ~2 more than exact linear solves)
+        self.extra_easy_iterations = 0
         if self.linear_solver != "mumps" and not pull_in:  # inexact Newton unless told otherwise
             settings = replace(settings,
                                petsc_options=INEXACT_NEWTON | dict(settings.petsc_options))
+            self.extra_easy_iterations = INEXACT_NEWTON_EXTRA_ITERATIONS
         nullspace = None
         if self.linear_solver == "gamg":
             nullspace = rigid_body_modes(self.W)

@@ -99,9 +99,11 @@ class SolidRun:
         segment = LoadStepping(
             steps=steps,
             min_increment=min(stepping.min_increment / span, 1.0 / steps),
+            max_increment=(1.0 / steps if stepping.max_increment * stepping.steps < 1 + 1e-9
+                           else min(1.0, max(stepping.max_increment / span, 1.0 / steps))),
             cut_factor=stepping.cut_factor,
             grow_factor=stepping.grow_factor,
-            easy_iterations=stepping.easy_iterations,
+            easy_iterations=stepping.easy_iterations + self.problem.extra_easy_iterations,
             adaptive=stepping.adaptive,
         )
 
