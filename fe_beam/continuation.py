@@ -625,6 +625,10 @@ class Continuation:
         self._tangent = None
         # steps that may grow beyond the first increment could jump past a limit point onto
         # another branch and still converge: checked against the secant predictor
+        # (only steps longer than the first increment: shorter ones are what load control
+        # without growth takes, and a state that barely moved would make every step's
+        # deviation look large)
+        first = increment
         guarded = stepping.adaptive and size.largest > increment * (1 + 1e-9)
         try:
             while lam < 1.0 - 1e-12:
@@ -648,7 +652,8 @@ class Continuation:
                     failure = str(error)
                 if failure is None:
                     failure = _agreed(self.comm, problem.check_step(previous, state))
-                if failure is None and guarded and before_previous is not None:
+                if (failure is None and guarded and before_previous is not None
+                        and increment > first * (1 + 1e-9)):
                     failure = self._branch_jump(before_previous, previous, state,
                                                 increment / previous_increment)
                 if failure is not None:

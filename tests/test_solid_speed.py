@@ -151,15 +151,31 @@ def svk_solve(bar, tip_force: float, **stepping):
 
 
 @pytest.mark.mpi
-def test_grown_steps_do_not_jump_past_a_limit_point(bar):
+def test_grown_steps_do_not_jump_past_a_limit_point(bar, monkeypatch):
     """SVK under compression has no equilibrium beyond 2 / (3 sqrt 3) E A = 0.19245 E A
     (stretch 1/sqrt 3): steps allowed to grow to the whole ramp jump past that limit load onto
     another branch and converge (load factor 1 reached, without the guard); the guard cuts
     them back and the ramp stops below the limit load."""
+    from fe_beam import continuation
+
     with pytest.raises(LoadSteppingFailed) as failure:
         svk_solve(bar, -0.3, max_increment=1.0)
     assert 0 < failure.value.last_load_factor < 0.19245 / 0.3
-    assert "branch jump" in failure.value.reason
+    vetoes = []
+    jump = continuation.Continuation._branch_jump
+
+    def counted(self, *args):
+        verdict = jump(self, *args)
+        vetoes.append(verdict)
+        return verdict
+
+    monkeypatch.setattr(continuation.Continuation, "_branch_jump", counted)
+    with pytest.raises(LoadSteppingFailed):
+        svk_solve(bar, -0.3, max_increment=1.0)
+    assert any(v is not None and "branch jump" in v for v in vetoes)
+    # without the guard the same ramp "converges" past the limit load: what the guard prevents
+    monkeypatch.setattr(continuation, "BRANCH_JUMP", np.inf)
+    svk_solve(bar, -0.3, max_increment=1.0)
 
 
 @pytest.mark.parametrize("value", [0.1, 1.5, 0.0])
