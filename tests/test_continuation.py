@@ -278,7 +278,8 @@ def test_rod_arc_length_agrees_with_load_control_on_the_stable_path(case):
 @pytest.mark.mpi
 def test_rod_arc_length_in_parallel_equals_serial():
     """The same arc-length path on all ranks together and on each rank alone: same steps, same
-    load factors and tips to 1e-10."""
+    load factors and tips to 1e-8 (each point is a Newton solve stopped at its tolerance, and
+    the sums of 2 ranks round differently: 1.1e-10 apart was seen on the PyPI stack)."""
     from beam_cases import cantilever
 
     model = cantilever(elements=16, **ROD_CASES["tip force, inextensible-unshearable"])
@@ -292,8 +293,8 @@ def test_rod_arc_length_in_parallel_equals_serial():
             run.destroy()
     (together, tip_together), (alone, tip_alone) = paths
     assert len(together) == len(alone) and together[-1] == 1.0
-    np.testing.assert_allclose(together, alone, rtol=1e-10)
-    np.testing.assert_allclose(tip_together, tip_alone, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(together, alone, rtol=1e-8)
+    np.testing.assert_allclose(tip_together, tip_alone, rtol=1e-8, atol=1e-12)
 
 
 def compat_state(run):
