@@ -412,7 +412,10 @@ def petsc_event_times() -> dict:
     """{event: (seconds, count)} of the PETSC_EVENTS so far (PETSc.Log.begin() must be on)."""
     out = {}
     for name in PETSC_EVENTS:
-        info = PETSc.Log.Event(name).getPerfInfo()
+        try:
+            info = PETSc.Log.Event(name).getPerfInfo()
+        except PETSc.Error:  # logging is off
+            return {}
         out[name] = (info["time"], info["count"])
     return out
 
@@ -446,7 +449,7 @@ def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = Non
     seconds = time.perf_counter() - started
     cpu = problem.comm.allgather(time.process_time() - cpu)
     events = {name: {"seconds": t - events[name][0], "count": c - events[name][1]}
-              for name, (t, c) in petsc_event_times().items()}
+              for name, (t, c) in petsc_event_times().items() if name in events}
     newton = max(snes.snes.getIterationNumber(), 1)
     krylov = snes.snes.getLinearSolveIterations()
     iteration_s = np.diff([started] + stamps).tolist()
