@@ -29,10 +29,14 @@ d-g. The u-p (Taylor-Hood P2-P1) finger of issue 10 (nu = 0.45, tendon to 5 N), 
    ``[solid] solver = "fieldsplit"`` (``--up PART ...``, under mpirun for 2 ranks): ``sweep``
    the full sweep on the 2 mm mesh (~92k DOFs) with fieldsplit, MUMPS timed for its first
    ``--mumps-newton`` Newton iterations and extrapolated to the sweep's Newton iterations;
-   ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration, Krylov
-   its per Newton and peak RSS vs DOFs; ``nu`` Krylov its vs nu (0.3 .. 0.4999).
+   ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration (wall,
+   and CPU s per rank by process_time), Krylov its per Newton, peak RSS per rank, meshing
+   time and memory and PETSc event times vs DOFs (``--mumps-cap 0``: fieldsplit only;
+   ``--preallocate-anchor``: see `preallocate_anchor`); ``nu`` Krylov its vs nu (0.3 .. 0.4999).
 
     mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up sweep ranks
+    nice -n 5 mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up \
+        scaling --mumps-cap 0 --preallocate-anchor --up-sizes 0.005 0.0034 0.002 0.0013 0.00085
 """
 
 from __future__ import annotations
