@@ -35,7 +35,7 @@ d-g. The u-p (Taylor-Hood P2-P1) finger of issue 10 (nu = 0.45, tendon to 5 N), 
    ``--preallocate-anchor``: see `preallocate_anchor`); ``nu`` Krylov its vs nu (0.3 .. 0.4999).
 
     mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up sweep ranks
-    nice -n 5 mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up \
+    nice -n 5 mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up
         scaling --mumps-cap 0 --preallocate-anchor --up-sizes 0.005 0.0034 0.002 0.0013 0.00085
 """
 
