@@ -29,10 +29,14 @@ d-g. The u-p (Taylor-Hood P2-P1) finger of issue 10 (nu = 0.45, tendon to 5 N), 
    ``[solid] solver = "fieldsplit"`` (``--up PART ...``, under mpirun for 2 ranks): ``sweep``
    the full sweep on the 2 mm mesh (~92k DOFs) with fieldsplit, MUMPS timed for its first
    ``--mumps-newton`` Newton iterations and extrapolated to the sweep's Newton iterations;
-   ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration, Krylov
-   its per Newton and peak RSS vs DOFs; ``nu`` Krylov its vs nu (0.3 .. 0.4999).
+   ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration (wall,
+   and CPU s per rank by process_time), Krylov its per Newton, peak RSS per rank, meshing
+   time and memory and PETSc event times vs DOFs (``--mumps-cap 0``: fieldsplit only;
+   ``--preallocate-anchor``: see `preallocate_anchor`); ``nu`` Krylov its vs nu (0.3 .. 0.4999).
 
     mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up sweep ranks
+    nice -n 5 mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up
+        scaling --mumps-cap 0 --preallocate-anchor --up-sizes 0.005 0.0034 0.002 0.0013 0.00085
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ import time
 import numpy as np
 from common import fit_exponent, table, write_results
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from fe_beam import compat
 from fe_beam.finger import DEFAULT_FINGER
@@ -126,10 +131,19 @@ def probe_step(finger, solver: str) -> dict:
     return result
 
 
-def mesh(size: float, comm=MPI.COMM_WORLD):
+def mesh(size: float, comm=MPI.COMM_WORLD, measure: dict | None = None):
+    """The finger mesh and its wall time; ``measure`` (if given) gets the meshing's CPU
+    seconds, RSS before and peak RSS during it of each rank (gmsh runs on rank 0)."""
+    reset_peak_rss()
+    rss, cpu = rss_gib(), time.process_time()
     started = time.perf_counter()
     finger = create_finger_mesh(GEOMETRY, MeshSizes(size), comm)
-    return finger, time.perf_counter() - started
+    seconds = time.perf_counter() - started
+    if measure is not None:
+        measure.update({"meshing_cpu_s_per_rank": comm.allgather(time.process_time() - cpu),
+                        "meshing_rss_before_gib": comm.allgather(rss),
+                        "meshing_peak_rss_gib": comm.allgather(rss_gib("VmHWM"))})
+    return finger, seconds
 
 
 # --- a. cost per Newton iteration -------------------------------------------------------------
@@ -319,56 +333,185 @@ def up_problem(finger, solver: str, tension: float, nu: float = 0.45,
         solver=settings, prefix=f"bench_up_{solver}_")
 
 
-def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = None) -> dict:
+def rss_gib(field: str = "VmRSS") -> float:
+    """Resident memory of this process [GiB] from /proc/self/status: ``VmRSS`` now, ``VmHWM``
+    its peak since the last `reset_peak_rss`."""
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) / 2**20
+    return float("nan")
+
+
+def reset_peak_rss() -> None:
+    """Reset VmHWM to the current RSS (Linux: write 5 to /proc/self/clear_refs)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        pass
+
+
+def preallocate_anchor(problem: SolidFingerProblem) -> dict:
+    """Give the Jacobian the tendon anchor plate's entries in its preallocation (a benchmark-side
+    work-around, fe_beam itself does not do it yet).
+
+    The anchor plate couples the anchor vertex with the whole tip face (a dense block), entries
+    outside dolfinx's sparsity pattern: PETSc then reallocates the matrix storage once per such
+    row on the first Jacobian assembly (thousands of copies of the whole matrix: 69 s at 92k
+    DOFs on 1 rank, growing ~DOFs^2). Here the volume pattern (one assembly of the Jacobian form)
+    is merged with the dense anchor block into a new, exactly preallocated AIJ matrix that
+    replaces the problem's one before the first solve; the Jacobian's values are unchanged.
+    Returns {seconds, extra_rows}."""
+    nl = problem.problem
+    blocks = [np.concatenate([c.dofs[-2:].ravel(), c.patch_dofs.ravel()]).astype(np.int64)
+              for c in problem.cables if c.patch_dofs is not None]
+    if not blocks:
+        return {"seconds": 0.0, "extra_rows": 0}
+    started = time.perf_counter()
+    A = nl.A
+    A.zeroEntries()
+    compat.assemble_matrix(A, nl.jacobian_form, bcs=nl.bcs)
+    A.assemble()
+    indptr, indices, _ = A.getValuesCSR()
+    indptr, indices = np.asarray(indptr, dtype=np.int64), np.asarray(indices, dtype=np.int64)
+    start, end = A.getOwnershipRange()
+    extra: dict[int, np.ndarray] = {}
+    for block in blocks:
+        cols = np.unique(block)
+        for row in cols[(cols >= start) & (cols < end)] - start:
+            extra[int(row)] = np.union1d(extra.get(int(row), cols), cols)
+    pieces, counts, last = [], np.diff(indptr), 0
+    for row in sorted(extra):
+        pieces.append(indices[indptr[last]:indptr[row]])
+        merged = np.union1d(indices[indptr[row]:indptr[row + 1]], extra[row])
+        pieces.append(merged)
+        counts[row] = len(merged)
+        last = row + 1
+    pieces.append(indices[indptr[last]:])
+    new_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
+    new_indices = np.concatenate(pieces).astype(PETSc.IntType)
+    B = PETSc.Mat().create(comm=A.comm)
+    B.setSizes(A.getSizes())
+    B.setType(PETSc.Mat.Type.AIJ)
+    B.setPreallocationCSR((new_indptr, new_indices))
+    B.setLGMap(*A.getLGMap())
+    B.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    B.assemble()
+    nl.A = B
+    problem.snes_solver.snes.setJacobian(nl.jacobian, B)
+    A.destroy()
+    seconds = problem.comm.allreduce(time.perf_counter() - started, op=MPI.MAX)
+    return {"seconds": seconds, "extra_rows": problem.comm.allreduce(len(extra))}
+
+
+# PETSc log events recorded by `up_probe` (wall seconds of rank 0 between the solve's start and
+# end; nested calls are counted in each: the fieldsplit PCSetUp contains GAMG's)
+PETSC_EVENTS = ("SNESFunctionEval", "SNESJacobianEval", "KSPSolve", "PCSetUp", "PCApply",
+                "KSPGMRESOrthog", "MatMult", "MatPtAP", "MatMatMult", "PCGAMGGraph_AGG",
+                "PCGAMGCoarse_AGG", "PCGAMGProl_AGG", "PCGAMGOptProl_AGG")
+
+
+def petsc_event_times() -> dict:
+    """{event: (seconds, count)} of the PETSC_EVENTS so far (PETSc.Log.begin() must be on)."""
+    out = {}
+    for name in PETSC_EVENTS:
+        try:
+            info = PETSc.Log.Event(name).getPerfInfo()
+        except PETSc.Error:  # logging is off
+            return {}
+        out[name] = (info["time"], info["count"])
+    return out
+
+
+def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = None,
+             preallocate: bool = False) -> dict:
     """One load step to UP_PROBE_TENSION from the straight finger (set-up not timed), or only
     its first ``newton_cap`` Newton iterations: seconds per Newton iteration (the first
-    includes the solver set-up: MUMPS analysis, GAMG hierarchy), Krylov its per Newton."""
+    includes the solver set-up: MUMPS analysis, GAMG hierarchy), Krylov its per Newton.
+    Also: CPU seconds of each rank (process_time), the wall time of each Newton iteration
+    (SNES monitor; entry 0 = the first residual), set-up time and memory."""
+    comm = finger.mesh.comm
+    comm.barrier()
+    reset_peak_rss()
+    setup_started, rss_before = time.perf_counter(), rss_gib()
     problem = up_problem(finger, solver, UP_PROBE_TENSION, nu, max_it=newton_cap)
+    anchor = preallocate_anchor(problem) if preallocate else None
+    setup_s = comm.allreduce(time.perf_counter() - setup_started, op=MPI.MAX)
     snes = problem.snes_solver
+    stamps = []
+    snes.snes.setMonitor(lambda _snes, it, norm: stamps.append(time.perf_counter()))
     problem.set_load_factor(1.0)
     problem.comm.barrier()
-    started = time.perf_counter()
+    events = petsc_event_times()
+    started, cpu = time.perf_counter(), time.process_time()
     converged = True
     try:
         snes.solve()
     except SolveFailed:
         converged = False
     seconds = time.perf_counter() - started
+    cpu = problem.comm.allgather(time.process_time() - cpu)
+    events = {name: {"seconds": t - events[name][0], "count": c - events[name][1]}
+              for name, (t, c) in petsc_event_times().items() if name in events}
     newton = max(snes.snes.getIterationNumber(), 1)
     krylov = snes.snes.getLinearSolveIterations()
+    iteration_s = np.diff([started] + stamps).tolist()
     if not converged and newton_cap is None:
         raise RuntimeError(f"{solver}: the probe step did not converge")
     result = {"solver": solver, "resolved": problem.linear_solver, "nu": nu,
               "dofs": dofs_of(problem), "ranks": problem.comm.size, "seconds": seconds,
               "converged": converged, "newton_iterations": newton, "krylov_iterations": krylov,
               "seconds_per_iteration": seconds / newton, "krylov_per_newton": krylov / newton,
+              "cpu_s_per_rank": cpu, "cpu_s_per_iteration": max(cpu) / newton,
+              "iteration_wall_s": iteration_s, "setup_s": setup_s, "petsc_events": events,
+              "anchor_preallocation": anchor,
+              "rss_before_problem_gib": comm.allgather(rss_before),
+              "rss_after_solve_gib": comm.allgather(rss_gib()),
+              "peak_rss_problem_gib": comm.allgather(rss_gib("VmHWM")),
               "peak_rss_gib": peak_rss_gib(problem.comm)}
+    if len(iteration_s) > 2:  # Newton iterations after the first (no Jacobian mallocs, no
+        # set-up of the preconditioner unless it is rebuilt)
+        result["seconds_per_later_iteration"] = float(np.mean(iteration_s[2:]))
     if converged:
         result["tip_displacement"] = problem.tip_displacement().tolist()
+        result["tip_rotation"] = problem.tip_rotation()["angle"]
     snes.destroy()
     return result
 
 
-def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2) -> dict:
+def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2, preallocate: bool = False) -> dict:
     """d. s / Newton iteration and Krylov its / Newton vs DOFs, fieldsplit (full step) and MUMPS
-    (its first ``mumps_newton`` iterations, skipped where predicted above ``mumps_cap`` s)."""
+    (its first ``mumps_newton`` iterations, skipped where predicted above ``mumps_cap`` s, and
+    always when ``mumps_cap`` <= 0). ``preallocate``: `preallocate_anchor` for fieldsplit."""
     world = MPI.COMM_WORLD
     runs, mumps = [], []
     for size in sizes:
-        finger, meshing = mesh(size)
-        split = up_probe(finger, "fieldsplit")
-        runs.append({"size": size, "meshing_s": meshing} | split)
-        line = (f"  size {size:g} m, {split['dofs']} DOFs: fieldsplit "
-                f"{split['seconds_per_iteration']:.3g} s/it ({split['newton_iterations']} "
+        meshing_measure = {}
+        finger, meshing = mesh(size, world, meshing_measure)
+        split = up_probe(finger, "fieldsplit", preallocate=preallocate)
+        runs.append({"size": size, "meshing_s": meshing} | meshing_measure | split)
+        line = (f"  size {size:g} m, {split['dofs']} DOFs (meshing {meshing:.1f} s, peak RSS "
+                f"{max(meshing_measure['meshing_peak_rss_gib']):.2f} GiB): fieldsplit "
+                f"{split['seconds_per_iteration']:.3g} s/it wall, "
+                f"{split['cpu_s_per_iteration']:.3g} s/it CPU (max rank; CPU per rank "
+                f"{' '.join(f'{c:.1f}' for c in split['cpu_s_per_rank'])} s), later its "
+                f"{split.get('seconds_per_later_iteration', float('nan')):.3g} s wall, "
+                f"first {(split['iteration_wall_s'] + [0, 0])[1]:.3g} s; "
+                f"set-up {split['setup_s']:.3g} s; {split['newton_iterations']} "
                 f"Newton, {split['krylov_per_newton']:.1f}"
-                f" Krylov/Newton, peak RSS {split['peak_rss_gib']['sum']:.2f} GiB)")
+                f" Krylov/Newton, peak RSS per rank "
+                f"{' '.join(f'{m:.2f}' for m in split['peak_rss_problem_gib'])} GiB)")
         predicted = None
-        if len(mumps) >= 2:
+        if mumps_cap <= 0:
+            predicted = float("inf")
+        elif len(mumps) >= 2:
             slope = fit_exponent(*zip(*mumps[-2:], strict=True))
             predicted = mumps[-1][1] * (split["dofs"] / mumps[-1][0]) ** slope
         if predicted is not None and predicted > mumps_cap:
             runs.append({"size": size, "solver": "mumps", "skipped": True,
-                         "predicted_seconds_per_iteration": predicted})
+                         "predicted_seconds_per_iteration": predicted
+                         if np.isfinite(predicted) else None})
             line += f"; MUMPS predicted {predicted:.0f} s/it, skipped"
         else:
             direct = up_probe(finger, "mumps", newton_cap=mumps_newton)
@@ -387,8 +530,15 @@ def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2) -> dict:
             dofs = [r["dofs"] for r in done]
             exponents[solver] = {
                 "time": fit_exponent(dofs, [r["seconds_per_iteration"] for r in done]),
+                "cpu": fit_exponent(dofs, [r["cpu_s_per_iteration"] for r in done]),
                 "krylov_per_newton": fit_exponent(dofs, [max(r["krylov_per_newton"], 1e-9)
+                                                         for r in done]),
+                "peak_rss_max_rank": fit_exponent(dofs, [max(r["peak_rss_problem_gib"])
                                                          for r in done])}
+            later = [r for r in done if "seconds_per_later_iteration" in r]
+            if len(later) >= 2:
+                exponents[solver]["later_iterations"] = fit_exponent(
+                    [r["dofs"] for r in later], [r["seconds_per_later_iteration"] for r in later])
     return {"ranks": world.size, "runs": runs, "exponents": exponents}
 
 
@@ -445,6 +595,7 @@ def up_main(args) -> int:
     world = MPI.COMM_WORLD
     root = world.rank == 0
     out = {"ranks": world.size}
+    PETSc.Log.begin()  # the PETSc events of up_probe
     warm, _ = mesh(0.01, world)
     up_probe(warm, "fieldsplit")
     up_probe(warm, "mumps")
@@ -493,17 +644,21 @@ def up_main(args) -> int:
     if "scaling" in args.up:
         if root:
             print(f"d. u-p cost per Newton iteration vs DOFs, {world.size} rank(s)", flush=True)
-        out["scaling"] = up_scaling(args.up_sizes or UP_SIZES, args.mumps_cap, args.mumps_newton)
+        out["scaling"] = up_scaling(args.up_sizes or UP_SIZES, args.mumps_cap, args.mumps_newton,
+                                    preallocate=args.preallocate_anchor)
         if root:
             for solver, e in out["scaling"]["exponents"].items():
-                print(f"  exponent {solver}: time/it {e['time']:.2f}, Krylov/Newton "
-                      f"{e['krylov_per_newton']:.2f}")
+                print(f"  exponent {solver}: time/it {e['time']:.2f} wall, {e['cpu']:.2f} CPU, "
+                      f"later its {e.get('later_iterations', float('nan')):.2f} wall, "
+                      f"Krylov/Newton {e['krylov_per_newton']:.2f}, peak RSS "
+                      f"{e['peak_rss_max_rank']:.2f}")
     if "nu" in args.up:
         if root:
             print(f"e. u-p Krylov its vs nu, mesh {args.up_nu_size:g} m", flush=True)
         out["nu"] = up_nu(args.up_nu_size)
     if root:
-        path = write_results("solid_up_" + "_".join(args.up) + f"_{world.size}ranks", out)
+        path = write_results("solid_up_" + "_".join(args.up) + f"_{world.size}ranks"
+                             + args.results_suffix, out)
         print(f"results: {path}")
     return 0
 
@@ -524,6 +679,12 @@ def main(argv=None) -> int:
     parser.add_argument("--up-sweep-size", type=float, default=UP_SWEEP_SIZE)
     parser.add_argument("--up-sizes", type=float, nargs="+", help="mesh sizes of --up scaling")
     parser.add_argument("--up-nu-size", type=float, default=0.003)
+    parser.add_argument("--preallocate-anchor", action="store_true",
+                        help="--up scaling: put the tendon anchor plate's entries in the "
+                        "Jacobian's preallocation (avoids PETSc's reallocations on the first "
+                        "Jacobian, see preallocate_anchor)")
+    parser.add_argument("--results-suffix", default="",
+                        help="appended to the results file name")
     parser.add_argument("--mumps-newton", type=int, default=2,
                         help="--up: MUMPS Newton iterations timed (then extrapolated)")
     args = parser.parse_args(argv)
