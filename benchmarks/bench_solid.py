@@ -31,12 +31,12 @@ d-g. The u-p (Taylor-Hood P2-P1) finger of issue 10 (nu = 0.45, tendon to 5 N), 
    ``--mumps-newton`` Newton iterations and extrapolated to the sweep's Newton iterations;
    ``ranks`` one probe step on 1 and on all ranks; ``scaling`` s per Newton iteration (wall,
    and CPU s per rank by process_time), Krylov its per Newton, peak RSS per rank, meshing
-   time and memory and PETSc event times vs DOFs (``--mumps-cap 0``: fieldsplit only;
-   ``--preallocate-anchor``: see `preallocate_anchor`); ``nu`` Krylov its vs nu (0.3 .. 0.4999).
+   time and memory and PETSc event times vs DOFs (``--mumps-cap 0``: fieldsplit only); ``nu``
+   Krylov its vs nu (0.3 .. 0.4999).
 
     mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up sweep ranks
     nice -n 5 mpirun --allow-run-as-root -n 2 .venv/bin/python benchmarks/bench_solid.py --up
-        scaling --mumps-cap 0 --preallocate-anchor --up-sizes 0.005 0.0034 0.002 0.0013 0.00085
+        scaling --mumps-cap 0 --up-sizes 0.005 0.0034 0.002 0.0013 0.00085
 """
 
 from __future__ import annotations
@@ -352,59 +352,6 @@ def reset_peak_rss() -> None:
         pass
 
 
-def preallocate_anchor(problem: SolidFingerProblem) -> dict:
-    """Give the Jacobian the tendon anchor plate's entries in its preallocation (a benchmark-side
-    work-around, fe_beam itself does not do it yet).
-
-    The anchor plate couples the anchor vertex with the whole tip face (a dense block), entries
-    outside dolfinx's sparsity pattern: PETSc then reallocates the matrix storage once per such
-    row on the first Jacobian assembly (thousands of copies of the whole matrix: 69 s at 92k
-    DOFs on 1 rank, growing ~DOFs^2). Here the volume pattern (one assembly of the Jacobian form)
-    is merged with the dense anchor block into a new, exactly preallocated AIJ matrix that
-    replaces the problem's one before the first solve; the Jacobian's values are unchanged.
-    Returns {seconds, extra_rows}."""
-    nl = problem.problem
-    blocks = [np.concatenate([c.dofs[-2:].ravel(), c.patch_dofs.ravel()]).astype(np.int64)
-              for c in problem.cables if c.patch_dofs is not None]
-    if not blocks:
-        return {"seconds": 0.0, "extra_rows": 0}
-    started = time.perf_counter()
-    A = nl.A
-    A.zeroEntries()
-    compat.assemble_matrix(A, nl.jacobian_form, bcs=nl.bcs)
-    A.assemble()
-    indptr, indices, _ = A.getValuesCSR()
-    indptr, indices = np.asarray(indptr, dtype=np.int64), np.asarray(indices, dtype=np.int64)
-    start, end = A.getOwnershipRange()
-    extra: dict[int, np.ndarray] = {}
-    for block in blocks:
-        cols = np.unique(block)
-        for row in cols[(cols >= start) & (cols < end)] - start:
-            extra[int(row)] = np.union1d(extra.get(int(row), cols), cols)
-    pieces, counts, last = [], np.diff(indptr), 0
-    for row in sorted(extra):
-        pieces.append(indices[indptr[last]:indptr[row]])
-        merged = np.union1d(indices[indptr[row]:indptr[row + 1]], extra[row])
-        pieces.append(merged)
-        counts[row] = len(merged)
-        last = row + 1
-    pieces.append(indices[indptr[last]:])
-    new_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
-    new_indices = np.concatenate(pieces).astype(PETSc.IntType)
-    B = PETSc.Mat().create(comm=A.comm)
-    B.setSizes(A.getSizes())
-    B.setType(PETSc.Mat.Type.AIJ)
-    B.setPreallocationCSR((new_indptr, new_indices))
-    B.setLGMap(*A.getLGMap())
-    B.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-    B.assemble()
-    nl.A = B
-    problem.snes_solver.snes.setJacobian(nl.jacobian, B)
-    A.destroy()
-    seconds = problem.comm.allreduce(time.perf_counter() - started, op=MPI.MAX)
-    return {"seconds": seconds, "extra_rows": problem.comm.allreduce(len(extra))}
-
-
 # PETSc log events recorded by `up_probe` (wall seconds of rank 0 between the solve's start and
 # end; nested calls are counted in each: the fieldsplit PCSetUp contains GAMG's)
 PETSC_EVENTS = ("SNESFunctionEval", "SNESJacobianEval", "KSPSolve", "PCSetUp", "PCApply",
@@ -424,8 +371,7 @@ def petsc_event_times() -> dict:
     return out
 
 
-def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = None,
-             preallocate: bool = False) -> dict:
+def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = None) -> dict:
     """One load step to UP_PROBE_TENSION from the straight finger (set-up not timed), or only
     its first ``newton_cap`` Newton iterations: seconds per Newton iteration (the first
     includes the solver set-up: MUMPS analysis, GAMG hierarchy), Krylov its per Newton.
@@ -436,7 +382,6 @@ def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = Non
     reset_peak_rss()
     setup_started, rss_before = time.perf_counter(), rss_gib()
     problem = up_problem(finger, solver, UP_PROBE_TENSION, nu, max_it=newton_cap)
-    anchor = preallocate_anchor(problem) if preallocate else None
     setup_s = comm.allreduce(time.perf_counter() - setup_started, op=MPI.MAX)
     snes = problem.snes_solver
     stamps = []
@@ -465,7 +410,6 @@ def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = Non
               "seconds_per_iteration": seconds / newton, "krylov_per_newton": krylov / newton,
               "cpu_s_per_rank": cpu, "cpu_s_per_iteration": max(cpu) / newton,
               "iteration_wall_s": iteration_s, "setup_s": setup_s, "petsc_events": events,
-              "anchor_preallocation": anchor,
               "rss_before_problem_gib": comm.allgather(rss_before),
               "rss_after_solve_gib": comm.allgather(rss_gib()),
               "peak_rss_problem_gib": comm.allgather(rss_gib("VmHWM")),
@@ -480,16 +424,16 @@ def up_probe(finger, solver: str, nu: float = 0.45, newton_cap: int | None = Non
     return result
 
 
-def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2, preallocate: bool = False) -> dict:
+def up_scaling(sizes, mumps_cap: float, mumps_newton: int = 2) -> dict:
     """d. s / Newton iteration and Krylov its / Newton vs DOFs, fieldsplit (full step) and MUMPS
     (its first ``mumps_newton`` iterations, skipped where predicted above ``mumps_cap`` s, and
-    always when ``mumps_cap`` <= 0). ``preallocate``: `preallocate_anchor` for fieldsplit."""
+    always when ``mumps_cap`` <= 0)."""
     world = MPI.COMM_WORLD
     runs, mumps = [], []
     for size in sizes:
         meshing_measure = {}
         finger, meshing = mesh(size, world, meshing_measure)
-        split = up_probe(finger, "fieldsplit", preallocate=preallocate)
+        split = up_probe(finger, "fieldsplit")
         runs.append({"size": size, "meshing_s": meshing} | meshing_measure | split)
         line = (f"  size {size:g} m, {split['dofs']} DOFs (meshing {meshing:.1f} s, peak RSS "
                 f"{max(meshing_measure['meshing_peak_rss_gib']):.2f} GiB): fieldsplit "
@@ -644,8 +588,7 @@ def up_main(args) -> int:
     if "scaling" in args.up:
         if root:
             print(f"d. u-p cost per Newton iteration vs DOFs, {world.size} rank(s)", flush=True)
-        out["scaling"] = up_scaling(args.up_sizes or UP_SIZES, args.mumps_cap, args.mumps_newton,
-                                    preallocate=args.preallocate_anchor)
+        out["scaling"] = up_scaling(args.up_sizes or UP_SIZES, args.mumps_cap, args.mumps_newton)
         if root:
             for solver, e in out["scaling"]["exponents"].items():
                 print(f"  exponent {solver}: time/it {e['time']:.2f} wall, {e['cpu']:.2f} CPU, "
@@ -679,10 +622,6 @@ def main(argv=None) -> int:
     parser.add_argument("--up-sweep-size", type=float, default=UP_SWEEP_SIZE)
     parser.add_argument("--up-sizes", type=float, nargs="+", help="mesh sizes of --up scaling")
     parser.add_argument("--up-nu-size", type=float, default=0.003)
-    parser.add_argument("--preallocate-anchor", action="store_true",
-                        help="--up scaling: put the tendon anchor plate's entries in the "
-                        "Jacobian's preallocation (avoids PETSc's reallocations on the first "
-                        "Jacobian, see preallocate_anchor)")
     parser.add_argument("--results-suffix", default="",
                         help="appended to the results file name")
     parser.add_argument("--mumps-newton", type=int, default=2,
