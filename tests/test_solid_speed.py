@@ -1,7 +1,9 @@
 """Speed of the 3D solid (issue 10) without changing its answers: the tendon anchor plate's
 Jacobian entries are preallocated (no PETSc malloc at the first assembly, same matrix)."""
 
+import copy
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -208,3 +210,25 @@ def test_solid_run_steps_grow_up_to_max_increment():
     assert 0.5 * (stretch**2 - 1) * stretch == pytest.approx(0.2, rel=1e-8)
     assert np.abs(tip[1:]).max() <= 1e-10 * tip[0]
     run.problem.snes_solver.destroy()
+
+
+@pytest.mark.parametrize("tendon_steps", [None, 10])
+def test_max_increment_is_kept_with_tendons(tendon_steps):
+    """A config with tendons goes through the finger's parsing, which sets the load steps from
+    the tendons' own `steps`: a given `[solver] max_increment` must survive it (it was silently
+    reset to one step, so `fe-beam solid` never grew its steps on a tendon-driven finger), at
+    least one step long; without the key the steps still never grow."""
+    from fe_beam.config import load_config
+    from fe_beam.solid.config import parse_solid
+
+    raw = load_config(Path(__file__).parents[1] / "examples" / "finger_solid.toml")
+    if tendon_steps is not None:
+        raw["tendons"][0]["steps"] = tendon_steps
+    steps = max(raw["loads"]["steps"], tendon_steps or 0)
+    assert parse_solid(copy.deepcopy(raw)).stepping.max_increment == pytest.approx(1 / steps)
+    raw["solver"] = {"max_increment": 0.4}
+    assert parse_solid(copy.deepcopy(raw)).stepping.max_increment == pytest.approx(0.4)
+    from fe_beam.model.finger import parse_finger
+
+    rod = {k: v for k, v in raw.items() if k not in ("solid", "compare")}
+    assert parse_finger(rod)[0].stepping.max_increment == pytest.approx(0.4)

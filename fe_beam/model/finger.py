@@ -155,10 +155,13 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")
+    # [solver] max_increment when given (steps may grow), else one step (never grow beyond it)
+    given = static.stepping.max_increment
+    grows = given > (1 + 1e-12) / static.stepping.steps
     stepping = replace(
         static.stepping,
         steps=steps,
-        max_increment=1.0 / steps,
+        max_increment=max(given, 1.0 / steps) if grows else 1.0 / steps,
         min_increment=min(static.stepping.min_increment, 1.0 / steps),
     )
     targets = {key: value for key, value in inverse.items() if value is not None}
