@@ -115,6 +115,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
         "max_increment": Key(NUMBER, None, "largest load-factor increment: easy steps grow up "
                              "to it (default 1/steps: never beyond the first increment)"),
+        "easy_iterations": Key((int,), 4, "a load step converged in at most this many Newton "
+                               "iterations lets the next one grow (up to max_increment)"),
         "max_rotation_jump": Key(NUMBER, 1.0, "branch check: largest rotation change per step"),
         "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
                            "memory; fe_beam.runctl)"),
@@ -410,20 +412,59 @@ def _support(spec):
     return tuple(spec) if isinstance(spec, list) else spec
 
 
+def _load_steps(config: dict, steps):
+    """The number of initial load steps a run takes: ``loads.steps``, or more when a tendon
+    asks for more (`fe_beam.model.finger.parse_finger`); ``steps`` itself when not a count."""
+    if not (isinstance(steps, int) and not isinstance(steps, bool)):
+        return steps
+    tendons = config.get("tendons")
+    asked = [t.get("steps") for t in tendons if isinstance(t, dict)] \
+        if isinstance(tendons, list) else []
+    return max([steps] + [n for n in asked if isinstance(n, int) and not isinstance(n, bool)])
+
+
+def given_max_increment(config: dict, steps: int) -> float:
+    """``[solver] max_increment`` when the user gave it (checked by `parse_solver` against the
+    run's load steps), else one step of ``steps`` (never grow beyond the first increment)."""
+    solver = config.get("solver")
+    given = solver.get("max_increment") if isinstance(solver, dict) else None
+    return 1.0 / steps if given is None else max(float(given), 1.0 / steps)
+
+
+def check_max_increment(largest, count, steps, adaptive) -> None:
+    """ConfigError unless ``[solver] max_increment`` (None: not given) is between 1/``count``
+    (the run's initial load steps; ``steps`` = loads.steps) and 1, with adaptive steps when it
+    lets them grow. Nothing is checked while the step count itself is invalid (named first)."""
+    if largest is None or not (isinstance(count, int) and not isinstance(count, bool)
+                               and count >= 1):
+        return
+    if not 1.0 / count <= largest <= 1.0:
+        where = (f"loads.steps = {steps}" if count == steps else
+                 f"the largest of loads.steps and the tendons' steps = {count}")
+        raise ConfigError(f"[solver] max_increment must be between 1/steps ({where}) and 1; "
+                          f"got {largest!r}")
+    if largest > (1 + 1e-12) / count and not adaptive:
+        raise ConfigError("[solver] max_increment above 1/steps lets load steps grow, which "
+                          "needs adaptive = true; got adaptive = false")
+
+
 def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
     solver = table(config, "solver")
     steps = table(config, "loads")["steps"]
     largest = solver.pop("max_increment")
-    if largest is not None and not (isinstance(steps, int) and steps >= 1
-                                    and 1.0 / steps <= largest <= 1.0):
-        raise ConfigError(f"[solver] max_increment must be between 1/steps (loads.steps = "
-                          f"{steps!r}) and 1; got {largest!r}")
+    adaptive = solver.pop("adaptive")
+    easy = solver.pop("easy_iterations")
+    if not (isinstance(easy, int) and not isinstance(easy, bool) and easy >= 1):
+        raise ConfigError(f"[solver] easy_iterations must be an integer >= 1; got {easy!r}")
+    check_max_increment(largest, _load_steps(config, steps), steps, adaptive)
     stepping = _wrap(
         LoadStepping,
         steps=steps,
-        adaptive=solver.pop("adaptive"),
+        adaptive=adaptive,
         min_increment=min(solver.pop("min_increment"), 1.0 / max(steps, 1)),
-        max_increment=largest,
+        max_increment=(None if largest is None or not isinstance(steps, int)
+                       else max(largest, 1.0 / max(steps, 1))),
+        easy_iterations=easy,
     )
     jump = solver.pop("max_rotation_jump")
     solver.pop("allow_large")  # read from the raw table by the drivers (fe_beam.runctl)

@@ -652,15 +652,21 @@ class Continuation:
                     failure = str(error)
                 if failure is None:
                     failure = _agreed(self.comm, problem.check_step(previous, state))
+                jumped = False
                 if (failure is None and guarded and before_previous is not None
                         and increment > first * (1 + 1e-9)):
                     failure = self._branch_jump(before_previous, previous, state,
                                                 increment / previous_increment)
+                    jumped = failure is not None
                 if failure is not None:
                     state[:] = previous
                     problem.set_parameter(value(lam))
                     failures.append(failure)
                     kind = size.cut()
+                    if jumped and kind is None:
+                        # a vetoed grown step is retried no shorter than the first increment
+                        # (what load control without growth takes; never vetoed again)
+                        size.value = max(size.value, first)
                     if kind is not None:
                         reason = _failure_reasons(failures)
                         raise ContinuationFailed(

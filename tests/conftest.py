@@ -46,6 +46,9 @@ def _guard_sigterm() -> None:
     ended so, at different tests, with no sender found) would end the whole suite silently;
     the tests that send SIGTERM to this process install fe_beam's own handler first and put
     this one back."""
+    if any(name.startswith(("OMPI_COMM_WORLD", "PMI_", "PMIX_", "MPI_LOCALNRANKS"))
+           for name in os.environ):
+        return  # a rank under mpirun: the launcher's SIGTERM (another rank failed) must end it
     try:
         from petsc4py import PETSc  # noqa: F401  (installs PETSc's handlers: replace them after)
     except ImportError:

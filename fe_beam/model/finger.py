@@ -16,6 +16,8 @@ from fe_beam.config import (
     Key,
     StaticConfig,
     _wrap,
+    check_max_increment,
+    given_max_increment,
     parse_static,
     table,
 )
@@ -144,7 +146,12 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     config.pop("inverse", None)
     if not isinstance(tendons_given, list) or not tendons_given:
         raise ConfigError("[[tendons]] must list at least one tendon")
-    static = parse_static(config)
+    # max_increment is checked against the run's steps, which the tendons may raise (below)
+    solver = config.get("solver")
+    given = solver.get("max_increment") if isinstance(solver, dict) else None
+    static = parse_static(config if given is None else
+                          {**config, "solver": {k: v for k, v in solver.items()
+                                                if k != "max_increment"}})
     # a tendon's time_function / time_table is read by fe-beam dynamic (noted, not used here)
     timed = ("time_function", "time_table")
     tendons_given = [{k: v for k, v in t.items() if k not in timed} if isinstance(t, dict) else t
@@ -155,13 +162,11 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")
-    # [solver] max_increment when given (steps may grow), else one step (never grow beyond it)
-    given = static.stepping.max_increment
-    grows = given > (1 + 1e-12) / static.stepping.steps
+    check_max_increment(given, steps, static.stepping.steps, static.stepping.adaptive)
     stepping = replace(
         static.stepping,
         steps=steps,
-        max_increment=max(given, 1.0 / steps) if grows else 1.0 / steps,
+        max_increment=given_max_increment(config, steps),
         min_increment=min(static.stepping.min_increment, 1.0 / steps),
     )
     targets = {key: value for key, value in inverse.items() if value is not None}

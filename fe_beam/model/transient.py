@@ -9,7 +9,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from fe_beam.config import NUMBER, ConfigError, Key, StaticConfig, _wrap, parse_static, table
+from fe_beam.config import (
+    NUMBER,
+    ConfigError,
+    Key,
+    StaticConfig,
+    _wrap,
+    given_max_increment,
+    parse_static,
+    table,
+)
 from fe_beam.model.finger import TENDON_KEYS, check_tendon_inside, parse_tendon
 from fe_beam.model.settings import Damping, TimeSettings
 from fe_beam.timefunctions import TimeFunctionError, parse_formula, time_function
@@ -224,7 +233,8 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
     count = max(steps)
     if count < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {count}")
-    stepping = replace(static.stepping, steps=count, max_increment=1.0 / count,
+    stepping = replace(static.stepping, steps=count,
+                       max_increment=given_max_increment(config, count),
                        min_increment=min(static.stepping.min_increment, 1.0 / count))
     return replace(static, tendons=tuple(tendons), stepping=stepping), tuple(functions)
 
