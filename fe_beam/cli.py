@@ -272,16 +272,21 @@ def run_design_command(args, config: dict, comm) -> int:
                        f"iterations ({summary['gradient']} gradients); results in {args.out}")
 
 
+def _exit_code(comm, summary: dict, who: str) -> int:
+    """0 for a converged run, else its message on stderr after ``who`` and EXIT_FAILED."""
+    if summary["status"] != "converged":
+        _say(comm, f"{who}: {summary['message']}", sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
 def _report_fit(comm, command: str, summary: dict, line: str) -> int:
     """Notes on stderr, the result line on stdout; exit 3 when the fit/optimum did not
     converge (calibrate, design)."""
     for note in summary.get("notes", []):
         _say(comm, f"fe-beam {command}: note: {note}", sys.stderr)
     _say(comm, line)
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam {command}: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _exit_code(comm, summary, f"fe-beam {command}")
 
 
 RUNNERS["design"] = run_design_command
@@ -319,10 +324,7 @@ def run_path_command(args, config: dict, comm) -> int:
                    f"{tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
     _say(comm, f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam path: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _exit_code(comm, summary, "fe-beam path")
 
 
 RUNNERS["path"] = run_path_command
@@ -354,10 +356,7 @@ def run_solid_command(args, config: dict, comm) -> int:
         _say(comm, line)
     _say(comm, f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _exit_code(comm, summary, "fe-beam")
 
 
 def run_compare_command(args, config: dict, comm) -> int:
@@ -378,10 +377,7 @@ def run_compare_command(args, config: dict, comm) -> int:
     for entry in summary["departures"].values():
         _say(comm, entry["statement"])
     _say(comm, f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _exit_code(comm, summary, "fe-beam")
 
 
 RUNNERS["solid"] = run_solid_command
@@ -399,10 +395,7 @@ def run_validity_command(args, config: dict, comm) -> int:
     _say(comm, f"{counts['finished']} of {counts['total']} points ({counts['computed']} computed, "
                f"{counts['skipped']} already finished, {counts['failed']} failed), "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    if summary["status"] != "converged":
-        _say(comm, f"fe-beam validity: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
+    return _exit_code(comm, summary, "fe-beam validity")
 
 
 RUNNERS["validity"] = run_validity_command
