@@ -10,7 +10,8 @@ must stay within TOL = 1e-3 L of it at every sample time. The released beam swin
 bending mode, but modes 2 and 3 carry ~1e-2 L and ~1e-3 L of the tip motion: a trajectory
 accurate to 1e-3 L needs them in phase over 2 T1 (79 and 220 rad of their phase).
 
-* fe_beam: `BeamProblem` + static pre-state (`fe_beam.transient._static_prestate`, 5 load steps)
+* fe_beam: `BeamProblem` + static pre-state (`fe_beam.analyses.transient._static_prestate`, 5 load
+steps)
   + `GeneralizedAlpha` (rho_inf = 0.9, fixed step, SNES rtol 1e-9), once with fe_beam's default
   linear solver (MUMPS) and once with PETSc's LU (fine here: no multiplier fields). The tip is
   recorded every step and interpolated (cubic spline) to the sample times.
@@ -61,10 +62,10 @@ from fe_beam import (
     SolverSettings,
     Supports,
 )
+from fe_beam.analyses.transient import _static_prestate
 from fe_beam.baselines import fd_rk
-from fe_beam.config import StaticConfig
-from fe_beam.dynamics import GeneralizedAlpha, TimeSettings
-from fe_beam.transient import _static_prestate
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.dynamics import GeneralizedAlpha, TimeSettings
 
 LENGTH, E, NU, RHO = 1.0, 1.0e7, 0.3, 1000.0
 K_LOAD = 1.5

@@ -41,8 +41,8 @@ from fe_beam import (
     SolverSettings,
     Supports,
 )
-from fe_beam.dynamics import DynamicsFailed, GeneralizedAlpha, TimeSettings
-from fe_beam.energy_momentum import EnergyMomentum
+from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha, TimeSettings
+from fe_beam.solvers.energy_momentum import EnergyMomentum
 
 LENGTH, E, NU, RHO = 1.0, 1.0e7, 0.3, 1000.0
 SCHEMES = {"energy-conserving": (EnergyMomentum, 0.9),

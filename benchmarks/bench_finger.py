@@ -1,6 +1,6 @@
 """Tendon finger benchmark (issue 4): tension sweep and inverse solve, fe_beam vs shooting.
 
-The finger is `fe_beam.finger.DEFAULT_FINGER` (the chapter's finger: L = 0.1 m, B = 0.02 m,
+The finger is `fe_beam.analyses.finger.DEFAULT_FINGER` (the chapter's finger: L = 0.1 m, B = 0.02 m,
 H 0.02 -> 0.01 m, E = 0.6 MPa, one tendon 8 -> 4 mm, 20 load steps to 2 N). The independent
 reference `fe_beam.baselines.shooting` solves the chapter's model: extensible, unshearable,
 m = EJ theta' (``curvature="reference"``); fe_beam solves the same model with the Reissner law
@@ -21,7 +21,8 @@ Sweep: the tip at the 20 tensions 0.1, 0.2, ..., 2 N. Both codes must be within 
   reactions (continuation, in the baseline's favour).
 
 Inverse: the tension that turns the tip by 0.3 rad (examples/finger.toml), by
-`fe_beam.finger.tension_for_tip_angle` (what `fe-beam finger` does for [inverse] tip_angle: brentq
+`fe_beam.analyses.finger.tension_for_tip_angle` (what `fe-beam finger` does for [inverse]
+tip_angle: brentq
 on full 20-step solves, xtol 1e-12) with the fewest elements whose tension is within 1e-4
 (relative) of the reference (and 2x elements also), and by `shooting.tension_for_tip_angle`
 (brentq, xtol 1e-14, solve_finger at its default rtol 1e-10). Reference: the shooting inverse
@@ -41,9 +42,7 @@ import sys
 import numpy as np
 from common import stats, table, timed, write_results
 
-from fe_beam.baselines import shooting
-from fe_beam.beam import BeamProblem
-from fe_beam.finger import (
+from fe_beam.analyses.finger import (
     DEFAULT_FINGER,
     InverseTarget,
     parse_finger,
@@ -51,9 +50,16 @@ from fe_beam.finger import (
     solve_inverse,
     tension_for_tip_angle,
 )
-from fe_beam.solver import NonlinearProblem, SNESSolver, rotation_jump_check, run_load_stepping
-from fe_beam.static import StaticContinuation, solve_static
-from fe_beam.tendons import PullInSolver, TendonSet
+from fe_beam.analyses.static import StaticContinuation, solve_static
+from fe_beam.baselines import shooting
+from fe_beam.fem.rod import BeamProblem
+from fe_beam.fem.tendons import PullInSolver, TendonSet
+from fe_beam.solvers.newton import (
+    NonlinearProblem,
+    SNESSolver,
+    rotation_jump_check,
+    run_load_stepping,
+)
 
 TOL = 1e-4  # tip position / L
 INVERSE_TOL = 1e-4  # relative tension error of the inverse solve

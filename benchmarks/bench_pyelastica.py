@@ -38,8 +38,8 @@ import numpy as np
 from common import cantilever, static_config, stats, table, timed, tip_errors, write_results
 
 from fe_beam import BeamProblem, LoadStepping, NonlinearProblem, SNESSolver, run_load_stepping
+from fe_beam.analyses.static import solve_static
 from fe_beam.analytic import elastica_tip_load
-from fe_beam.static import solve_static
 
 K = 3.0
 DEFAULT_TOL = 1e-3

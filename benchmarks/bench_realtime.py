@@ -4,7 +4,7 @@ cold `solve_static` of the k = 3 cantilever with cached forms vs tuned PyElastic
 a. Finger. The chapter's finger and model as in bench_finger.py (Reissner + unshearable, the
    shooting solver's model), with the fewest degree-2 elements whose tip is within 1e-4 L of a
    converged shooting reference at all 20 tensions 0.1 .. 2 N (and 2x elements also; the
-   search of bench_finger.py). `fe_beam.realtime.RealtimeSolver` is built once at 2 N, then
+   search of bench_finger.py). `fe_beam.solvers.realtime.RealtimeSolver` is built once at 2 N, then
    updated (i) through the 20 tensions of the sweep (steps of 0.1 N; every tip is checked
    against the reference) and (ii) along a control-rate trajectory, tau(t) = 1.5 + 0.5
    sin(2 pi t), t = 0 .. 1 s sampled at 1 kHz (1000 updates). Baseline: seed 001's shooting
@@ -43,9 +43,9 @@ import time
 import numpy as np
 from common import cantilever, static_config, stats, table, timed, write_results  # noqa: F401
 
-from fe_beam import realtime
+from fe_beam.analyses.static import solve_static
 from fe_beam.baselines import shooting
-from fe_beam.static import solve_static
+from fe_beam.solvers import realtime
 
 TRAJECTORY = 1.5 + 0.5 * np.sin(2 * np.pi * np.arange(1000) / 1000.0)
 SHOOTING_TRAJECTORY = 100

@@ -1,7 +1,8 @@
 """3D finger benchmark (issue 5): Newton iteration cost vs DOFs (MUMPS and GAMG), a full tension
 sweep on a >= 100k-DOF mesh, and 1 vs 2 MPI ranks.
 
-The finger is the chapter's finger of `fe_beam.finger.DEFAULT_FINGER` in 3D (`fe_beam.solid`):
+The finger is the chapter's finger of `fe_beam.analyses.finger.DEFAULT_FINGER` in 3D
+(`fe_beam.solid`):
 L = 0.1 m, B = 0.02 m, H 0.02 -> 0.01 m, a straight tendon 8 -> 4 mm above the axis anchored
 on the tip face, Neo-Hookean with E = 0.6 MPa, nu = 0.45, P2 displacement formulation, uniform
 gmsh sizes (`MeshSizes(size)`), clamp at x = 0.
@@ -51,8 +52,8 @@ from common import fit_exponent, table, write_results
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fe_beam import compat
-from fe_beam.finger import DEFAULT_FINGER
+from fe_beam.analyses.finger import DEFAULT_FINGER
+from fe_beam.fem import compat
 from fe_beam.solid import (
     Discretization,
     FingerGeometry,
@@ -63,7 +64,7 @@ from fe_beam.solid import (
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solver import LoadStepping, SolveFailed, SolverSettings, run_load_stepping
+from fe_beam.solvers.newton import LoadStepping, SolveFailed, SolverSettings, run_load_stepping
 
 _d = DEFAULT_FINGER
 LENGTH = _d["beam"]["length"]

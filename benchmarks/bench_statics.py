@@ -36,8 +36,8 @@ from fe_beam import (
     SolverSettings,
     run_load_stepping,
 )
+from fe_beam.analyses.static import solve_static
 from fe_beam.analytic import elastica_tip_load
-from fe_beam.static import solve_static
 
 K_MAX = 10.0
 SWEEP_ELEMENTS = 100

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_beam.calibrate import CalibrationData, CalibrationSpec, calibrate
+from fe_beam.analyses.calibrate import CalibrationData, CalibrationSpec, calibrate
+from fe_beam.analyses.sensitivity import RodSensitivity
 from fe_beam.cli import quiet_jit_logging
-from fe_beam.sensitivity import RodSensitivity
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

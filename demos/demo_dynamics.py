@@ -22,12 +22,12 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam.analyses.finger import parse_finger, run_finger
+from fe_beam.analyses.transient import parse_dynamic, parse_modes, run_dynamic, run_modes
 from fe_beam.cli import quiet_jit_logging
-from fe_beam.config import load_config
-from fe_beam.dynamics import period_from_crossings
-from fe_beam.finger import parse_finger, run_finger
-from fe_beam.outputs import _pyplot
-from fe_beam.transient import parse_dynamic, parse_modes, run_dynamic, run_modes
+from fe_beam.config.schema import load_config
+from fe_beam.exports.outputs import _pyplot
+from fe_beam.solvers.dynamics import period_from_crossings
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

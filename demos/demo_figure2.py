@@ -30,11 +30,11 @@ from fe_beam import (
     Section,
     Supports,
 )
+from fe_beam.analyses.static import solve_static
 from fe_beam.analytic import elastica_tip_load
 from fe_beam.cli import quiet_jit_logging
-from fe_beam.config import StaticConfig
-from fe_beam.outputs import plot_deformed_shapes
-from fe_beam.static import solve_static
+from fe_beam.config.schema import StaticConfig
+from fe_beam.exports.outputs import plot_deformed_shapes
 
 LENGTH, E, K_MAX = 1.0, 1.0e7, 10.0
 

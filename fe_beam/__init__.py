@@ -8,8 +8,8 @@ if _os.path.basename(_sys.argv[0] if _sys.argv else "") == "fe-beam":
     from fe_beam import runctl as _runctl
 
     _runctl.defer_signals()
+from fe_beam import _moved
 from fe_beam.lazy import lazy_getattr
-from fe_beam.materials import Material
 from fe_beam.model import (
     BeamModel,
     Discretisation,
@@ -19,19 +19,22 @@ from fe_beam.model import (
     SolverSettings,
     Supports,
 )
-from fe_beam.sections import Section, SectionProperties
+from fe_beam.model.materials import Material
+from fe_beam.model.sections import Section, SectionProperties
 
 # the finite-element names load dolfinx and PETSc: imported when first used (PEP 562), so that
-# `import fe_beam.config` (validation, `fe-beam --help`) does not load the FE stack
+# `import fe_beam.config.schema` (validation, `fe-beam --help`) does not load the FE stack
 _LAZY = {
-    "BeamProblem": "fe_beam.beam",
-    "LoadSteppingFailed": "fe_beam.solver",
-    "NonlinearProblem": "fe_beam.solver",
-    "SNESSolver": "fe_beam.solver",
-    "SolveFailed": "fe_beam.solver",
-    "run_load_stepping": "fe_beam.solver",
+    "BeamProblem": "fe_beam.fem.rod",
+    "LoadSteppingFailed": "fe_beam.solvers.newton",
+    "NonlinearProblem": "fe_beam.solvers.newton",
+    "SNESSolver": "fe_beam.solvers.newton",
+    "SolveFailed": "fe_beam.solvers.newton",
+    "run_load_stepping": "fe_beam.solvers.newton",
 }
 
+
+_moved.install()  # the import paths before the layers (fe_beam._moved.MOVED)
 
 __getattr__ = lazy_getattr("fe_beam", _LAZY, globals())
 

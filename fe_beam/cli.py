@@ -21,7 +21,7 @@ import time
 import traceback
 from pathlib import Path
 
-from fe_beam.config import (
+from fe_beam.config.schema import (
     ConfigError,
     apply_overrides,
     check_command_tables,
@@ -90,11 +90,11 @@ def _parser() -> argparse.ArgumentParser:
             help="override a config value, e.g. --set section.h=0.01",
         )
         command.add_argument("--quiet", action="store_true", help="no progress bar")
-    from fe_beam.refine import add_refine_arguments
+    from fe_beam.analyses.refine import add_refine_arguments
 
     add_refine_arguments(sub.choices["refine"])
     sub.choices["calibrate"].add_argument("--data", required=True, metavar="DATA.csv",
-                                          help="measurements (fe_beam.calibrate: columns)")
+                                          help="measurements (fe_beam.analyses.calibrate: columns)")
     return parser
 
 
@@ -147,8 +147,8 @@ def _finish(comm, result, out) -> int:
 
 
 def run_static(args, config: dict, comm) -> int:
-    from fe_beam.config import parse_static
-    from fe_beam.static import solve_static
+    from fe_beam.analyses.static import solve_static
+    from fe_beam.config.schema import parse_static
 
     parsed = parse_static(config)
     result = solve_static(parsed, args.out, comm, progress=not args.quiet)
@@ -163,7 +163,7 @@ def run_static(args, config: dict, comm) -> int:
 
 
 def run_finger(args, config: dict, comm) -> int:
-    from fe_beam.finger import parse_finger, run_finger
+    from fe_beam.analyses.finger import parse_finger, run_finger
 
     parsed, target = parse_finger(config)
     result, inverse = run_finger(
@@ -189,7 +189,7 @@ def run_finger(args, config: dict, comm) -> int:
 
 
 def run_dynamic(args, config: dict, comm) -> int:
-    from fe_beam.transient import parse_dynamic, run_dynamic
+    from fe_beam.analyses.transient import parse_dynamic, run_dynamic
 
     parsed = parse_dynamic(config)
     result = run_dynamic(parsed, args.out, comm, progress=not args.quiet)
@@ -208,8 +208,8 @@ def run_dynamic(args, config: dict, comm) -> int:
 
 
 def run_modes(args, config: dict, comm) -> int:
+    from fe_beam.analyses.transient import parse_modes, run_modes
     from fe_beam.runctl import WARNED
-    from fe_beam.transient import parse_modes, run_modes
 
     static, modes = parse_modes(config)
     summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
@@ -245,7 +245,7 @@ RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
 
 
 def run_refine(args, config: dict, comm) -> int:
-    from fe_beam.refine import run_refine_command
+    from fe_beam.analyses.refine import run_refine_command
 
     return run_refine_command(args, config, comm, say=lambda text, stream=None: _say(
         comm, text, stream))
@@ -255,8 +255,8 @@ RUNNERS["refine"] = run_refine
 
 
 def run_design_command(args, config: dict, comm) -> int:
-    from fe_beam.design import run_design
-    from fe_beam.realtime import UpdateFailed
+    from fe_beam.analyses.design import run_design
+    from fe_beam.solvers.realtime import UpdateFailed
 
     try:
         summary = run_design(config, args.out, comm, progress=not args.quiet)
@@ -293,7 +293,7 @@ RUNNERS["design"] = run_design_command
 
 
 def run_buckling_command(args, config: dict, comm) -> int:
-    from fe_beam.buckling import run_buckling
+    from fe_beam.solvers.buckling import run_buckling
 
     summary = run_buckling(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
@@ -313,7 +313,7 @@ RUNNERS["buckling"] = run_buckling_command
 
 
 def run_path_command(args, config: dict, comm) -> int:
-    from fe_beam.path import run_path
+    from fe_beam.analyses.path import run_path
 
     summary = run_path(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
@@ -331,7 +331,7 @@ RUNNERS["path"] = run_path_command
 
 
 def run_solid_command(args, config: dict, comm) -> int:
-    from fe_beam.solid.driver import run_solid
+    from fe_beam.analyses.solid_driver import run_solid
 
     summary = run_solid(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
@@ -350,7 +350,7 @@ def run_solid_command(args, config: dict, comm) -> int:
     if "distance_to_solid" in rod:
         _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
                    f"{rod['distance_to_solid']['max_over_L']:.3g}")
-    from fe_beam.solid.modes import modes_table  # [modes]: solid vs rod frequencies
+    from fe_beam.solvers.solid_modes import modes_table  # [modes]: solid vs rod frequencies
 
     for line in modes_table(summary.get("modes")):
         _say(comm, line)
@@ -360,7 +360,7 @@ def run_solid_command(args, config: dict, comm) -> int:
 
 
 def run_compare_command(args, config: dict, comm) -> int:
-    from fe_beam.compare import run_compare
+    from fe_beam.analyses.compare import run_compare
 
     summary = run_compare(config, args.out, comm, progress=not args.quiet)
     for row in summary["table"]:
@@ -385,7 +385,7 @@ RUNNERS["compare"] = run_compare_command
 
 
 def run_validity_command(args, config: dict, comm) -> int:
-    from fe_beam.validity import run_validity
+    from fe_beam.analyses.validity import run_validity
 
     summary = run_validity(config, args.out, comm, progress=not args.quiet,
                            say=lambda text: _say(comm, text, sys.stderr))
@@ -402,8 +402,8 @@ RUNNERS["validity"] = run_validity_command
 
 
 def run_calibrate_command(args, config: dict, comm) -> int:
-    from fe_beam.calibrate import run_calibrate
-    from fe_beam.solver import LoadSteppingFailed
+    from fe_beam.analyses.calibrate import run_calibrate
+    from fe_beam.solvers.newton import LoadSteppingFailed
 
     try:
         summary = run_calibrate(config, args.data, args.out, comm, quiet=args.quiet)
@@ -647,7 +647,7 @@ def check_solver_options(validated) -> None:
     """PETSc's verdict on the configuration's PETSc options (ConfigError naming the first one
     it rejects), before the run starts: the finite-element stack is loaded by now."""
     if validated.petsc_options:
-        from fe_beam.solver import check_petsc_options
+        from fe_beam.solvers.newton import check_petsc_options
 
         for options in validated.petsc_options:
             check_petsc_options(options)
@@ -672,7 +672,7 @@ def _main(argv: list[str] | None = None) -> int:
                   "quantities": getattr(args, "quantity", None)}
         validated = validate(args.command, config, refine)
         if args.command == "calibrate":  # the data file too, before the FE stack is loaded
-            from fe_beam.calibrate import check_data
+            from fe_beam.analyses.calibrate import check_data
 
             check_data(config, args.data)
         world = _world() if isinstance(comm, SerialComm) else comm

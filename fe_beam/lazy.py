@@ -18,3 +18,15 @@ def lazy_getattr(module: str, names: dict[str, str], namespace: dict):
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
 
     return attribute
+
+
+class LazyModule:
+    """A stand-in for a third-party module that imports it on first attribute access, e.g.
+    ``ufl = LazyModule("ufl")`` in a model module: validating a configuration builds the law
+    dataclasses without loading UFL, building a law's energy loads it."""
+
+    def __init__(self, name: str):
+        self._name = name
+
+    def __getattr__(self, attribute: str):
+        return getattr(importlib.import_module(self._name), attribute)

@@ -160,7 +160,7 @@ def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
 
 def table_function(table) -> Callable[[float], float]:
     """Piecewise-linear f(t) through [[t0, f0], [t1, f1], ...], constant beyond the ends."""
-    import numpy as np  # here: fe_beam.config (and `fe-beam --help`) load this module
+    import numpy as np  # here: fe_beam.config.schema (and `fe-beam --help`) load this module
 
     try:
         points = np.array(table, dtype=float)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from fe_beam.solid.geometry import FingerGeometry, MeshSizes, TendonPath, write_msh
+from fe_beam.fem.solid.geometry import FingerGeometry, MeshSizes, TendonPath, write_msh
 
 
 def main(argv=None) -> int:

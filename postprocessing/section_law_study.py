@@ -25,10 +25,10 @@ from mpi4py import MPI
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from fe_beam import compare as cmp  # noqa: E402
-from fe_beam.config import apply_overrides, load_config  # noqa: E402
-from fe_beam.outputs import atomic_write_json, atomic_write_text  # noqa: E402
-from fe_beam.solid.driver import backbone_distance, run_rod  # noqa: E402
+from fe_beam.analyses import compare as cmp  # noqa: E402
+from fe_beam.analyses.solid_driver import backbone_distance, run_rod  # noqa: E402
+from fe_beam.config.schema import apply_overrides, load_config  # noqa: E402
+from fe_beam.exports.outputs import atomic_write_json, atomic_write_text  # noqa: E402
 
 EXAMPLES = ROOT / "examples" / "section_laws"
 LAWS = ("hyperelastic", "nonstandard", "reissner")

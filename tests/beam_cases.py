@@ -13,8 +13,8 @@ from fe_beam import (
     SolverSettings,
     Supports,
 )
-from fe_beam.config import StaticConfig
-from fe_beam.static import solve_static
+from fe_beam.analyses.static import solve_static
+from fe_beam.config.schema import StaticConfig
 
 E = 1.0e7
 NU = 0.3

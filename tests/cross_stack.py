@@ -155,8 +155,8 @@ def numbers(tree, path: str = "") -> dict[str, float]:
 
 def dump_mesh(finger, path: Path) -> None:
     """Vertices, tetrahedra, clamp and tip triangles and tendon chains of a serial finger mesh."""
-    from fe_beam import compat
-    from fe_beam.solid.geometry import CLAMP_TAG, TIP_TAG
+    from fe_beam.fem import compat
+    from fe_beam.fem.solid.geometry import CLAMP_TAG, TIP_TAG
 
     msh = finger.mesh
     x = msh.geometry.x
@@ -175,8 +175,8 @@ def mesh_from_file(path: Path):
     import numpy as np
     from mpi4py import MPI
 
-    from fe_beam import compat
-    from fe_beam.solid.geometry import FingerMesh
+    from fe_beam.fem import compat
+    from fe_beam.fem.solid.geometry import FingerMesh
 
     data = json.loads(path.read_text())
 
@@ -216,10 +216,10 @@ def use_stored_mesh(path: Path) -> None:
     import importlib
     import pkgutil
 
-    import fe_beam.solid
-    from fe_beam.solid import geometry
+    import fe_beam
+    from fe_beam.fem.solid import geometry
 
-    for module in pkgutil.walk_packages(fe_beam.solid.__path__, "fe_beam.solid."):
+    for module in pkgutil.walk_packages(fe_beam.__path__, "fe_beam."):
         importlib.import_module(module.name)
     original = geometry.create_finger_mesh
     if not path.exists():
@@ -236,8 +236,8 @@ def use_stored_mesh(path: Path) -> None:
 
 
 def run_case(name: str, folder: Path) -> dict:
-    from fe_beam import compat
     from fe_beam.cli import main
+    from fe_beam.fem import compat
 
     command, config, dimension = CASES[name]
     path = folder / f"{name}.toml"

@@ -1,7 +1,7 @@
 """Independent numpy/scipy references for rod section laws derived from 3D hyperelastic laws.
 
 Nothing here uses UFL, dolfinx or fe_beam (``from_solid_law`` only reads the public attributes
-of an ``fe_beam.solid.materials`` law object by duck typing). The references are written from the
+of an ``fe_beam.model.hyperelastic`` law object by duck typing). The references are written from the
 formulas of docs/theory.md, section "Section laws from 3D hyperelastic materials", and are meant
 to judge an implementation, so they favour accuracy over speed: root finding by ``brentq`` with
 tight tolerances and adaptive ``scipy.integrate.quad`` over the exact section profile.
@@ -109,7 +109,7 @@ def small_strain_modulus(law_name: str, coeffs: dict, bulk: float) -> float:
 
 
 def from_solid_law(law) -> tuple:
-    """(law_name, coeffs, bulk, volumetric) of an fe_beam.solid.materials law object."""
+    """(law_name, coeffs, bulk, volumetric) of an fe_beam.model.hyperelastic law object."""
     coeffs = {k: v for k, v in law.coefficients().items() if k != "kappa"}
     return _name(law.name), coeffs, float(law.kappa), law.volumetric
 
@@ -363,7 +363,7 @@ def section_area(shape: str, dims: dict) -> float:
 
 
 def section_moment_exact(shape: str, dims: dict, n: int) -> float:
-    """int eta^n dA about the centroid (n = 2, 3, 4 give I, I3, I4 of fe_beam.sections)."""
+    """int eta^n dA about the centroid (n = 2, 3, 4 give I, I3, I4 of fe_beam.model.sections)."""
     return _integrate(shape, dims, lambda eta: eta**n)
 
 

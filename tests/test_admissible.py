@@ -30,10 +30,10 @@ from fe_beam import (
     Supports,
     runctl,
 )
-from fe_beam.beam import StrainRange
+from fe_beam.analyses.static import solve_static
 from fe_beam.cli import main
-from fe_beam.config import StaticConfig
-from fe_beam.static import solve_static
+from fe_beam.config.schema import StaticConfig
+from fe_beam.fem.rod import StrainRange
 
 E, D = 1.0e7, 0.02  # a circular section (the case was a square)
 AREA = math.pi * D**2 / 4

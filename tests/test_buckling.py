@@ -1,4 +1,5 @@
-"""Linear buckling (fe_beam.buckling, `fe-beam buckling`): Euler columns, the shear / extension
+"""Linear buckling (fe_beam.solvers.buckling, `fe-beam buckling`): Euler columns, the shear /
+extension
 corrections of stocky columns (closed forms of tests/column_closed_forms.py, docs/theory.md
 Linear buckling), the observed convergence rate, mode shapes, 2 ranks, the 3D column and the
 command line."""
@@ -13,11 +14,11 @@ import pytest
 from column_closed_forms import CASES, critical_loads
 from mpi4py import MPI
 
-from fe_beam import compat
-from fe_beam.buckling import rod_buckling
+from fe_beam.analyses.static import StaticContinuation
 from fe_beam.cli import main
-from fe_beam.config import parse_static
-from fe_beam.static import StaticContinuation
+from fe_beam.config.schema import parse_static
+from fe_beam.fem import compat
+from fe_beam.solvers.buckling import rod_buckling
 
 E, NU, B, L = 2.0e11, 0.3, 0.01, 1.0
 G = E / (2 * (1 + NU))
@@ -290,7 +291,7 @@ def test_example_runs_and_gives_euler_loads(tmp_path):
     no note about unused tables."""
     from pathlib import Path
 
-    from fe_beam.config import check_command_tables, load_config
+    from fe_beam.config.schema import check_command_tables, load_config
 
     example = Path(__file__).resolve().parents[1] / "examples" / "column_buckling.toml"
     assert check_command_tables("buckling", load_config(example)) == []
@@ -312,14 +313,14 @@ SOLID_COLUMN = {"beam": {"length": 0.2}, "section": {"shape": "rectangle", "b": 
 
 
 def solid_factor(comm=MPI.COMM_WORLD) -> float:
-    from fe_beam.buckling import run_buckling
+    from fe_beam.solvers.buckling import run_buckling
 
     return run_buckling(json.loads(json.dumps(SOLID_COLUMN)), None, comm,
                         progress=False)["load_factors"][0]
 
 
 def rod_factor(law: str) -> float:
-    from fe_beam.buckling import run_buckling
+    from fe_beam.solvers.buckling import run_buckling
 
     config = {k: v for k, v in json.loads(json.dumps(SOLID_COLUMN)).items() if k != "solid"}
     config["model"]["law"] = law

@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from fe_beam.calibrate import CalibrationData, CalibrationSpec, calibrate
+from fe_beam.analyses.calibrate import CalibrationData, CalibrationSpec, calibrate
+from fe_beam.analyses.sensitivity import RodSensitivity
 from fe_beam.cli import main
-from fe_beam.sensitivity import RodSensitivity
 
 FINGER = {"beam": {"length": 0.1},
           "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
@@ -290,7 +290,7 @@ def test_calibration_demo_fits_rod_to_3d_backbone(tmp_path):
 
 
 def test_default_bounds_keep_physical_parameters_positive():
-    from fe_beam.calibrate import default_bounds
+    from fe_beam.analyses.calibrate import default_bounds
 
     assert default_bounds("material.E") == (0.0, np.inf)
     assert default_bounds("material.nu") == (-1.0, 0.5)
@@ -329,7 +329,7 @@ def test_parameters_the_data_cannot_tell_apart_have_no_standard_errors():
 def test_trial_without_equilibrium_is_a_rejected_step(finger_model, monkeypatch):
     """A trial parameter set without an equilibrium (here: the first trial step) shrinks the
     trust region instead of ending the fit (was: LoadSteppingFailed, exit 3, no summary)."""
-    from fe_beam.solver import LoadSteppingFailed
+    from fe_beam.solvers.newton import LoadSteppingFailed
 
     clean = synthetic(finger_model, TRUTH, TENSIONS)
     finger_model.set_values(TRUTH * [0.8, 1.25])
@@ -390,7 +390,7 @@ def test_parameter_stopped_by_its_bound_has_no_standard_error(finger_model):
 def test_data_file_with_a_byte_order_mark(tmp_path, finger_model):
     """A CSV saved by a spreadsheet with a UTF-8 byte order mark reads like one without (was:
     unknown column '\\ufefftension')."""
-    from fe_beam.calibrate import read_data
+    from fe_beam.analyses.calibrate import read_data
 
     _, data = write_case(tmp_path)
     plain = read_data(data)
@@ -441,7 +441,7 @@ def test_tension_column_with_other_loads_is_refused(change, named):
     """The load factor tension / tendons.0.tension scales every load: with gravity or a
     second tendon a tension column would fit a model whose gravity (other tendon) changes
     with tendon 0's tension (was: fitted silently). load_factor data are accepted."""
-    from fe_beam.config import ConfigError
+    from fe_beam.config.schema import ConfigError
 
     raw = {**FINGER, **change}
     model = RodSensitivity(raw, ("material.E",))

@@ -1,4 +1,4 @@
-"""Every dolfinx/ufl/basix/petsc4py-version-specific call lives in ``fe_beam/compat.py``
+"""Every dolfinx/ufl/basix/petsc4py-version-specific call lives in ``fe_beam/fem/compat.py``
 (issue 13): the names below differ between Debian's dolfinx 0.5.2 and PyPI's 0.10/0.11 (or are
 internals that move between versions) and must not appear anywhere else in the repository's
 Python code. A new one found in a version move belongs in this list and in compat."""
@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-COMPAT = ROOT / "fe_beam" / "compat.py"
+COMPAT = ROOT / "fe_beam" / "fem" / "compat.py"
 
 # (pattern, what replaces it)
 VERSION_SPECIFIC = [
@@ -63,14 +63,14 @@ def test_version_specific_names_only_in_compat(pattern, instead):
     found = [f"{path.relative_to(ROOT)}:{number}: {code.strip()}"
              for path in python_files() for number, code in code_lines(path)
              if regex.search(code)]
-    assert not found, f"use {instead} (fe_beam/compat.py) instead of:\n" + "\n".join(found)
+    assert not found, f"use {instead} (fe_beam/fem/compat.py) instead of:\n" + "\n".join(found)
 
 
 def test_the_grep_sees_the_package_and_would_catch_a_use():
     """The file walk covers the package and the tests, and each pattern matches the call it
     names: a pattern with a typo would pass on any code."""
     files = {p.relative_to(ROOT).as_posix() for p in python_files()}
-    assert {"fe_beam/beam.py", "fe_beam/solid/problem.py", "tests/test_beam.py"} <= files
+    assert {"fe_beam/fem/rod.py", "fe_beam/solvers/solid.py", "tests/test_beam.py"} <= files
     samples = [
         'ufl.FiniteElement("Lagrange", cell, 1)', "ufl.VectorElement('P', c, 2)",
         "ufl.TensorElement('P', c, 1)", "ufl.MixedElement([a, b])", "basix.ufl.element('P')",
@@ -94,7 +94,7 @@ def test_the_grep_sees_the_package_and_would_catch_a_use():
 
 def test_compat_module_provides_what_the_list_points_to():
     """Every compat function named as the replacement exists (on the running stack)."""
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     names = set(re.findall(r"compat\.(\w+)", " ".join(i for _, i in VERSION_SPECIFIC)))
     missing = [name for name in sorted(names) if not hasattr(compat, name)]

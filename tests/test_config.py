@@ -71,7 +71,7 @@ def names_key(message: str, table: str, key: str) -> bool:
 
 def test_base_config_is_valid():
     """Guard for the cases below: the unedited base config parses (no solve here)."""
-    from fe_beam.config import parse_static
+    from fe_beam.config.schema import parse_static
 
     parsed = parse_static(BASE)
     assert parsed.model.mesh.elements == 8
@@ -164,7 +164,7 @@ def test_rigid_motions_left_free_by_the_supports(x0, xL, free):
 
 
 def test_set_addresses_arrays_of_tables_by_index():
-    from fe_beam.config import ConfigError, apply_overrides
+    from fe_beam.config.schema import ConfigError, apply_overrides
 
     config = {"tendons": [{"tension": 1.0}, {"tension": 2.0}]}
     changed = apply_overrides(config, ["tendons.1.tension=3.5", "tendons.0.name=flexor"])
@@ -176,7 +176,7 @@ def test_set_addresses_arrays_of_tables_by_index():
 
 
 def test_supports_free_to_move_are_allowed_for_dynamics_and_modes():
-    from fe_beam.transient import parse_dynamic, parse_modes
+    from fe_beam.analyses.transient import parse_dynamic, parse_modes
 
     flying = edited({"supports.x0": "free", "material.rho": 1000.0, "time.t_end": 1.0,
                      "time.dt": 0.1})
@@ -230,7 +230,7 @@ def test_bad_value_through_set_is_reported_like_a_file_value(tmp_path, capsys, a
 
 
 def test_apply_overrides_parses_toml_values_and_bare_words():
-    from fe_beam.config import apply_overrides
+    from fe_beam.config.schema import apply_overrides
 
     config = apply_overrides(
         BASE,

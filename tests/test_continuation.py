@@ -1,4 +1,5 @@
-"""The continuation engine (`fe_beam.continuation`): arc-length through limit points against a
+"""The continuation engine (`fe_beam.solvers.continuation`): arc-length through limit points
+against a
 closed form, load control vs arc-length on the rod, failure reasons, snapshot/restore/step."""
 
 import math
@@ -8,13 +9,13 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fe_beam.continuation import (
+from fe_beam.solvers.continuation import (
     ArcLength,
     Continuation,
     ContinuationFailed,
     bordered_solve,
 )
-from fe_beam.solver import LoadStepping, LoadSteppingFailed, SolveFailed
+from fe_beam.solvers.newton import LoadStepping, LoadSteppingFailed, SolveFailed
 
 # --- a 2-dof problem with a closed-form path --------------------------------------------------
 #   R(x, lambda) = [f(x0) - lambda, 2 x1 - x0],  f(u) = u^3/2 - 3u^2/2 + u (a von Mises truss
@@ -64,7 +65,7 @@ class _Newton:
 
 
 class Toy:
-    """The 2-dof `fe_beam.continuation.ParameterProblem`."""
+    """The 2-dof `fe_beam.solvers.continuation.ParameterProblem`."""
 
     def __init__(self, veto=None):
         self.comm = MPI.COMM_SELF
@@ -228,8 +229,8 @@ def test_bordered_solve_matches_a_dense_solve():
 
 def _rod_run(model, tendons=(), comm=MPI.COMM_WORLD):
     from fe_beam import SolverSettings
-    from fe_beam.config import StaticConfig
-    from fe_beam.static import StaticContinuation
+    from fe_beam.analyses.static import StaticContinuation
+    from fe_beam.config.schema import StaticConfig
 
     config = StaticConfig(model, SolverSettings(), LoadStepping(steps=4), tendons=tuple(tendons))
     return StaticContinuation(config, comm)
@@ -298,7 +299,7 @@ def test_rod_arc_length_in_parallel_equals_serial():
 
 
 def compat_state(run):
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     return compat.local_array(run.problem.w).copy()
 
@@ -331,7 +332,7 @@ def test_rod_tendon_tension_as_the_parameter():
     tension T (the tension-controlled finger)."""
     from beam_cases import cantilever
 
-    from fe_beam.tendons import Tendon
+    from fe_beam.fem.tendons import Tendon
 
     tension = 2.0
     tendon = Tendon(paths=(((0.0, 0.004), (1.0, 0.004)),), tension=tension)
@@ -380,7 +381,7 @@ def test_solid_arc_length_step_matches_load_control(formulation):
     arc_state = point.state
     engine.restore(start)
     engine.load_control(point.load_factor, LoadStepping(steps=2))
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     scale = np.abs(arc_state).max()
     np.testing.assert_allclose(compat.local_array(problem.w), arc_state, atol=1e-8 * scale)
@@ -396,8 +397,8 @@ def test_rod_parameter_derivative_matches_a_central_difference():
     from beam_cases import cantilever
 
     from fe_beam import Supports
-    from fe_beam.continuation import NonlinearParameterProblem
-    from fe_beam.tendons import Tendon
+    from fe_beam.fem.tendons import Tendon
+    from fe_beam.solvers.continuation import NonlinearParameterProblem
 
     tendon = Tendon(paths=(((0.0, 0.004), (1.0, 0.002)),), tension=1.5)
     model = cantilever(elements=8, constraint="inextensible-unshearable",
@@ -429,7 +430,7 @@ def test_arc_length_refuses_pull_in_control_and_the_bordered_pull_in_keeps_the_l
     pull-in is the prescribed one to 1e-10 L; arc length on it is refused with a reason."""
     from beam_cases import cantilever
 
-    from fe_beam.tendons import Tendon
+    from fe_beam.fem.tendons import Tendon
 
     tendon = Tendon(paths=(((0.0, 0.004), (1.0, 0.004)),), pull_in=0.002)
     run = _rod_run(cantilever(elements=10, constraint="none"), [tendon])
@@ -454,9 +455,9 @@ def test_pull_in_needing_a_compressive_tension_is_noted(offset, compressed):
     from beam_cases import cantilever
 
     from fe_beam import SolverSettings
-    from fe_beam.config import StaticConfig
-    from fe_beam.static import solve_static
-    from fe_beam.tendons import Tendon
+    from fe_beam.analyses.static import solve_static
+    from fe_beam.config.schema import StaticConfig
+    from fe_beam.fem.tendons import Tendon
 
     tendon = Tendon(paths=(((0.0, offset), (1.0, offset)),), pull_in=0.0)
     model = cantilever(elements=8, constraint="none", tip_force=(0.0, 1e-3))

@@ -9,9 +9,9 @@ import pytest
 from mpi4py import MPI
 from tomlio import dump_toml
 
+from fe_beam.analyses.design import parse_design, run_design
 from fe_beam.cli import main
-from fe_beam.config import ConfigError
-from fe_beam.design import parse_design, run_design
+from fe_beam.config.schema import ConfigError
 
 E, B, L = 1.0e7, 0.02, 1.0
 
@@ -85,8 +85,8 @@ def test_fibre_strain_limit_is_active():
 def test_finger_offset_for_a_tip_pose(tmp_path):
     """A finger: the tip offset of the tendon that puts the tip at the angle that a known
     offset gives (computed independently by solve_static)."""
-    from fe_beam.finger import parse_finger
-    from fe_beam.static import solve_static
+    from fe_beam.analyses.finger import parse_finger
+    from fe_beam.analyses.static import solve_static
 
     finger = {"mesh": {"elements": 4, "degree": 2}, "output": {"plots": True, "xdmf": False},
               "model": {"law": "reissner", "constraint": "unshearable"},
@@ -260,7 +260,7 @@ def test_custom_section_dimension_is_refused_with_one_sentence(tmp_path, capfd):
 def test_trial_design_without_equilibrium_exits_3(tmp_path, capfd, monkeypatch):
     """A trial design the solver finds no equilibrium for ends the command with exit 3 and one
     line saying so (was: 'internal error', exit 1)."""
-    from fe_beam import realtime
+    from fe_beam.solvers import realtime
 
     update = realtime.RealtimeSolver.update
     calls = []

@@ -10,10 +10,10 @@ from beam_cases import dynamic_rod as rod
 from mpi4py import MPI
 
 from fe_beam import BeamProblem, Loads, Supports
-from fe_beam.config import StaticConfig
-from fe_beam.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
-from fe_beam.modes import natural_frequencies
-from fe_beam.transient import _static_prestate
+from fe_beam.analyses.transient import _static_prestate
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
+from fe_beam.solvers.modes import natural_frequencies
 
 L = 1.0
 

@@ -25,11 +25,11 @@ from fe_beam import (
     Supports,
     tendons,
 )
-from fe_beam.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
-from fe_beam.energy_momentum import EnergyMomentum, tendon_length_density
-from fe_beam.laws import strains
-from fe_beam.modes import natural_frequencies
-from fe_beam.mpi import assemble_scalar
+from fe_beam.fem.kinematics import strains
+from fe_beam.fem.mpi import assemble_scalar
+from fe_beam.solvers.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
+from fe_beam.solvers.energy_momentum import EnergyMomentum, tendon_length_density
+from fe_beam.solvers.modes import natural_frequencies
 
 L = 1.0
 H = 0.005  # L/h = 200
@@ -345,7 +345,7 @@ def test_energy_momentum_parallel_equals_serial():
 def test_tendon_like_potential_in_strain_space_is_balanced():
     """A load potential written in the strains (a tendon at constant offset delta along the
     whole rod, tension ramped by its own time function): its body-frame length density equals
-    fe_beam.tendons' global form on a deformed state, and the energy balance (the tendon's work
+    fe_beam.fem.tendons' global form on a deformed state, and the energy balance (the tendon's work
     -tau_mid Delta l in external_work) holds to 1e-9."""
     h, delta, tension = 0.02, 0.006, 2.0
     problem = BeamProblem(rod(h, "nonstandard", elements=8))
@@ -384,7 +384,7 @@ def test_tendon_like_potential_in_strain_space_is_balanced():
 def test_extra_energy_hook_is_refused_with_a_config_error():
     """A problem with an extra_energy hook (tendons: not in strain space) is a user mistake for
     this scheme (one-sentence ConfigError, exit 2 from the CLI), not a wrong answer."""
-    from fe_beam.config import ConfigError
+    from fe_beam.config.schema import ConfigError
 
     tendon_set = tendons.TendonSet([tendons.Tendon.linear(0.005, 0.005, L, tension=1.0)], L)
     problem = BeamProblem(rod(0.02, elements=4), breakpoints=tendon_set.breakpoints,

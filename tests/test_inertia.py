@@ -1,4 +1,5 @@
-"""Sparse, parallel inertia (fe_beam.inertia, docs/theory.md, Sparse inertia): the MUMPS LDL^T
+"""Sparse, parallel inertia (fe_beam.solvers.inertia, docs/theory.md, Sparse inertia): the MUMPS
+LDL^T
 pivot counts equal dense eigenvalue counts for plain symmetric matrices, saddle points
 (negative(KKT) - m = negative(Z^T K Z)), the rod under every constraint kind on one and two
 ranks and beyond the dense size limit, and the 3D column below and past its buckling load."""
@@ -14,10 +15,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam import LoadStepping, SolverSettings
-from fe_beam.config import StaticConfig
-from fe_beam.critical import spectrum
-from fe_beam.inertia import inertia, rod_unstable_count, solid_unstable_count
-from fe_beam.static import STABILITY_MAX_DOFS, StaticContinuation
+from fe_beam.analyses.static import STABILITY_MAX_DOFS, StaticContinuation
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.critical import spectrum
+from fe_beam.solvers.inertia import inertia, rod_unstable_count, solid_unstable_count
 
 EI = bending_stiffness(0.01)
 EULER = math.pi**2 * EI / 4  # first critical load of the cantilever, L = 1
@@ -144,8 +145,8 @@ def _column(formulation="displacement"):
 
 
 def _solid_at(config, factor, comm):
-    from fe_beam.model.buckling import parse_buckling
-    from fe_beam.solid.run import SolidRun
+    from fe_beam.analyses.solid import SolidRun
+    from fe_beam.config.buckling import parse_buckling
 
     _, parsed, _ = parse_buckling(config)
     run = SolidRun(parsed, comm)
@@ -159,7 +160,7 @@ def _dense_count(problem) -> int:
     import ufl
     from dolfinx import fem
 
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     form = fem.form(ufl.derivative(problem.residual, problem.w, ufl.TrialFunction(problem.W)))
     A = compat.assemble_matrix(form, bcs=problem.bcs)
@@ -178,7 +179,7 @@ def _dense_count(problem) -> int:
 
 def _factors(formulation):
     """`fe-beam buckling`'s load factors of the column (the first two modes)."""
-    from fe_beam.buckling import run_buckling
+    from fe_beam.solvers.buckling import run_buckling
 
     return run_buckling(_column(formulation), None, MPI.COMM_SELF,
                         progress=False)["load_factors"]
@@ -206,7 +207,7 @@ def test_3d_column_count_on_all_ranks():
 def test_3d_column_path_reports_stability():
     """`fe-beam path` of the 3D column (tip force only): stable below `fe-beam buckling`'s
     first load factor, one energy-decreasing direction past it (on any number of ranks)."""
-    from fe_beam.path import run_path
+    from fe_beam.analyses.path import run_path
 
     first, second = _factors("displacement")
     config = _column()
@@ -227,8 +228,8 @@ def test_bifurcation_located_from_counts_on_all_ranks():
     the count alone) locates the same bifurcation as on one rank (dense eigenvalue sign)."""
     from pathlib import Path
 
-    from fe_beam.config import load_config
-    from fe_beam.path import run_path
+    from fe_beam.analyses.path import run_path
+    from fe_beam.config.schema import load_config
 
     examples = Path(__file__).resolve().parents[1] / "examples"
     config = load_config(examples / "elastica_path.toml")

@@ -17,7 +17,7 @@ from test_cli_dynamics import DYNAMIC
 from test_config import BASE, dump_toml, edited, names_key
 
 from fe_beam.cli import main
-from fe_beam.config import ConfigError, check_command_tables, check_values, load_config
+from fe_beam.config.schema import ConfigError, check_command_tables, check_values, load_config
 from fe_beam.timefunctions import TimeFunctionError, parse_formula
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -285,7 +285,7 @@ def test_single_tendons_table_says_to_write_an_array_of_tables(tmp_path, capsys,
 
 def test_single_table_where_one_is_expected_names_the_mistake():
     with pytest.raises(ConfigError, match=r"\[beam\].*one table.*\[\[beam\]\]"):
-        from fe_beam.config import parse_static
+        from fe_beam.config.schema import parse_static
 
         parse_static({**BASE, "beam": [{"length": 1.0}]})
 
@@ -293,7 +293,7 @@ def test_single_table_where_one_is_expected_names_the_mistake():
 def test_typo_table_still_named():
     code_words = re.compile(r"unknown table \[lods\]")
     with pytest.raises(ConfigError, match=code_words):
-        from fe_beam.config import parse_static
+        from fe_beam.config.schema import parse_static
 
         parse_static({**BASE, "lods": {}})
 

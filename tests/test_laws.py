@@ -6,7 +6,7 @@ import ufl
 from dolfinx import fem, mesh
 from mpi4py import MPI
 
-from fe_beam.laws import (
+from fe_beam.fem.kinematics import (
     Stiffness,
     nonstandard_energy,
     reissner_energy,

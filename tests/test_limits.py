@@ -42,7 +42,7 @@ def test_writing_per_step_does_not_grow_with_the_steps(command, tmp_path, capsys
     20 to 200 steps. Whole-file rewrites (summary.json, the XDMF index, which grow with the
     run): at most about once a second of the run, whatever the number of steps. (When they
     were rewritten after every step, as before, both grew as the square of the steps.)"""
-    from fe_beam import outputs
+    from fe_beam.exports import outputs
 
     rewrites = {"count": {}, "bytes": 0}
     original = outputs.atomic_write_text

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fe_beam.config import ConfigError, load_config, parse_static
-from fe_beam.model.finger import parse_finger
-from fe_beam.model.transient import parse_dynamic
+from fe_beam.config.finger import parse_finger
+from fe_beam.config.schema import ConfigError, load_config, parse_static
+from fe_beam.config.transient import parse_dynamic
 
 EXAMPLES = Path(__file__).parents[1] / "examples"
 
@@ -67,7 +67,7 @@ def test_steps_mistake_is_named_before_max_increment():
 
 
 def run_static(raw: dict):
-    from fe_beam.static import solve_static
+    from fe_beam.analyses.static import solve_static
 
     result = solve_static(parse_static(raw), progress=False)
     assert result.status != "failed", result.message
@@ -94,7 +94,7 @@ def test_easy_iterations_lets_the_cantilever_grow_to_the_same_answer():
 def test_vetoed_grown_step_is_retried_at_the_first_increment(monkeypatch):
     """A branch-jump veto cuts the grown step back to no less than the first increment (the
     step load control without growth takes): every accepted increment stays >= 1/steps."""
-    from fe_beam import continuation
+    from fe_beam.solvers import continuation
 
     vetoes = []
     jump = continuation.Continuation._branch_jump

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from fe_beam.materials import Material
+from fe_beam.model.materials import Material
 
 
 @pytest.mark.parametrize("E, nu", [(2.0e11, 0.3), (70e9, 0.0), (1.0, -0.5), (3.0e6, 0.49)])

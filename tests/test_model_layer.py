@@ -1,4 +1,4 @@
-"""The model layer and `fe_beam.config` are free of the finite-element stack: validating any
+"""The model layer and `fe_beam.config.schema` are free of the finite-element stack: validating any
 configuration, ``fe-beam --help`` and a configuration mistake load neither dolfinx, nor PETSc,
 nor MPI (checked in a fresh interpreter); PETSc judges PETSc options where a solver is built."""
 
@@ -48,7 +48,7 @@ LOADED = f"[m for m in {HEAVY!r} if m in sys.modules]"
 def test_every_example_validates_without_the_fe_stack():
     code = f"""
 import json, sys
-from fe_beam.config import apply_overrides, load_config, validate
+from fe_beam.config.schema import apply_overrides, load_config, validate
 done = []
 for name, commands in {EXAMPLES!r}.items():
     config = load_config("examples/" + name)
@@ -73,11 +73,12 @@ print(json.dumps({{"done": done, "loaded": {LOADED}}}))
 def test_model_modules_import_no_fe_stack():
     code = f"""
 import json, sys
-import fe_beam, fe_beam.config, fe_beam.model, fe_beam.model.beam, fe_beam.model.laws
-import fe_beam.model.settings, fe_beam.model.tendons, fe_beam.model.solid, fe_beam.model.finger
-import fe_beam.model.transient, fe_beam.model.compare, fe_beam.solid.config, fe_beam.solid.driver
-import fe_beam.refine
-from fe_beam.solid.driver import parse_solid
+import fe_beam, fe_beam.config.schema, fe_beam.model, fe_beam.model.beam, fe_beam.model.laws
+import fe_beam.model.settings, fe_beam.model.tendons, fe_beam.model.solid, fe_beam.config.finger
+import fe_beam.config.transient, fe_beam.config.compare, fe_beam.config.solid
+import fe_beam.analyses.solid_driver
+import fe_beam.analyses.refine
+from fe_beam.analyses.solid_driver import parse_solid
 print(json.dumps({{"loaded": {LOADED}}}))
 """
     assert run_python(code)["loaded"] == []
@@ -119,8 +120,8 @@ from fe_beam.model.settings import SolverSettings
 bad = SolverSettings(petsc_options={{"ksp_type": "nonsense"}})
 bad = dataclasses.replace(bad, rtol=1e-8)
 before = {LOADED}
-from fe_beam.config import ConfigError
-from fe_beam.solver import check_petsc_options
+from fe_beam.config.schema import ConfigError
+from fe_beam.solvers.newton import check_petsc_options
 try:
     check_petsc_options(bad.petsc_options)
     message = None
@@ -153,7 +154,7 @@ def test_law_objects_give_the_energies_of_their_formulas(one_plus_e, g, eps, kap
     """NonStandard and Reissner (dataclasses, energy as a method) against the energies written
     out here: W = 1/2 EA eps^2 + 1/2 GA g^2 + 1/2 EI k^2 ((1+e)^2 + eps) + 1/2 EI3 k^3 (1+e)
     + 1/8 EI4 k^4 and W_R = 1/2 EA e^2 + 1/2 k_s GA g^2 + 1/2 EI k^2."""
-    from fe_beam.laws import strain_energy
+    from fe_beam.fem.kinematics import strain_energy
     from fe_beam.model.laws import (
         ROD_LAWS,
         NonStandard,

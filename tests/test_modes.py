@@ -6,8 +6,8 @@ import pytest
 from beam_cases import RHO, E, dynamic_rod
 
 from fe_beam import BeamProblem, Loads, Supports
-from fe_beam.modes import natural_frequencies
-from fe_beam.transient import _static_prestate
+from fe_beam.analyses.transient import _static_prestate
+from fe_beam.solvers.modes import natural_frequencies
 
 L = 1.0
 
@@ -47,7 +47,7 @@ def test_tension_raises_frequencies_as_string_beam_formula_says(law):
     model = rod(h, Supports("pinned", "roller"), law=law, elements=40,
                 loads=Loads(tip_force=(tension, 0.0)))
     problem = BeamProblem(model)
-    from fe_beam.config import StaticConfig
+    from fe_beam.config.schema import StaticConfig
 
     _static_prestate(problem, StaticConfig(model), progress=False)
     modes = natural_frequencies(problem, 4).bending()

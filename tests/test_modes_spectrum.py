@@ -11,9 +11,9 @@ from beam_cases import RHO, E, square
 from mpi4py import MPI
 
 from fe_beam import BeamModel, BeamProblem, Discretisation, Loads, Material, ModelOptions, Supports
-from fe_beam.config import StaticConfig
-from fe_beam.modes import natural_frequencies
-from fe_beam.transient import _static_prestate
+from fe_beam.analyses.transient import _static_prestate
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.modes import natural_frequencies
 
 L = 1.0
 PINNED = Supports("pinned", "roller")
@@ -309,8 +309,8 @@ def test_fifty_modes_agree_with_a_dense_reduced_solve(constraint):
     import ufl
     from dolfinx import fem
 
-    from fe_beam import compat
-    from fe_beam.modes import mass_form
+    from fe_beam.fem import compat
+    from fe_beam.solvers.modes import mass_form
 
     h, steel, density = 0.01, 2.0e11, 7850.0
     EI = steel * h**4 / 12

@@ -106,8 +106,8 @@ INJECT = """
 import sys
 from mpi4py import MPI
 import fe_beam.cli as cli
-import fe_beam.static as static
-from fe_beam.config import ConfigError
+import fe_beam.analyses.static as static
+from fe_beam.config.schema import ConfigError
 
 kind, rank = sys.argv[1], int(sys.argv[2])
 solve = static.solve_static

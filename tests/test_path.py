@@ -1,4 +1,5 @@
-"""Critical points and branch switching on the rod (fe_beam.critical, fe_beam.path) against the
+"""Critical points and branch switching on the rod (fe_beam.solvers.critical,
+fe_beam.analyses.path) against the
 elliptic-integral elastica (fe_beam.analytic)."""
 
 import math
@@ -9,16 +10,16 @@ from mpi4py import MPI
 from scipy.optimize import brentq
 
 from fe_beam import LoadStepping, SolverSettings, Supports
+from fe_beam.analyses.path import follow_path
 from fe_beam.analytic import elastica_clamped_free, elastica_pinned_pinned
-from fe_beam.config import StaticConfig
-from fe_beam.continuation import ArcLength
-from fe_beam.path import follow_path
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.continuation import ArcLength
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="dense stability: serial")
 
 
 def _follow(model, max_load_factor, branch_switch="positive", **arc):
-    from fe_beam.static import StaticContinuation
+    from fe_beam.analyses.static import StaticContinuation
 
     run = StaticContinuation(StaticConfig(model, SolverSettings(), LoadStepping(steps=4)))
     try:
@@ -91,7 +92,7 @@ def test_limit_point_of_the_nonstandard_law_under_a_tip_moment():
     kappa^2) (docs/theory.md), whose maximum 2 / (3 sqrt(0.9)) EI / h is a limit point of the
     tip-moment path: located to 1e-6, traced through (lambda turns, the branch beyond it is
     unstable)."""
-    from fe_beam.static import StaticContinuation
+    from fe_beam.analyses.static import StaticContinuation
 
     h = 0.2
     EI = bending_stiffness(h)

@@ -1,4 +1,5 @@
-"""`fe-beam path` (fe_beam.path.run_path, fe_beam.model.path): the clamped-free elastica example
+"""`fe-beam path` (fe_beam.analyses.path.run_path, fe_beam.config.path): the clamped-free elastica
+example
 against the elliptic-integral solution, a finger's tendon-tension path against fe-beam finger,
 outputs that agree with each other, and one-sentence exit 2 for bad [path] input."""
 
@@ -13,7 +14,7 @@ from tomlio import dump_toml
 
 from fe_beam.analytic import elastica_clamped_free
 from fe_beam.cli import main
-from fe_beam.config import load_config
+from fe_beam.config.schema import load_config
 
 serial = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="dense stability: serial")
 
@@ -91,8 +92,8 @@ def _finger(tmp_path, **path):
 def test_tendon_tension_path_equals_fe_beam_finger(tmp_path, tip_force):
     """The tension of the flexor from 0 to 2 N (with a tip force: held in full, the path
     starting from the state it bends alone) equals fe-beam finger at the path's tensions."""
-    from fe_beam.config import validate
-    from fe_beam.finger import run_finger
+    from fe_beam.analyses.finger import run_finger
+    from fe_beam.config.schema import validate
 
     config = _finger(tmp_path)
     if tip_force:
@@ -124,8 +125,8 @@ def test_tendon_tension_path_equals_fe_beam_finger(tmp_path, tip_force):
 def test_end_displacement_path_equals_fe_beam_static(tmp_path):
     """parameter = "end_displacement": the prescribed tip deflection scaled from 0 to 1 ends
     where fe-beam static (load stepping) ends."""
-    from fe_beam.config import validate
-    from fe_beam.static import solve_static
+    from fe_beam.analyses.static import solve_static
+    from fe_beam.config.schema import validate
 
     config = load_config(EXAMPLES / "elastica_path.toml")
     config["model"]["constraint"] = "none"
@@ -297,7 +298,8 @@ def test_path_model_layer_imports_no_fe_stack():
     import subprocess
     import sys
 
-    code = ("import sys, fe_beam.model.path; from fe_beam.config import validate, load_config;"
+    code = ("import sys, fe_beam.config.path; "
+            "from fe_beam.config.schema import validate, load_config;"
             f"validate('path', load_config({str(EXAMPLES / 'elastica_path.toml')!r}));"
             "print([m for m in ('dolfinx', 'petsc4py', 'mpi4py', 'ufl') if m in sys.modules])")
     root = Path(__file__).resolve().parents[1]
@@ -337,7 +339,7 @@ def test_solid_path_ends_where_fe_beam_solid_ends(tmp_path):
 def test_path_on_two_ranks_equals_the_serial_path(tmp_path_factory):
     """An imperfect column (small lateral tip force, no bifurcation) on the ranks of
     COMM_WORLD equals the path on one rank, stability counts included (sparse in parallel)."""
-    from fe_beam.path import run_path
+    from fe_beam.analyses.path import run_path
 
     comm = MPI.COMM_WORLD
     config = load_config(EXAMPLES / "elastica_path.toml")

@@ -57,7 +57,7 @@ def saved(monkeypatch):
     [(f"load factor {k / 10:.3g}", 4.0 * k / 10) for k in range(1, 11)],
 ])
 def test_deformed_shapes_legend_inside_axes(tmp_path, saved, shapes):
-    from fe_beam.outputs import plot_deformed_shapes
+    from fe_beam.exports.outputs import plot_deformed_shapes
 
     x = np.linspace(0.0, 1.0, 60)
     drawn = []
@@ -100,7 +100,7 @@ def test_finger_3d_skip_without_display(tmp_path, monkeypatch):
     """pyvista importable (a stand-in) but no DISPLAY and no Xvfb: the reason names both."""
     import shutil
 
-    from fe_beam import finger
+    from fe_beam.analyses import finger
 
     monkeypatch.setitem(sys.modules, "pyvista", SimpleNamespace())
     monkeypatch.delenv("DISPLAY", raising=False)
@@ -110,7 +110,7 @@ def test_finger_3d_skip_without_display(tmp_path, monkeypatch):
 
 
 def test_compare_legend_labels_carry_units(tmp_path, saved):
-    from fe_beam import compare
+    from fe_beam.analyses import compare
 
     assert compare.sweep_label(0.5, True) == "tension 0.5 N"
     assert compare.sweep_label(0.25, False) == "load factor 0.25"
@@ -130,7 +130,7 @@ def test_compare_legend_labels_carry_units(tmp_path, saved):
 
 
 def refinement_summary(values: dict, h0=0.025, ratio=2.0):
-    from fe_beam.refine import analyse_sequence
+    from fe_beam.analyses.refine import analyse_sequence
 
     count = len(next(iter(values.values())))
     levels = [{"level": k, "h": h0 / ratio**k, "elements": 40 * 2**k, "dofs": 243 * 2**k,
@@ -145,7 +145,7 @@ def refinement_summary(values: dict, h0=0.025, ratio=2.0):
 def test_refinement_title_matches_the_table_and_ticks_are_readable(tmp_path, saved):
     """4th order down to round-off at the finest level (the table: 4.000 then "noise"); another
     quantity of clean 2nd order; the x ticks name every mesh size on a sub-decade range."""
-    from fe_beam.refine import format_table, plot_convergence
+    from fe_beam.analyses.refine import format_table, plot_convergence
 
     exact = -0.7138618424
     quartic = [exact + 1.1e-8 * 16 ** -k for k in range(3)] + [exact + 2e-11]
@@ -164,7 +164,7 @@ def test_refinement_title_matches_the_table_and_ticks_are_readable(tmp_path, sav
 
 
 def test_refinement_title_says_undefined_only_when_no_level_has_an_order(tmp_path, saved):
-    from fe_beam.refine import plot_convergence
+    from fe_beam.analyses.refine import plot_convergence
 
     summary = refinement_summary({"tip.u": [0.1, 0.2, 0.15, 0.18]})  # oscillating
     plot_convergence(summary, tmp_path / "refinement.png")

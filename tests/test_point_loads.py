@@ -9,9 +9,9 @@ import json
 import pytest
 from mpi4py import MPI
 
+from fe_beam.analyses.static import StaticContinuation
 from fe_beam.cli import main
-from fe_beam.config import ConfigError, parse_static
-from fe_beam.static import StaticContinuation
+from fe_beam.config.schema import ConfigError, parse_static
 
 E, NU, B, H, L = 2.0e11, 0.3, 0.01, 0.02, 1.0
 EI = E * B * H**3 / 12
@@ -176,7 +176,7 @@ def test_force_within_round_off_of_x0_is_applied(a):
 def test_solid_refuses_rod_only_end_loads(loads, key):
     """The 3D solid takes tip_force and tendons only: the rod run beside it took these keys
     and the solid dropped them (a 1D-vs-3D comparison of two different problems, exit 0)."""
-    from fe_beam.solid.config import parse_solid
+    from fe_beam.config.solid import parse_solid
 
     raw = {"beam": {"length": 0.1}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.02},
            "material": {"E": 0.6e6, "nu": 0.45, "rho": 1070.0}, "model": {"law": "reissner"},
@@ -188,8 +188,8 @@ def test_solid_refuses_rod_only_end_loads(loads, key):
 
 def test_fd_dynamics_refuses_point_forces():
     """The FD + Runge-Kutta baseline takes tip and distributed loads only (it dropped them)."""
-    from fe_beam.model.transient import parse_dynamic
-    from fe_beam.transient import _run_finite_differences
+    from fe_beam.analyses.transient import _run_finite_differences
+    from fe_beam.config.transient import parse_dynamic
 
     cfg = config(point_forces=[[0.5, 0.0, 1.0]])
     cfg["material"]["rho"] = 7850.0
@@ -207,8 +207,8 @@ def test_calibration_tension_column_refuses_point_loads(loads, named):
     end motions were scaled silently."""
     import numpy as np
 
-    from fe_beam.calibrate import CalibrationData, CalibrationSpec, _load_factors
-    from fe_beam.sensitivity import RodSensitivity
+    from fe_beam.analyses.calibrate import CalibrationData, CalibrationSpec, _load_factors
+    from fe_beam.analyses.sensitivity import RodSensitivity
 
     raw = {"beam": {"length": 0.1},
            "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},

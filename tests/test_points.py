@@ -23,11 +23,11 @@ from beam_cases import NU, E, bending_stiffness, cantilever
 from mpi4py import MPI
 
 from fe_beam import LoadStepping, SolverSettings, Supports
-from fe_beam.beam import BeamProblem, interval_mesh, smallest_cell_size
-from fe_beam.compat import owned_bc_dofs
-from fe_beam.config import StaticConfig
-from fe_beam.mpi import global_sum
-from fe_beam.static import solve_static
+from fe_beam.analyses.static import solve_static
+from fe_beam.config.schema import StaticConfig
+from fe_beam.fem.compat import owned_bc_dofs
+from fe_beam.fem.mpi import global_sum
+from fe_beam.fem.rod import BeamProblem, interval_mesh, smallest_cell_size
 
 H = 0.01
 EI = bending_stiffness(H)
@@ -144,8 +144,8 @@ def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
     import ufl
     from dolfinx import fem
 
-    from fe_beam import compat
-    from fe_beam.mpi import assemble_scalar
+    from fe_beam.fem import compat
+    from fe_beam.fem.mpi import assemble_scalar
     from fe_beam.solid import (
         CLAMP_TAG,
         TIP_TAG,
@@ -176,7 +176,7 @@ def test_solid_tip_and_clamp_faces_and_anchor_on_two_meshes(size):
 def test_tendon_anchor_and_entry_are_single_vertices_on_a_fine_mesh():
     """Tendon entry/anchor/kinks become mesh vertices (checked at set-up: one owned vertex
     each, over all ranks); a fine mesh with an anchor off the uniform grid."""
-    from fe_beam.tendons import Tendon, TendonSet
+    from fe_beam.fem.tendons import Tendon, TendonSet
 
     model = cantilever("reissner", "none", elements=100_000, degree=1)
     tendons = TendonSet([Tendon(name="t", paths=(((0.0, 0.004), (1.0, 0.002)),),

@@ -1,4 +1,5 @@
-"""Real-time re-solves (fe_beam.realtime): warm-started updates equal fresh solve_static runs,
+"""Real-time re-solves (fe_beam.solvers.realtime): warm-started updates equal fresh solve_static
+runs,
 the load-stepping fallback, a clear failure, and the cache of built problems."""
 
 from dataclasses import replace
@@ -20,10 +21,10 @@ from fe_beam import (
     Supports,
     realtime,
 )
-from fe_beam.config import StaticConfig
-from fe_beam.finger import parse_finger
-from fe_beam.realtime import RealtimeSolver, UpdateFailed, set_parameters
-from fe_beam.static import solve_static
+from fe_beam.analyses.finger import parse_finger
+from fe_beam.analyses.static import solve_static
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.realtime import RealtimeSolver, UpdateFailed, set_parameters
 
 TOL = 1e-10
 

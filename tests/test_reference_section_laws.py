@@ -2,8 +2,9 @@
 
 The references judge the `hyperelastic` rod law, so they are themselves checked against closed
 forms (svk fibre = 1/2 E E11^2, incompressible uniaxial energies, small-strain modulus), against
-the 3D UFL laws of fe_beam.solid.materials, against the section moments of fe_beam.sections and
-the non-standard energy of fe_beam.laws, and against finite differences of themselves.
+the 3D UFL laws of fe_beam.model.hyperelastic, against the section moments of
+fe_beam.model.sections and
+the non-standard energy of fe_beam.fem.kinematics, and against finite differences of themselves.
 """
 
 import math
@@ -29,9 +30,9 @@ from reference_section_laws import (
     svk_pure_bending,
 )
 
-from fe_beam.laws import Stiffness, Strains, nonstandard_energy
-from fe_beam.sections import Section
-from fe_beam.solid.materials import MooneyRivlin, NeoHookean, SaintVenantKirchhoff, Yeoh
+from fe_beam.fem.kinematics import Stiffness, Strains, nonstandard_energy
+from fe_beam.model.hyperelastic import MooneyRivlin, NeoHookean, SaintVenantKirchhoff, Yeoh
+from fe_beam.model.sections import Section
 
 LAWS = [
     ("neo-hookean", {"mu": 1.3}),

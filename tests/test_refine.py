@@ -14,10 +14,10 @@ import types
 import pytest
 from test_config import dump_toml
 
-from fe_beam import refine
+from fe_beam.analyses import refine
+from fe_beam.analyses.refine import analyse_sequence, observed_order, richardson
 from fe_beam.analytic import elastica_tip_load
 from fe_beam.cli import main
-from fe_beam.refine import analyse_sequence, observed_order, richardson
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -333,7 +333,7 @@ def check_solid_study(out, std, sizes):
 def test_solid_config_divides_mesh_size(tmp_path, monkeypatch):
     """The real driver validates the levels; its default mesh_size min(b, h, h_tip) / 2 is the
     first level."""
-    from fe_beam.solid import driver
+    from fe_beam.analyses import solid_driver as driver
 
     calls = []
     monkeypatch.setattr(driver, "run_solid", stand_in_solid(calls))
@@ -348,9 +348,9 @@ def test_solid_config_divides_mesh_size(tmp_path, monkeypatch):
 def test_solid_without_driver_validation_needs_mesh_size(tmp_path, monkeypatch):
     """A driver with only ``run_solid`` (the contract): mesh_size must then be given."""
     calls = []
-    stand_in = types.ModuleType("fe_beam.solid.driver")
+    stand_in = types.ModuleType("fe_beam.analyses.solid_driver")
     stand_in.run_solid = stand_in_solid(calls)
-    monkeypatch.setitem(sys.modules, "fe_beam.solid.driver", stand_in)
+    monkeypatch.setitem(sys.modules, "fe_beam.analyses.solid_driver", stand_in)
     config = "[solid]\nmesh_size = 0.004\n"
     code, std, err, out, _ = run_refine(tmp_path, config, "--levels", "3", "--quantity", "tip.v")
     assert code == 0, err
@@ -370,7 +370,7 @@ def test_solid_without_driver_validation_needs_mesh_size(tmp_path, monkeypatch):
     ],
 )
 def test_solid_mistakes_exit_2(tmp_path, monkeypatch, extra, words):
-    from fe_beam.solid import driver
+    from fe_beam.analyses import solid_driver as driver
 
     calls = []
     monkeypatch.setattr(driver, "run_solid", stand_in_solid(calls))

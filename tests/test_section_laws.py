@@ -18,18 +18,18 @@ from tomlio import dump_toml
 from ufl.algorithms.apply_derivatives import apply_derivatives
 
 from fe_beam import runctl
-from fe_beam.beam import BeamProblem, StrainRange
+from fe_beam.analyses.static import solve_static
 from fe_beam.cli import main
-from fe_beam.config import ConfigError, parse_static
-from fe_beam.laws import Stiffness, Strains, nonstandard_energy, reissner_energy
-from fe_beam.section_laws import (
+from fe_beam.config.schema import ConfigError, parse_static
+from fe_beam.fem.kinematics import Stiffness, Strains, nonstandard_energy, reissner_energy
+from fe_beam.fem.rod import BeamProblem, StrainRange
+from fe_beam.fem.section_laws import (
     DEFAULT_SECTION_POINTS,
     FibreLaw,
     HyperelasticSectionLaw,
     section_rule,
 )
-from fe_beam.sections import Section
-from fe_beam.static import solve_static
+from fe_beam.model.sections import Section
 
 SPLIT = [("neo-hookean", {"mu": 1.0}), ("mooney-rivlin", {"c10": 0.6, "c01": -0.1}),
          ("yeoh", {"c10": 0.5, "c20": 0.05, "c30": -0.002})]
@@ -88,7 +88,8 @@ def test_svk_fibre_law_is_the_non_standard_fibre():
 # --- section rules ------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", list(SECTIONS))
 def test_section_rule_integrates_the_moments(name):
-    """sum W eta^n = A, 0, I, I3, I4 (with its sign) of fe_beam.sections, on a tapered section."""
+    """sum W eta^n = A, 0, I, I3, I4 (with its sign) of fe_beam.model.sections, on a tapered
+    section."""
     section = SECTIONS[name]
     for s in (0.0, 0.37):
         rule = section_rule(section, 3, s)
@@ -301,7 +302,7 @@ def test_pure_bending_matches_the_exact_section_law():
 
 
 def test_modes_at_the_undeformed_state_equal_the_non_standard_ones():
-    from fe_beam.modes import natural_frequencies
+    from fe_beam.solvers.modes import natural_frequencies
 
     raw = config(model={"law": "hyperelastic", "material": "neo-hookean", "section_points": 2,
                         "volumetric": "quadratic"})
@@ -314,8 +315,8 @@ def test_modes_at_the_undeformed_state_equal_the_non_standard_ones():
 
 def test_finger_and_dynamics_run_with_the_hyperelastic_law():
     """svk: the finger's tip and a short release equal the non-standard rod's."""
-    from fe_beam.finger import parse_finger
-    from fe_beam.transient import parse_dynamic, run_dynamic
+    from fe_beam.analyses.finger import parse_finger
+    from fe_beam.analyses.transient import parse_dynamic, run_dynamic
 
     tips = []
     for model in ({"law": "nonstandard"}, SVK):

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from fe_beam.sections import Section
+from fe_beam.model.sections import Section
 
 RTOL = 1e-10
 

@@ -1,12 +1,12 @@
-"""Adjoint sensitivities (fe_beam.sensitivity) against central finite differences of the
+"""Adjoint sensitivities (fe_beam.analyses.sensitivity) against central finite differences of the
 converged equilibrium: every parameter kind, rod and finger (tension and pull-in control),
 serial and on 2 MPI ranks (``mpirun -n 2 ... -m mpi``)."""
 
 import numpy as np
 import pytest
 
-from fe_beam.config import ConfigError
-from fe_beam.sensitivity import RodSensitivity
+from fe_beam.analyses.sensitivity import RodSensitivity
+from fe_beam.config.schema import ConfigError
 
 TOLERANCE = 1e-6
 
@@ -182,7 +182,7 @@ def test_unusable_parameters(key, problem):
 
 def test_point_evaluation_matches_interpolation():
     """x@S, y@S: the deformed backbone between nodes, against dolfinx's own evaluation."""
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     model = RodSensitivity(rod(), ["material.E"])
     try:
@@ -217,7 +217,7 @@ def coarse_solid():
 def test_solid_tip_displacement():
     """The coarse 3D finger: material (neo-Hookean E, nu), tip force, cable tension (a
     non-UFL residual term)."""
-    from fe_beam.sensitivity import SolidSensitivity
+    from fe_beam.analyses.sensitivity import SolidSensitivity
 
     params = ["material.E", "material.nu", "loads.tip_force.0", "loads.tip_force.1",
               "tendons.0.tension"]
@@ -238,7 +238,7 @@ def test_solid_tip_displacement():
 
 
 def test_solid_refuses_other_parameters():
-    from fe_beam.sensitivity import SolidSensitivity
+    from fe_beam.analyses.sensitivity import SolidSensitivity
 
     with pytest.raises(ConfigError, match="not a 3D-solid parameter"):
         SolidSensitivity(coarse_solid(), ["section.h"])
@@ -250,7 +250,7 @@ def test_solid_refuses_other_parameters():
 
 
 def test_from_parsed_config_matches_raw():
-    from fe_beam.finger import parse_finger
+    from fe_beam.analyses.finger import parse_finger
 
     raw = finger()
     parsed, _ = parse_finger(raw)
@@ -303,7 +303,7 @@ def test_backbone_distances_of_unlabelled_points():
 def test_finger_without_section_table_uses_the_finger_defaults():
     """A finger config that leaves [section] to the chapter's defaults: its dimensions are
     parameters too, with the same gradient as when the default table is written out."""
-    from fe_beam.model.finger import DEFAULT_FINGER
+    from fe_beam.config.finger import DEFAULT_FINGER
 
     tendon = {"tension": 2.0, "offset_base": 0.006, "offset_tip": 0.004}
     implicit = RodSensitivity({"tendons": [tendon]}, ["section.h", "tendons.0.offset_tip"])

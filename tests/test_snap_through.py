@@ -5,7 +5,8 @@ through and back, against the independent shooting solution of the inextensible 
 The beam (inextensible and unshearable, so that it is the reference's elastica) is clamped at
 both ends, brought to its first buckled shape by the end shortening d held in full, then pushed
 down at midspan by a point force whose factor is the path parameter (``[path] parameter =
-"point_force"``, `fe_beam.path.point_force_control`). The straight shortened state is not an
+"point_force"``, `fe_beam.analyses.path.point_force_control`). The straight shortened state is not
+an
 admissible start for Newton (the linearised inextensibility u' = 0 contradicts u(L) = -d), so
 the test starts Newton from the small-shortening first mode (1 - cos 2 pi x) / 2, which is
 branch switching into the buckled shape by hand.
@@ -50,7 +51,7 @@ def _config(elements: int) -> dict:
 def _buckled_start(problem, d: float) -> None:
     """The first buckled mode of small shortening d (inextensible to first order) as Newton's
     start: v = A (1 - cos 2 pi x) / 2 with A = 2 sqrt(d) / pi, u = -int v'^2 / 2."""
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     amplitude = 2 * math.sqrt(d) / math.pi
     k = 2 * math.pi / LENGTH
@@ -75,10 +76,10 @@ def _buckled_start(problem, d: float) -> None:
 
 def _snap_path(elements: int, max_steps: int = 70):
     """(points [(load factor, midspan v / L, stable, state, snapshot)], PathResult, run)."""
-    from fe_beam.continuation import ArcLength
-    from fe_beam.model.path import parse_path
-    from fe_beam.path import follow_path, point_force_control
-    from fe_beam.static import StaticContinuation
+    from fe_beam.analyses.path import follow_path, point_force_control
+    from fe_beam.analyses.static import StaticContinuation
+    from fe_beam.config.path import parse_path
+    from fe_beam.solvers.continuation import ArcLength
 
     _, static, _ = parse_path(_config(elements))
     run = StaticContinuation(static, MPI.COMM_SELF)
@@ -104,7 +105,7 @@ def _snap_path(elements: int, max_steps: int = 70):
 
 
 def _dense_spectrum_is_slow() -> bool:
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     return not compat.LEGACY
 
@@ -170,7 +171,7 @@ def test_snap_through_limit_point_and_path_against_elastica(reference):
 def test_snap_through_load_control_agrees_with_arc_length_on_the_stable_part():
     """The stable part of the path (before the bifurcation) by load control from the same
     buckled state reaches the arc-length states to 1e-8."""
-    from fe_beam.solver import LoadStepping
+    from fe_beam.solvers.newton import LoadStepping
 
     points, result, run, start = _snap_path(16, max_steps=3)
     try:
@@ -191,7 +192,7 @@ def _cli_config(tmp_path, name: str, changes: dict):
 
     from tomlio import dump_toml
 
-    from fe_beam.config import load_config
+    from fe_beam.config.schema import load_config
 
     examples = Path(__file__).resolve().parents[1] / "examples"
     config = load_config(examples / name)

@@ -10,7 +10,7 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fe_beam import compat
+from fe_beam.fem import compat
 from fe_beam.solid import (
     Discretization,
     FingerGeometry,
@@ -22,7 +22,7 @@ from fe_beam.solid import (
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solver import (
+from fe_beam.solvers.newton import (
     LoadStepping,
     LoadSteppingFailed,
     SolverSettings,
@@ -158,7 +158,7 @@ def test_grown_steps_do_not_jump_past_a_limit_point(bar, monkeypatch):
     (stretch 1/sqrt 3): steps allowed to grow to the whole ramp jump past that limit load onto
     another branch and converge (load factor 1 reached, without the guard); the guard cuts
     them back and the ramp stops below the limit load."""
-    from fe_beam import continuation
+    from fe_beam.solvers import continuation
 
     with pytest.raises(LoadSteppingFailed) as failure:
         svk_solve(bar, -0.3, max_increment=1.0)
@@ -194,8 +194,8 @@ def test_solid_run_steps_grow_up_to_max_increment():
     """`[solver] max_increment` reaches the solid's load stepping (`parse_solid`,
     `SolidRun.advance`): the stretched SVK bar takes fewer steps than `loads.steps` to 1 and
     ends at its closed-form equilibrium (no branch-jump veto on a smooth path)."""
-    from fe_beam.solid.config import parse_solid
-    from fe_beam.solid.run import SolidRun
+    from fe_beam.analyses.solid import SolidRun
+    from fe_beam.config.solid import parse_solid
 
     config = parse_solid(svk_bar(0.2, max_increment=1.0))
     assert config.stepping.max_increment == 1.0
@@ -218,8 +218,8 @@ def test_max_increment_is_kept_with_tendons(tendon_steps):
     the tendons' own `steps`: a given `[solver] max_increment` must survive it (it was silently
     reset to one step, so `fe-beam solid` never grew its steps on a tendon-driven finger), at
     least one step long; without the key the steps still never grow."""
-    from fe_beam.config import load_config
-    from fe_beam.solid.config import parse_solid
+    from fe_beam.config.schema import load_config
+    from fe_beam.config.solid import parse_solid
 
     raw = load_config(Path(__file__).parents[1] / "examples" / "finger_solid.toml")
     if tendon_steps is not None:
@@ -228,7 +228,7 @@ def test_max_increment_is_kept_with_tendons(tendon_steps):
     assert parse_solid(copy.deepcopy(raw)).stepping.max_increment == pytest.approx(1 / steps)
     raw["solver"] = {"max_increment": 0.4}
     assert parse_solid(copy.deepcopy(raw)).stepping.max_increment == pytest.approx(0.4)
-    from fe_beam.model.finger import parse_finger
+    from fe_beam.config.finger import parse_finger
 
     rod = {k: v for k, v in raw.items() if k not in ("solid", "compare")}
     assert parse_finger(rod)[0].stepping.max_increment == pytest.approx(0.4)

@@ -1,4 +1,4 @@
-"""Newton convergence tests of `fe_beam.solver`: what counts as converged must not depend on
+"""Newton convergence tests of `fe_beam.solvers.newton`: what counts as converged must not depend on
 the load-step size, the predictor, round-off or a zero load."""
 
 from dataclasses import replace
@@ -9,9 +9,9 @@ from beam_cases import bending_stiffness, cantilever, solve
 from mpi4py import MPI
 
 from fe_beam import BeamProblem, Loads, LoadStepping, Material, SolverSettings
-from fe_beam.config import StaticConfig
-from fe_beam.solver import NonlinearProblem, SNESSolver
-from fe_beam.static import solve_static
+from fe_beam.analyses.static import solve_static
+from fe_beam.config.schema import StaticConfig
+from fe_beam.solvers.newton import NonlinearProblem, SNESSolver
 
 EI = bending_stiffness(0.01)
 
@@ -94,7 +94,7 @@ def test_linear_solve_leaves_no_options_behind():
     from dolfinx import fem
     from petsc4py import PETSc
 
-    from fe_beam import compat
+    from fe_beam.fem import compat
 
     mesh = compat.create_interval(MPI.COMM_WORLD, 8, 1.0)
     space = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
@@ -147,7 +147,7 @@ def test_auto_linear_solver_takes_lu_only_where_it_is_safe(saddle_point, ranks, 
 @pytest.mark.parametrize(("constraint", "factor"), [("none", "petsc"),
                                                      ("inextensible-unshearable", "mumps")])
 def test_static_runs_factorise_with_the_resolved_solver(constraint, factor):
-    from fe_beam.static import StaticContinuation
+    from fe_beam.analyses.static import StaticContinuation
 
     model = cantilever(constraint=constraint, elements=4, tip_force=(0.0, -EI))
     run = StaticContinuation(StaticConfig(model, SolverSettings(), LoadStepping(steps=1)),

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from test_config import dump_toml
 
+from fe_beam.analyses.finger import parse_finger, run_finger
+from fe_beam.analyses.transient import parse_dynamic, parse_modes, run_dynamic, run_modes
 from fe_beam.cli import main
-from fe_beam.dynamics import period_from_crossings
-from fe_beam.finger import parse_finger, run_finger
-from fe_beam.transient import parse_dynamic, parse_modes, run_dynamic, run_modes
+from fe_beam.solvers.dynamics import period_from_crossings
 
 LENGTH = 0.1
 # the chapter's finger (examples/finger.toml) on a coarser mesh
@@ -524,7 +524,7 @@ def test_pull_in_step_that_makes_the_tendon_push_is_noted(tmp_path, capsys):
 def test_summary_rho_inf_of_every_scheme(scheme, expected):
     """summary.json "rho_inf" is a public key: the fd-* schemes report the configured number as
     they did before the energy-conserving scheme (null only for that new scheme)."""
-    from fe_beam.transient import DynamicResult, _dynamic_summary
+    from fe_beam.analyses.transient import DynamicResult, _dynamic_summary
     raw = finger(time={"t_end": 0.01, "dt": 0.005, "scheme": scheme, "rho_inf": 0.7})
     config = parse_dynamic({k: v for k, v in raw.items() if k != "tendons"})
     summary = _dynamic_summary(DynamicResult([], {}), config, 0.0)

@@ -10,11 +10,11 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from fe_beam import BeamModel, BeamProblem, Discretisation, LoadStepping, Material, ModelOptions
+from fe_beam.analyses.finger import parse_finger
+from fe_beam.analyses.static import solve_static
 from fe_beam.baselines.shooting import default_finger, solve_finger
-from fe_beam.config import StaticConfig
-from fe_beam.finger import parse_finger
-from fe_beam.static import solve_static
-from fe_beam.tendons import Tendon, TendonSet, looped_tendon
+from fe_beam.config.schema import StaticConfig
+from fe_beam.fem.tendons import Tendon, TendonSet, looped_tendon
 
 LENGTH, H = 0.1, 0.01
 EI = E * H**4 / 12
@@ -219,7 +219,7 @@ def test_finger_cli_rejects_bad_tendons(tmp_path, capsys, tendon, words):
 
 
 def test_inverse_tension_reaches_target_angle():
-    from fe_beam.finger import tension_for_tip_angle
+    from fe_beam.analyses.finger import tension_for_tip_angle
 
     config = replace(finger_config(10), stepping=LoadStepping(steps=4))
     tension = tension_for_tip_angle(config, 0.25, bracket=(0.0, 5.0))
@@ -235,7 +235,7 @@ def test_inverse_tension_reaches_target_angle():
 def test_inverse_reaches_tip_targets_with_either_control(control, key, value):
     """The inverse finds the tension or pull-in that puts the tip component on the target; the
     sweep brackets it, and a fresh forward solve at the answer lands on the target to 1e-9."""
-    from fe_beam.finger import TIP_COMPONENT, InverseTarget, solve_inverse
+    from fe_beam.analyses.finger import TIP_COMPONENT, InverseTarget, solve_inverse
 
     tendon = {"tension": 5.0} if control == "tension" else {"tension": None, "pull_in": 0.005}
     config = replace(finger_config(10, **tendon), stepping=LoadStepping(steps=5))

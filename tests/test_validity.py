@@ -21,8 +21,8 @@ from pathlib import Path
 import pytest
 from tomlio import dump_toml
 
-from fe_beam.config import ConfigError, validate
-from fe_beam.model.validity import parse_validity, resolve_key
+from fe_beam.config.schema import ConfigError, validate
+from fe_beam.config.validity import parse_validity, resolve_key
 
 ROOT = Path(__file__).resolve().parents[1]
 L, B, H, D = 0.1, 0.01, 0.01, 0.003  # length, width, height, tendon offset [m]
@@ -144,10 +144,10 @@ def test_validation_loads_no_fe_stack():
 
     code = (
         "import json, sys\n"
-        "from fe_beam.config import validate, ConfigError\n"
+        "from fe_beam.config.schema import validate, ConfigError\n"
         f"config = {with_map()!r}\n"
         "validate('validity', config)\n"
-        "from fe_beam.config import load_config\n"
+        "from fe_beam.config.schema import load_config\n"
         "validate('validity', load_config('examples/finger_validity.toml'))\n"
         "config['validity']['x'] = 'beam.nothing'\n"
         "try:\n    validate('validity', config)\nexcept ConfigError as e:\n    error = str(e)\n"
@@ -315,8 +315,8 @@ def test_ranks_share_the_points(tmp_path):
     the one rank 1 solved is what ``fe-beam compare``'s code gives serially on rank 0."""
     from mpi4py import MPI
 
-    from fe_beam.compare import run_compare
-    from fe_beam.validity import run_validity
+    from fe_beam.analyses.compare import run_compare
+    from fe_beam.analyses.validity import run_validity
 
     world = MPI.COMM_WORLD
     if world.size == 1:
@@ -346,7 +346,7 @@ def test_ctrl_c_leaves_the_finished_points_and_a_rerun_finishes_the_map(tmp_path
     about the files, the physics is tested above.)"""
     import signal
 
-    from fe_beam import validity
+    from fe_beam.analyses import validity
 
     solved = []
 
@@ -384,7 +384,7 @@ def test_ctrl_c_leaves_the_finished_points_and_a_rerun_finishes_the_map(tmp_path
 def test_pictures_of_any_grid_shape(tmp_path, shape):
     """2-D maps (with a failed point: no colour there), a single point and a 1-D grid along y
     draw (the records are stand-ins: this is about the drawing)."""
-    from fe_beam.validity import _plot
+    from fe_beam.analyses.validity import _plot
 
     nx, ny = shape
     config = parse_validity(with_map(x_values=[0.1 * (k + 1) for k in range(nx)],

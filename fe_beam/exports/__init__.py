@@ -9,7 +9,7 @@ A driver builds a list of exports, wraps it in `Exports` and calls, on every ran
 
 ``record`` is the driver's dict of one step (the entry it also keeps in summary.json's
 ``steps`` / ``history`` / ``table``); ``summary`` the final content of summary.json. Every file
-stays readable at any moment (`fe_beam.outputs`): summaries and whole tables are replaced
+stays readable at any moment (`fe_beam.exports.outputs`): summaries and whole tables are replaced
 atomically, growing tables and XDMF series are appended by the two-copy scheme. Files that grow
 with the run are brought up to date together, at a bounded share of the wall time
 (`fe_beam.runctl.Throttle`; ``throttle=False``: after every step), so that after an interruption
@@ -27,8 +27,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from fe_beam import outputs, runctl
-from fe_beam.outputs import figure
+from fe_beam import runctl
+from fe_beam.exports import outputs
+from fe_beam.exports.outputs import figure
 
 __all__ = [
     "CSVExport",
@@ -138,7 +139,7 @@ def indexed_columns(name: str, count: int, values: Callable[[dict], Sequence]) -
 
 class CSVExport(Export):
     """A table with one row per record, its columns declared once, appended as the run goes
-    (`fe_beam.outputs.AppendCSV`: O(1) per row, readable at any moment).
+    (`fe_beam.exports.outputs.AppendCSV`: O(1) per row, readable at any moment).
 
     ``columns``: a list of `Column`, or a function of the first record (None when the run ends
     without one) that returns it, for tables whose width is known from the data. ``empty``:
@@ -200,7 +201,7 @@ class TableExport(Export):
 
 
 class XDMFExport(Export):
-    """The states of a run as an XDMF time series (`fe_beam.outputs.BeamXDMFWriter`, or any
+    """The states of a run as an XDMF time series (`fe_beam.exports.outputs.BeamXDMFWriter`, or any
     writer with ``write(t, flush)`` and ``close()``); collective. ``time``: the record key of
     the time axis ("t", "load_factor")."""
 

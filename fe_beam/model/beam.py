@@ -1,7 +1,7 @@
 """The planar beam as data: the model options (law, constraint), discretisation, supports,
 loads and the `BeamModel` that holds them with the section and the material.
 
-Pure Python: no numpy, no finite-element code. `fe_beam.beam.BeamProblem` turns a
+Pure Python: no numpy, no finite-element code. `fe_beam.fem.rod.BeamProblem` turns a
 `BeamModel` into forms.
 """
 
@@ -11,9 +11,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fe_beam.materials import Material
 from fe_beam.model.laws import CONSTRAINTS, DEFAULT_SECTION_POINTS, LAWS, MAX_SECTION_POINTS
-from fe_beam.sections import Section
+from fe_beam.model.materials import Material
+from fe_beam.model.sections import Section
 
 __all__ = [
     "COMPONENTS",
@@ -40,9 +40,9 @@ class ModelOptions:
     """Constitutive law, kinematic constraint and (Reissner law only) shear correction k.
 
     ``law = "hyperelastic"``: ``hyperelastic`` is the 3D law (a
-    `fe_beam.solid.materials.HyperelasticLaw`) whose uniaxial fibre energy is integrated over
+    `fe_beam.model.hyperelastic.HyperelasticLaw`) whose uniaxial fibre energy is integrated over
     the section with ``section_points`` Gauss points per section part (None: the default,
-    `fe_beam.section_laws.DEFAULT_SECTION_POINTS`); both are ignored by the other laws.
+    `fe_beam.fem.section_laws.DEFAULT_SECTION_POINTS`); both are ignored by the other laws.
     """
 
     law: str = "nonstandard"
@@ -336,7 +336,7 @@ class BeamModel:
     def _check_hyperelastic(self) -> None:
         """The section law needs the profile (custom sections: svk only), and the rod's E and G
         are the 3D law's small-strain ones (every other output uses them)."""
-        from fe_beam.section_laws import FibreLaw
+        from fe_beam.fem.section_laws import FibreLaw
 
         fibre = FibreLaw.from_solid(self.options.hyperelastic)
         if self.section.shape == "custom" and fibre.material != "svk":

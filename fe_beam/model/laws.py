@@ -4,7 +4,7 @@ energy and Reissner law).
 A law holds its section stiffnesses (`Stiffness`: floats or UFL values) and gives the stored
 energy per unit reference length of the generalised strains (`Strains`) with ``energy(s)``;
 ``fibre_stretches(s)`` lists the extreme fibres' stretches of laws that integrate a section
-profile (none here; `fe_beam.section_laws.HyperelasticSectionLaw` does). Only arithmetic on the
+profile (none here; `fe_beam.fem.section_laws.HyperelasticSectionLaw` does). Only arithmetic on the
 strains enters: the classes import no UFL and no finite-element code.
 """
 
@@ -34,7 +34,7 @@ LAWS = ("nonstandard", "reissner", "hyperelastic")
 CONSTRAINTS = ("none", "inextensible", "unshearable", "inextensible-unshearable")
 #: default Gauss points per section part of the hyperelastic section law (rectangle, circle;
 #: tube and T: twice as many points): measured quadrature error ~5e-10 at fibre strains of
-#: +-26%, far less at moderate strains (`fe_beam.section_laws`)
+#: +-26%, far less at moderate strains (`fe_beam.fem.section_laws`)
 DEFAULT_SECTION_POINTS = 6
 MAX_SECTION_POINTS = 64
 
@@ -116,7 +116,7 @@ def closed_form_law(name: str, stiffness: Stiffness):
         return ROD_LAWS[name](stiffness)
     if name == "hyperelastic":
         raise ValueError("law = \"hyperelastic\" has no closed form in the section stiffnesses: "
-                         "use fe_beam.section_laws.HyperelasticSectionLaw")
+                         "use fe_beam.fem.section_laws.HyperelasticSectionLaw")
     raise ValueError(f"model.law must be one of {', '.join(LAWS)}; got {name!r}")
 
 

@@ -1,7 +1,8 @@
 """Solver, load-stepping and time-stepping settings as plain validated dataclasses.
 
 No PETSc here: `SolverSettings` checks the form of its options; PETSc judges their values where
-a solver is built (`fe_beam.solver`). Creating or `dataclasses.replace`-ing a setting is cheap.
+a solver is built (`fe_beam.solvers.newton`). Creating or `dataclasses.replace`-ing a setting is
+cheap.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ __all__ = [
 
 LINEAR_SOLVERS = ("auto", "mumps", "lu", "gamg", "gmres-ilu")
 #: [solid] solver: "fieldsplit" (the scalable solver of the 3D solid, see `resolve_solid_solver`)
-#: is set up by `fe_beam.solid.problem`, which gives PETSc the fields
+#: is set up by `fe_beam.solvers.solid`, which gives PETSc the fields
 SOLID_LINEAR_SOLVERS = ("auto", "mumps", "gamg", "fieldsplit")
 #: "auto" for the 3D solid: MUMPS up to this many unknowns, the iterative solver above
 #: (measured with benchmarks/bench_solid.py --crossover: see `resolve_solid_solver`)
@@ -40,7 +41,8 @@ class SolverSettings:
 
     Only the form of ``petsc_options`` is checked here (names without '-', string or number
     values); PETSc itself judges the values where a solver is built
-    (`fe_beam.solver.check_petsc_options`, called by `fe_beam.solver.SNESSolver`)."""
+    (`fe_beam.solvers.newton.check_petsc_options`, called by
+    `fe_beam.solvers.newton.SNESSolver`)."""
 
     rtol: float = 1e-9
     # Residuals carry the problem's units (N, N m): any fixed absolute tolerance is wrong for
@@ -124,7 +126,8 @@ class SolverSettings:
 
 # Inexact Newton (Eisenstat-Walker, PETSc's version 2): the Krylov tolerance of each Newton
 # iteration follows the nonlinear convergence; capped at 0.1 so that every Newton step still
-# reduces the linearised residual tenfold (the convergence test of `fe_beam.solver.SNESSolver`
+# reduces the linearised residual tenfold (the convergence test of
+# `fe_beam.solvers.newton.SNESSolver`
 # is on the nonlinear residual, as tight as with a direct solver).
 INEXACT_NEWTON = {"snes_ksp_ew": "true", "snes_ksp_ew_rtolmax": 0.1}
 # ... whose loose early linear solves cost a step about 2 Newton iterations more than exact ones
@@ -135,7 +138,7 @@ INEXACT_NEWTON_EXTRA_ITERATIONS = 2
 # u-p (Taylor-Hood) saddle point: FGMRES, block lower-triangular Schur preconditioner
 # [[A, 0], [B, S]]^-1 with A^-1 ~ one GAMG V-cycle (rigid-body near-nullspace) and
 # S = -B A^-1 B^T - M/kappa ~ -(1/mu + 1/kappa) M_p (pressure mass matrix, given by
-# `fe_beam.solid.problem` as the user Schur preconditioner), applied by Jacobi.
+# `fe_beam.solvers.solid` as the user Schur preconditioner), applied by Jacobi.
 # The preconditioner (GAMG hierarchy, extracted blocks) is rebuilt every 3rd Newton iteration
 # of a load step: FGMRES still runs on the current Jacobian, so the Newton steps and the
 # equilibrium are unchanged, and the Krylov count barely moves (measured, benchmarks/README.md).

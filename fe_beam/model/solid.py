@@ -1,6 +1,6 @@
 """The 3D finger as data: body and tendon geometry, mesh sizes, tendon loads and the
 discretisation (docs/theory.md, 3D finger and cable). Pure Python and numpy: gmsh and dolfinx
-come in with `fe_beam.solid.geometry` and `fe_beam.solid.problem`, which re-export these.
+come in with `fe_beam.fem.solid.geometry` and `fe_beam.solvers.solid`, which re-export these.
 """
 
 from __future__ import annotations

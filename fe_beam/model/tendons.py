@@ -1,6 +1,6 @@
 """Tendon geometry as data (docs/theory.md, Tendons): offset paths, entry, anchor, and the
 tension or pull-in at load factor 1. Pure Python; the tendon energy and the pull-in solver are
-in `fe_beam.tendons`.
+in `fe_beam.fem.tendons`.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ import json
 import pytest
 from test_solid_driver import DROP, FINGER, assert_usage_error, edited, run_cli, shared_folder
 
-from fe_beam.compare import RODS, crossing, matched_law, parse_compare, rod_at
+from fe_beam.analyses.compare import RODS, crossing, matched_law, parse_compare, rod_at
 
 SWEEP = edited(FINGER, {"compare": {"tensions": [1.0, 2.0]}})
 

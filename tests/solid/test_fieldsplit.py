@@ -9,7 +9,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from test_solid_driver import DROP, FINGER, assert_usage_error, edited, run_cli, shared_folder
 
-from fe_beam import compat
+from fe_beam.fem import compat
 from fe_beam.model.settings import (
     AUTO_DIRECT_MAX_DOFS,
     FIELDSPLIT_OPTIONS,
@@ -26,7 +26,7 @@ from fe_beam.solid import (
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solver import LoadStepping, SolverSettings
+from fe_beam.solvers.newton import LoadStepping, SolverSettings
 
 # a tapered finger bent by a tendon to a tip rotation of ~0.5 rad (geometrically nonlinear),
 # coarse (P2-P1 ~ 2.5k unknowns): nu = 0.49 makes the u-p saddle point a real one

@@ -6,7 +6,7 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fe_beam import compat
+from fe_beam.fem import compat
 from fe_beam.solid import (
     FingerGeometry,
     MeshSizes,
@@ -86,7 +86,7 @@ def test_chains_lie_on_mesh_edges(finger):
 
 def tip_face_plate(finger, anchor):
     """All tip-face vertices (gathered from every rank) with anchor-plate weights."""
-    from fe_beam.solid.problem import plate_weights
+    from fe_beam.solvers.solid import plate_weights
 
     x = finger.mesh.geometry.x
     local = x[np.abs(x[:, 0] - L) < 1e-12]

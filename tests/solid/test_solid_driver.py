@@ -1,4 +1,5 @@
-"""``fe-beam solid`` / `fe_beam.solid.driver.run_solid`: configuration mistakes (exit code 2, one
+"""``fe-beam solid`` / `fe_beam.analyses.solid_driver.run_solid`: configuration mistakes (exit code
+2, one
 sentence naming the key), the 3D law from [material] and [solid], a small tendon-finger run with
 its outputs, the slender Saint-Venant-Kirchhoff cantilever against the 1D non-standard law,
 exit code 3, and serial vs 2 ranks."""
@@ -16,11 +17,11 @@ import pytest
 from mpi4py import MPI
 from tomlio import dump_toml
 
-from fe_beam import compat
+from fe_beam.analyses.solid_driver import parse_solid, run_solid
 from fe_beam.cli import main
-from fe_beam.config import ConfigError
+from fe_beam.config.schema import ConfigError
+from fe_beam.fem import compat
 from fe_beam.solid import SILICONE_PRESETS
-from fe_beam.solid.driver import parse_solid, run_solid
 
 # --- a tiny tapered finger (the chapter's, coarse: one element across the tip height) -----------
 FINGER = {
@@ -383,7 +384,7 @@ def test_exported_table_matches_the_summary_and_the_old_writer(tmp_path):
     whole-file) writes the same bytes from the same summary."""
     import csv
 
-    from fe_beam.solid.driver import _write_tables
+    from fe_beam.analyses.solid_driver import _write_tables
 
     config = edited(FINGER, {"solid.order": 1, "output.plots": False, "output.xdmf": False})
     code, _, stderr, out = run_cli("solid", shared_folder(tmp_path), config)

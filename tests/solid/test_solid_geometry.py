@@ -6,7 +6,7 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from fe_beam.mpi import assemble_scalar
+from fe_beam.fem.mpi import assemble_scalar
 from fe_beam.solid import (
     CLAMP_TAG,
     TIP_TAG,

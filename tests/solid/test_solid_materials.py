@@ -10,8 +10,8 @@ from dolfinx import fem, mesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fe_beam.mpi import assemble_scalar
-from fe_beam.solid import materials as m
+from fe_beam.fem.mpi import assemble_scalar
+from fe_beam.model import hyperelastic as m
 
 E, NU = 3.0e5, 0.3
 

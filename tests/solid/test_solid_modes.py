@@ -1,4 +1,4 @@
-"""3D modal analysis of ``fe-beam solid`` (`fe_beam.solid.modes`, ``[modes]``): a slender
+"""3D modal analysis of ``fe-beam solid`` (`fe_beam.solvers.solid_modes`, ``[modes]``): a slender
 straight bar (the finger geometry with h_tip = h, no tendons) against Timoshenko beam theory
 (bending in both planes, solved here from the clamped-free Timoshenko equations), the axial rod
 and Saint-Venant torsion (closed forms), convergence under mesh refinement, the CLI run with its
@@ -16,7 +16,7 @@ import scipy.optimize
 from mpi4py import MPI
 from test_solid_driver import assert_usage_error, run_cli, shared_folder
 
-from fe_beam.solid.config import parse_solid
+from fe_beam.config.solid import parse_solid
 
 E, NU, RHO = 1.0e6, 0.3, 1000.0
 L, B, H = 0.2, 0.015, 0.01  # slender: L / H = 20, L / B = 13.3; B != H: distinct bending planes
@@ -105,8 +105,8 @@ def first_of_each_kind(result) -> dict:
 
 
 def bar_modes(size: float, comm=MPI.COMM_WORLD, **changes):
-    from fe_beam.solid.modes import solid_natural_frequencies
-    from fe_beam.solid.run import SolidRun
+    from fe_beam.analyses.solid import SolidRun
+    from fe_beam.solvers.solid_modes import solid_natural_frequencies
 
     config = parse_solid(bar(solid__mesh_size=size, **changes))
     run = SolidRun(config, comm)
@@ -157,8 +157,8 @@ def test_undeformed_modes_of_a_loaded_run():
     """about = "undeformed" after a sweep (a tendon under pull-in control, whose tension the
     load factor does not set): the modes of the unloaded bar, and the loaded state is left as
     it was; the loaded state's modes differ."""
-    from fe_beam.solid.modes import solid_natural_frequencies
-    from fe_beam.solid.run import SolidRun
+    from fe_beam.analyses.solid import SolidRun
+    from fe_beam.solvers.solid_modes import solid_natural_frequencies
 
     config = bar(solid__mesh_size=H, modes__count=3)
     config["tendons"] = [{"name": "t", "offset_base": 0.003, "offset_tip": 0.003,

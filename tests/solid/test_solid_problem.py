@@ -17,7 +17,7 @@ from fe_beam.solid import (
     create_finger_mesh,
     write_xdmf,
 )
-from fe_beam.solver import LoadStepping, SolverSettings
+from fe_beam.solvers.newton import LoadStepping, SolverSettings
 
 # straight prism, L/H = 10, E = 1 (units drop out of the relative checks)
 L, H, B, E = 10.0, 1.0, 1.0, 1.0
@@ -102,7 +102,7 @@ def test_constant_offset_tendon_bends_toward_plus_y_with_beam_curvature(tendon_b
 
 
 def test_bulk_mask_leaves_out_the_clamp_edges_the_loaded_tendon_ends_and_the_tendon():
-    from fe_beam.solid.problem import bulk_mask
+    from fe_beam.solvers.solid import bulk_mask
 
     geometry = FingerGeometry(L, B, H, height_tip=0.5)  # H(x) = 1 - 0.05 x
     chain = np.array([[0.0, 0.25, 0.0], [5.0, 0.2, 0.0], [L, 0.125, 0.0]])

@@ -1,0 +1,635 @@
+"""``fe-beam calibrate``: fit rod or finger parameters to measured tip poses and backbone points
+by Gauss-Newton / Levenberg-Marquardt (scipy.optimize.least_squares, trust-region reflective)
+with the exact adjoint Jacobian of `fe_beam.analyses.sensitivity.RodSensitivity`; each new parameter
+set is solved from the last equilibrium at each load level (continuation).
+
+Configuration::
+
+    [calibrate]
+    parameters = ["material.E", "tendons.0.offset_tip"]   # config keys
+    (fe_beam.analyses.sensitivity)
+    bounds = {"material.E" = [1e5, 1e7]}   # optional, per parameter (default: positive for
+                                           # moduli, dimensions, tensions; nu in (-1, 0.5))
+    weights = {tip_theta = 1.0, x = 10.0, y = 10.0}       # optional, per data column
+
+DATA.csv: a header line, then one row per measurement. One load column, ``tension`` (N, the
+tension of tendon 0; load factor = tension / tendons.0.tension, which scales every load, so a
+configuration with other loads or loaded tendons needs ``load_factor``) or ``load_factor``; and
+any of
+``tip_u``, ``tip_v``, ``tip_theta`` (tip displacement [m], rotation [rad]) and ``x``, ``y``
+(deformed positions [m] of backbone points; several rows per load). With a column ``s``, each
+point is the material point at reference coordinate s [m]: two residuals, x(s) - x and
+y(s) - y. Without it, the point is compared with the nearest point of the deformed backbone:
+one residual, its signed distance to the backbone (weight: ``weights.x``). An empty cell is
+"not measured"; any other cell must be a finite number.
+
+The residuals are weight * (model - data); with m residuals and n parameters the reported
+standard errors are sqrt(diag(s^2 (J^T J)^-1)), s^2 = |r|^2 / (m - n) (J the weighted
+residuals' Jacobian at the optimum), and ``correlation`` the matching correlation matrix.
+
+The input checks here are free of dolfinx and PETSc (`parse_calibrate`, `read_data`).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from fe_beam.config.schema import ConfigError
+
+__all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
+           "check_data", "parse_calibrate", "parameter_kind", "read_data",
+           "run_calibrate"]
+
+SECTION_DIMS = ("b", "h", "d", "t", "tf", "tw", "A", "I", "I3", "I4")
+DATA_COLUMNS = ("tension", "load_factor", "tip_u", "tip_v", "tip_theta", "s", "x", "y")
+MEASURED = ("tip_u", "tip_v", "tip_theta", "x", "y")
+CALIBRATE_KEYS = ("parameters", "bounds", "weights")
+MAX_DATA_BYTES = 64 * 2**20
+
+
+def parameter_kind(key) -> str:
+    """The kind of a parameter key (material, section, load, tension, pull_in, offset), or a
+    `ConfigError` naming what is allowed."""
+    if not isinstance(key, str):
+        raise ConfigError(f"[calibrate] parameters must be config keys (strings), got {key!r}")
+    if key in ("material.E", "material.nu", "material.G", "material.rho"):
+        return "material"
+    m = re.fullmatch(r"section\.([A-Za-z0-9]+?)(_tip)?", key)
+    if m and m.group(1) in SECTION_DIMS:
+        return "section"
+    if key == "loads.tip_moment" or re.fullmatch(r"loads\.(tip_force|distributed|gravity)\.[01]",
+                                                 key):
+        return "load"
+    m = re.fullmatch(r"tendons\.(\d+)\.(.+)", key)
+    if m:
+        rest = m.group(2)
+        if rest in ("tension", "pull_in"):
+            return rest
+        if rest in ("offset_base", "offset_tip") or re.fullmatch(r"path\.\d+\.1", rest) \
+                or re.fullmatch(r"paths\.\d+\.\d+\.1", rest):
+            return "offset"
+    raise ConfigError(
+        f"unknown parameter {key!r}: parameters are material.E|nu|G|rho, section.<dim>[_tip], "
+        "loads.tip_force.0|1, loads.tip_moment, loads.distributed.0|1, loads.gravity.0|1, "
+        "tendons.<i>.tension|pull_in|offset_base|offset_tip, tendons.<i>.path.<k>.1 or "
+        "tendons.<i>.paths.<b>.<k>.1")
+
+
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+@dataclass(frozen=True)
+class CalibrationSpec:
+    """The [calibrate] table: parameters (config keys), bounds {key: (low, high)} and weights
+    {data column: weight}."""
+
+    parameters: tuple
+    bounds: dict = field(default_factory=dict)
+    weights: dict = field(default_factory=dict)
+
+
+def _config_value(raw: dict, key: str):
+    """The number a parameter key names in the raw configuration (None if not given)."""
+    node = raw
+    for part in key.split("."):
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                return None
+            node = node[int(part)]
+        elif isinstance(node, dict):
+            if part not in node:
+                return None
+            node = node[part]
+        else:
+            return None
+    return node
+
+
+def parse_calibrate(raw: dict) -> CalibrationSpec:
+    """Validate [calibrate] (FE-free): ConfigError with one sentence on any mistake."""
+    table = raw.get("calibrate")
+    if not isinstance(table, dict):
+        raise ConfigError("fe-beam calibrate needs a [calibrate] table with parameters = "
+                          "[\"material.E\", ...]")
+    unknown = [k for k in table if k not in CALIBRATE_KEYS]
+    if unknown:
+        raise ConfigError(f"[calibrate] {unknown[0]} is not a key of [calibrate] (allowed: "
+                          f"{', '.join(CALIBRATE_KEYS)})")
+    parameters = table.get("parameters")
+    if not isinstance(parameters, list) or not parameters:
+        raise ConfigError("[calibrate] parameters must be a non-empty list of config keys, got "
+                          f"{parameters!r}")
+    for key in parameters:
+        if not isinstance(key, str):
+            raise ConfigError(f"[calibrate] parameters must be config keys (strings), got "
+                              f"{key!r}")
+        value = _config_value(raw, key)
+        if value is not None and not _number(value):
+            raise ConfigError(f"[calibrate] parameter {key!r} is not numeric (its value is "
+                              f"{value!r}): only numbers can be fitted")
+        parameter_kind(key)
+    if len(set(parameters)) != len(parameters):
+        raise ConfigError("[calibrate] parameters lists a key twice")
+    bounds = table.get("bounds", {})
+    if not isinstance(bounds, dict):
+        raise ConfigError("[calibrate] bounds must be a table {\"key\" = [low, high]}")
+    parsed_bounds = {}
+    for key, pair in bounds.items():
+        if key not in parameters:
+            raise ConfigError(f"[calibrate] bounds names {key!r}, which is not in parameters")
+        if not (isinstance(pair, list) and len(pair) == 2 and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and not math.isnan(v)
+                for v in pair) and pair[0] < pair[1]):
+            raise ConfigError(f"[calibrate] bounds.{key} must be [low, high] with low < high, "
+                              f"got {pair!r}")
+        parsed_bounds[key] = (float(pair[0]), float(pair[1]))
+    weights = table.get("weights", {})
+    if not isinstance(weights, dict):
+        raise ConfigError("[calibrate] weights must be a table {column = weight}")
+    for key, value in weights.items():
+        if key not in MEASURED:
+            raise ConfigError(f"[calibrate] weights.{key}: weights are given per data column, "
+                              f"one of {', '.join(MEASURED)}")
+        if not _number(value) or value <= 0:
+            raise ConfigError(f"[calibrate] weights.{key} must be a number > 0, got {value!r}")
+    return CalibrationSpec(tuple(parameters), parsed_bounds,
+                           {k: float(v) for k, v in weights.items()})
+
+
+@dataclass(frozen=True)
+class CalibrationData:
+    """The measurements: ``load_column`` ("tension" or "load_factor"), one entry per row in
+    ``loads``, and per measured column its values (NaN: not measured in that row)."""
+
+    load_column: str
+    loads: np.ndarray
+    columns: dict
+    s: np.ndarray | None = None
+
+    def count(self) -> int:
+        """Number of residuals: measured values; a backbone point without ``s`` is one (its
+        distance to the backbone)."""
+        total = sum(np.count_nonzero(np.isfinite(v)) for v in self.columns.values())
+        if self.s is None and "y" in self.columns:
+            total -= np.count_nonzero(np.isfinite(self.columns["y"]))
+        return int(total)
+
+
+def read_data(path) -> CalibrationData:
+    """Read DATA.csv (FE-free): ConfigError with one sentence on any mistake."""
+    path = Path(path)
+    name = str(path)
+    if not path.is_file():
+        raise ConfigError(f"data file {name} does not exist or is not a file")
+    if path.stat().st_size > MAX_DATA_BYTES:
+        raise ConfigError(f"data file {name} is larger than {MAX_DATA_BYTES // 2**20} MiB")
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as stream:  # a BOM (Excel) too
+            rows = [row for row in csv.reader(stream) if any(c.strip() for c in row)]
+    except (OSError, UnicodeDecodeError, csv.Error) as error:
+        raise ConfigError(f"data file {name} cannot be read as CSV ({error})") from None
+    if not rows:
+        raise ConfigError(f"data file {name} is empty (it needs a header line and rows)")
+    header = [c.strip() for c in rows[0]]
+    unknown = [c for c in header if c not in DATA_COLUMNS]
+    if unknown:
+        raise ConfigError(f"data file {name}: unknown column {unknown[0]!r} (columns: "
+                          f"{', '.join(DATA_COLUMNS)})")
+    if len(set(header)) != len(header):
+        raise ConfigError(f"data file {name}: a column appears twice in the header")
+    loads = [c for c in ("tension", "load_factor") if c in header]
+    if len(loads) != 1:
+        raise ConfigError(f"data file {name} needs exactly one of the columns tension or "
+                          "load_factor")
+    measured = [c for c in MEASURED if c in header]
+    if not measured:
+        raise ConfigError(f"data file {name} has no measured column (any of "
+                          f"{', '.join(MEASURED)})")
+    if ("x" in header) != ("y" in header) or ("s" in header and "x" not in header):
+        raise ConfigError(f"data file {name}: backbone points need both columns x and y (and "
+                          "optionally s, their reference coordinate)")
+    table = {c: [] for c in header}
+    for number, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise ConfigError(f"data file {name} line {number} has {len(row)} cells, the header "
+                              f"{len(header)}")
+        for column, cell in zip(header, row, strict=True):
+            text = cell.strip()
+            if not text and (column in MEASURED or column == "s"):
+                table[column].append(math.nan)
+                continue
+            try:
+                value = float(text)
+            except ValueError:
+                value = None
+            if value is None or not math.isfinite(value):
+                raise ConfigError(f"data file {name} line {number}: {column} = {text!r} is not a "
+                                  "finite number")
+            table[column].append(value)
+    if len(rows) < 2:
+        raise ConfigError(f"data file {name} has a header but no data rows")
+    s = np.array(table["s"]) if "s" in table else None
+    given = np.isfinite(s) if s is not None else np.isfinite(np.array(table.get("x", [])))
+    if "x" in table:
+        for column in ("x", "y"):
+            if np.any(np.isfinite(np.array(table[column])) != given):
+                raise ConfigError(f"data file {name}: x and y (and s) of a backbone point must "
+                                  "be given together (a row has one of them empty)")
+    load = loads[0]
+    values = np.array(table[load])
+    if load == "load_factor" and np.any(values < 0) or load == "tension" and np.any(values < 0):
+        raise ConfigError(f"data file {name}: {load} must be >= 0")
+    return CalibrationData(load, values, {c: np.array(table[c]) for c in measured}, s)
+
+
+class _Residuals:
+    """Weighted residuals and their exact Jacobian at a parameter vector (cached by value)."""
+
+    def __init__(self, model, data: CalibrationData, spec: CalibrationSpec, scale: np.ndarray,
+                 load_factors: np.ndarray):
+        self.model, self.data, self.spec = model, data, spec
+        self.scale = scale
+        self.factors = load_factors
+        self.levels = sorted(set(load_factors.tolist()))
+        self.history: list[dict] = []
+        self._cache: dict = {}
+        self.failed = 0  # trial points without an equilibrium
+        # per level: output names and (row index, column, output index, data value, weight)
+        self.plan = {}
+        self.points = {}  # per level: backbone points without s (distance residuals)
+        for level in self.levels:
+            names, entries, points = [], [], []
+            for row in np.flatnonzero(load_factors == level):
+                for column, values in data.columns.items():
+                    value = values[row]
+                    if not np.isfinite(value):
+                        continue
+                    if data.s is None and column in ("x", "y"):
+                        if column == "x":
+                            points.append((value, data.columns["y"][row]))
+                        continue
+                    name = (column if column.startswith("tip_")
+                            else f"{column}@{float(data.s[row])!r}")
+                    if name not in names:
+                        names.append(name)
+                    entries.append((names.index(name), value,
+                                    spec.weights.get(column, 1.0)))
+            self.plan[level] = (names, entries)
+            self.points[level] = np.array(points).reshape(-1, 2)
+
+    def trial(self, q: np.ndarray, size: int) -> np.ndarray:
+        """The residuals at a trial point, or ``size`` infinities when the model has no
+        equilibrium there (the point is recorded in the history as failed)."""
+        from fe_beam.solvers.newton import LoadSteppingFailed, SolveFailed
+
+        try:
+            return self.evaluate(q)[0]
+        except (LoadSteppingFailed, SolveFailed):
+            self.failed += 1
+            self.history.append({"parameters": dict(zip(self.spec.parameters,
+                                                        (q * self.scale).tolist(), strict=True)),
+                                 "residual_norm": None, "equilibrium": False})
+            return np.full(size, np.inf)
+
+    def evaluate(self, q: np.ndarray):
+        key = tuple(np.asarray(q, dtype=float).tolist())
+        if key in self._cache:
+            return self._cache[key]
+        self.model.set_values(q * self.scale)
+        residuals, jacobian = [], []
+        for level in self.levels:
+            names, entries = self.plan[level]
+            self.model.solve(level)
+            values = self.model.outputs(names)
+            grad = self.model.gradient(names)
+            for index, value, weight in entries:
+                residuals.append(weight * (values[index] - value))
+                jacobian.append(weight * grad[index] * self.scale)
+            if len(self.points[level]):
+                weight = self.spec.weights.get("x", self.spec.weights.get("y", 1.0))
+                distances, rows = self.model.backbone_distances(self.points[level])
+                residuals.extend(weight * distances)
+                jacobian.extend(weight * rows * self.scale)
+        r, jac = np.array(residuals), np.array(jacobian)
+        self._cache = {key: (r, jac)}
+        self.history.append({"parameters": dict(zip(self.spec.parameters,
+                                                    (q * self.scale).tolist(), strict=True)),
+                             "residual_norm": float(np.linalg.norm(r))})
+        return r, jac
+
+
+def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None,
+              model=None, tolerance: float = 1e-12, curves: bool = False) -> dict:
+    """Fit ``spec.parameters`` to ``data`` (collective). Returns the summary dict (parameters,
+    standard_errors, correlation, residual_norm, iterations, history, ...). ``model``: an
+    existing `RodSensitivity` with ``spec.parameters`` to reuse (its forms and cached
+    equilibria; ``raw`` is then not used): the fit starts from its current parameter values,
+    else from the configuration's. ``curves``: also the fitted model's backbone and tip at
+    every load level (key ``_model``, for the plot)."""
+    from mpi4py import MPI
+
+    from fe_beam.analyses.sensitivity import RodSensitivity
+
+    comm = comm or MPI.COMM_WORLD
+    started = time.perf_counter()
+    own = model is None
+    if own:
+        model = RodSensitivity(raw, spec.parameters, comm)
+    try:
+        count, size = data.count(), len(spec.parameters)
+        if count < size:
+            raise ConfigError(f"{size} parameters cannot be fitted to {count} measured values "
+                              "(give at least as many data as parameters)")
+        if list(model.parameters) != list(spec.parameters):
+            raise ValueError("calibrate: the model's parameters differ from spec.parameters")
+        factors = _load_factors(model, data, spec)
+        start = model.values()
+        scale = np.where(start != 0, np.abs(start), 1.0)
+        limits = [spec.bounds.get(k, default_bounds(k)) for k in spec.parameters]
+        low = np.array([lo for lo, _ in limits])
+        high = np.array([hi for _, hi in limits])
+        if np.any(start < low) or np.any(start > high):
+            bad = spec.parameters[int(np.flatnonzero((start < low) | (start > high))[0])]
+            raise ConfigError(f"[calibrate] the start value of {bad!r} lies outside its bounds")
+        residuals = _Residuals(model, data, spec, scale, factors)
+        # the start must have equilibria (else LoadSteppingFailed: exit 3); a trial parameter
+        # set without one gives non-finite residuals, which the trust-region method rejects
+        # (it shrinks the region) instead of ending the fit
+        r0, jac0 = residuals.evaluate(start / scale)
+        size_r = len(r0)
+        # a parameter the data do not depend on (e.g. material.rho without gravity, or only
+        # unloaded data) has no best value: the optimiser would report any number as fitted
+        influence = np.linalg.norm(jac0, axis=0)
+        dead = np.flatnonzero(~(influence > 1e-12 * max(float(influence.max()), 0.0)))
+        if len(dead):
+            raise ConfigError(f"[calibrate] parameter {spec.parameters[int(dead[0])]!r} does not "
+                              "influence the data (zero sensitivity of every measured value): "
+                              "remove it from parameters or give data it changes")
+        fit = least_squares(lambda q: residuals.trial(q, size_r),
+                            start / scale, jac=lambda q: residuals.evaluate(q)[1],
+                            bounds=(low / scale, high / scale), method="trf",
+                            x_scale="jac", xtol=tolerance, ftol=tolerance, gtol=tolerance,
+                            max_nfev=200)
+        r, jac = residuals.evaluate(fit.x)
+        values = fit.x * scale
+        jac_p = jac / scale  # d r / d p
+        names = list(spec.parameters)
+        # a parameter stopped by its bound is not a least-squares estimate: no standard error
+        # for it, and the others' are those with it held there
+        # (trust-region iterates stay strictly inside: one close to a bound, 1e-6 of its
+        # scale, with the misfit's gradient pushing outwards is stopped by it)
+        near = 1e-6 * np.maximum(scale, np.abs(np.where(np.isfinite(low), low, 0.0)))
+        push = jac_p.T @ r  # half the gradient of |r|^2 by p
+        cosine = push / np.maximum(np.linalg.norm(jac_p, axis=0) * np.linalg.norm(r), 1e-300)
+        at_bound = ((np.asarray(fit.active_mask) != 0)
+                    | ((values <= low + near) & (cosine > 1e-8))
+                    | ((values >= high - near) & (cosine < -1e-8)))
+        free = np.flatnonzero(~at_bound)
+        errors = correlation = None
+        if len(free):
+            sub_errors, sub_corr = _uncertainty(r, jac_p[:, free], scale[free])
+            if sub_errors is not None:
+                errors = np.full(size, np.nan)
+                errors[free] = sub_errors
+                if sub_corr is not None:
+                    correlation = np.full((size, size), np.nan)
+                    correlation[np.ix_(free, free)] = sub_corr
+        bound_notes = [f"{names[i]} ended at its bound "
+                       f"[{low[i]:.6g}, {high[i]:.6g}]: no standard error (the data pull it "
+                       "further; check the model, the data or the bounds)"
+                       for i in np.flatnonzero(at_bound)]
+        # a fitted tendon outside the section is a model the configuration itself refuses:
+        # the data cannot be reproduced inside it (not a fit to report as converged)
+        outside = []
+        for k, value in zip(names, values, strict=True):
+            extent = _offset_bounds(model, k)
+            if extent is not None and not (
+                    extent[0] - 1e-9 * (extent[1] - extent[0]) <= value
+                    <= extent[1] + 1e-9 * (extent[1] - extent[0])):
+                outside.append(f"the fit puts {k} = {value:.6g} m outside the section (y from "
+                               f"{extent[0]:.6g} to {extent[1]:.6g} m): this model cannot "
+                               "reproduce the data with the tendon inside; check the data or "
+                               "give [calibrate] bounds")
+        summary = {
+            "status": "converged" if fit.success and not outside else "not converged",
+            "message": outside[0] if outside else str(fit.message),
+            "parameters": dict(zip(names, values.tolist(), strict=True)),
+            "initial": dict(zip(names, start.tolist(), strict=True)),
+            "standard_errors": (dict(zip(names, _or_none(errors), strict=True))
+                                if errors is not None else None),
+            "correlation": ({a: dict(zip(names, _or_none(row), strict=True))
+                             for a, row in zip(names, correlation, strict=True)}
+                            if correlation is not None else None),
+            "residual_norm": float(np.linalg.norm(r)),
+            "residuals": int(len(r)),
+            "iterations": int(fit.njev or 0),
+            "function_evaluations": int(fit.nfev),
+            "history": residuals.history,
+            "wall_time_s": time.perf_counter() - started,
+            "notes": bound_notes + ([] if errors is not None or len(free) == 0 else [
+                "no standard errors: as many data as parameters, or parameters the data cannot "
+                "tell apart (J^T J singular)"]) + ([
+                f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]
+                if residuals.failed else []),
+        }
+        if curves:
+            summary["_model"] = (_fitted_curves(model, residuals), factors)
+        return summary
+    finally:
+        if own:
+            model.destroy()
+
+
+def _offset_bounds(model, key: str) -> tuple[float, float] | None:
+    """The section's extent at the path point of a tendon offset parameter (the
+    configuration refuses a tendon outside the section; a fit must not report one), of the
+    configuration's section. None for other parameters or a custom section."""
+    m = re.fullmatch(r"tendons\.(\d+)\.(offset_base|offset_tip|path\.(\d+)\.1|"
+                     r"paths\.(\d+)\.(\d+)\.1)", key)
+    if m is None or not getattr(model, "tendons", None):
+        return None
+    index = int(m.group(1))
+    paths = model.tendons.tendons[index].paths
+    if m.group(2) in ("offset_base", "offset_tip"):
+        branch, point = 0, (0 if m.group(2) == "offset_base" else len(paths[0]) - 1)
+    elif m.group(3) is not None:
+        branch, point = 0, int(m.group(3))
+    else:
+        branch, point = int(m.group(4)), int(m.group(5))
+    x = float(paths[branch][point][0])
+    config = model.config.model
+    extent = config.section.y_extent(x / float(config.length))
+    return None if extent is None else (float(extent[0]), float(extent[1]))
+
+
+def _or_none(values) -> list:
+    """A list of floats with NaN (no value: a parameter at its bound) as None (JSON null)."""
+    return [None if not math.isfinite(v) else float(v) for v in np.asarray(values).tolist()]
+
+
+def default_bounds(key: str) -> tuple[float, float]:
+    """Physical limits of a parameter when [calibrate] bounds does not give any: moduli,
+    density, section dimensions (except the signed I3), tensions and pull-ins are positive
+    (the trust-region iterates stay strictly inside), Poisson's ratio in (-1, 0.5)."""
+    if key == "material.nu":
+        return (-1.0, 0.5)
+    kind = parameter_kind(key)
+    if kind in ("material", "tension", "pull_in") or (kind == "section"
+                                                       and not key.startswith("section.I3")):
+        return (0.0, np.inf)
+    return (-np.inf, np.inf)
+
+
+def _uncertainty(r: np.ndarray, jac: np.ndarray, scale: np.ndarray):
+    """Standard errors and correlation of least squares: covariance s^2 (J^T J)^-1 with
+    s^2 = |r|^2 / (m - n), by the SVD of the Jacobian in the scaled parameters p / scale (well
+    conditioned whatever the parameters' units). None when m == n (no redundancy) or when the
+    data cannot tell the parameters apart (smallest singular value below 1e-12 of the
+    largest)."""
+    m, n = jac.shape
+    if m <= n:
+        return None, None
+    scaled = jac * scale[None, :]
+    _, singular, vt = np.linalg.svd(scaled, full_matrices=False)
+    if not singular[-1] > 1e-12 * singular[0]:
+        return None, None
+    sigma2 = float(r @ r) / (m - n)
+    covariance = sigma2 * (vt.T / singular**2) @ vt  # of p / scale
+    covariance = covariance * np.outer(scale, scale)
+    errors = np.sqrt(np.diag(covariance))
+    correlation = covariance / np.outer(errors, errors) if np.all(errors > 0) else None
+    return errors, correlation
+
+
+def _load_factors(model, data: CalibrationData, spec: CalibrationSpec) -> np.ndarray:
+    if data.load_column == "load_factor":
+        return data.loads.astype(float)
+    tendons = model.tendons
+    if not tendons:
+        raise ConfigError("the data column tension needs a configuration with [[tendons]] "
+                          "(use load_factor for other loads)")
+    first = tendons.tendons[0]
+    if first.controlled_by_pull_in or not first.tension:
+        raise ConfigError("the data column tension needs tendon 0 tension controlled with "
+                          "tension > 0 (use load_factor otherwise)")
+    if "tendons.0.tension" in spec.parameters:
+        raise ConfigError("tendons.0.tension cannot be fitted when the data give the tension "
+                          "(use a load_factor column)")
+    # the load factor scales every load and tendon: a tension column would silently scale the
+    # others with tendon 0's tension (e.g. gravity at a quarter for a quarter of the tension)
+    loads = model.config.model.loads
+    others = [f"loads.{name}" for name, value in (
+        ("tip_force", loads.tip_force), ("tip_moment", loads.tip_moment),
+        ("distributed", loads.distributed),
+        ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0),
+        ("point_forces", [f[1:] for f in loads.point_forces] or 0.0),
+        ("end_displacement", loads.end_displacement or 0.0),
+        ("end_rotation", loads.end_rotation or 0.0))
+        if np.any(np.asarray(value, dtype=float) != 0)]
+    others += [f"tendons.{i}" for i, t in enumerate(tendons.tendons) if i > 0 and (
+        t.controlled_by_pull_in or t.tension)]
+    if others:
+        raise ConfigError(f"the data column tension scales every load with tendon 0's tension "
+                          f"(load factor = tension / tendons.0.tension), {others[0]} included: "
+                          "with other loads or tendons give a load_factor column")
+    return data.loads / float(first.tension)
+
+
+def _fitted_curves(model, residuals: _Residuals) -> dict:
+    """Model backbones and tip values at every load level (for the plot; collective)."""
+    length = model.config.model.length
+    stations = np.linspace(0.0, length, 41)
+    names = [f"x@{float(s)!r}" for s in stations] + [f"y@{float(s)!r}" for s in stations]
+    curves = {}
+    for level in residuals.levels:
+        model.solve(level)
+        values = model.outputs(names + ["tip_u", "tip_v", "tip_theta"])
+        curves[level] = {"x": values[:41].tolist(), "y": values[41:82].tolist(),
+                         "tip": values[82:].tolist()}
+    return curves
+
+
+def check_data(raw: dict, data_path) -> tuple[CalibrationSpec, CalibrationData]:
+    """[calibrate] and DATA.csv checked together (FE-free: the command calls it before the
+    FE stack is loaded): ConfigError with one sentence on any mistake."""
+    spec = parse_calibrate(raw)
+    data = read_data(data_path)
+    if data.count() < len(spec.parameters):
+        raise ConfigError(f"{len(spec.parameters)} parameters cannot be fitted to "
+                          f"{data.count()} measured values in {data_path} (give at least as "
+                          "many data as parameters)")
+    merged = raw
+    if raw.get("tendons"):
+        from fe_beam.config.finger import with_defaults  # FE-free: the finger's beam length
+
+        merged = with_defaults(raw)
+    length = (merged.get("beam") or {}).get("length") if isinstance(merged, dict) else None
+    if data.s is not None and _number(length):
+        outside = np.flatnonzero(np.isfinite(data.s) & ((data.s < 0) | (data.s > length)))
+        if len(outside):
+            raise ConfigError(f"data file {data_path}: s = {data.s[outside[0]]:g} (data row "
+                              f"{outside[0] + 1}) lies outside the rod, s in [0, {length:g}] m")
+    absent = [c for c in spec.weights if c not in data.columns]
+    if absent:
+        raise ConfigError(f"[calibrate] weights.{absent[0]}: {data_path} has no column "
+                          f"{absent[0]} (columns with data: {', '.join(data.columns)})")
+    return spec, data
+
+
+def run_calibrate(raw: dict, data_path, out: Path | None, comm, quiet: bool = False) -> dict:
+    """The command: validate, fit, write summary.json and calibration.png under ``out``."""
+    from fe_beam.exports.outputs import atomic_write_json
+
+    spec, data = check_data(raw, data_path)
+    summary = calibrate(raw, data, spec, comm, curves=True)
+    curves, factors = summary.pop("_model")
+    summary["data"] = str(data_path)
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_json(out / "summary.json", summary)
+        _plot(out / "calibration.png", data, curves, factors, summary)
+    return summary
+
+
+def _plot(path: Path, data: CalibrationData, curves: dict, row_factors: np.ndarray,
+          summary: dict) -> None:
+    from fe_beam.exports.outputs import _pyplot
+
+    plt = _pyplot()
+    figure, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    levels = sorted(curves)
+    factors = np.array([lf for lf in levels])
+    for level in levels:
+        axes[0].plot(curves[level]["x"], curves[level]["y"], "-", lw=1,
+                     label=f"model, load {level:.3g}")
+    if "x" in data.columns:
+        axes[0].plot(data.columns["x"], data.columns["y"], "k.", label="data")
+    axes[0].set_xlabel("x [m]")
+    axes[0].set_ylabel("y [m]")
+    axes[0].set_aspect("equal", adjustable="datalim")
+    axes[0].set_title("backbone: data and fitted model")
+    axes[0].legend(fontsize=7)
+    for index, column in enumerate(("tip_u", "tip_v", "tip_theta")):
+        model_values = [curves[level]["tip"][index] for level in levels]
+        line = axes[1].plot(factors, model_values, "-", label=f"{column} model")[0]
+        if column in data.columns:
+            axes[1].plot(row_factors, data.columns[column], "o", color=line.get_color(),
+                         label=f"{column} data")
+    axes[1].set_xlabel("load factor")
+    axes[1].set_ylabel("tip value [m or rad]")
+    axes[1].set_title("tip: data and fitted model")
+    axes[1].legend(fontsize=7)
+    fitted = ", ".join(f"{k} = {v:.4g}" for k, v in summary["parameters"].items())
+    figure.suptitle(fitted, fontsize=8)
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)

@@ -1,0 +1,319 @@
+"""``fe-beam compare``: the 3D solid against the 1D rod over a load or tendon-tension sweep, on the
+same geometry and material. The rod laws (``[compare] laws``) default to all three: the section law
+of the solid's own material (``hyperelastic``: the uniaxial fibre energy of the 3D law integrated
+over the section, `fe_beam.fem.section_laws`; with the u-p formulation the volumetric energy is the
+quadratic one that formulation uses), the non-standard law and the Reissner law.
+
+The configuration is the one of ``fe-beam solid`` (`fe_beam.analyses.solid_driver`) plus
+``[compare]``
+(`COMPARE_KEYS`): the sweep is given as ``tensions`` (of the one tension-controlled tendon; the
+loads at load factor 1 are then those at the largest tension), ``load_factors`` in (0, 1], or
+``steps`` = n (load factors k / n). The rod's E and G are the small-strain limit of the 3D law.
+
+The 3D solid is ramped once through the sweep; the rod is solved from the unloaded state for each
+sweep point and law (`fe_beam.analyses.static.solve_static`). The departure of a rod from the solid
+is
+
+    d = max over x of |r_rod(x) - r_solid(x)| / L,
+
+the largest distance between the deformed centroids of the same reference section x (rod: the
+axis point r = (x + u, v); solid: the area centroid of the deformed section X = x) over the
+``[solid] backbone_points`` stations, relative to the length L. The summary states where along the
+sweep d first exceeds 1 % and 5 % (linear interpolation between sweep points, from d = 0 unloaded).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import exports, runctl
+from fe_beam.analyses.solid import SolidRun
+from fe_beam.analyses.solid_rod import backbone_distance, run_rod
+from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
+    COMPARE_KEYS,
+    MEASURE,
+    RODS,
+    THRESHOLDS,
+    CompareConfig,
+    _increasing,
+    matched_law,
+    parse_compare,
+    rod_at,
+)
+from fe_beam.exports.outputs import _pyplot
+from fe_beam.solvers.newton import LoadSteppingFailed
+
+__all__ = ["COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
+
+def crossing(factors, distances, threshold: float) -> dict | None:
+    """First load factor at which ``distances`` exceed ``threshold`` (linear interpolation
+    between sweep points, starting from 0 at load factor 0), with the first sweep point above."""
+    previous_f, previous_d = 0.0, 0.0
+    for f, d in zip(factors, distances, strict=True):
+        if d is None:
+            previous_f, previous_d = f, None
+            continue
+        if d > threshold:
+            if previous_d is None:
+                at = f
+            else:
+                at = previous_f + (threshold - previous_d) / (d - previous_d) * (f - previous_f)
+            return {"load_factor": at, "first_sweep_point_above": f}
+        previous_f, previous_d = f, d
+    return None
+
+
+def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """Run the sweep; write ``summary.json``, ``compare.csv`` and the plots into ``out`` (if not
+    None, by rank 0) after every sweep point; return the summary dict (``status`` "converged", or
+    "failed" when the solid stopped before the end of the sweep)."""
+    started = time.perf_counter()
+    config = parse_compare(raw)
+    solid = config.solid
+    out = None if out is None else Path(out)
+    root = comm.rank == 0
+    if out is not None and root:
+        out.mkdir(parents=True, exist_ok=True)
+    scale = _tension_scale(config)
+    summary = {
+        "status": "running",
+        "message": "",
+        "wall_time_s": 0.0,
+        "measure": MEASURE,
+        "thresholds": list(THRESHOLDS),
+        "laws": list(config.laws),
+        "sweep": {"load_factors": list(config.load_factors),
+                  "tensions": [scale * f for f in config.load_factors] if scale else None},
+        "table": [],
+        "departures": {},
+        "dofs": 0,
+        "rod_dofs": 0,
+        "model": solid.model_summary() | {
+            "rod": {"E": solid.rod.model.material.E, "G": solid.rod.model.material.shear_modulus,
+                    "constraint": solid.rod.model.options.constraint,
+                    "elements": solid.rod.model.mesh.elements,
+                    "degree": solid.rod.model.mesh.degree}},
+    }
+    if "hyperelastic" in config.laws:
+        law = matched_law(solid)
+        summary["model"]["rod"]["hyperelastic"] = {
+            "material": solid.material_name, "coefficients": law.coefficients(),
+            "volumetric": law.volumetric}
+
+    def current() -> dict:
+        summary["wall_time_s"] = time.perf_counter() - started
+        summary["departures"] = _departures(summary["table"], config, scale)
+        return summary
+
+    # the solid's sweep points are slow: every file is brought up to date after each
+    files = exports.Exports(_exports(out, config, current) if out is not None else [], comm,
+                            throttle=False)
+    try:
+        run = SolidRun(solid, comm)
+    except RuntimeError as error:
+        summary |= {"status": "failed", "message": str(error)}
+        files.finish(current())
+        if out is not None:
+            comm.barrier()
+        return summary
+    summary["dofs"] = run.dofs
+    summary["linear_solver_resolved"] = run.problem.linear_solver
+    files.start(current())  # status "running" from the start
+    try:
+        for factor in config.load_factors:
+            last = {}
+            try:
+                run.advance(factor, solid.stepping, last.update, progress=progress,
+                            label=f"solid to {factor:.3g}")
+            except LoadSteppingFailed as failure:
+                summary |= {"status": "failed", "message": str(failure)}
+                break
+            row = {"load_factor": factor}
+            row |= {k: last[k] for k in ("tension", "tensions") if k in last}
+            row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch",
+                                                 "max_principal_stretch_bulk")}
+            row["rod"] = {}
+            for law in config.laws:
+                rod = run_rod(rod_at(solid.rod, law, factor, solid), solid.stations, comm)
+                summary["rod_dofs"] = rod["dofs"]
+                entry = {"status": rod["status"], "message": rod["message"]}
+                reached = rod["status"] == "converged" and rod["backbone"] is not None
+                if reached:
+                    distance = backbone_distance(rod["backbone"], last["backbone"])
+                    entry |= {
+                        "tip": rod["steps"][-1]["tip"],
+                        "backbone": rod["backbone"],
+                        "distance_over_L": distance["max"] / solid.length,
+                        "distance_x": distance["x"],
+                    }
+                row["rod"][law] = entry
+            summary["table"].append(row)
+            files.on_step(row)
+        else:
+            summary["status"] = "converged"
+    except runctl.Interrupted as stop:
+        last = summary["table"][-1]["load_factor"] if summary["table"] else 0.0
+        summary |= stop.stopped(f"load factor {last:.4g} of the sweep",
+                                f"after load factor {last:.6g}")
+        raise
+    finally:
+        run.destroy()
+        files.finish(current())  # pictures unless interrupted (then those of the last point)
+    if out is not None:
+        comm.barrier()  # the files are complete on return, whichever rank looks
+    return summary
+
+
+def _tension_scale(config: CompareConfig) -> float | None:
+    """Tension at load factor 1 when the sweep is over one tendon's tension, else None."""
+    if not config.tension_axis:
+        return None
+    return float(config.solid.rod.tendons[0].tension)
+
+
+def _departures(rows: list[dict], config: CompareConfig, scale: float | None) -> dict:
+    result = {}
+    factors = [r["load_factor"] for r in rows]
+    for law in config.laws:
+        distances = [r["rod"][law].get("distance_over_L") for r in rows]
+        known = [d for d in distances if d is not None]
+        entry = {"max_distance_over_L": max(known) if known else None}
+        words = []
+        for threshold in THRESHOLDS:
+            found = crossing(factors, distances, threshold) if rows else None
+            if found is not None and scale is not None:
+                found |= {"tension": scale * found["load_factor"],
+                          "first_sweep_tension_above": scale * found["first_sweep_point_above"]}
+            key = f"above_{round(threshold * 100)}_percent"
+            entry[key] = found
+            words.append(_sentence(threshold, found, scale))
+        biggest = entry["max_distance_over_L"]
+        entry["statement"] = (
+            f"rod ({law}) vs 3D solid, d = max_x |r_rod - r_solid| / L: " + "; ".join(words)
+            + (f" (largest d in the sweep: {100 * biggest:.3g} %)" if biggest is not None else "")
+        )
+        result[law] = entry
+    return result
+
+
+def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
+    what = f"d > {100 * threshold:g} %"
+    if found is None:
+        return f"{what} nowhere in the sweep"
+    if scale is not None:
+        return (f"{what} from tension {found['tension']:.4g} N (interpolated; first sweep point "
+                f"above: {found['first_sweep_tension_above']:.4g} N)")
+    return (f"{what} from load factor {found['load_factor']:.4g} (interpolated; first sweep "
+            f"point above: {found['first_sweep_point_above']:.4g})")
+
+
+def _columns(first: dict | None, laws) -> list[exports.Column]:
+    """compare.csv: the sweep point, the solid's tip, each rod's tip and distance (empty cells
+    where the rod did not converge)."""
+    count = len(first.get("tensions", [])) if first else 0
+
+    def rod_tip(row: dict, law: str) -> dict:
+        return row["rod"][law].get("tip") or {}
+
+    columns = [exports.Column("load_factor", lambda r: r["load_factor"]),
+               *exports.indexed_columns("tension", count, lambda r: r["tensions"]),
+               *exports.tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
+    for law in laws:
+        columns += [exports.Column(f"{law}_tip_{k}",
+                                   lambda r, law=law, k=k: rod_tip(r, law).get(k, ""))
+                    for k in ("u", "v", "theta")]
+        columns.append(exports.Column(f"{law}_distance_over_L",
+                                      lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
+    return columns
+
+
+def _exports(out: Path, config: CompareConfig, content, every_step: bool = True) -> list:
+    """summary.json, compare.csv and the pictures (``every_step``: redrawn after each point)."""
+    return [exports.SummaryExport(out / "summary.json", content),
+            exports.CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
+            exports.PlotExport(lambda summary: _plot(out, summary, config)
+                               if summary["table"] and config.solid.output.plots else None,
+                               content, every_step)]
+
+
+def _write_outputs(out: Path, summary: dict, config: CompareConfig) -> None:
+    """The files of a finished sweep (``summary``) at once (on the calling rank)."""
+    files = exports.Exports(_exports(out, config, lambda: summary, every_step=False))
+    for row in summary["table"]:
+        files.on_step(row)
+    files.finish(summary)
+
+
+STYLES = {"solid": ("-", "3D solid"), "nonstandard": ("--", "rod, non-standard law"),
+          "reissner": (":", "rod, Reissner law"),
+          "hyperelastic": ("-.", "rod, section law of the 3D material")}
+COLOURS = {"solid": "tab:blue", "nonstandard": "tab:orange", "reissner": "tab:green",
+           "hyperelastic": "tab:red"}
+
+
+def sweep_label(value: float, tension_axis: bool) -> str:
+    """A sweep point with its unit: "tension 0.5 N" or "load factor 0.5"."""
+    return f"tension {value:.3g} N" if tension_axis else f"load factor {value:.3g}"
+
+
+def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
+    plt = _pyplot()
+    rows = summary["table"]
+    tensions = summary["sweep"]["tensions"]
+    label = "tension [N]" if tensions else "load factor"
+    axis_values = [r.get("tension", r["load_factor"]) if tensions else r["load_factor"]
+                   for r in rows]
+    length = config.solid.length
+
+    with exports.figure(out / "backbones.png", figsize=(9, 5)) as (_, axis):
+        colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
+        axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
+        for row, value, colour in zip(rows, axis_values, colours, strict=True):
+            models = [("solid", row["solid"].get("backbone"))]
+            models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
+            for name, backbone in models:
+                if backbone is None:
+                    continue
+                style, text = STYLES[name]
+                axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
+                          lw=1.6, label=f"{text}, {sweep_label(value, bool(tensions))}")
+        axis.set_xlabel("x + u [m]")
+        axis.set_ylabel("y + v [m]")
+        axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+    with exports.figure(out / "tip_vs_tension.png", 1, 4, figsize=(15, 3.6)) as (_, axes):
+        names = [("solid", None)] + [(law, law) for law in config.laws]
+        for axis, key, unit in zip(axes[:3], ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+            for name, law in names:
+                style, text = STYLES[name]
+                points = [
+                    (value, (row["solid"] if law is None else row["rod"][law]).get("tip"))
+                    for row, value in zip(rows, axis_values, strict=True)
+                ]
+                xs = [p for p, tip in points if tip]
+                ys = [tip[key] for _, tip in points if tip]
+                axis.plot(xs, ys, style, marker="o", ms=3, color=COLOURS[name], label=text)
+            axis.set_xlabel(label)
+            axis.set_ylabel(f"tip {key} [{unit}]")
+            axis.grid(alpha=0.3)
+            axis.legend(fontsize=7)
+        axis = axes[3]
+        for law in config.laws:
+            style, text = STYLES[law]
+            pairs = [(v, r["rod"][law].get("distance_over_L")) for r, v in zip(rows, axis_values,
+                                                                                 strict=True)]
+            axis.plot([v for v, d in pairs if d is not None],
+                      [100 * d for _, d in pairs if d is not None], style, marker="o", ms=3,
+                      color=COLOURS[law], label=text)
+        for threshold in THRESHOLDS:
+            axis.axhline(100 * threshold, color="0.6", lw=0.8)
+        axis.set_xlabel(label)
+        axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7)

@@ -1,0 +1,696 @@
+"""Design (`fe-beam design CONFIG.toml --out DIR`): choose section sizes, tendon offsets,
+tensions or loads so that the rod reaches a target, by SLSQP (scipy) with gradients.
+
+The configuration is a rod's (`fe-beam static`) or, with ``[[tendons]]``, a finger's
+(`fe-beam finger`), plus::
+
+    [design]
+    variables = ["section.h_tip", "tendons.0.offset_tip"]   #
+    fe_beam.solvers.realtime.PARAMETER_KEYS
+    bounds = [[0.005, 0.02], [0.0, 0.008]]                  # one [low, high] per variable
+    # (or a table: bounds = {"section.h_tip" = [0.005, 0.02], ...})
+    objective = "tip_pose"        # "tip_pose" | "backbone" | "tension"
+    target = {theta = 0.8}        # tip_pose: any of u, v [m], theta [rad]
+    # backbone: points = [[s, x, y], ...]: the point at reference arclength s (a mesh vertex)
+    #           should be at (x, y) [m]
+    # tension:  tip_angle = 0.8: minimise |the one force-like variable| (tendons.<i>.tension,
+    #           loads.tip_moment, loads.tip_force.<k>) with the tip angle held at tip_angle
+    max_fibre_strain = 0.05       # optional constraint: |eps| + h/2 |kappa| <= this everywhere
+    max_iterations = 100
+
+Objectives are made dimensionless: tip_pose = sum over the given components of
+((value - target) / scale)^2, scale L for u, v and 1 rad for theta; backbone = the mean of
+|r(s_i) - target_i|^2 / L^2; tension = |value| / max(|low|, |high|) of its bounds. Variables
+are scaled to [0, 1] by their bounds for the optimiser.
+
+Gradients: central finite differences of equilibria of one `fe_beam.solvers.realtime.RealtimeSolver`
+(warm-started, Newton to rtol 1e-12), step 1e-6 of each variable's range (``"gradient":
+"finite-difference"`` in summary.json). The adjoint sensitivities of issue 14 item 1 go
+behind the same function (`gradients`) when they are available.
+
+summary.json: ``status``, ``message``, ``variables`` ({key: optimum}), ``initial``,
+``objective`` ({kind, value}), ``constraints`` ({name: value}, >= 0 feasible for
+inequalities, 0 for equalities), ``kkt_residual`` and ``kkt`` (stationarity, feasibility,
+dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``evaluations``,
+``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
+shapes, targets).
+
+Validation (`parse_design`) imports no FE code: a bad [design] table is a ConfigError (exit
+2, one sentence).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fe_beam.config.schema import ConfigError
+
+__all__ = ["DesignProblem", "parse_design", "run_design"]
+
+OBJECTIVES = ("tip_pose", "backbone", "tension")
+DESIGN_KEYS = ("variables", "bounds", "objective", "target", "points", "tip_angle",
+               "max_fibre_strain", "max_iterations")
+MATERIAL_KEYS = ("E", "nu", "G", "rho")
+SECTION_DIMS = {"rectangle": ("b", "h"), "circle": ("d",), "tube": ("d", "t"),
+                "t-section": ("b", "h", "tf", "tw"), "custom": ("A", "I", "I3", "I4")}
+FORCE_LIKE = re.compile(r"^(tendons\.\d+\.tension|loads\.tip_moment|loads\.tip_force\.[01])$")
+POSITIVE = re.compile(r"^(section\.|material\.(E|G)$)")
+FD_STEP = 1e-6  # of each variable's range
+DESIGN_RTOL = 1e-12
+
+
+@dataclass
+class DesignProblem:
+    """A parsed [design] table."""
+
+    variables: list[str]
+    bounds: np.ndarray  # (n, 2)
+    objective: str
+    initial: np.ndarray
+    target: dict = field(default_factory=dict)
+    points: list = field(default_factory=list)
+    tip_angle: float | None = None
+    max_fibre_strain: float | None = None
+    max_iterations: int = 100
+
+    @property
+    def force_variable(self) -> int | None:
+        for i, key in enumerate(self.variables):
+            if FORCE_LIKE.match(key):
+                return i
+        return None
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
+        value)
+
+
+def _initial_value(config: dict, key: str):
+    """The configuration's value of a design variable (after the finger's defaults), or a
+    ConfigError naming the key: unknown key, or a key whose value is not a number."""
+    parts = key.split(".")
+    head = parts[0]
+    where = f"[design] variables: {key!r}"
+    if head == "material" and len(parts) == 2:
+        material = config.get("material", {})
+        if parts[1] not in MATERIAL_KEYS:
+            raise ConfigError(f"{where} is not a design variable; material variables are "
+                              f"{', '.join('material.' + k for k in MATERIAL_KEYS)}")
+        if parts[1] not in material:
+            raise ConfigError(f"{where} is not set in [material] (give it there first)")
+        return material[parts[1]]
+    if head == "section" and len(parts) == 2:
+        section = config.get("section", {})
+        shape = section.get("shape", "rectangle")
+        name = parts[1]
+        dims = SECTION_DIMS.get(shape, ())
+        if name == "shape":
+            raise ConfigError(f"{where} is not numeric (a section shape): design variables "
+                              "must be numbers")
+        base = name[:-4] if name.endswith("_tip") else name
+        if base not in dims:
+            raise ConfigError(f"{where} is not a dimension of section shape {shape!r} "
+                              f"(dimensions: {', '.join(dims)} and their _tip values)")
+        if name in section:
+            return section[name]
+        if name.endswith("_tip") and base in section:
+            return section[base]  # an untapered dimension starts a taper from its value
+        raise ConfigError(f"{where} is not set in [section]")
+    if head == "loads" and len(parts) in (2, 3):
+        loads = config.get("loads", {})
+        if key == "loads.tip_moment":
+            return loads.get("tip_moment", 0.0)
+        if len(parts) == 3 and parts[1] in ("tip_force", "distributed") and parts[2] in ("0",
+                                                                                          "1"):
+            return list(loads.get(parts[1], [0.0, 0.0]))[int(parts[2])]
+        if len(parts) == 2 and parts[1] in ("follower", "steps"):
+            raise ConfigError(f"{where} is not a numeric design variable")
+        raise ConfigError(f"{where} is not a design variable; load variables are "
+                          "loads.tip_moment, loads.tip_force.0/1, loads.distributed.0/1")
+    if head == "tendons" and len(parts) >= 3:
+        tendons = config.get("tendons", [])
+        if not parts[1].isdigit() or int(parts[1]) >= len(tendons):
+            raise ConfigError(f"{where}: the tendon index must be 0 .. {len(tendons) - 1}")
+        tendon = tendons[int(parts[1])]
+        what = parts[2]
+        if what in ("tension", "pull_in", "offset_base", "offset_tip") and len(parts) == 3:
+            if what not in tendon:
+                raise ConfigError(f"{where} is not set for that tendon")
+            return tendon[what]
+        if what == "path" and len(parts) == 4 and parts[3].isdigit():
+            path = tendon.get("path")
+            if not isinstance(path, list) or int(parts[3]) >= len(path):
+                raise ConfigError(f"{where}: the tendon has no path point {parts[3]} "
+                                  "(path = [[x, offset], ...])")
+            return path[int(parts[3])][1]
+        if what in ("name", "entry", "anchor", "steps", "paths"):
+            raise ConfigError(f"{where} is not a numeric design variable (a tendon's "
+                              "tension, pull_in, offset_base, offset_tip or path.<point>)")
+        raise ConfigError(f"{where} is not a design variable (a tendon has tension, "
+                          "pull_in, offset_base, offset_tip and path.<point>)")
+    if head in ("model", "mesh", "beam", "supports", "solver", "output"):
+        raise ConfigError(f"{where} is not a numeric design variable: the design varies "
+                          "section.*, material.*, loads.* and tendons.<i>.* values")
+    raise ConfigError(f"{where} is not a design variable; use section.<dim>[_tip], "
+                      "material.E/nu/G/rho, loads.tip_moment, loads.tip_force.<k>, "
+                      "tendons.<i>.tension/offset_base/offset_tip/path.<j>")
+
+
+def parse_design(config: dict) -> tuple[DesignProblem, dict]:
+    """The [design] table (FE-free checks) and the configuration without it."""
+    given = config.get("design")
+    if not isinstance(given, dict):
+        raise ConfigError("fe-beam design needs a [design] table (variables, bounds, "
+                          "objective)")
+    unknown = [k for k in given if k not in DESIGN_KEYS]
+    if unknown:
+        raise ConfigError(f"[design] unknown key {unknown[0]!r}; allowed: "
+                          f"{', '.join(DESIGN_KEYS)}")
+    rest = {k: v for k, v in config.items() if k != "design"}
+    if "tendons" in rest:
+        from fe_beam.config.finger import with_defaults
+
+        merged = with_defaults(rest)
+    else:
+        merged = rest
+    variables = given.get("variables")
+    if not (isinstance(variables, list) and variables
+            and all(isinstance(v, str) for v in variables)):
+        raise ConfigError("[design] variables must be a non-empty list of keys such as "
+                          "[\"section.h_tip\", \"tendons.0.offset_tip\"]")
+    if len(set(variables)) != len(variables):
+        raise ConfigError("[design] variables must be distinct")
+    initial = []
+    for key in variables:
+        value = _initial_value(merged, key)
+        if not _is_number(value):
+            raise ConfigError(f"[design] variables: {key!r} is not numeric (its value is "
+                              f"{value!r}): design variables must be numbers")
+        initial.append(float(value))
+    bounds = given.get("bounds")
+    if isinstance(bounds, dict):  # {variable = [low, high], ...}
+        missing = [v for v in variables if v not in bounds]
+        extra = [k for k in bounds if k not in variables]
+        if missing or extra:
+            what = f"missing {missing[0]!r}" if missing else f"{extra[0]!r} is not a variable"
+            raise ConfigError(f"[design] bounds: give one [low, high] for each variable "
+                              f"({what})")
+        bounds = [bounds[v] for v in variables]
+    ok = (isinstance(bounds, list) and len(bounds) == len(variables)
+          and all(isinstance(b, list) and len(b) == 2 and all(_is_number(x) for x in b)
+                  for b in bounds))
+    if not ok:
+        raise ConfigError(f"[design] bounds must be one [low, high] pair of numbers per "
+                          f"variable ({len(variables)} pairs)")
+    bounds = np.array(bounds, dtype=float)
+    for key, (low, high), value in zip(variables, bounds, initial, strict=True):
+        if not low < high:
+            raise ConfigError(f"[design] bounds of {key!r}: low {low:g} must be < high "
+                              f"{high:g}")
+        if POSITIVE.match(key) and not (low > 0 or key == "section.I3"):
+            raise ConfigError(f"[design] bounds of {key!r} must be > 0 (got low {low:g})")
+        if not low <= value <= high:
+            raise ConfigError(f"[design] the configuration's {key} = {value:g} lies outside "
+                              f"its bounds [{low:g}, {high:g}]")
+    objective = given.get("objective")
+    if objective not in OBJECTIVES:
+        raise ConfigError(f"[design] objective must be one of {', '.join(OBJECTIVES)}; got "
+                          f"{objective!r}")
+    problem = DesignProblem(list(variables), bounds, objective, np.array(initial))
+    if objective == "tip_pose":
+        target = given.get("target")
+        if not (isinstance(target, dict) and target
+                and all(k in ("u", "v", "theta") and _is_number(v) for k, v in target.items())):
+            raise ConfigError("[design] objective = \"tip_pose\" needs target = {u = .., v = "
+                              ".., theta = ..} (any of them, numbers)")
+        problem.target = {k: float(v) for k, v in target.items()}
+    elif objective == "backbone":
+        points = given.get("points")
+        if not (isinstance(points, list) and points and all(
+                isinstance(p, list) and len(p) == 3 and all(_is_number(x) for x in p)
+                for p in points)):
+            raise ConfigError("[design] objective = \"backbone\" needs points = [[s, x, y], "
+                              "...] (reference arclength s, target position x, y; numbers)")
+        problem.points = [tuple(float(x) for x in p) for p in points]
+    else:
+        angle = given.get("tip_angle")
+        if not _is_number(angle):
+            raise ConfigError("[design] objective = \"tension\" needs tip_angle = <number> "
+                              "(rad), the tip angle to hold")
+        forces = [v for v in variables if FORCE_LIKE.match(v)]
+        if len(forces) != 1:
+            raise ConfigError("[design] objective = \"tension\" minimises one force-like "
+                              "variable: exactly one of tendons.<i>.tension, loads.tip_moment, "
+                              f"loads.tip_force.<k> must be among the variables (got "
+                              f"{len(forces)})")
+        problem.tip_angle = float(angle)
+    strain = given.get("max_fibre_strain")
+    if strain is not None:
+        if not (_is_number(strain) and strain > 0):
+            raise ConfigError(f"[design] max_fibre_strain must be a number > 0, got {strain!r}")
+        problem.max_fibre_strain = float(strain)
+    iterations = given.get("max_iterations", 100)
+    if not (isinstance(iterations, int) and not isinstance(iterations, bool)
+            and 1 <= iterations <= 10000):
+        raise ConfigError(f"[design] max_iterations must be an integer from 1 to 10000, got "
+                          f"{iterations!r}")
+    problem.max_iterations = iterations
+    return problem, rest
+
+
+# --- evaluation ----------------------------------------------------------------------------------
+def _check_in_place(design: DesignProblem, config, comm) -> None:
+    """Every variable must change numbers held by Constants only (one solver for all
+    evaluations): a custom section's dimensions (its height sqrt(12 I / A)) and those of a
+    hyperelastic section rule are compiled into the forms. ConfigError naming the variable."""
+    from fe_beam.solvers.realtime import set_parameters, structure_key
+
+    base = structure_key(config, comm)
+    for key, initial, (low, high) in zip(design.variables, design.initial, design.bounds,
+                                         strict=True):
+        try:
+            changed = set_parameters(config, {key: high if high != initial else low})
+        except (KeyError, ValueError):
+            continue  # reported by the solver with its own message
+        if structure_key(changed, comm) != base:
+            raise ConfigError(f"[design] variables: {key!r} cannot be a design variable of "
+                              "this model (a custom section's or a hyperelastic section rule's "
+                              "dimensions are compiled into its forms); use a closed-form "
+                              "section shape (rectangle, circle, tube, t-section)")
+
+
+class Evaluator:
+    """Objective and constraints of a design at scaled variables t in [0, 1]^n, from one
+    `RealtimeSolver` (each evaluation warm-started from the last equilibrium)."""
+
+    def __init__(self, design: DesignProblem, config, comm, raw: dict | None = None):
+        """``raw``: the configuration's TOML tables (without [design]): with it, gradients
+        come from the adjoint sensitivities (`fe_beam.analyses.sensitivity`) when that module is
+        installed and supports the variables and outputs."""
+        from dataclasses import replace
+
+        from fe_beam.solvers.realtime import RealtimeSolver
+
+        self.design = design
+        _check_in_place(design, config, comm)
+        solver = replace(config.solver, rtol=min(config.solver.rtol, DESIGN_RTOL))
+        self.config = replace(config, solver=solver)
+        self.comm = comm
+        self.length = float(config.model.length)
+        self.solver = RealtimeSolver(self.config, comm)
+        self.evaluations = 0
+        self._cache: dict = {}
+        self.adjoint = _adjoint_model(design, raw, comm) if raw is not None else None
+        if design.objective == "backbone":
+            for s, _, _ in design.points:
+                try:
+                    self.solver.problem.point_values(s)
+                except RuntimeError:
+                    raise ConfigError(f"[design] points: s = {s:g} is not a mesh vertex (use "
+                                      "vertices of the uniform mesh, s = k L / elements)"
+                                      ) from None
+
+    def values(self, t: np.ndarray) -> dict:
+        return dict(zip(self.design.variables, self.x(t), strict=True))
+
+    def x(self, t: np.ndarray) -> np.ndarray:
+        low, high = self.design.bounds.T
+        return low + np.asarray(t, dtype=float) * (high - low)
+
+    def evaluate(self, t: np.ndarray) -> dict:
+        """{"objective": f, "inequality": [...], "equality": [...], "tip": {...}}."""
+        key = tuple(np.round(np.asarray(t, dtype=float), 15))
+        if key in self._cache:
+            return self._cache[key]
+        self.solver.update(parameters=self.values(t))
+        self.evaluations += 1
+        problem, design = self.solver.problem, self.design
+        tip = self.solver.tip()
+        if design.objective == "tip_pose":
+            scale = {"u": self.length, "v": self.length, "theta": 1.0}
+            f = sum(((tip[k] - v) / scale[k]) ** 2 for k, v in design.target.items())
+        elif design.objective == "backbone":
+            total = 0.0
+            for s, x, y in design.points:
+                p = problem.point_values(s)
+                total += ((s + p["u"] - x) ** 2 + (p["v"] - y) ** 2) / self.length**2
+            f = total / len(design.points)
+        else:
+            i = design.force_variable
+            f = abs(self.x(t)[i]) / np.max(np.abs(design.bounds[i]))
+        inequality, equality = [], []
+        if design.max_fibre_strain is not None:
+            from fe_beam.solvers.realtime import max_fibre_strain
+
+            inequality.append(1.0 - max_fibre_strain(problem) / design.max_fibre_strain)
+        if design.objective == "tension":
+            equality.append(tip["theta"] - design.tip_angle)
+        result = {"objective": float(f), "inequality": inequality, "equality": equality,
+                  "tip": tip}
+        self._cache[key] = result
+        return result
+
+    def close(self) -> None:
+        self.solver.close()
+        if self.adjoint is not None:
+            self.adjoint.destroy()
+            self.adjoint = None
+
+
+def _adjoint_key(key: str) -> str:
+    """A design variable's name among the sensitivity module's parameters."""
+    parts = key.split(".")
+    if parts[0] == "tendons" and len(parts) == 4 and parts[2] == "path":
+        return f"{key}.1"  # the offset (second coordinate) of path point j
+    return key
+
+
+def _adjoint_model(design: DesignProblem, raw: dict, comm):
+    """A `fe_beam.analyses.sensitivity.RodSensitivity` for the design's variables, or None (module
+    not
+    installed, or it refuses a variable): the gradients are then finite differences. The
+    fibre-strain constraint is not one of its outputs: None too."""
+    if design.max_fibre_strain is not None:
+        return None
+    try:
+        from fe_beam.analyses.sensitivity import RodSensitivity
+    except ImportError:
+        return None
+    try:
+        return RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
+    except (ConfigError, ValueError, KeyError):
+        return None
+
+
+def _adjoint_gradients(evaluator: Evaluator, t: np.ndarray) -> dict:
+    """d(objective, equality)/dt from adjoint gradients of the outputs the objective uses."""
+    design, model = evaluator.design, evaluator.adjoint
+    x = evaluator.x(t)
+    model.set_values(x)
+    model.solve(1.0)
+    scale_t = design.bounds[:, 1] - design.bounds[:, 0]  # dx/dt
+    n = len(t)
+    grads = {"objective": np.zeros(n), "inequality": np.zeros((0, n)),
+             "equality": np.zeros((0, n))}
+    if design.objective == "tip_pose":
+        names = [f"tip_{k}" for k in design.target]
+        values, jac = model.outputs(names), model.gradient(names)
+        scale = {"u": evaluator.length, "v": evaluator.length, "theta": 1.0}
+        for (k, target), value, row in zip(design.target.items(), values, jac, strict=True):
+            grads["objective"] += 2 * (value - target) / scale[k] ** 2 * row
+    elif design.objective == "backbone":
+        names = [f"{c}@{s!r}" for s, _, _ in design.points for c in ("x", "y")]
+        values, jac = model.outputs(names), model.gradient(names)
+        targets = [v for _, x_t, y_t in design.points for v in (x_t, y_t)]
+        for value, target, row in zip(values, targets, jac, strict=True):
+            grads["objective"] += 2 * (value - target) / evaluator.length**2 * row
+        grads["objective"] /= len(design.points)
+    else:
+        i = design.force_variable
+        grads["objective"][i] = np.sign(x[i]) / np.max(np.abs(design.bounds[i]))
+        grads["equality"] = model.gradient(["tip_theta"])
+    # d/dx -> d/dt
+    grads["objective"] = grads["objective"] * scale_t
+    grads["equality"] = grads["equality"] * scale_t[None, :]
+    return grads
+
+
+def gradients(evaluator: Evaluator, t: np.ndarray) -> tuple[dict, str]:
+    """d(objective, constraints)/dt at t, and how they were computed: "adjoint" (the
+    sensitivity module's exact gradients of the outputs, when available: `_adjoint_model`)
+    or "finite-difference" (central differences, step FD_STEP of each variable's range,
+    inside [0, 1])."""
+    t = np.asarray(t, dtype=float)
+    if evaluator.adjoint is not None:
+        return _adjoint_gradients(evaluator, t), "adjoint"
+    base = evaluator.evaluate(t)
+    n = len(t)
+    grads = {"objective": np.zeros(n),
+             "inequality": np.zeros((len(base["inequality"]), n)),
+             "equality": np.zeros((len(base["equality"]), n))}
+    for i in range(n):
+        h = FD_STEP
+        up, down = t.copy(), t.copy()
+        up[i] = min(t[i] + h, 1.0)
+        down[i] = max(t[i] - h, 0.0)
+        a, b = evaluator.evaluate(up), evaluator.evaluate(down)
+        width = up[i] - down[i]
+        grads["objective"][i] = (a["objective"] - b["objective"]) / width
+        for kind in ("inequality", "equality"):
+            if len(base[kind]):
+                grads[kind][:, i] = (np.array(a[kind]) - np.array(b[kind])) / width
+    evaluator.evaluate(t)  # back to t (cached: no solve) for the caller
+    return grads, "finite-difference"
+
+
+def kkt(evaluator: Evaluator, t: np.ndarray, active_tol: float = 1e-7) -> dict:
+    """First-order optimality at t (scaled variables): multipliers of the equality and active
+    inequality constraints and the active bounds by least squares on
+    grad f = sum lambda_i grad c_i + mu (bounds); residuals of stationarity (inf-norm),
+    primal feasibility, dual sign (inequality lambda >= 0, lower-bound mu >= 0, upper-bound
+    mu <= 0) and complementarity; kkt_residual = the largest."""
+    values = evaluator.evaluate(t)
+    grads, _ = gradients(evaluator, t)
+    n = len(t)
+    columns, kinds = [], []
+    for j, g in enumerate(grads["equality"]):
+        columns.append(g)
+        kinds.append(("equality", j))
+    for j, (c, g) in enumerate(zip(values["inequality"], grads["inequality"], strict=True)):
+        if c <= active_tol:
+            columns.append(g)
+            kinds.append(("inequality", j))
+    for i in range(n):
+        if t[i] <= active_tol:
+            columns.append(np.eye(n)[i])
+            kinds.append(("lower", i))
+        elif t[i] >= 1 - active_tol:
+            columns.append(np.eye(n)[i])
+            kinds.append(("upper", i))
+    g = grads["objective"]
+    if columns:
+        matrix = np.array(columns).T
+        multipliers, *_ = np.linalg.lstsq(matrix, g, rcond=None)
+        stationarity = float(np.max(np.abs(g - matrix @ multipliers)))
+    else:
+        multipliers, stationarity = np.zeros(0), float(np.max(np.abs(g)))
+    sign = 0.0
+    for (kind, _), value in zip(kinds, multipliers, strict=True):
+        if kind in ("inequality", "lower"):
+            sign = max(sign, -value)
+        elif kind == "upper":
+            sign = max(sign, value)
+    feasibility = max([abs(c) for c in values["equality"]]
+                      + [max(-c, 0.0) for c in values["inequality"]]
+                      + [max(-t.min(), 0.0), max(t.max() - 1, 0.0)], default=0.0)
+    complementarity = max([abs(c) * abs(m) for (kind, _), m, c in (
+        (k, m, values["inequality"][k[1]]) for k, m in zip(kinds, multipliers, strict=True)
+        if k[0] == "inequality")], default=0.0)
+    return {
+        "stationarity": stationarity, "primal_feasibility": float(feasibility),
+        "dual_sign": float(sign), "complementarity": float(complementarity),
+        "active": [f"{kind} {evaluator.design.variables[i] if kind in ('lower', 'upper') else i}"
+                   for kind, i in kinds],
+        "multipliers": [float(m) for m in multipliers],
+        "kkt_residual": float(max(stationarity, feasibility, sign, complementarity)),
+    }
+
+
+def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> dict:
+    """SLSQP on the scaled variables; the summary's content (see the module docstring)."""
+    from scipy.optimize import minimize
+
+    started = time.perf_counter()
+    evaluator = Evaluator(design, config, comm, raw)
+    low, high = design.bounds.T
+    t0 = (design.initial - low) / (high - low)
+    history = []
+    gradient_kind = ["finite-difference"]
+
+    def objective(t):
+        return evaluator.evaluate(t)["objective"]
+
+    def objective_gradient(t):
+        grads, gradient_kind[0] = gradients(evaluator, t)
+        return grads["objective"]
+
+    def record(t):
+        values = evaluator.evaluate(t)
+        history.append({"variables": {k: float(v) for k, v in evaluator.values(t).items()},
+                        "objective": values["objective"]})
+
+    constraints = []
+    if design.max_fibre_strain is not None:
+        constraints.append({"type": "ineq",
+                            "fun": lambda t: np.array(evaluator.evaluate(t)["inequality"]),
+                            "jac": lambda t: gradients(evaluator, t)[0]["inequality"]})
+    if design.objective == "tension":
+        constraints.append({"type": "eq",
+                            "fun": lambda t: np.array(evaluator.evaluate(t)["equality"]),
+                            "jac": lambda t: gradients(evaluator, t)[0]["equality"]})
+    initial = evaluator.evaluate(t0)
+    record(t0)
+    try:
+        result = minimize(objective, t0, jac=objective_gradient, method="SLSQP",
+                          bounds=[(0.0, 1.0)] * len(t0), constraints=constraints,
+                          callback=record,
+                          options={"maxiter": design.max_iterations, "ftol": 1e-14})
+        t = np.clip(result.x, 0.0, 1.0)
+        final = evaluator.evaluate(t)
+        conditions = kkt(evaluator, t)
+        status = "converged" if result.success else "not converged"
+        message = str(result.message)
+        iterations = int(result.nit)
+        # SLSQP may stop on its line search with a point that is optimal to the accuracy of
+        # the gradients: the KKT residual decides
+        if not result.success and conditions["kkt_residual"] <= 1e-6:
+            status = "converged"
+            message += " (the KKT conditions hold to 1e-6)"
+        shape = _shape(evaluator)
+        evaluator.solver.update(parameters=evaluator.values(t0))
+        start_shape = _shape(evaluator)
+        evaluator.solver.update(parameters=evaluator.values(t))
+    finally:
+        evaluator.close()
+    names = []
+    if design.max_fibre_strain is not None:
+        names.append("max_fibre_strain")
+    summary = {
+        "status": status,
+        "message": message,
+        "variables": {k: float(v) for k, v in evaluator.values(t).items()},
+        "initial": {k: float(v) for k, v in evaluator.values(t0).items()},
+        "bounds": {k: [float(a), float(b)] for k, (a, b) in zip(design.variables,
+                                                                design.bounds, strict=True)},
+        "objective": {"kind": design.objective, "value": final["objective"],
+                      "initial": initial["objective"]},
+        "constraints": _constraint_summary(design, final),
+        "kkt_residual": conditions["kkt_residual"],
+        "kkt": conditions,
+        "iterations": iterations,
+        "evaluations": evaluator.evaluations,
+        "gradient": gradient_kind[0],
+        "tip": final["tip"],
+        "history": history,
+        "wall_time_s": time.perf_counter() - started,
+        "notes": _target_notes(design, final, conditions),
+    }
+    return summary | {"_shapes": (start_shape, shape)}
+
+
+TARGET_TOLERANCE = 1e-10  # dimensionless objective: a miss of 1e-5 L (or 1e-5 rad)
+
+
+def _target_notes(design: DesignProblem, values: dict, conditions: dict) -> list[str]:
+    """A tip_pose or backbone target that the optimum does not reach (the optimum of the
+    misfit within the bounds and constraints is then not the wanted shape): one note naming
+    the miss and what stops it."""
+    if design.objective not in ("tip_pose", "backbone") or not (
+            values["objective"] > TARGET_TOLERANCE):
+        return []
+    if design.objective == "tip_pose":
+        units = {"u": "m", "v": "m", "theta": "rad"}
+        miss = ", ".join(f"tip {k} = {values['tip'][k]:.6g} {units[k]} (target {v:.6g})"
+                         for k, v in design.target.items())
+    else:
+        miss = f"rms distance to the target points {math.sqrt(values['objective']):.3g} L"
+    limits = [a for a in conditions.get("active", []) if not a.startswith("equality")]
+    why = (f"; active: {', '.join(limits)}" if limits else
+           " (no bound or constraint is active: a local minimum of the misfit)")
+    return [f"the target is not reached: {miss}{why}"]
+
+
+def _constraint_summary(design: DesignProblem, values: dict) -> dict:
+    out = {}
+    if design.max_fibre_strain is not None:
+        margin = values["inequality"][0]
+        out["max_fibre_strain"] = {"limit": design.max_fibre_strain,
+                                   "value": design.max_fibre_strain * (1 - margin),
+                                   "margin": margin}
+    if design.objective == "tension":
+        out["tip_angle"] = {"target": design.tip_angle,
+                            "value": values["tip"]["theta"],
+                            "residual": values["equality"][0]}
+    return out
+
+
+def _shape(evaluator: Evaluator):
+    from fe_beam.exports.outputs import BeamXDMFWriter
+
+    writer = BeamXDMFWriter(evaluator.solver.problem, None)
+    try:
+        return writer.vertex_values()
+    finally:
+        writer.close()
+
+
+def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float) -> None:
+    from fe_beam.exports.outputs import _pyplot
+
+    plt = _pyplot()
+    figure, axis = plt.subplots(figsize=(6, 5))
+    for shape, label, style in ((shapes[0], "initial", "--"), (shapes[1], "optimum", "-")):
+        if shape is not None:
+            order = np.argsort(shape["x"])
+            axis.plot((shape["x"] + shape["u"])[order], shape["v"][order], style, lw=2,
+                      label=label)
+    if design.objective == "backbone":
+        points = np.array(design.points)
+        axis.plot(points[:, 1], points[:, 2], "kx", ms=8, label="target points")
+    if design.objective == "tip_pose" and {"u", "v"} <= set(design.target):
+        axis.plot(length + design.target["u"], design.target["v"], "kx", ms=8,
+                  label="target tip")
+    axis.set_aspect("equal", adjustable="datalim")
+    axis.set_xlabel("x [m]")
+    axis.set_ylabel("y [m]")
+    text = "\n".join(f"{k} = {v:.4g}" for k, v in summary["variables"].items())
+    axis.set_title(f"design optimum ({summary['status']}):\n{text}", fontsize=8)
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(out / "design.png", dpi=130)
+    plt.close(figure)
+
+
+def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> dict:
+    """Parse, optimise, write summary.json and design.png under ``out``."""
+    from fe_beam.config.schema import parse_static
+    from fe_beam.exports.outputs import atomic_write_json
+
+    design, rest = parse_design(config)
+    rest = copy.deepcopy(rest)
+    rest.pop("inverse", None)
+    if "tendons" in rest:  # the finger's defaults written out (every table explicit)
+        from fe_beam.config.finger import with_defaults
+
+        rest = with_defaults(rest)
+    section = rest.get("section")
+    for key in design.variables:
+        # a tip value of an untapered dimension: the taper starts from the uniform value (so
+        # that the built model has a constant for it)
+        match = re.fullmatch(r"section\.(\w+)_tip", key)
+        if match and isinstance(section, dict) and key[len("section."):] not in section \
+                and match.group(1) in section:
+            section[key[len("section."):]] = section[match.group(1)]
+    if "tendons" in rest:
+        from fe_beam.analyses.finger import parse_finger
+
+        parsed, _ = parse_finger(rest)
+    else:
+        parsed = parse_static(rest)
+    summary = optimise(design, parsed, comm, rest)
+    shapes = summary.pop("_shapes")
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_json(out / "summary.json", summary)
+        if parsed.output.plots:
+            _plot(out, summary, shapes, design, parsed.model.length)
+    return summary

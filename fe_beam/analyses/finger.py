@@ -1,0 +1,350 @@
+"""Tendon-driven tapered soft finger (the finger chapter; docs/theory.md, Tendons).
+
+The finger is a `BeamModel` plus `[[tendons]]`; every table the user leaves out defaults to the
+chapter's finger: L = 0.1 m, B = 0.02 m, H from 0.02 to 0.01 m, one tendon from 8 mm offset at
+the base to 4 mm at the tip, silicone with E = 0.6 MPa (nu = 0.45 assumed: the rod model needs
+nu < 0.5; it only enters the shear stiffness).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import exports, runctl
+from fe_beam.analyses.static import StaticResult, solve_static
+from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
+    DEFAULT_FINGER,
+    INVERSE_KEYS,
+    TENDON_KEYS,
+    TIP_COMPONENT,
+    InverseTarget,
+    check_tendon_inside,
+    parse_finger,
+    parse_tendon,
+    with_defaults,
+)
+from fe_beam.config.schema import (
+    ConfigError,
+    StaticConfig,
+)
+from fe_beam.exports.outputs import atomic_write_json, virtual_display
+from fe_beam.fem.tendons import tension_for_target
+from fe_beam.solvers.newton import LoadSteppingFailed
+
+__all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
+
+def tension_for_tip_angle(
+    config: StaticConfig,
+    target: float,
+    comm=MPI.COMM_WORLD,
+    bracket: tuple[float, float] | None = None,
+) -> float:
+    """Tension of the (single, tension-controlled) tendon that turns the tip by ``target``."""
+    return solve_inverse(config, InverseTarget("tip_angle", target), comm, bracket=bracket)[
+        "tension"]
+
+
+def solve_inverse(
+    config: StaticConfig,
+    target: InverseTarget,
+    comm=MPI.COMM_WORLD,
+    sweep: list[dict] | None = None,
+    bracket: tuple[float, float] | None = None,
+) -> dict:
+    """Tension (or pull-in, if the single tendon is pull-in controlled) that puts the tip
+    component of ``target`` at its value: Brent's method on full static solves. The converged
+    steps of a sweep (``sweep``, e.g. the finger run itself) bracket the answer between two
+    neighbouring steps, which saves most of the solves; without them the bracket grows by
+    doubling from the tendon's own value."""
+    started = time.perf_counter()
+    tendon = config.tendons[0]
+    control = "pull_in" if tendon.controlled_by_pull_in else "tension"
+    unit = "m" if control == "pull_in" else "N"
+    evaluations = []
+    # One problem for all trials: the tendon at a reference value, each trial a load factor
+    # reached by continuation from the previous equilibrium (a few Newton iterations instead of
+    # a full load ramp); from the unloaded state again only if that fails.
+    reference = abs(getattr(tendon, control)) or 1.0
+    from fe_beam.solvers import realtime  # the sweep's built problem is reused (no form building)
+
+    run = realtime.acquire(
+        replace(config, tendons=(replace(tendon, **{control: reference}),)), comm
+    )
+
+    def solve(value: float) -> dict:
+        target = value / reference
+        steps = max(1, math.ceil(config.stepping.steps * abs(target - run.load_factor)))
+        try:
+            run.advance(target, replace(config.stepping, steps=steps))
+        except LoadSteppingFailed:
+            run.restart()
+            try:
+                run.advance(target, config.stepping)
+            except LoadSteppingFailed:
+                raise ConfigError(
+                    f"[inverse] no equilibrium at {control} {value:g} {unit}"
+                ) from None
+        evaluations.append(value)
+        return {
+            "tip": run.problem.end_values("xL"),
+            "tensions": run.tendons.tension_values().tolist(),
+            "pull_ins": run.tendons.pull_ins().tolist(),
+        }
+
+    def miss(value: float) -> float:
+        return solve(value)["tip"][target.component] - target.value
+
+    try:
+        if bracket is None:
+            bracket = _bracket_from_sweep(sweep or [], control, target)
+        if bracket is None:
+            bracket = _bracket_by_doubling(solve, target, control, unit,
+                                           max(abs(getattr(tendon, control)), 1e-9))
+        value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
+        final = solve(value)
+    finally:
+        realtime.release(run)
+    answer = {
+        "target": target.key,
+        "target_value": target.value,
+        "control": control,
+        "tension": final["tensions"][0],
+        "pull_in": final["pull_ins"][0],
+        "tip": final["tip"],
+        "evaluations": len(evaluations),
+        "wall_time_s": time.perf_counter() - started,
+    }
+    if target.key == "tip_angle":
+        answer["target_tip_angle"] = target.value
+    return answer
+
+
+def _bracket_by_doubling(solve, target: InverseTarget, control: str, unit: str, start: float):
+    """(low, high) values of ``control`` whose tip values straddle the target, doubling from
+    ``start`` (the tip is 0 at zero load); a clear ConfigError when the target lies the other
+    way or beyond the last value with an equilibrium."""
+    low, high, reached = 0.0, start, 0.0
+    what = f"[inverse] {target.key} = {target.value:g}"
+    while True:
+        try:
+            now = solve(high)["tip"][target.component]
+        except ConfigError:
+            if low == 0.0:
+                raise
+            raise ConfigError(
+                f"{what} is not reached: the largest {control} with an equilibrium, {low:g} "
+                f"{unit}, gives {reached:.6g}; at {high:g} {unit} load stepping failed"
+            ) from None
+        if (now - target.value) * (0.0 - target.value) <= 0:
+            return low, high
+        if now * target.value < 0:
+            raise ConfigError(
+                f"{what} cannot be reached: the tendon moves the tip the other way "
+                f"({target.component} = {now:.6g} at {control} {high:g} {unit})"
+            )
+        low, high, reached = high, 2 * high, now
+        if high > 1e6 * max(start, 1.0):
+            raise ConfigError(f"{what} is not reachable by the tendon's {control}")
+
+
+def _bracket_from_sweep(steps: list[dict], control: str, target: InverseTarget):
+    """Two neighbouring swept values of ``control`` whose tip values straddle the target."""
+    key = "tensions" if control == "tension" else "pull_ins"
+    points = [(0.0, 0.0)] + [(s[key][0], s["tip"][target.component]) for s in steps]
+    for (a, qa), (b, qb) in zip(points, points[1:]):
+        if (qa - target.value) * (qb - target.value) <= 0 and a != b:
+            return (a, b)
+    return None
+
+
+def run_finger(
+    config: StaticConfig,
+    out: Path | None,
+    comm=MPI.COMM_WORLD,
+    progress=True,
+    target: InverseTarget | float | None = None,
+) -> tuple[StaticResult, dict]:
+    """The finger's tension (or pull-in) sweep, then the inverse solve if ``target`` is given;
+    with ``out``, summary.json, the sweep CSV, XDMF and the chapter's figures are written
+    (``result.shapes`` is only recorded then)."""
+    extra = {
+        "tendons": [
+            {
+                "name": t.name,
+                "paths": t.paths,
+                "entry": t.entry,
+                "anchor": t.anchor,
+                "tension": t.tension,
+                "pull_in": t.pull_in,
+            }
+            for t in config.tendons
+        ]
+    }
+    # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
+    sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
+                                empty=False)] if out is not None else [])
+    result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
+                          record_shapes=out is not None, extra_exports=sweep)
+    # after the sweep: summary.json again (with the inverse solve) and the chapter's pictures
+    draw = (lambda _: plot_finger(out, result, config)) if config.output.plots else None
+    after = exports.Exports([exports.SummaryExport(out / "summary.json"),
+                             exports.PlotExport(draw) if draw else None]
+                            if out is not None and result.steps else [], comm)
+    inverse = {}
+    if isinstance(target, (int, float)):
+        target = InverseTarget("tip_angle", float(target))
+    if target is not None and result.status == "converged":
+        try:
+            inverse = solve_inverse(config, target, comm, sweep=result.steps)
+        except runctl.Interrupted as stop:
+            after.finish(result.summary(extra | stop.stopped(
+                "the inverse solve (the sweep is complete)", "during the inverse solve")))
+            raise
+    after.finish(result.summary(extra | ({"inverse": inverse} if inverse else {})))
+    return result, inverse
+
+
+def sweep_columns(tendons: int) -> list[exports.Column]:
+    """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip."""
+    return [exports.Column("load_factor", lambda s: s["load_factor"]),
+            *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),
+            *exports.tip_columns()]
+
+
+def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
+    """The chapter's Figures 3.8 (profiles along s) and 3.9 (backbone), and tension curves."""
+    from fe_beam.exports.plotting import legend_inside
+
+    final = result.shapes[-1][1]
+    cells = final["cells"]
+    profiles = out / "fig3_8_profiles.png"
+    with exports.figure(profiles, 2, 2, figsize=(9, 6), sharex=True) as (drawn, axes):
+        zero = np.zeros_like(cells["x"])
+        panels = [
+            ("torsion [1/m]", zero, "(a) torsion: identically 0 in the plane"),
+            ("curvature about n [1/m]", zero, "(b) curvature about n: 0 in the plane"),
+            ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
+            ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)"),
+        ]
+        for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
+            axis.plot(cells["x"], values, lw=1.8)
+            axis.set_title(title, fontsize=9)
+            axis.set_ylabel(label)
+            axis.grid(alpha=0.3)
+        for axis in axes[1]:
+            axis.set_xlabel("s [m]")
+        tension = result.steps[-1]["tensions"]
+        drawn.suptitle(
+            f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
+            " N (cf. chapter Fig. 3.8)"
+        )
+
+    with exports.figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
+        every = max(1, len(result.shapes) // 8)
+        shapes = list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]
+        for (_, shape), step in shapes:
+            axis.plot(shape["x"] + shape["u"], shape["v"],
+                      label=f"tension {step['tensions'][0]:.3g} N")
+        axis.set_aspect("equal", adjustable="datalim")
+        axis.set_xlabel("x [m]")
+        axis.set_ylabel("y [m]")
+        axis.set_title("Backbone in the XY plane (cf. chapter Fig. 3.9a)")
+        axis.grid(alpha=0.3)
+        legend_inside(axis, fontsize=7)
+
+    tensions = [s["tensions"][0] for s in result.steps]
+    with exports.figure(out / "tension_tip.png", 1, 2, figsize=(9, 3.6)) as (_, (left, right)):
+        left.plot(tensions, [s["tip"]["theta"] for s in result.steps], "o-", ms=3)
+        left.set_xlabel("tension [N]")
+        left.set_ylabel("tip angle [rad]")
+        right.plot(tensions, [s["tip"]["u"] for s in result.steps], "o-", ms=3, label="tip u")
+        right.plot(tensions, [s["tip"]["v"] for s in result.steps], "s-", ms=3, label="tip v")
+        right.set_xlabel("tension [N]")
+        right.set_ylabel("tip displacement [m]")
+        right.legend()
+        for axis in (left, right):
+            axis.grid(alpha=0.3)
+    reason = render_3d_skipped(out / "finger_3d.png", final, config)
+    if reason is not None:
+        note_skipped_picture(out, f"finger_3d.png was not made: {reason}")
+
+
+def note_skipped_picture(out: Path, note: str) -> None:
+    """Say why a picture is missing: on stderr and in summary.json's ``notes``."""
+    import json
+    import sys
+
+    print(f"fe-beam: note: {note}", file=sys.stderr, flush=True)
+    path = out / "summary.json"
+    try:
+        summary = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return
+    notes = summary.get("notes")
+    summary["notes"] = (notes if isinstance(notes, list) else []) + [note]
+    atomic_write_json(path, summary)
+
+
+def render_3d(path: Path, shape: dict, config: StaticConfig) -> bool:
+    """pyvista tube rendering of the deformed finger with its tendon (Fig. 3.9b); skipped
+    (returns False) when pyvista or a virtual screen is not available."""
+    return render_3d_skipped(path, shape, config) is None
+
+
+def render_3d_skipped(path: Path, shape: dict, config: StaticConfig) -> str | None:
+    """Render the 3D picture; None when done, else why it was skipped (one sentence)."""
+    import os
+    import shutil
+
+    try:
+        import pyvista
+    except ImportError:
+        return ("pyvista is not installed (./bootstrap installs it; or pip install "
+                "'fe_beam[viz]')")
+    if not os.environ.get("DISPLAY") and shutil.which("Xvfb") is None:
+        return "no display to render on: set DISPLAY or install Xvfb (apt-get install xvfb)"
+    try:
+        with virtual_display():
+            _render_tube(pyvista, path, shape, config)
+    except Exception as error:  # a picture must never fail an analysis
+        first = (str(error).strip().splitlines() or [""])[0][:200]
+        return f"rendering with pyvista failed ({type(error).__name__}: {first})"
+    if not path.is_file():
+        return "rendering with pyvista produced no file"
+    return None
+
+
+def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None:
+    x = shape["x"] + shape["u"]
+    y = shape["v"]
+    theta = shape["theta"]
+    section = config.model.section
+    s = shape["x"] / config.model.length
+    height = np.array([section.properties(si).h for si in s])
+    backbone = np.column_stack([x, y, np.zeros_like(x)])
+    plotter = pyvista.Plotter(off_screen=True, window_size=(900, 600))
+    body = pyvista.Spline(backbone, len(x) * 3).tube(radius=float(np.mean(height)) / 2)
+    plotter.add_mesh(body, color="lightsteelblue", opacity=0.45)
+    for tendon in config.tendons:
+        for branch in tendon.paths:
+            xs, ds = np.array([p[0] for p in branch]), np.array([p[1] for p in branch])
+            delta = np.interp(shape["x"], xs, ds)
+            inside = (shape["x"] >= tendon.entry - 1e-12) & (shape["x"] <= tendon.anchor + 1e-12)
+            points = np.column_stack(
+                [x - delta * np.sin(theta), y + delta * np.cos(theta), np.zeros_like(x)]
+            )[inside]
+            plotter.add_mesh(
+                pyvista.Spline(points, len(points) * 3).tube(radius=float(np.mean(height)) / 25),
+                color="crimson",
+            )
+    plotter.view_xy()
+    plotter.add_axes()
+    plotter.screenshot(str(path))
+    plotter.close()

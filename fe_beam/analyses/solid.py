@@ -1,0 +1,377 @@
+"""``fe-beam solid``: the run. `run_solid` validates the configuration
+(`fe_beam.config.solid.parse_solid`), runs the rod companion (`fe_beam.analyses.solid_rod`) and the
+3D load
+stepping (`SolidRun`), and writes the summary, the tables, the XDMF files and the plots.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import runctl
+from fe_beam.analyses.solid_rod import backbone_distance, run_rod, write_rod_xdmf
+from fe_beam.analyses.static import beam_dofs_estimate
+from fe_beam.config.solid import SolidConfig, parse_solid, solid_dofs_estimate
+from fe_beam.exports import (
+    Column,
+    CSVExport,
+    Exports,
+    PlotExport,
+    SummaryExport,
+    figure,
+    indexed_columns,
+    tip_columns,
+)
+from fe_beam.exports.outputs import _pyplot, write_csv
+from fe_beam.exports.solid import DisplacementXDMF
+from fe_beam.fem.solid.geometry import create_finger_mesh
+from fe_beam.solvers.continuation import ContinuationFailed
+from fe_beam.solvers.newton import LoadStepping, LoadSteppingFailed
+from fe_beam.solvers.solid import SolidFingerProblem, stretch_keys
+
+
+def _import_gmsh() -> None:
+    """gmsh (4.8) resets SIGINT to its default action when first imported: import it now, then
+    put the deferring handlers of fe_beam.runctl back, so Ctrl-C while meshing ends cleanly."""
+    import gmsh  # noqa: F401
+
+    runctl.reassert()
+
+
+_import_gmsh()
+
+__all__ = ["SolidRun", "check_solid_work", "run_solid"]
+
+# --- the 3D run ---------------------------------------------------------------------------------
+
+_RUNS = itertools.count(1)
+
+
+class SolidRun:
+    """The meshed 3D finger and its problem, advanced along the load factor in segments.
+
+    ``advance(target)`` ramps the load factor from its current value to ``target`` with the
+    load control of `fe_beam.solvers.continuation.Continuation` (cut-back on divergence) and calls
+    ``on_step(record)`` after each converged step with the plain-data `record`.
+    """
+
+    def __init__(self, config: SolidConfig, comm: MPI.Comm = MPI.COMM_WORLD):
+        self.config = config
+        self.comm = comm
+        self.finger = create_finger_mesh(config.geometry, config.sizes, comm)
+        self.problem = SolidFingerProblem(
+            self.finger,
+            config.material,
+            tendons=config.tendon_loads,
+            tip_force=config.tip_force,
+            discretization=config.discretization,
+            solver=config.solver,
+            prefix=f"fe_beam_solid{next(_RUNS)}_",
+            anchor=config.anchor,
+        )
+        self.load_factor = 0.0
+        self._theta = 0.0
+
+    @property
+    def dofs(self) -> int:
+        dofmap = self.problem.W.dofmap
+        return int(dofmap.index_map.size_global * dofmap.index_map_bs)
+
+    @property
+    def cells(self) -> int:
+        imap = self.finger.mesh.topology.index_map(3)
+        return int(imap.size_global)
+
+    def advance(self, target: float, stepping: LoadStepping, on_step=None,
+                progress: bool = False, label: str = "solid") -> None:
+        """Load factor from its current value to ``target`` (raises LoadSteppingFailed with the
+        last converged state restored)."""
+        start = self.load_factor
+        span = float(target) - start
+        if not span > 0:
+            raise ValueError(f"advance: target {target!r} must exceed {start!r}")
+        steps = max(1, math.ceil(stepping.steps * span - 1e-9))
+        segment = LoadStepping(
+            steps=steps,
+            min_increment=min(stepping.min_increment / span, 1.0 / steps),
+            max_increment=(1.0 / steps if stepping.max_increment * stepping.steps < 1 + 1e-9
+                           else min(1.0, max(stepping.max_increment / span, 1.0 / steps))),
+            cut_factor=stepping.cut_factor,
+            grow_factor=stepping.grow_factor,
+            easy_iterations=stepping.easy_iterations + self.problem.extra_easy_iterations,
+            adaptive=stepping.adaptive,
+        )
+
+        engine = self.problem.engine()
+        engine.parameter = start
+
+        def converged(step) -> None:
+            self.load_factor = float(target) if step.fraction == 1.0 else step.load_factor
+            record = self.record(step.iterations, step.linear_iterations)
+            if on_step is not None:
+                on_step(record)
+
+        try:
+            engine.load_control(target, segment, on_converged=converged, progress=progress,
+                                label=label)
+        except ContinuationFailed as failure:
+            self.problem.set_load_factor(self.load_factor)
+            raise ContinuationFailed(
+                f"load stepping stopped at load factor {failure.attempted:.6g} "
+                f"({failure.reason}); last converged load factor {self.load_factor:.6g}",
+                self.load_factor, failure.results, reason=failure.reason, kind=failure.kind,
+                parameter=self.load_factor, attempted=failure.attempted,
+            ) from None
+
+    def tip(self) -> dict:
+        """Tip-face centroid displacement (u, v) and rotation theta (continuous along the path)."""
+        d = self.problem.tip_displacement()
+        angle = self.problem.tip_rotation()["angle"]
+        self._theta += (angle - self._theta + math.pi) % (2 * math.pi) - math.pi
+        return {"u": float(d[0]), "v": float(d[1]), "theta": float(self._theta)}
+
+    def backbone(self) -> dict:
+        data = self.problem.backbone(self.config.stations)
+        u = np.asarray(data["displacement"])
+        return {"x": list(data["x"]), "u": u[:, 0].tolist(), "v": u[:, 1].tolist()}
+
+    def tendon_values(self) -> dict:
+        owners = self.config.branch_owner
+        if not owners:
+            return {}
+        count = max(owners) + 1
+        tensions = self.problem.tensions()
+        lengths = self.problem.tendon_lengths()
+        rest = [c.reference_length for c in self.problem.cables]
+        per_tendon = [0.0] * count
+        pulls = [0.0] * count
+        for i, owner in enumerate(owners):
+            per_tendon[owner] = float(tensions[i])
+            pulls[owner] += float(rest[i] - lengths[i])
+        values = {"tensions": per_tendon, "pull_ins": pulls}
+        if count == 1:
+            values["tension"] = per_tendon[0]
+        return values
+
+    def record(self, newton_iterations: int = 0, linear_iterations: int = 0) -> dict:
+        """Plain data of the current state (collective)."""
+        return {
+            "load_factor": self.load_factor,
+            **self.tendon_values(),
+            "tip": self.tip(),
+            "backbone": self.backbone(),
+            "newton_iterations": int(newton_iterations),
+            "linear_iterations": int(linear_iterations),
+            **stretch_keys(self.problem.max_principal_stretches()),
+        }
+
+    def destroy(self) -> None:
+        self.problem.snes_solver.destroy()
+
+
+# --- the command -------------------------------------------------------------------------------
+
+
+def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """Validate ``raw`` (the parsed TOML), run the rod companion and the 3D load stepping, write
+    results into ``out`` (if not None) and return the summary dict.
+
+    Raises ConfigError for a mistake in ``raw``; an analysis that stops early returns (and
+    writes) the converged steps with ``status = "failed"`` and a ``message``. Collective on
+    ``comm``; files are written by its rank 0. ``out`` receives ``summary.json``,
+    ``load_displacement.csv``, ``solid.xdmf``/``.h5`` (3D displacement per load factor),
+    ``rod.xdmf`` (the rod in the same coordinates) and, with ``[output] plots``, ``backbone.png``
+    and ``load_displacement.png``.
+    """
+    started = time.perf_counter()
+    config = parse_solid(raw)
+    notes = check_solid_work(config, comm, quiet=out is None)
+    out = None if out is None else Path(out)
+    root = comm.rank == 0
+    if out is not None and root:
+        out.mkdir(parents=True, exist_ok=True)
+    summary = {
+        "status": "running",
+        "message": "",
+        "steps": [],
+        "dofs": 0,
+        "cells": 0,
+        "wall_time_s": 0.0,
+        "model": config.model_summary(),
+        "rod": None,
+        "notes": list(config.notes) + notes,
+    }
+
+    def content() -> dict:
+        summary["wall_time_s"] = time.perf_counter() - started
+        return summary
+
+    files = Exports(solid_exports(out, config, content) if out is not None else [], comm)
+    files.start(content())  # status "running" from the start
+    try:
+        _run_solid(config, out, comm, progress, summary, files)
+    except runctl.Interrupted as stop:
+        last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
+        summary |= stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
+        raise
+    finally:
+        files.finish(content())  # pictures only for a finished analysis (not interrupted)
+    if out is not None:
+        comm.barrier()  # the files are complete on return, whichever rank looks
+    return summary
+
+
+def _csv_columns(record: dict | None) -> list[Column]:
+    """load_displacement.csv: one ``tension_i`` per tendon of the first record (none without)."""
+    count = len(record.get("tensions", [])) if record else 0
+    return [
+        Column("load_factor", lambda s: s["load_factor"]),
+        *indexed_columns("tension", count, lambda s: s.get("tensions", [])),
+        *tip_columns(),
+        *(Column(key, lambda s, key=key: s[key]) for key in (
+            "newton_iterations", "linear_iterations", "max_principal_stretch",
+            "max_principal_stretch_bulk")),
+    ]
+
+
+def solid_exports(out: Path, config: SolidConfig, content) -> list:
+    """The files of ``fe-beam solid`` in ``out`` (`fe_beam.exports`): load_displacement.csv,
+    summary.json (``content()``: the summary as it stands) and, with ``[output] plots``, the
+    pictures of a finished run with steps. The 3D states (solid.xdmf) and the rod (rod.xdmf) are
+    written by the run itself (collective, once the mesh exists)."""
+    return [
+        CSVExport(out / "load_displacement.csv", _csv_columns),
+        SummaryExport(out / "summary.json", content),
+        PlotExport(lambda s: _plot_solid(out, s, config) if s["steps"] else None)
+        if config.output.plots else None,
+    ]
+
+
+def check_solid_work(config: SolidConfig, comm, quiet: bool = False) -> list[str]:
+    """Up-front limits of `fe_beam.runctl.check_work` for the 3D solid (and its rod)."""
+    allow = bool((config.raw.get("solver") or {}).get("allow_large", False))
+    notes = runctl.check_work(config.stepping.steps, solid_dofs_estimate(config), allow,
+                              " of load stepping", kind="solid")
+    if config.rod is not None:
+        notes += runctl.check_work(None, beam_dofs_estimate(config.rod), allow)
+    if not quiet:
+        runctl.warn(comm, notes)
+    return notes
+
+
+def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summary: dict,
+               files: Exports) -> dict:
+    """The rod companion and the 3D load stepping, filling ``summary``; ``files`` gets the step
+    records (`run_solid` starts and finishes it)."""
+    root = comm.rank == 0
+    rod = None
+    if config.rod is not None:
+        rod = run_rod(config.rod, config.stations, comm, progress=progress)
+        if out is not None and root and config.output.xdmf:
+            write_rod_xdmf(out / "rod.xdmf", rod["frames"])
+        summary["rod"] = {k: v for k, v in rod.items() if k != "frames"}
+    else:
+        summary["rod"] = {"status": "skipped", "message": config.rod_note}
+
+    try:
+        run = SolidRun(config, comm)
+    except RuntimeError as error:  # gmsh could not mesh (e.g. a tendon not on tet edges)
+        summary |= {"status": "failed", "message": str(error)}
+        return summary
+    summary |= {"dofs": run.dofs, "cells": run.cells,
+                "linear_solver_resolved": run.problem.linear_solver}
+    writer = None
+    if out is not None and config.output.xdmf:
+        writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
+        writer.write(0.0)
+
+    def on_step(record: dict) -> None:
+        summary["steps"].append(record)
+        if writer is not None:
+            writer.write(record["load_factor"])
+        files.on_step(record)
+
+    try:
+        run.advance(1.0, config.stepping, on_step, progress=progress, label="solid")
+        summary["status"] = "converged"
+        if config.modes is not None:  # [modes]: 3D modal analysis, the rod's beside it
+            from fe_beam.solvers.solid_modes import run_solid_modes
+
+            summary["modes"] = run_solid_modes(run, config, out, comm)
+    except LoadSteppingFailed as failure:
+        summary |= {"status": "failed", "message": str(failure)}
+    finally:
+        if writer is not None:
+            writer.close()
+        run.destroy()
+    if rod is not None and rod["backbone"] is not None and summary["steps"]:
+        last_rod = rod["steps"][-1]["load_factor"] if rod["steps"] else 0.0
+        last = summary["steps"][-1]
+        if abs(last_rod - last["load_factor"]) < 1e-12:
+            distance = backbone_distance(rod["backbone"], last["backbone"])
+            summary["rod"]["distance_to_solid"] = {
+                "load_factor": last["load_factor"],
+                "max_over_L": distance["max"] / config.length,
+                "x": distance["x"],
+                "measure": "max over x of |r_rod(x) - r_solid(x)| / L (deformed centroids)",
+            }
+    return summary
+
+
+def _write_tables(out: Path, summary: dict) -> None:
+    """summary.json and the whole load_displacement.csv of ``summary`` at once (the columns of
+    `solid_exports`; kept for callers of the old name)."""
+    SummaryExport(out / "summary.json").write(summary)
+    steps = summary["steps"]
+    columns = _csv_columns(steps[0] if steps else None)
+    write_csv(out / "load_displacement.csv", [c.name for c in columns],
+              [[c.get(s) for c in columns] for s in steps])
+
+
+def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
+    """backbone.png (deformed backbones, 3D and rod) and load_displacement.png (tip u, v, theta
+    against the load factor) of ``summary`` (with at least one step)."""
+    plt = _pyplot()
+    steps = summary["steps"]
+    rod = summary.get("rod") or {}
+    with figure(out / "backbone.png", figsize=(9, 4.5)) as (_, axis):
+        every = max(1, len(steps) // 8)
+        chosen = steps[every - 1 :: every]
+        if chosen[-1] is not steps[-1]:
+            chosen.append(steps[-1])
+        colours = plt.cm.viridis(np.linspace(0, 0.9, len(chosen)))
+        axis.plot([0, config.length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+        for step, colour in zip(chosen, colours, strict=True):
+            b = step["backbone"]
+            axis.plot(np.add(b["x"], b["u"]), b["v"], color=colour, lw=1.8,
+                      label=f"3D, load factor {step['load_factor']:.3g}")
+        if rod.get("backbone") and rod.get("steps"):
+            b = rod["backbone"]
+            axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
+                      label=f"rod ({rod['law']}), load factor "
+                      f"{rod['steps'][-1]['load_factor']:.3g}")
+        axis.set_xlabel("x + u [m]")
+        axis.set_ylabel("y + v [m]")
+        axis.set_title(f"Backbone: 3D {config.material_name} vs rod")
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+    with figure(out / "load_displacement.png", 1, 3, figsize=(11, 3.4)) as (_, axes):
+        factors = [s["load_factor"] for s in steps]
+        rod_steps = rod.get("steps") or []
+        for axis, key, unit in zip(axes, ("u", "v", "theta"), ("m", "m", "rad"), strict=True):
+            axis.plot(factors, [s["tip"][key] for s in steps], "o-", ms=3, label="3D")
+            if rod_steps:
+                axis.plot([s["load_factor"] for s in rod_steps],
+                          [s["tip"][key] for s in rod_steps], "s--", ms=3,
+                          label=f"rod ({rod['law']})")
+            axis.set_xlabel("load factor")
+            axis.set_ylabel(f"tip {key} [{unit}]")
+            axis.grid(alpha=0.3)
+            axis.legend(fontsize=7)

@@ -1,0 +1,575 @@
+"""Drivers of ``fe-beam dynamic`` and ``fe-beam modes``: config tables, runs and outputs.
+
+Extra tables over the statics config:
+
+    [time]    t_end, dt, rho_inf, adaptive, tol, min_dt, max_dt, output_every,
+              scheme = "generalized-alpha" | "energy-conserving" | "fd-rk45" | "fd-dop853"
+    [initial] from_static (solve the static problem under [loads] first), velocity =
+              ["u_t(x)", "v_t(x)", "theta_t(x)"] formulas in x, angular_velocity (rigid spin)
+    [loads]   time_function = "formula in t" or time_table = [[t, f], ...] (scales every load),
+              motion_function = "formula in t" (scales prescribed end values; default: same)
+    [damping] c, kelvin_voigt
+    [modes]   count, prestress (linearise about the static state under [loads])
+    [[tendons]] as for fe-beam finger, plus time_function = "formula in t" or time_table =
+              [[t, f], ...] scaling the tension or pull-in (default: the [loads] one); the
+              static pre-state (from_static, prestress) applies them in full; pull_in only in
+              dynamics with generalized-alpha (the tension is then an unknown of each step);
+              energy-conserving takes tension-controlled tendons as strain potentials
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from fe_beam import exports, runctl
+from fe_beam.analyses.static import StaticContinuation, check_beam_work
+from fe_beam.config.schema import ConfigError, StaticConfig
+from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
+    DAMPING_KEYS,
+    INITIAL_KEYS,
+    MODES_KEYS,
+    TENDON_SAMPLES,
+    TENDON_TIME_KEYS,
+    TIME_KEYS,
+    TIME_LOAD_KEYS,
+    DynamicConfig,
+    _check_tendons_pull,
+    _functions,
+    _parse_tendons,
+    _split_time_loads,
+    _velocity,
+    parse_dynamic,
+    parse_modes,
+)
+from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.fem import compat
+from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
+from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
+from fe_beam.solvers.energy_momentum import EnergyMomentum
+from fe_beam.solvers.newton import (
+    LoadSteppingFailed,
+)
+
+__all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
+
+def _note_pushing_tendons(tendons, tensions, t: float, notes: list, comm) -> None:
+    """Note (once per tendon, also a warning on stderr) a pull-in controlled tendon whose
+    solved tension is negative at time t: the model then lets the cable push."""
+    for tendon, tension in zip(tendons.tendons, tensions, strict=True):
+        start = f"[[tendons]] {tendon.name!r} (pull_in control): its tension"
+        if (tendon.controlled_by_pull_in and tension < 0
+                and not any(note.startswith(start) for note in notes)):
+            note = (f"{start} is {tension:.4g} N < 0 at t = {t:.4g} s: a cable cannot push, "
+                    "so from then on the results are of a tendon that pushes (ramp the pull-in "
+                    "more slowly or add damping)")
+            notes.append(note)
+            runctl.warn(comm, [note])
+
+
+def _tendon_problem(static: StaticConfig, comm):
+    """(BeamProblem, TendonSet or None) of a configuration: the tendons' breakpoints are mesh
+    vertices and their potential is part of the stored energy."""
+    from fe_beam.fem.tendons import TendonSet
+
+    tendons = TendonSet(static.tendons, static.model.length) if static.tendons else None
+    problem = BeamProblem(static.model, comm,
+                          breakpoints=tendons.breakpoints if tendons else (),
+                          extra_energy=tendons.energy if tendons else None)
+    return problem, tendons
+
+
+def _detach_tendon_energy(problem: BeamProblem) -> None:
+    """After the static pre-state (solved with the tendon potential as the problem's
+    extra_energy): the energy-conserving scheme takes the tendons as potentials in the strains
+    (`TendonSet.strain_potentials`, the same offsets, indicators and Gauss rule, so the
+    pre-state is its equilibrium too), and the problem's stored energy becomes the rod's alone;
+    its static residual, built with the tendon energy, is dropped (no solver of the scheme
+    uses it)."""
+    problem.extra_energy = None
+    problem.residual = None
+
+
+def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
+                     watch=None, tendons=None) -> None:
+    """Load the problem to the static state of ``static``; ``watch`` (a StrainWatch) sees
+    the strains of its converged steps; ``tendons``: the problem's TendonSet (full tension)."""
+    run = StaticContinuation(static, problem=problem, prefix="fe_beam_prestate_",
+                             tendons=tendons)
+    if watch is not None:
+        run.watch = watch
+    try:
+        run.advance(1.0, static.stepping, progress=progress, label="static pre-state")
+    except LoadSteppingFailed as failure:
+        raise PrestateFailed(f"static pre-state: {failure}", failure.last_load_factor) from None
+    finally:
+        run.destroy()
+
+
+class PrestateFailed(DynamicsFailed):
+    """The static pre-state of a dynamic or modal run could not be reached (no equilibrium,
+    or only inadmissible ones, beyond ``load_factor``, whose state the problem keeps)."""
+
+    def __init__(self, message: str, load_factor: float):
+        super().__init__(message, 0.0)
+        self.load_factor = load_factor
+
+
+def _prestate_record(problem: BeamProblem, failure: PrestateFailed) -> dict:
+    """The last converged pre-state (collective): its load factor and tip."""
+    return {"load_factor": failure.load_factor, "tip": problem.end_values("xL")}
+
+
+@dataclass
+class DynamicResult:
+    history: list[dict]
+    info: dict
+    status: str = "completed"
+    message: str = ""
+    dofs: int = 0
+    notes: list = field(default_factory=list)
+    strain_range: dict | None = None
+
+
+def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
+                progress: bool = True) -> DynamicResult:
+    if config.time.scheme.startswith("fd-"):
+        return _run_finite_differences(config, out, comm)
+    started = time.perf_counter()
+    steps = config.time.t_end / config.time.dt
+    if config.time.adaptive and config.time.max_dt:
+        steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
+    notes = check_beam_work(config.static, steps, comm, " of time stepping",
+                            quiet=out is None)
+    if config.time.scheme == "energy-conserving" and config.time.adaptive:
+        # measured: a step load on an 8-element cantilever took 59k steps to t = 0.09 s
+        note = ("[time] adaptive = true with scheme = \"energy-conserving\": the local error "
+                "estimate follows the undamped high-frequency content, so the step can shrink to "
+                "the mesh's highest period and the run become very long; the scheme is stable "
+                "at any step: prefer a fixed dt (adaptive = false)")
+        notes.append(note)
+        if out is not None:
+            runctl.warn(comm, [note])
+    if config.from_static:  # the load steps of the static pre-state count too
+        notes += check_beam_work(config.static, config.static.stepping.steps, comm,
+                                 " of load stepping (static pre-state)", quiet=out is None)
+    problem, tendons = _tendon_problem(config.static, comm)
+    xdmf = out / "beam.xdmf" if out is not None and config.static.output.xdmf else None
+    watch = StrainWatch()
+    if config.from_static:
+        try:
+            _static_prestate(problem, config.static, progress, watch, tendons)
+        except runctl.Interrupted as stop:
+            stop.where = "the static pre-state (before the time stepping)"
+            raise
+        except PrestateFailed as failure:
+            # no time stepping: the run failed (exit 3) with the last converged pre-state
+            # written (summary "prestate", beam.xdmf at t = 0)
+            result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
+                                   dofs=problem.global_dofs, notes=notes + watch.notes(),
+                                   strain_range=watch.summary())
+            prestate = _prestate_record(problem, failure)
+            writer = BeamXDMFWriter(problem, xdmf)
+            files = exports.Exports(_history_exports(out, config, writer), comm)
+            writer.write(0.0)
+            result.info["wall_time_s"] = time.perf_counter() - started
+            summary = _dynamic_summary(result, config, result.info["wall_time_s"])
+            files.finish(summary | {"prestate": prestate})
+            return result
+    if tendons is not None:
+        tendons.set_time_functions(config.tendon_functions)
+    if config.time.scheme == "energy-conserving":
+        if tendons is not None:
+            _detach_tendon_energy(problem)
+        integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,
+                                    config.motion_function, config.static.solver,
+                                    tendons=tendons)
+    else:
+        integrator = GeneralizedAlpha(problem, config.time, config.damping,
+                                      config.load_function, config.motion_function,
+                                      config.static.solver, tendons=tendons)
+    integrator.watch = watch
+    integrator.initialise(config.velocity)
+    root, writing = comm.rank == 0, out is not None
+    if writing and root:
+        out.mkdir(parents=True, exist_ok=True)
+    result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
+                           * problem.space.dofmap.index_map_bs, notes=notes)
+    writer = BeamXDMFWriter(problem, xdmf)
+    shapes = []
+    files = exports.Exports(_history_exports(
+        out, config, writer,
+        lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+        lambda _: _plot_dynamic(out, result, shapes, config)
+        if config.static.output.plots and result.history else None), comm)
+    files.start(_dynamic_summary(result, config, 0.0))  # status "running"
+
+    def record(t: float, step: int) -> None:
+        energies = integrator.energies()
+        result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
+                               "momenta": integrator.momenta()})
+        if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
+            pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
+                        if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
+            tensions = tendons.applied_tensions(t)
+            result.history[-1]["tendons"] = {"tensions": tensions.tolist(),
+                                             "pull_ins": pull_ins.tolist()}
+            _note_pushing_tendons(tendons, tensions, t, notes, comm)
+        result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+        files.on_step(result.history[-1])
+        if config.static.output.plots:
+            shape = writer.vertex_values(update=False)
+            if root:
+                shapes.append((t, shape))
+
+    try:
+        result.info = integrator.run(record, progress=progress)
+        result.status = "completed"
+    except DynamicsFailed as failure:
+        result.status, result.message = "failed", str(failure)
+    except runctl.Interrupted as stop:
+        # the state is the last accepted step: record it unless it was the last output
+        if not result.history or integrator.time > result.history[-1]["t"]:
+            record(integrator.time, -1)
+        status = stop.stopped(f"t = {integrator.time:.6g} s", f"at t = {integrator.time:.6g} s")
+        result.status, result.message = status["status"], status["message"]
+        raise
+    finally:
+        integrator.solver.destroy()
+        result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+        result.info["wall_time_s"] = time.perf_counter() - started
+        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]))
+    return result
+
+
+def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> DynamicResult:
+    """The paper's FD + Runge-Kutta scheme (fe_beam.baselines.fd_rk) on the same config."""
+    from fe_beam.baselines import fd_rk
+
+    model = config.static.model
+    if model.options.law == "hyperelastic":
+        raise ConfigError("[time] scheme = fd-* has the non-standard and Reissner laws only, not "
+                          "[model] law = \"hyperelastic\"; use scheme = \"generalized-alpha\"")
+    if model.section.tapered or model.options.constraint != "none":
+        raise ConfigError("[time] scheme = fd-*: only uniform sections without constraints")
+    supports = {("clamped", "free"): "clamped-free", ("pinned", "roller"): "pinned-roller"}
+    key = (model.supports.x0, model.supports.xL)
+    if key not in supports or config.damping.kelvin_voigt or config.velocity is not None:
+        raise ConfigError("[time] scheme = fd-*: supports clamped/free or pinned/roller, "
+                          "viscous damping only, no initial velocity")
+    loads = model.loads
+    if loads.follower or any(loads.gravity):
+        raise ConfigError("[time] scheme = fd-*: no follower loads or gravity")
+    if loads.point_forces:  # fd_rk takes tip and distributed loads only: would drop them
+        raise ConfigError("[time] scheme = fd-* takes no [loads] point_forces; use scheme = "
+                          "\"generalized-alpha\"")
+    notes = check_beam_work(config.static, config.time.t_end / config.time.dt, comm,
+                            " of time stepping (output times)", quiet=out is None)
+    stiffness = model.stiffness_at(0.0)
+    props = model.section.properties(0.0)
+    k = model.options.shear_correction if model.options.law == "reissner" else 1.0
+    params = fd_rk.FDBeamParameters(
+        L=model.length, n_intervals=model.mesh.elements * model.mesh.degree,
+        EA=stiffness["EA"], GA=k * stiffness["GA"], EI=stiffness["EI"], EI3=stiffness["EI3"],
+        EI4=stiffness["EI4"], rhoA=model.material.rho * props.A,
+        rhoI=model.material.rho * props.I, c=config.damping.c, law=model.options.law,
+        supports=supports[key], Px=loads.tip_force[0], Py=loads.tip_force[1],
+        M=loads.tip_moment, qx=loads.distributed[0], qy=loads.distributed[1],
+        load_time=_interruptible(config.load_function, comm))
+    q0 = None
+    if config.from_static:
+        try:
+            q0 = fd_rk.solve_static(params, 1.0, config.static.stepping.steps)
+        except RuntimeError as error:  # no static equilibrium: the analysis failed
+            return _fd_failed(config, out, comm, params, f"static pre-state: {error}")
+        reason = _fd_strains(params, q0).inadmissible()
+        if reason:
+            return _fd_failed(config, out, comm, params, f"static pre-state: {reason}")
+    times = np.arange(0.0, config.time.t_end + 0.5 * config.time.dt, config.time.dt)
+    method = {"fd-rk45": "RK45", "fd-dop853": "DOP853"}[config.time.scheme]
+    tolerance = min(config.time.tol, 1e-6)
+    summary_file = exports.Exports([exports.SummaryExport(out / "summary.json")]
+                                   if out is not None else [], comm)
+    summary_file.start({"status": "running", "message": "", "scheme": config.time.scheme,
+                        "notes": notes})
+    try:
+        solution = fd_rk.simulate(params, q0, None, config.time.t_end, times, method=method,
+                                  rtol=tolerance, atol=tolerance * 1e-3 * model.length)
+    except runctl.Interrupted as stop:
+        stop.where = "the FD + Runge-Kutta integration"
+        stop.written = ("no history (the scheme writes it at its end): only summary.json, status "
+                        "interrupted, is")
+        summary_file.finish({
+            "status": "interrupted", "history": [], "scheme": config.time.scheme,
+            "notes": notes, "message": f"interrupted by {stop.name} during the FD + "
+            "Runge-Kutta integration (its history is written at its end)"})
+        raise
+    history = [{"t": float(t), "tip": {"u": float(u), "v": float(v), "theta": float(th)},
+                "energies": {"kinetic": float(kin), "strain": float(strain),
+                             "external_work": float(work), "dissipated": float(diss)}}
+               for t, u, v, th, kin, strain, work, diss in zip(
+                   solution.t, solution.tip_u, solution.tip_v, solution.tip_theta,
+                   solution.kinetic, solution.strain, solution.external_work,
+                   solution.dissipated, strict=True)]
+    result = DynamicResult(history, {"rhs_evaluations": solution.nfev,
+                                     "wall_time_s": solution.wall_time},
+                           "completed" if solution.success else "failed", solution.message,
+                           dofs=int(fd_rk.free_dofs(params).sum()))
+    # the explicit scheme has no step to reject: the outputs up to the first inadmissible
+    # state (1 + e <= 0 at a midpoint: turned inside out) are kept, and the run failed
+    watch = StrainWatch()
+    for index, q in enumerate(solution.q):
+        strains = _fd_strains(params, q)
+        reason = strains.inadmissible()
+        if reason:
+            last = history[index - 1]["t"] if index else 0.0
+            result.history = history[:index]
+            result.status = "failed"
+            result.message = (f"{reason} at t = {history[index]['t']:.6g} s; last admissible "
+                              f"time {last:.6g} s")
+            break
+        watch.observe(strains)
+    result.notes, result.strain_range = notes + watch.notes(), watch.summary()
+    runctl.warn(comm, watch.notes())
+    _write_dynamic(out, result, config, solution.wall_time, comm, config.static.output.plots)
+    return result
+
+
+def _fd_strains(params, q) -> StrainRange:
+    """`StrainRange` of a state of the finite-difference scheme (its midpoint strains)."""
+    from fe_beam.baselines import fd_rk
+
+    st = fd_rk.midpoint_strains(params, q)
+    gamma = np.arctan2(st["g"], st["E1"])
+    return StrainRange(float(np.min(st["E1"])), float(np.max(np.abs(st["eps"]))),
+                       float(np.max(np.abs(gamma))))
+
+
+def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: str):
+    from fe_beam.baselines import fd_rk
+
+    result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
+                           dofs=int(fd_rk.free_dofs(params).sum()))
+    _write_dynamic(out, result, config, 0.0, comm, plots=False)
+    return result
+
+
+def _interruptible(load_time, comm, every: int = 200):
+    """``load_time`` that looks for SIGINT/SIGTERM (`fe_beam.runctl.check`, collective: every
+    rank integrates the same system, so every rank calls it equally often) every ``every``
+    calls: the FD scheme's right-hand side calls it once per evaluation."""
+    calls = [0]
+
+    def checked(t):
+        calls[0] += 1
+        if calls[0] % every == 0:
+            runctl.check(comm)
+        return load_time(t)
+
+    return checked
+
+
+ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
+
+
+def history_columns(tendons: int) -> list[exports.Column]:
+    """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
+    return [exports.Column("t", lambda h: h["t"]), *exports.tip_columns(),
+            *(exports.Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            *exports.indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
+
+
+HISTORY_HEADER = [c.name for c in history_columns(0)]
+
+
+def _history_exports(out: Path | None, config: DynamicConfig, writer=None, content=None,
+                     draw=None) -> list:
+    """The exports of a time history: XDMF states (``writer``), and with ``out`` history.csv,
+    summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
+    files = [exports.XDMFExport(writer, "t")] if writer is not None else []
+    if out is not None:
+        columns = history_columns(len(config.static.tendons))
+        files += [exports.CSVExport(out / "history.csv", columns),
+                  exports.SummaryExport(out / "summary.json", content),
+                  exports.PlotExport(draw) if draw is not None else None]
+    return files
+
+
+def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
+    return {
+        "status": result.status, "message": result.message, "history": result.history,
+        "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
+        # rho_inf parametrises generalized-alpha only: null for energy-conserving (new); the
+        # fd-* schemes keep the number they always reported (public interface)
+        "scheme": config.time.scheme,
+        "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
+        "notes": list(result.notes),
+    } | ({"strain_range": result.strain_range} if result.strain_range else {})
+
+
+def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfig, wall: float,
+                   comm, plots: bool) -> None:
+    """The files of a history computed in one go (the FD scheme): summary.json, history.csv
+    and, with ``plots``, the pictures."""
+    draw = (lambda _: _plot_dynamic(out, result, [], config)) if plots else None
+    files = exports.Exports(_history_exports(out, config, draw=draw), comm)
+    for record in result.history:
+        files.on_step(record)
+    files.finish(_dynamic_summary(result, config, wall))
+
+
+def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
+    t = np.array([h["t"] for h in result.history])
+    length = config.static.model.length
+    with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
+        left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
+                  [h["tip"]["v"] for h in result.history], lw=1.2)
+        left.set_xlabel("tip x [m]")
+        left.set_ylabel("tip y [m]")
+        left.set_title("tip trajectory")
+        left.set_aspect("equal", adjustable="datalim")
+        for key in ENERGIES:
+            right.plot(t, [h["energies"][key] for h in result.history], label=key)
+        right.set_xlabel("t [s]")
+        right.set_ylabel("energy [J]")
+        right.set_title("energies")
+        right.legend(fontsize=8)
+        for axis in (left, right):
+            axis.grid(alpha=0.3)
+    if shapes and config.static.output.gif:
+        _write_gif(out / "beam.gif", shapes, length)
+
+
+def _write_gif(path: Path, shapes, length: float) -> None:
+    """Animated deformed shapes (skipped when Pillow is not installed)."""
+    try:
+        from matplotlib.animation import FuncAnimation, PillowWriter
+    except ImportError:
+        return
+    plt = _pyplot()
+    frames = shapes[:: max(1, len(shapes) // 60)]
+    xs = np.concatenate([s["x"] + s["u"] for _, s in frames])
+    ys = np.concatenate([s["v"] for _, s in frames])
+    drawn, axis = plt.subplots(figsize=(5, 4))
+    (line,) = axis.plot([], [], lw=2)
+    margin = 0.05 * length
+    axis.set_xlim(xs.min() - margin, xs.max() + margin)
+    axis.set_ylim(ys.min() - margin, ys.max() + margin)
+    axis.set_aspect("equal")
+    axis.grid(alpha=0.3)
+
+    def draw(index):
+        t, shape = frames[index]
+        line.set_data(shape["x"] + shape["u"], shape["v"])
+        axis.set_title(f"t = {t:.4g} s")
+        return (line,)
+
+    try:
+        FuncAnimation(drawn, draw, frames=len(frames), blit=False).save(
+            str(path), writer=PillowWriter(fps=15))
+    except Exception:  # an animation must never fail an analysis
+        pass
+    plt.close(drawn)
+
+
+def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM_WORLD,
+              progress: bool = True) -> dict:
+    from fe_beam.solvers.modes import natural_frequencies
+
+    started = time.perf_counter()
+    check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)
+    problem, tendons = _tendon_problem(static, comm)
+    if out is not None and comm.rank == 0:
+        atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
+    watch = StrainWatch()
+    if modes["prestress"]:
+        try:
+            _static_prestate(problem, static, progress, watch, tendons)
+        except PrestateFailed as failure:
+            # no equilibrium (or only inadmissible ones) beyond the last converged factor:
+            # the analysis failed (exit 3), no modes of a state that is not an equilibrium
+            summary = {"status": "failed", "message": str(failure),
+                       "prestate": _prestate_record(problem, failure), "frequencies_hz": [],
+                       "transverse_fraction": [], "prestress": True,
+                       "dofs": problem.global_dofs, "notes": watch.notes(),
+                       "strain_range": watch.summary(),
+                       "wall_time_s": time.perf_counter() - started}
+            runctl.warn(comm, watch.notes())
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+            return summary
+        except runctl.Interrupted as stop:
+            status = stop.stopped("the static pre-state", "in the static pre-state")
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", status)
+            raise
+    else:
+        problem.set_load_factor(0.0)
+    result = natural_frequencies(problem, modes["count"])
+    summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
+               "transverse_fraction": result.transverse_fraction,
+               "prestress": modes["prestress"], "dofs": problem.space.dofmap.index_map.size_global
+               * problem.space.dofmap.index_map_bs,
+               "wall_time_s": time.perf_counter() - started}
+    summary.update(_modes_summary(result))
+    if modes["prestress"]:
+        # strains of the pre-state outside the range the model is meant for: warnings
+        summary["strain_range"] = watch.summary()
+        runctl.warn(comm, watch.notes())
+        summary["notes"] = watch.notes() + summary["notes"]
+    if not static.output.xdmf:
+        for mode in summary["unstable_modes"]:
+            mode["shape"] = None  # [output] xdmf = false: no shapes written
+    if out is not None:
+        if comm.rank == 0:
+            out.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        state = compat.local_array(problem.w).copy()
+        for name, shapes in (("modes.xdmf", result.shapes),
+                             ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
+            if name == "unstable_modes.xdmf" and not shapes:
+                continue
+            writer = BeamXDMFWriter(problem, out / name if static.output.xdmf else None)
+            for index, shape in enumerate(shapes, start=1):
+                compat.local_array(problem.w)[:] = compat.local_array(shape)
+                writer.write(float(index))
+            writer.close()
+        compat.local_array(problem.w)[:] = state
+        if comm.rank == 0:
+            atomic_write_json(out / "summary.json", summary)
+    return summary
+
+
+def _modes_summary(result) -> dict:
+    """The summary keys beyond frequencies_hz: eigenvalues omega^2 [rad^2/s^2] and kind
+    ("rigid" | "bending" | "axial") of each listed mode, the number of rigid-body modes, every
+    unstable direction (omega^2 < 0: eigenvalue, growth_rate = sqrt(-omega^2) [1/s], shape at
+    time index k of unstable_modes.xdmf), stable, and notes (also warnings on stderr)."""
+    unstable = [{"eigenvalue": mode.eigenvalue, "growth_rate": mode.growth_rate,
+                 "eigenvalue_imag": mode.eigenvalue_imag, "kind": mode.kind,
+                 "transverse_fraction": mode.transverse_fraction,
+                 "shape": {"file": "unstable_modes.xdmf", "index": index}}
+                for index, mode in enumerate(result.unstable, start=1)]
+    notes = list(result.notes)
+    if result.unstable_count:
+        rates = ", ".join(f"{mode.growth_rate:.4g}" for mode in result.unstable[:5])
+        flutter = sum(1 for mode in result.unstable if mode.eigenvalue_imag)
+        kinds = (f"omega^2 < 0 or complex ({flutter} flutter)" if flutter
+                 else "omega^2 < 0")
+        notes.insert(0, f"the state is unstable: {result.unstable_count} direction(s) with "
+                        f"{kinds} (growth rates {rates} 1/s); see unstable_modes")
+    if len(result.unstable) < result.unstable_count:
+        notes.append(f"only the first {len(result.unstable)} of {result.unstable_count} unstable "
+                     "directions are listed and written")
+    if result.rigid_body_modes:
+        notes.append(f"{result.rigid_body_modes} rigid-body mode(s) (0 Hz): the supports leave "
+                     "the beam free to move as a rigid body")
+    return {"eigenvalues": result.eigenvalues, "mode_kinds": result.kinds,
+            "rigid_body_modes": result.rigid_body_modes, "unstable_modes": unstable,
+            "unstable_count": result.unstable_count, "stable": result.unstable_count == 0,
+            "notes": notes}

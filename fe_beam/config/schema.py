@@ -1,0 +1,804 @@
+"""TOML configuration: schema, ``--set`` overrides and validation into model dataclasses.
+
+Every user mistake becomes one `ConfigError` sentence that names the key, says what is allowed and
+what was given; the CLI prints it and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import stat
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
+from fe_beam.model.materials import Material
+from fe_beam.model.sections import SHAPES, Section
+from fe_beam.model.settings import LoadStepping, SolverSettings
+from fe_beam.timefunctions import shown
+
+__all__ = [
+    "ConfigError",
+    "OutputOptions",
+    "StaticConfig",
+    "apply_overrides",
+    "check_command_tables",
+    "check_values",
+    "load_config",
+    "parse_static",
+    "validate",
+]
+
+
+class ConfigError(ValueError):
+    """A user mistake in a configuration (message is shown as is, exit code 2)."""
+
+
+NUMBER = (int, float)
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Key:
+    types: tuple
+    default: object = None
+    doc: str = ""
+
+
+# Tables and keys every command understands; commands read the tables they need. A key not
+# listed here is a mistake (typically a typo) and is reported, never ignored.
+SCHEMA: dict[str, dict[str, Key]] = {
+    "beam": {"length": Key(NUMBER, REQUIRED, "beam length L [m]")},
+    "section": {"shape": Key((str,), "rectangle", f"one of {', '.join(SHAPES)}")},
+    "material": {
+        "E": Key(NUMBER, REQUIRED, "Young's modulus [Pa]"),
+        "nu": Key(NUMBER, None, "Poisson's ratio (or give G)"),
+        "G": Key(NUMBER, None, "shear modulus [Pa] (or give nu)"),
+        "rho": Key(NUMBER, 0.0, "density [kg/m^3]"),
+    },
+    "model": {
+        "law": Key((str,), "nonstandard", "nonstandard | reissner | hyperelastic"),
+        "constraint": Key(
+            (str,), "none", "none | inextensible | unshearable | inextensible-unshearable"
+        ),
+        "shear_correction": Key(NUMBER, 1.0, "k of the Reissner law"),
+        # law = "hyperelastic" only: the 3D law (same keys, meaning and defaults as [solid])
+        "material": Key((str,), None, "hyperelastic: neo-hookean (default) | mooney-rivlin | "
+                        "yeoh | svk"),
+        "preset": Key((str,), None, "hyperelastic: silicone preset (sets the constants)"),
+        "mu": Key(NUMBER, None, "hyperelastic: shear modulus [Pa] (neo-hookean, svk)"),
+        "c10": Key(NUMBER, None, "hyperelastic: C10 [Pa] (mooney-rivlin, yeoh)"),
+        "c01": Key(NUMBER, None, "hyperelastic: C01 [Pa] (mooney-rivlin)"),
+        "c20": Key(NUMBER, None, "hyperelastic: C20 [Pa] (yeoh)"),
+        "c30": Key(NUMBER, None, "hyperelastic: C30 [Pa] (yeoh)"),
+        "kappa": Key(NUMBER, None, "hyperelastic: bulk modulus [Pa] (default from [material] "
+                     "nu)"),
+        "volumetric": Key((str,), None, "hyperelastic: simo_taylor (default) | quadratic"),
+        "section_points": Key((int,), None, "hyperelastic: Gauss points per section part "
+                              "(default 6)"),
+    },
+    "mesh": {
+        "elements": Key((int,), 50, "number of elements"),
+        "degree": Key((int,), 2, "1 or 2"),
+    },
+    "supports": {
+        "x0": Key((str, list), "clamped", "clamped | pinned | roller | free | [components]"),
+        "xL": Key((str, list), "free", "clamped | pinned | roller | free | [components]"),
+    },
+    "loads": {
+        "tip_force": Key((list,), [0.0, 0.0], "[Px, Py] at x = L [N]"),
+        "tip_moment": Key(NUMBER, 0.0, "moment at x = L [N m], counterclockwise"),
+        "follower": Key((bool,), False, "tip force follows the tip section"),
+        "distributed": Key((list,), [0.0, 0.0], "[qx, qy] per unit length [N/m]"),
+        "gravity": Key((list,), [0.0, 0.0], "[gx, gy] acceleration [m/s^2]"),
+        "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
+        "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
+        "point_forces": Key((list,), [], "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
+        "end_displacement": Key((list,), None, "[du, dv] prescribed at x = L [m]"),
+        "end_rotation": Key(NUMBER, None, "rotation prescribed at x = L [rad]"),
+        "steps": Key((int,), 10, "initial number of load steps"),
+        "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
+        "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),
+        "motion_function": Key((str,), None, "dynamic: scale of prescribed end values"),
+    },
+    "solver": {
+        "rtol": Key(NUMBER, 1e-9, "relative residual tolerance"),
+        "atol": Key(NUMBER, 1e-300, "absolute residual tolerance (units of the residual)"),
+        "stol": Key(NUMBER, 1e-11, "relative step tolerance"),
+        "max_it": Key((int,), 25, "Newton iterations per step"),
+        "line_search": Key((str,), "basic", "basic | bt | l2 | cp"),
+        "linear_solver": Key((str,), "auto", "auto | mumps | lu | gamg | gmres-ilu"),
+        "petsc_options": Key((dict,), {}, "any PETSc option, without prefix"),
+        "adaptive": Key((bool,), True, "cut back / grow load steps"),
+        "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
+        "max_increment": Key(NUMBER, None, "largest load-factor increment: easy steps grow up "
+                             "to it (default 1/steps: never beyond the first increment)"),
+        "easy_iterations": Key((int,), 4, "a load step converged in at most this many Newton "
+                               "iterations lets the next one grow (up to max_increment)"),
+        "max_rotation_jump": Key(NUMBER, 1.0, "branch check: largest rotation change per step"),
+        "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
+                           "memory; fe_beam.runctl)"),
+    },
+    "output": {
+        "xdmf": Key((bool,), True, "write XDMF for ParaView"),
+        "plots": Key((bool,), True, "write PNG plots"),
+        "gif": Key((bool,), False, "dynamic: animated GIF of the deformed beam"),
+    },
+}
+# Tables owned by other commands (validated by them).
+OTHER_TABLES = (
+    "design",
+    "time",
+    "initial",
+    "damping",
+    "modes",
+    "tendons",
+    "solid",
+    "finger",
+    "compare",
+    "refine",
+    "calibrate",
+    "buckling",
+    "validity",
+    "path",
+)
+
+
+MAX_CONFIG_BYTES = 256 * 2**20
+FILE_KINDS = ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISCHR, "a character device"),
+              (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be read as a configuration file (None: it can). Never opens a FIFO
+    or a device (reading one could block or never end)."""
+    name = shown(str(path), 300)
+    try:
+        info = path.stat()
+    except ValueError:
+        return f"config file {name} is not a usable file name (it contains a NUL byte)"
+    except FileNotFoundError:
+        if path.is_symlink():
+            return f"config file {name} is a symbolic link to a file that does not exist"
+        return f"config file {name} does not exist"
+    except NotADirectoryError:
+        blocking = next((parent for parent in path.parents if parent.is_file()), path.parent)
+        return (f"config file {name} cannot exist: {shown(str(blocking), 300)} is a file, not a "
+                "folder")
+    except OSError as error:
+        return f"config file {name} cannot be read ({error.strerror})"
+    if stat.S_ISDIR(info.st_mode):
+        return f"config file {name} is a directory, not a TOML file"
+    for test, kind in FILE_KINDS:
+        if test(info.st_mode):
+            return f"config file {name} is {kind}, not a regular file"
+    if not stat.S_ISREG(info.st_mode):
+        return f"config file {name} is not a regular file"
+    if info.st_size > MAX_CONFIG_BYTES:
+        return (f"config file {name} has {info.st_size / 2**20:.0f} MiB; a configuration has at "
+                f"most {MAX_CONFIG_BYTES // 2**20} MiB")
+    return None
+
+
+def load_config(path: str | Path) -> dict:
+    path = Path(path)
+    name = shown(str(path), 300)
+    problem = _file_problem(path)
+    if problem:
+        raise ConfigError(problem)
+    try:
+        with path.open("rb") as stream:
+            return tomllib.load(stream)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError, ValueError) as error:
+        # ValueError: e.g. an integer of more than 4300 digits
+        raise ConfigError(f"{name}: not valid TOML ({shown(str(error), 200)[1:-1]})") from None
+    except RecursionError:
+        raise ConfigError(f"{name}: not valid TOML (arrays or inline tables nested too "
+                          "deeply)") from None
+    except OSError as error:
+        raise ConfigError(f"config file {name} cannot be read ({error.strerror})") from None
+
+
+def _parse_value(text: str):
+    try:
+        return tomllib.loads(f"value = {text}")["value"]
+    except (tomllib.TOMLDecodeError, ValueError, RecursionError):
+        return text  # a bare word such as reissner (or a value the checks then refuse)
+
+
+def apply_overrides(config: dict, assignments: list[str]) -> dict:
+    """Apply ``table.key=value`` overrides (values in TOML syntax; bare words are strings).
+    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``."""
+    config = copy.deepcopy(config)
+    for assignment in assignments or []:
+        if "=" not in assignment:
+            raise ConfigError(f"--set {shown(assignment)}: expected table.key=value")
+        dotted, text = assignment.split("=", 1)
+        names = dotted.strip().split(".")
+        if len(names) < 2 or not all(names):
+            raise ConfigError(f"--set {shown(assignment)}: expected table.key=value")
+        target, position = config, 0
+        while position < len(names) - 1:
+            name = names[position]
+            target = target.setdefault(name, {})
+            position += 1
+            if isinstance(target, list) and all(isinstance(item, dict) for item in target):
+                index = names[position]
+                if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
+                    raise ConfigError(
+                        f"--set {shown(assignment)}: {shown(name)[1:-1]} is an array of "
+                        f"{len(target)} tables; "
+                        f"address one as {name}.<index 0..{len(target) - 1}>.key"
+                    )
+                target = target[int(index)]
+                position += 1
+            elif not isinstance(target, dict):
+                raise ConfigError(f"--set {shown(assignment)}: {shown(name)[1:-1]} is not a table")
+        target[names[-1]] = _parse_value(text.strip())
+    return config
+
+
+def _type_name(types: tuple) -> str:
+    names = {
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        bool: "true/false",
+        list: "a list",
+        dict: "a table",
+    }
+    if set(types) == {int, float}:
+        return "a number"
+    return " or ".join(names[t] for t in types)
+
+
+def _checked(table: str, key: str, value, spec: Key):
+    ok = isinstance(value, spec.types) and not (isinstance(value, bool) and bool not in spec.types)
+    if not ok:
+        raise ConfigError(
+            f"[{table}] {key} must be {_type_name(spec.types)} ({spec.doc}); got {shown(value)}"
+        )
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ConfigError(f"[{table}] {key} must be finite; got {value!r}")
+    if spec.types == (int,) and abs(value) > MAX_COUNT:
+        raise ConfigError(f"[{table}] {key} = {shown(value)} is out of range ({spec.doc}; an "
+                          f"integer from -{MAX_COUNT} to {MAX_COUNT})")
+    return value
+
+
+def table(
+    config: dict, name: str, schema: dict[str, Key] | None = None, open_keys=lambda key: False
+) -> dict:
+    """A validated table with defaults filled in (unknown keys and wrong types are errors)."""
+    schema = SCHEMA[name] if schema is None else schema
+    given = config.get(name, {})
+    if isinstance(given, list):
+        raise ConfigError(f"[{name}] must be one table, written [{name}]; the config has an "
+                          f"array of tables [[{name}]]")
+    if not isinstance(given, dict):
+        raise ConfigError(f"[{name}] must be a table; got {shown(given)}")
+    unknown = [k for k in given if k not in schema and not open_keys(k)]
+    if unknown:
+        raise ConfigError(f"[{name}] unknown key {shown(unknown[0])}; allowed: {', '.join(schema)}")
+    values = {}
+    for key, spec in schema.items():
+        if key in given:
+            values[key] = _checked(name, key, given[key], spec)
+        elif spec.default is REQUIRED:
+            raise ConfigError(f"[{name}] {key} is required ({spec.doc})")
+        else:
+            values[key] = copy.deepcopy(spec.default)
+    values.update({k: v for k, v in given.items() if k not in schema})
+    return values
+
+
+def check_tables(config: dict, known: tuple[str, ...]) -> None:
+    unknown = [name for name in config if name not in known]
+    if unknown:
+        raise ConfigError(f"unknown table [{shown(unknown[0])[1:-1]}]; known tables: "
+                          f"{', '.join(known)}")
+
+
+@dataclass(frozen=True)
+class OutputOptions:
+    xdmf: bool = True
+    plots: bool = True
+    gif: bool = False
+
+
+@dataclass(frozen=True)
+class StaticConfig:
+    model: BeamModel
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    stepping: LoadStepping = field(default_factory=LoadStepping)
+    max_rotation_jump: float = 1.0
+    output: OutputOptions = field(default_factory=OutputOptions)
+    tendons: tuple = ()
+    raw: dict = field(default_factory=dict)
+
+
+def _wrap(builder, *args, **kwargs):
+    """Run a dataclass constructor, turning its ValueError into a ConfigError."""
+    try:
+        return builder(*args, **kwargs)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as error:
+        raise ConfigError(str(error)) from None
+
+
+def parse_section(config: dict) -> Section:
+    values = table(config, "section", open_keys=lambda key: True)
+    shape = values.pop("shape")
+    dims, dims_tip = {}, {}
+    for key, value in values.items():
+        target, name = (dims_tip, key[:-4]) if key.endswith("_tip") else (dims, key)
+        if isinstance(value, bool) or not isinstance(value, NUMBER):
+            raise ConfigError(f"[section] {shown(key)[1:-1]} must be a number; got {shown(value)}")
+        target[name] = value
+    orphans = [n for n in dims_tip if n not in dims]
+    if orphans:
+        raise ConfigError(f"[section] {orphans[0]}_tip given without {orphans[0]}")
+    return _wrap(Section, shape, dims, dims_tip)
+
+
+#: [model] keys of law = "hyperelastic" (the 3D law, and the section quadrature)
+HYPERELASTIC_KEYS = ("material", "preset", "mu", "c10", "c01", "c20", "c30", "kappa",
+                     "volumetric", "section_points")
+
+
+def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
+    """The rod's Material and the ModelOptions keywords of the law; with law = "hyperelastic"
+    the 3D law of [model] (`fe_beam.config.material_laws.hyperelastic_law`) and E, G its
+    small-strain
+    ones (E derived from a preset)."""
+    law_keys = {key: model.pop(key) for key in HYPERELASTIC_KEYS}
+    if model["law"] != "hyperelastic":
+        given = [key for key, value in law_keys.items() if value is not None]
+        if given:
+            raise ConfigError(f"[model] {given[0]} applies to law = \"hyperelastic\" only; got "
+                              f"law = {shown(model['law'])}")
+        return _wrap(Material, **table(config, "material")), {}
+    from fe_beam.config.material_laws import MATERIAL_KEYS, hyperelastic_law
+
+    values = dict(law_keys)
+    values["material"] = values["material"] or "neo-hookean"
+    values["volumetric"] = values["volumetric"] or "simo_taylor"
+    points = values.pop("section_points")
+    law = hyperelastic_law(config, values, "model", "law = \"hyperelastic\"")
+    rho = table(config, "material", MATERIAL_KEYS)["rho"]
+    material = _wrap(Material, E=law.young_modulus, G=law.shear_modulus, rho=rho)
+    return material, {"hyperelastic": law, "section_points": points}
+
+
+def parse_model(config: dict) -> BeamModel:
+    beam = table(config, "beam")
+    model = table(config, "model")
+    material, law_options = _rod_material(config, model)
+    mesh = table(config, "mesh")
+    supports = table(config, "supports")
+    loads = table(config, "loads")
+    section = parse_section(config)
+    return _wrap(
+        BeamModel,
+        length=beam["length"],
+        section=section,
+        material=material,
+        options=_wrap(ModelOptions, **model, **law_options),
+        mesh=_wrap(Discretisation, **mesh),
+        supports=_wrap(
+            Supports,
+            x0=_support(supports["x0"]),
+            xL=_support(supports["xL"]),
+            prescribed_x0=loads["prescribed_x0"],
+            prescribed_xL=loads["prescribed_xL"],
+        ),
+        loads=_wrap(
+            Loads,
+            tip_force=loads["tip_force"],
+            tip_moment=loads["tip_moment"],
+            follower=loads["follower"],
+            distributed=loads["distributed"],
+            gravity=loads["gravity"],
+            point_forces=loads["point_forces"],
+            end_displacement=loads["end_displacement"],
+            end_rotation=loads["end_rotation"],
+        ),
+    )
+
+
+def _support(spec):
+    return tuple(spec) if isinstance(spec, list) else spec
+
+
+def _load_steps(config: dict, steps):
+    """The number of initial load steps a run takes: ``loads.steps``, or more when a tendon
+    asks for more (`fe_beam.config.finger.parse_finger`); ``steps`` itself when not a count."""
+    if not (isinstance(steps, int) and not isinstance(steps, bool)):
+        return steps
+    tendons = config.get("tendons")
+    asked = [t.get("steps") for t in tendons if isinstance(t, dict)] \
+        if isinstance(tendons, list) else []
+    return max([steps] + [n for n in asked if isinstance(n, int) and not isinstance(n, bool)])
+
+
+def given_max_increment(config: dict, steps: int) -> float:
+    """``[solver] max_increment`` when the user gave it (checked by `parse_solver` against the
+    run's load steps), else one step of ``steps`` (never grow beyond the first increment)."""
+    solver = config.get("solver")
+    given = solver.get("max_increment") if isinstance(solver, dict) else None
+    return 1.0 / steps if given is None else max(float(given), 1.0 / steps)
+
+
+def check_max_increment(largest, count, steps, adaptive) -> None:
+    """ConfigError unless ``[solver] max_increment`` (None: not given) is between 1/``count``
+    (the run's initial load steps; ``steps`` = loads.steps) and 1, with adaptive steps when it
+    lets them grow. Nothing is checked while the step count itself is invalid (named first)."""
+    if largest is None or not (isinstance(count, int) and not isinstance(count, bool)
+                               and count >= 1):
+        return
+    if not 1.0 / count <= largest <= 1.0:
+        where = (f"loads.steps = {steps}" if count == steps else
+                 f"the largest of loads.steps and the tendons' steps = {count}")
+        raise ConfigError(f"[solver] max_increment must be between 1/steps ({where}) and 1; "
+                          f"got {largest!r}")
+    if largest > (1 + 1e-12) / count and not adaptive:
+        raise ConfigError("[solver] max_increment above 1/steps lets load steps grow, which "
+                          "needs adaptive = true; got adaptive = false")
+
+
+def parse_solver(config: dict) -> tuple[SolverSettings, LoadStepping, float]:
+    solver = table(config, "solver")
+    steps = table(config, "loads")["steps"]
+    largest = solver.pop("max_increment")
+    adaptive = solver.pop("adaptive")
+    easy = solver.pop("easy_iterations")
+    if not (isinstance(easy, int) and not isinstance(easy, bool) and easy >= 1):
+        raise ConfigError(f"[solver] easy_iterations must be an integer >= 1; got {easy!r}")
+    check_max_increment(largest, _load_steps(config, steps), steps, adaptive)
+    stepping = _wrap(
+        LoadStepping,
+        steps=steps,
+        adaptive=adaptive,
+        min_increment=min(solver.pop("min_increment"), 1.0 / max(steps, 1)),
+        max_increment=(None if largest is None or not isinstance(steps, int)
+                       else max(largest, 1.0 / max(steps, 1))),
+        easy_iterations=easy,
+    )
+    jump = solver.pop("max_rotation_jump")
+    solver.pop("allow_large")  # read from the raw table by the drivers (fe_beam.runctl)
+    if not jump > 0:
+        raise ConfigError(f"[solver] max_rotation_jump must be > 0; got {jump!r}")
+    if solver.get("linear_solver") == "fieldsplit":  # the solid's u-p solver: rods have no blocks
+        raise ConfigError("[solver] linear_solver = \"fieldsplit\" is the 3D solid's u-p solver "
+                          "([solid] solver); the rod takes auto | mumps | lu | gamg | gmres-ilu")
+    return _wrap(SolverSettings, **solver), stepping, float(jump)
+
+
+def _spec(support) -> str:
+    """A support as the user wrote it in TOML."""
+    if isinstance(support, str):
+        return f'"{support}"'
+    return "[" + ", ".join(f'"{c}"' for c in support) + "]"
+
+
+def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConfig:
+    """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
+    beam free to move as a rigid body (free-free, flying) is meaningful."""
+    check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
+    model = parse_model(config)
+    settings, stepping, jump = parse_solver(config)
+    if model.options.constraint != "none" and settings.linear_solver not in ("auto", "mumps"):
+        raise ConfigError(
+            f"[solver] linear_solver = \"{settings.linear_solver}\" cannot solve the saddle-point "
+            f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
+            "zero diagonal); use linear_solver = \"auto\" or \"mumps\", or constraint = \"none\""
+        )
+    free = model.supports.rigid_motions()
+    if free and not rigid_motion_allowed:
+        raise ConfigError(
+            f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "
+            "the beam "
+            f"free to move as a rigid body: {'; '.join(free)}. A static equilibrium needs "
+            "supports that prevent it (e.g. x0 = \"clamped\", or x0 = \"pinned\" and "
+            "xL = \"roller\")"
+        )
+    output = OutputOptions(**table(config, "output"))
+    return StaticConfig(model, settings, stepping, jump, output, raw=config)
+
+
+# --- checks over the whole configuration, before any command reads it ---------------------------
+MAX_COUNT = 2**31 - 1  # integer keys are counts (elements, steps, iterations): C ints downstream
+# Magnitudes of nonzero numbers (SI units): beyond them products of a few numbers overflow or
+# underflow, or the factorisations meet "zero" pivots; no physical input of a rod is near them.
+MAGNITUDES = (1e-30, 1e30)
+# Keys whose numbers may be as small or as large as the user likes (tolerances; PETSc's own).
+UNBOUNDED = ("tol", "petsc_options", "min_increment")
+
+
+def _where(path: tuple) -> str:
+    """A key path as the user wrote it: ``[loads] prescribed_xL.theta``, ``[loads]
+    tip_force[1]``, ``[[tendons]] #2 tension``."""
+    head, rest = path[0], list(path[1:])
+    if rest and isinstance(rest[0], int):
+        text = f"[[{head}]] #{rest.pop(0) + 1}"
+    else:
+        text = f"[{head}]"
+    key = ""
+    for part in rest:
+        key += f"[{part}]" if isinstance(part, int) else (f".{part}" if key else str(part))
+    return f"{text} {key}".strip() if key else text
+
+
+def check_values(config: dict) -> None:
+    """Every number anywhere in the configuration is finite (no nan or inf: no key gives them a
+    meaning), fits the 64-bit integers of TOML and, outside tolerances, is 0 or has a magnitude
+    in MAGNITUDES; a table
+    meant as an array of tables ([[tendons]]) is one. ConfigError naming the key otherwise."""
+    if not isinstance(config, dict):
+        raise ConfigError("the configuration must be a table")
+    tendons = config.get("tendons")
+    if isinstance(tendons, dict):
+        raise ConfigError(
+            "tendons must be an array of tables: write each tendon as [[tendons]] (double "
+            "brackets), not [tendons]")
+    stack = [((name,), value) for name, value in config.items()]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, dict):
+            stack.extend((path + (str(key),), item) for key, item in value.items())
+            continue
+        if isinstance(value, list):
+            stack.extend((path + (index,), item) for index, item in enumerate(value))
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if isinstance(value, int) and not -(2**63) <= value < 2**63:
+            raise ConfigError(f"{_where(path)} = {shown(value)} is too large (TOML integers "
+                              "are 64-bit)")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{_where(path)} must be a finite number; got {value!r}")
+        bounded = not any(part in str(name) for name in path for part in UNBOUNDED)
+        low, high = MAGNITUDES
+        if bounded and value != 0 and not low <= abs(value) <= high:
+            raise ConfigError(f"{_where(path)} = {value:.6g} is out of range: fe-beam takes "
+                              f"numbers of magnitude {low:g} to {high:g} (SI units), or 0")
+    _check_ranges(config)
+    _check_pairs(config)
+
+
+# Lengths below this are beyond what the mesh generator and point location resolve (they work
+# with absolute tolerances near 1e-15 m); above the upper bound a "beam" is not a structure.
+LENGTH_RANGE = (1e-6, 1e6)
+
+
+def _number(config: dict, table_name: str, key: str):
+    given = config.get(table_name)
+    value = given.get(key) if isinstance(given, dict) else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return value
+
+
+def _check_ranges(config: dict) -> None:
+    low, high = LENGTH_RANGE
+    length = _number(config, "beam", "length")
+    if length is not None and length > 0 and not low <= length <= high:
+        raise ConfigError(f"[beam] length = {length:g} m is outside the range fe-beam computes "
+                          f"with ({low:g} m to {high:g} m)")
+
+
+def _check_pairs(config: dict) -> None:
+    """Keys that bound each other: the smaller must not exceed the larger."""
+    time = config.get("time")
+    if not isinstance(time, dict):
+        return
+    values = {key: _number(config, "time", key) for key in ("min_dt", "dt", "max_dt")}
+    order = ("min_dt", "dt", "max_dt")
+    for i, small in enumerate(order):
+        for large in order[i + 1:]:
+            a, b = values[small], values[large]
+            if a is not None and b is not None and a > 0 and b > 0 and a > b:
+                raise ConfigError(f"[time] {small} = {a:g} s must not exceed {large} = {b:g} s")
+
+
+# Tables each command reads besides the rod's (SCHEMA). A table another command reads is refused
+# when ignoring it would change the answer (tendons pull on the beam; [inverse] asks a question
+# the command does not answer) and noted otherwise. refine sorts its configurations itself.
+COMMAND_TABLES = {
+    "design": ("tendons", "design", "inverse"),
+    "static": (),
+    "finger": ("tendons", "inverse"),
+    "dynamic": ("time", "initial", "damping", "modes", "tendons"),
+    "modes": ("time", "initial", "damping", "modes", "tendons"),
+    "solid": ("tendons", "solid", "compare", "modes"),
+    "compare": ("tendons", "solid", "compare"),
+    "calibrate": ("tendons", "inverse", "calibrate"),
+    "buckling": ("tendons", "solid", "buckling"),
+    "validity": ("tendons", "solid", "compare", "validity"),
+    "path": ("tendons", "solid", "path"),
+}
+REFUSED_UNUSED = ("tendons", "inverse")
+DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
+
+
+def _readers(name: str) -> str:
+    commands = [command for command, tables in COMMAND_TABLES.items() if name in tables]
+    if name in ("tendons", "solid", "refine"):
+        commands.append("refine")
+    if not commands:
+        return "no command"
+    listed = commands[0] if len(commands) == 1 else (
+        f"{', '.join(commands[:-1])} and {commands[-1]}")
+    return f"fe-beam {listed}"
+
+
+def check_command_tables(command: str, config: dict) -> list[str]:
+    """ConfigError for a table the command would silently ignore although it changes the
+    answer; notes (sentences) for other tables and keys the command does not use."""
+    if command not in COMMAND_TABLES:
+        return []
+    used = COMMAND_TABLES[command]
+    unused: dict[str, list[str]] = {}
+    for name in config:
+        if name in SCHEMA or name in used or name not in OTHER_TABLES + ("inverse",):
+            continue
+        if name in REFUSED_UNUSED:
+            what = "[[tendons]]" if name == "tendons" else f"[{name}]"
+            hint = ("fe-beam finger for a rod pulled by tendons" if name == "tendons"
+                    else "fe-beam finger for the tension that reaches a target")
+            raise ConfigError(
+                f"fe-beam {command} does not use {what}, which is read by {_readers(name)}: "
+                f"run {hint}, or remove {what}")
+        unused.setdefault(_readers(name), []).append(f"[{name}]")
+    notes = []
+    for readers, names in unused.items():
+        listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+        verb = "is" if len(names) == 1 else "are"
+        notes.append(f"{listed} {verb} not used by fe-beam {command} and ignored (read by "
+                     f"{readers})")
+    loads = config.get("loads")
+    if command not in ("dynamic", "modes") and isinstance(loads, dict):
+        timed = [key for key in DYNAMIC_LOAD_KEYS if key in loads]
+        if timed:
+            notes.append(f"[loads] {timed[0]} is read by fe-beam dynamic only; fe-beam {command} "
+                         "applies the loads in full")
+    tendons = config.get("tendons")
+    if command not in ("dynamic", "modes") and isinstance(tendons, list):
+        timed = [key for t in tendons if isinstance(t, dict)
+                 for key in ("time_function", "time_table") if key in t]
+        if timed:
+            notes.append(f"[[tendons]] {timed[0]} is read by fe-beam dynamic only; fe-beam "
+                         f"{command} applies the tensions in full")
+    return notes
+
+
+def check_partition(config: dict, ranks: int, command: str = "static") -> None:
+    """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
+    that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
+    hang in parallel, while they run serially)."""
+    if ranks > 1 and command in ("solid", "compare", "refine", "buckling"):
+        _check_solid_partition(config, ranks)
+    mesh = config.get("mesh")
+    elements = mesh.get("elements", SCHEMA["mesh"]["elements"].default) if isinstance(
+        mesh, dict) else SCHEMA["mesh"]["elements"].default
+    if (isinstance(elements, int) and not isinstance(elements, bool)
+            and 1 <= elements < ranks):
+        raise ConfigError(
+            f"[mesh] elements = {elements} is fewer than the {ranks} MPI ranks: every rank needs "
+            f"at least one element; use elements >= {ranks} or run on fewer ranks")
+
+
+def _check_solid_partition(config: dict, ranks: int) -> None:
+    solid = config.get("solid")
+    size = _number(config, "solid", "mesh_size") if isinstance(solid, dict) else None
+    dimensions = [value for key in ("b", "h", "h_tip")
+                  if (value := _number(config, "section", key)) is not None and value > 0]
+    if size is None or not dimensions or size <= max(dimensions):
+        return
+    raise ConfigError(
+        f"[solid] mesh_size = {size:g} m is larger than the cross-section ({max(dimensions):g} m):"
+        f" such a coarse 3D mesh does not run on {ranks} MPI ranks; use mesh_size <= "
+        f"{max(dimensions):g} m, or run on one rank")
+
+
+# --- one entry point: a whole configuration of any command, without the finite-element stack ----
+@dataclass(frozen=True)
+class Validated:
+    """A configuration validated for ``command``: ``parsed`` is what the command's parser
+    returns (`StaticConfig`; finger: (StaticConfig, InverseTarget | None); dynamic:
+    `fe_beam.config.transient.DynamicConfig`; modes: (StaticConfig, [modes] table); solid:
+    `fe_beam.config.solid.SolidConfig`; compare: `fe_beam.config.compare.CompareConfig`; refine:
+    `fe_beam.analyses.refine.RefinementPlan`). ``petsc_options`` lists the solver settings whose
+    PETSc
+    options PETSc itself still has to accept (`fe_beam.solvers.newton.check_petsc_options`, where
+    the
+    solver is built: the CLI checks them before the run starts)."""
+
+    command: str
+    parsed: object
+    petsc_options: tuple[dict, ...] = ()
+
+
+COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
+            "design", "buckling", "validity", "path")
+
+
+def _solver_settings(parsed) -> list:
+    """The SolverSettings inside a parsed configuration (duck-typed: no imports)."""
+    if isinstance(parsed, tuple):
+        return [s for part in parsed for s in _solver_settings(part)]
+    found = []
+    for name in ("solver", "static", "rod", "solid", "parsed"):
+        value = getattr(parsed, name, None)
+        if isinstance(value, SolverSettings):
+            found.append(value)
+        elif value is not None and not isinstance(value, (dict, str, int, float)):
+            found.extend(_solver_settings(value))
+    return found
+
+
+def validate(command: str, config: dict, refine: dict | None = None) -> Validated:
+    """Validate the whole configuration ``config`` (the parsed TOML, after ``--set``) for
+    ``command`` as the command's own parser does, raising ConfigError (one sentence naming the
+    key) for the first mistake. Imports no dolfinx, PETSc or mpi4py: `fe-beam` answers a
+    mistake before loading them. ``refine``: the refine command's --levels, --ratio, --quantity
+    (strings or None)."""
+    if command not in COMMANDS:
+        raise ConfigError(f"unknown command {command!r}; one of {', '.join(COMMANDS)}")
+    check_values(config)
+    if command == "static":
+        parsed = parse_static(config)
+    elif command == "finger":
+        from fe_beam.config.finger import parse_finger
+
+        parsed = parse_finger(config)
+    elif command in ("dynamic", "modes"):
+        from fe_beam.config.transient import parse_dynamic, parse_modes
+
+        parsed = parse_dynamic(config) if command == "dynamic" else parse_modes(config)
+    elif command == "solid":
+        from fe_beam.config.solid import parse_solid
+
+        parsed = parse_solid(config)
+    elif command == "compare":
+        from fe_beam.config.compare import parse_compare
+
+        parsed = parse_compare(config)
+    elif command == "buckling":
+        from fe_beam.config.buckling import parse_buckling
+
+        parsed = parse_buckling(config)
+    elif command == "validity":
+        from fe_beam.config.validity import parse_validity
+
+        parsed = parse_validity(config)
+    elif command == "path":
+        from fe_beam.config.path import parse_path
+
+        parsed = parse_path(config)
+    elif command == "calibrate":
+        from fe_beam.analyses.calibrate import parse_calibrate
+        from fe_beam.config.finger import parse_finger
+
+        parsed = parse_finger(config)[0] if config.get("tendons") else parse_static(config)
+        parse_calibrate(config)
+    elif command == "design":
+        from fe_beam.analyses.design import parse_design
+        from fe_beam.config.finger import parse_finger
+
+        rest = parse_design(config)[1]
+        parsed = parse_finger(rest)[0] if rest.get("tendons") else parse_static(rest)
+    else:
+        from fe_beam.analyses.refine import plan_refinement
+
+        refine = refine or {}
+        parsed = plan_refinement(config, refine.get("levels"), refine.get("ratio"),
+                                 refine.get("quantities"))
+    options = []
+    for settings in _solver_settings(parsed):
+        if settings.petsc_options and settings.petsc_options not in options:
+            options.append(dict(settings.petsc_options))
+    return Validated(command, parsed, tuple(options))

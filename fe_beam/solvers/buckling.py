@@ -1,0 +1,525 @@
+"""Linear (eigenvalue) buckling of the rod and of the 3D solid about the undeformed or a
+prestressed state (docs/theory.md, Linear buckling).
+
+With R(w, lambda) the residual and K_T = dR/dw its tangent, the state w(lambda) of the load path
+through the prestress state w_p = w(p) has the load derivative w1 = dw/dlambda, solved from
+
+    K_T(w_p, p) w1 = -dR/dlambda(w_p, p)        (w1 = d(prescribed values)/dlambda on supports)
+
+and the tangent changes along the path at the rate
+
+    K_geo = dK_T(w(lambda), lambda)/dlambda = D_w K_T(w_p, p)[w1] + dK_T/dlambda|_w.
+
+The first term is UFL's exact directional derivative of the Jacobian form (a trilinear form with
+w1 as a coefficient); the second, the explicit dependence on the load factor (follower tip
+forces, tendon tensions), is the central difference (K_T(w_p, p + 1) - K_T(w_p, p - 1)) / 2,
+exact because every load enters the residual affinely; it is zero for dead loads and skipped.
+The buckling load factors are lambda_c = p + mu with mu the eigenvalues of
+
+    (K_T + mu K_geo) phi = 0,
+
+the smallest positive ones first (SLEPc, shift-and-invert about 0: K_T is factorised once,
+MUMPS). At p = 0 this is the classical linearised buckling problem of the linear prestress; at
+p close to a critical load mu -> 0 and lambda_c is exact to O(mu^2): repeating with prestress =
+the last estimate converges to the bifurcation of the nonlinear problem (the extensible, shear-
+deformable column included). Dirichlet rows: K_T 1 on the diagonal, K_geo 0 (infinite
+eigenvalues, far from the target; pairs living on the fixed dofs are dropped as in
+fe_beam/modes.py); multiplier rows (constraints): K_geo 0 there too, the saddle-point K_T
+factorised by MUMPS with the same extra workspace as the static solves.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from fe_beam.fem import compat
+from fe_beam.fem.mpi import global_max, global_sum
+from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE
+
+__all__ = ["Buckling", "LinearisedProblem", "buckling_modes", "rod_buckling", "run_buckling",
+           "solid_buckling"]
+
+# eigenvalues whose imaginary part is below this fraction of their modulus are real
+IMAGINARY_TOLERANCE = 1e-6
+MAX_EXTRA = 64  # widen the search for positive eigenvalues at most to count + this
+
+
+@dataclass
+class Buckling:
+    """Buckling load factors (ascending, multiples of the applied load, > prestress) and their
+    mode shapes (max |displacement dof| = 1); ``prestress``: the load factor of the state
+    linearised about; ``negative``: load factors below the prestress found on the way (the
+    loads reversed), ascending in magnitude."""
+
+    load_factors: list[float]
+    shapes: list[fem.Function]
+    prestress: float = 0.0
+    negative: list[float] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class LinearisedProblem:
+    """What the eigenvalue solver needs of a problem with a load parameter: its mixed space,
+    state ``w``, residual form, Dirichlet conditions, ``set_load_factor`` (loads and prescribed
+    values), ``set_prescribed_factor`` (prescribed values only), the current load factor, the
+    dofs that are displacements (normalisation) and whether the tangent depends on the load
+    factor at fixed state (``explicit``: follower loads, tendon tensions)."""
+
+    space: object
+    w: fem.Function
+    residual: object
+    bcs: list
+    set_load_factor: object
+    set_prescribed_factor: object
+    load_factor: float
+    displacement_dofs: np.ndarray
+    comm: MPI.Comm
+    saddle_point: bool = False
+    explicit: bool = False
+    jacobian: object = None
+
+
+class BucklingFailed(ArithmeticError):
+    """The linearised buckling problem cannot be set up or solved at the given state (exit 3:
+    an analysis failure, not a user mistake nor an internal error)."""
+
+
+def _assemble_vector(form) -> PETSc.Vec:
+    vector = compat.assemble_vector(form)
+    vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    return vector
+
+
+def load_derivative(problem: LinearisedProblem, K: PETSc.Mat, jacobian_form) -> fem.Function:
+    """w1 = dw/dlambda at the current state: K_T w1 = -dR/dlambda, w1 = the load derivative of
+    the prescribed values on the Dirichlet dofs (``K``: K_T with 1 on the Dirichlet diagonal)."""
+    p = problem.load_factor
+    residual = fem.form(problem.residual)
+    problem.set_load_factor(p + 1.0)
+    plus = _assemble_vector(residual)
+    problem.set_load_factor(p - 1.0)
+    minus = _assemble_vector(residual)
+    rhs = plus.copy()
+    rhs.axpy(-1.0, minus)
+    rhs.scale(-0.5)  # -dR/dlambda (exact: the residual is affine in the load factor)
+    # the prescribed values' rate: the Dirichlet functions at factor 1 minus factor 0
+    problem.set_prescribed_factor(1.0)
+    compat.apply_lifting(rhs, [jacobian_form], [problem.bcs])
+    rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    compat.set_bc(rhs, problem.bcs)
+    problem.set_load_factor(p)
+    w1 = fem.Function(problem.space)
+    ksp = _direct_solver(K, problem.saddle_point, "fe_beam_buckling_w1_")
+    ksp.solve(rhs, compat.vector_of(w1))
+    compat.vector_of(w1).ghostUpdate(addv=PETSc.InsertMode.INSERT,
+                                     mode=PETSc.ScatterMode.FORWARD)
+    reason = ksp.getConvergedReason()
+    ksp.destroy()
+    for vector in (plus, minus, rhs):
+        vector.destroy()
+    if reason < 0:
+        raise BucklingFailed(
+            f"the tangent at the prestress state is singular (PETSc reason {reason}): the state "
+            "is critical, or the constraints leave no room for the prescribed end values (an "
+            "inextensible rod cannot take an axial end displacement)")
+    return w1
+
+
+def _direct_solver(K: PETSc.Mat, saddle_point: bool, prefix: str) -> PETSc.KSP:
+    ksp = PETSc.KSP().create(K.getComm())
+    ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(K)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    if saddle_point:
+        option, percent = SADDLE_POINT_WORKSPACE
+        PETSc.Options()[f"{prefix}{option}"] = percent
+    ksp.setFromOptions()
+    return ksp
+
+
+def geometric_stiffness(problem: LinearisedProblem, w1: fem.Function, jacobian) -> PETSc.Mat:
+    """K_geo = D_w K_T[w1] + dK_T/dlambda|_w (module docstring), 0 on the Dirichlet diagonal."""
+    directional = fem.form(ufl.derivative(jacobian, problem.w, w1))
+    G = compat.assemble_matrix(directional, bcs=problem.bcs, diagonal=0.0)
+    G.assemble()
+    if problem.explicit:
+        p, form = problem.load_factor, fem.form(jacobian)
+        problem.set_load_factor(p + 1.0)
+        plus = compat.assemble_matrix(form, bcs=problem.bcs, diagonal=0.0)
+        plus.assemble()
+        problem.set_load_factor(p - 1.0)
+        minus = compat.assemble_matrix(form, bcs=problem.bcs, diagonal=0.0)
+        minus.assemble()
+        problem.set_load_factor(p)
+        plus.axpy(-1.0, minus)
+        G.axpy(0.5, plus)
+        plus.destroy()
+        minus.destroy()
+    return G
+
+
+def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
+    """The ``count`` smallest buckling load factors above the current one, and their modes."""
+    from slepc4py import SLEPc
+
+    if count < 1:
+        raise ValueError(f"[buckling] count must be >= 1, got {count}")
+    trial = ufl.TrialFunction(problem.space)
+    jacobian = problem.jacobian if problem.jacobian is not None else \
+        ufl.derivative(problem.residual, problem.w, trial)
+    jacobian_form = fem.form(jacobian)
+    K = compat.assemble_matrix(jacobian_form, bcs=problem.bcs, diagonal=1.0)
+    K.assemble()
+    w1 = load_derivative(problem, K, jacobian_form)
+    G = geometric_stiffness(problem, w1, jacobian)
+    B = G.copy()
+    B.scale(-1.0)  # K_T phi = mu (-K_geo) phi
+    notes: list[str] = []
+    fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
+    scale = global_max(problem.comm, np.max(np.abs(compat.local_array(w1)), initial=0.0))
+    if not scale > 0:
+        for matrix in (K, G, B):
+            matrix.destroy()
+        raise ValueError("the applied loads are zero: there is no load to buckle under "
+                         "(give [loads] or tendon tensions)")
+    extra = 4
+    while True:
+        pairs = _solve(SLEPc, K, B, count + extra, fixed, problem)
+        positive = [(mu, shape) for mu, shape in pairs if mu > 0]
+        if len(positive) >= count or extra >= MAX_EXTRA or len(pairs) < count + extra:
+            break
+        extra *= 2
+    for matrix in (K, G, B):
+        matrix.destroy()
+    positive.sort(key=lambda pair: pair[0])
+    negative = sorted((mu for mu, _ in pairs if mu < 0), key=abs)
+    chosen = positive[:count]
+    if len(chosen) < count:
+        notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
+                     "factor(s) found (the loads may not compress the structure enough)")
+    p = problem.load_factor
+    passed = sorted(p + mu for mu in negative if 0 < p + mu < p)
+    if passed:  # the prestate is past a critical point: the factors above p are not the first
+        notes.append(f"[buckling] prestress = {p:g} is past the critical load factor "
+                     f"{passed[0]:.6g} (in reversed_load_factors): the state linearised about "
+                     "is beyond a bifurcation or limit of the path from 0, and load_factors "
+                     "(above the prestress only) do not start with the first buckling load; "
+                     "use a prestress below it")
+    for index, (_, shape) in enumerate(chosen, start=1):
+        _normalise(shape, problem.displacement_dofs, problem.comm)
+        shape.name = f"buckling_mode_{index}"
+    return Buckling([p + mu for mu, _ in chosen], [s for _, s in chosen], p,
+                    [p + mu for mu in negative], notes)
+
+
+def _solve(SLEPc, A, B, nev, fixed, problem):
+    """Real eigenpairs (mu, shape) of A x = mu B x nearest 0 (shift-and-invert: A factorised),
+    without the pairs of the Dirichlet rows. LAPACK's reordering of the projected Schur form
+    can fail on the many zero eigenvalues of the inverted operator (Dirichlet and multiplier
+    rows): the solve is then repeated with a larger subspace, then with plain Arnoldi."""
+    attempts = ((None, max(2 * nev + 1, nev + 15)), (None, 3 * nev + 21),
+                (SLEPc.EPS.Type.ARNOLDI, 3 * nev + 21))
+    for attempt, (kind, ncv) in enumerate(attempts):
+        try:
+            return _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem)
+        except PETSc.Error:
+            if attempt == len(attempts) - 1:
+                raise
+    return []
+
+
+def _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem):
+    eps = SLEPc.EPS().create(problem.comm)
+    eps.setOptionsPrefix("fe_beam_buckling_")
+    eps.setOperators(A, B)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP)
+    if kind is not None:
+        eps.setType(kind)
+    eps.setDimensions(nev, ncv)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setTarget(0.0)
+    transform = eps.getST()
+    transform.setType(SLEPc.ST.Type.SINVERT)
+    transform.setShift(0.0)
+    ksp = transform.getKSP()
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    if problem.saddle_point:
+        option, percent = SADDLE_POINT_WORKSPACE
+        PETSc.Options()[f"fe_beam_buckling_st_{option}"] = percent
+    eps.setTolerances(1e-12, 300)
+    eps.setFromOptions()
+    try:
+        eps.solve()
+    except PETSc.Error:
+        eps.destroy()
+        raise
+    pairs = []
+    vector = A.createVecRight()
+    for i in range(eps.getConverged()):
+        value = complex(eps.getEigenpair(i, vector))
+        if not math.isfinite(value.real) or abs(value.imag) > IMAGINARY_TOLERANCE * abs(value):
+            continue
+        if _lives_on_fixed_dofs(vector, fixed):
+            continue
+        shape = fem.Function(problem.space)
+        vector.copy(compat.vector_of(shape))
+        compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
+                                            mode=PETSc.ScatterMode.FORWARD)
+        pairs.append((value.real, shape))
+    vector.destroy()
+    eps.destroy()
+    pairs.sort(key=lambda pair: pair[0])
+    return pairs
+
+
+def _lives_on_fixed_dofs(vector: PETSc.Vec, fixed: np.ndarray) -> bool:
+    array = vector.getArray(readonly=True)
+    on_fixed, total = global_sum(vector.getComm().tompi4py(),
+                                 np.array([np.sum(array[fixed] ** 2), np.sum(array**2)]))
+    return on_fixed > 1e-6 * total
+
+
+def _normalise(shape: fem.Function, displacement_dofs: np.ndarray, comm) -> None:
+    """max |displacement dof| = 1, the largest one positive (a reproducible sign)."""
+    array = compat.local_array(shape)
+    owned = array[displacement_dofs]
+    local_max = float(np.max(np.abs(owned), initial=0.0))
+    scale = global_max(comm, local_max)
+    if not scale > 0:
+        return
+    # the sign of the (first) largest entry, from the rank that holds it
+    local_sign = 0.0
+    if owned.size and local_max == scale:
+        local_sign = float(np.sign(owned[int(np.argmax(np.abs(owned)))]))
+    candidates = comm.allgather(local_sign)
+    sign = next((s for s in candidates if s != 0.0), 1.0)
+    array /= sign * scale
+
+
+# --- the rod ------------------------------------------------------------------------------------
+def _rod_linearised(run) -> LinearisedProblem:
+    """The rod problem of a `fe_beam.analyses.static.StaticContinuation` at its current load
+    factor."""
+    problem = run.problem
+    dofs = np.concatenate([problem.component_dofs(name) for name in ("u", "v")])
+    return LinearisedProblem(
+        space=problem.space, w=problem.w, residual=problem.residual, bcs=problem.bcs,
+        set_load_factor=run._set_load_factor, set_prescribed_factor=problem.set_prescribed_factor,
+        load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
+        saddle_point=problem.saddle_point,
+        explicit=bool(problem.model.loads.follower or run.tendons))
+
+
+def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
+                 progress: bool = False) -> Buckling:
+    """Buckling of the rod of ``run`` (a `fe_beam.analyses.static.StaticContinuation`): the state is
+    first loaded to ``prestress`` (load stepping; `LoadSteppingFailed` if it is not reached)."""
+    if prestress != run.load_factor:
+        run.advance(prestress, stepping or run.config.stepping, progress=progress,
+                    label="buckling pre-state")
+    run._set_load_factor(float(run.load_factor))
+    return buckling_modes(_rod_linearised(run), count)
+
+
+# --- the 3D solid -------------------------------------------------------------------------------
+def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
+                   progress: bool = False) -> Buckling:
+    """Buckling of the 3D solid of ``run`` (a `fe_beam.analyses.solid.SolidRun`, tip force only:
+    its cables' contributions are outside the UFL residual) about the state at ``prestress``."""
+    if prestress > run.load_factor:
+        run.advance(prestress, stepping or run.config.stepping, progress=progress,
+                    label="buckling pre-state")
+    elif prestress != run.load_factor:
+        raise ValueError("the solid's pre-state is loaded upwards from its current load factor")
+    problem = run.problem
+    problem.set_load_factor(run.load_factor)
+    space = problem.W
+    owned = space.dofmap.index_map.size_local * space.dofmap.index_map_bs
+    if problem.p is None:
+        dofs = np.arange(owned, dtype=np.int32)
+    else:
+        dofs = np.asarray(compat.sub_space_collapsed(space, 0)[1])
+        dofs = dofs[dofs < owned]
+    lin = LinearisedProblem(
+        space=space, w=problem.w, residual=problem.residual, bcs=problem.bcs,
+        set_load_factor=problem.set_load_factor, set_prescribed_factor=lambda value: None,
+        load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
+        saddle_point=problem.p is not None)
+    return buckling_modes(lin, count)
+
+
+# --- the command ------------------------------------------------------------------------------
+def load_scale_record(model, factor: float) -> dict:
+    """The rod's applied loads times ``factor`` (the nonzero ones): the critical loads."""
+    loads = model.loads
+    record = {}
+    for name in ("tip_force", "distributed", "gravity"):
+        value = getattr(loads, name)
+        if any(value):
+            record[name] = [factor * c for c in value]
+    if loads.tip_moment:
+        record["tip_moment"] = factor * loads.tip_moment
+    for end in ("x0", "xL"):
+        values = getattr(model.supports, f"prescribed_{end}")
+        if values:
+            record[f"prescribed_{end}"] = {k: factor * v for k, v in values.items()}
+    for name in ("end_displacement", "point_forces"):
+        value = getattr(loads, name, None)
+        if value:
+            record[name] = (np.asarray(value, dtype=float) * _scaling(name, factor)).tolist()
+    if getattr(loads, "end_rotation", None) is not None:
+        record["end_rotation"] = factor * loads.end_rotation
+    return record
+
+
+def _scaling(name: str, factor: float):
+    if name == "point_forces":  # [x, Px, Py]: the position is not scaled
+        return np.array([1.0, factor, factor])
+    return factor
+
+
+def run_buckling(config: dict, out: Path | None, comm=MPI.COMM_WORLD,
+                 progress: bool = True) -> dict:
+    """`fe-beam buckling` on a validated configuration (rod, finger or 3D solid: [solid]);
+    writes summary.json and buckling_modes.xdmf into ``out`` and returns the summary."""
+    from fe_beam.config.buckling import parse_buckling
+
+    kind, parsed, settings = parse_buckling(config)
+    if kind == "solid":
+        return _run_solid(parsed, settings, out, comm, progress)
+    return _run_rod(parsed, settings, out, comm, progress)
+
+
+def _failed(failure, prestress, dofs, started, prestate, out, comm) -> dict:
+    from fe_beam.exports.outputs import atomic_write_json
+
+    summary = {"status": "failed", "message": f"buckling pre-state: {failure}",
+               "load_factors": [], "prestress": prestress, "prestate": prestate,
+               "dofs": dofs, "notes": [], "wall_time_s": time.perf_counter() - started}
+    if out is not None and comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_json(out / "summary.json", summary)
+    return summary
+
+
+def _summary(result: Buckling, settings, dofs: int, started: float, critical: list) -> dict:
+    return {
+        "status": "completed",
+        "message": "",
+        "load_factors": result.load_factors,
+        "critical_loads": critical,
+        "reversed_load_factors": result.negative[: settings.count],
+        "prestress": result.prestress,
+        "modes": [{"load_factor": f, "shape": {"file": "buckling_modes.xdmf", "index": i}}
+                  for i, f in enumerate(result.load_factors, start=1)],
+        "dofs": dofs,
+        "notes": result.notes,
+        "wall_time_s": time.perf_counter() - started,
+    }
+
+
+def _run_rod(static, settings, out, comm, progress) -> dict:
+    from fe_beam.analyses.static import StaticContinuation, check_beam_work
+    from fe_beam.exports.outputs import BeamXDMFWriter, atomic_write_json
+    from fe_beam.solvers.newton import LoadSteppingFailed
+
+    started = time.perf_counter()
+    # up-front limits (fe_beam.runctl; TooLarge: exit 2 unless [solver] allow_large)
+    work_notes = check_beam_work(static, static.stepping.steps if settings.prestress else None,
+                                 comm, quiet=out is None)
+    run = StaticContinuation(static, comm, prefix="fe_beam_buckling_static_")
+    problem = run.problem
+    try:
+        try:
+            result = rod_buckling(run, settings.count, settings.prestress, static.stepping,
+                                  progress=progress)
+        except LoadSteppingFailed as failure:
+            return _failed(failure, settings.prestress, problem.global_dofs, started,
+                           {"load_factor": float(run.load_factor),
+                            "tip": problem.end_values("xL")}, out, comm)
+        critical = [load_scale_record(static.model, f) for f in result.load_factors]
+        if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
+            result.notes.append(
+                "follower tip force: a non-conservative load loses stability by flutter "
+                "(complex eigenvalues of the dynamic problem), which linear buckling does not "
+                "find; an empty or short load_factors list does not mean stable: check with "
+                "fe-beam modes (prestress = true) at the loads of interest")
+        if run.tendons:
+            for record, factor in zip(critical, result.load_factors, strict=True):
+                record["tensions"] = [factor * t.tension for t in static.tendons]
+            result.notes.append(
+                "tendon loads: the load factors are the linearised-buckling estimate about the "
+                "given state (the tendon's tension enters the geometric stiffness); a tendon "
+                "that bends the rod gives no bifurcation of the nonlinear path, and these "
+                "factors are not verified against a reference: confirm with the stability "
+                "check of the static path")
+        summary = _summary(result, settings, problem.global_dofs, started, critical)
+        summary["notes"] = work_notes + summary["notes"]
+        summary["prestate_tip"] = problem.end_values("xL")
+        if out is not None:
+            if comm.rank == 0:
+                out.mkdir(parents=True, exist_ok=True)
+            comm.barrier()
+            state = compat.local_array(problem.w).copy()
+            writer = BeamXDMFWriter(problem, out / "buckling_modes.xdmf"
+                                    if static.output.xdmf else None)
+            for index, shape in enumerate(result.shapes, start=1):
+                compat.local_array(problem.w)[:] = compat.local_array(shape)
+                writer.write(float(index))
+            writer.close()
+            compat.local_array(problem.w)[:] = state
+            if comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+        return summary
+    finally:
+        run.destroy()
+
+
+def _run_solid(config, settings, out, comm, progress) -> dict:
+    from fe_beam.analyses.solid import SolidRun, check_solid_work
+    from fe_beam.exports.outputs import atomic_write_json
+    from fe_beam.exports.solid import DisplacementXDMF
+    from fe_beam.solvers.newton import LoadSteppingFailed
+
+    started = time.perf_counter()
+    work_notes = check_solid_work(config, comm, quiet=out is None)
+    run = SolidRun(config, comm)
+    problem = run.problem
+    try:
+        result = solid_buckling(run, settings.count, settings.prestress, config.stepping,
+                                progress=progress)
+    except LoadSteppingFailed as failure:
+        return _failed(failure, settings.prestress, run.dofs, started,
+                       {"load_factor": float(run.load_factor)}, out, comm)
+    critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
+    summary = _summary(result, settings, run.dofs, started, critical)
+    summary["notes"] = work_notes + summary["notes"]
+    summary["model"] = "solid"
+    if out is not None:
+        if comm.rank == 0:
+            out.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        state = compat.local_array(problem.w).copy()
+        if config.output.xdmf:
+            with DisplacementXDMF(problem, out / "buckling_modes.xdmf") as writer:
+                for index, shape in enumerate(result.shapes, start=1):
+                    compat.local_array(problem.w)[:] = compat.local_array(shape)
+                    writer.write(float(index))
+        compat.local_array(problem.w)[:] = state
+        if comm.rank == 0:
+            atomic_write_json(out / "summary.json", summary)
+    return summary

@@ -1,0 +1,429 @@
+"""Nonlinear beam dynamics with the generalised-alpha method (Chung & Hulbert 1993).
+
+With rho_inf in [0, 1] (docs/theory.md, Time integration):
+
+    alpha_m = (2 rho_inf - 1)/(rho_inf + 1),  alpha_f = rho_inf/(rho_inf + 1)
+    gamma   = 1/2 - alpha_m + alpha_f,         beta  = (1 - alpha_m + alpha_f)^2 / 4
+    a_{n+1} = (q_{n+1} - q_n - dt v_n) / (beta dt^2) - (1 - 2 beta)/(2 beta) a_n
+    v_{n+1} = v_n + dt ((1 - gamma) a_n + gamma a_{n+1})
+
+and the balance M a_{n+1-alpha_m} + C v_{n+1-alpha_f} + f_int(q_{n+1-alpha_f}) =
+f_ext(t_{n+1-alpha_f}) with x_{n+1-alpha} = (1 - alpha) x_{n+1} + alpha x_n. The internal forces
+are the derivative of the same stored energy as in statics, evaluated at q_{n+1-alpha_f};
+constraints (multiplier fields) are enforced at t_{n+1}. rho_inf = 1 is the implicit midpoint
+rule: energy-conserving for linear problems and exactly momentum-conserving.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from fe_beam.fem import compat
+from fe_beam.fem.kinematics import axis_tangent, strains_from_gradient
+from fe_beam.fem.mpi import assemble_scalar, global_max
+from fe_beam.fem.rod import BeamProblem, StrainWatch
+from fe_beam.fem.tendons import PullInSolver
+from fe_beam.model.settings import SCHEMES, Damping, TimeSettings  # noqa: F401
+from fe_beam.progress import ProgressBar
+from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
+
+__all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
+           "alpha_parameters"]
+
+class DynamicsFailed(RuntimeError):
+    """Time stepping gave up (the state of ``last_time`` is kept)."""
+
+    def __init__(self, message: str, last_time: float):
+        super().__init__(message)
+        self.last_time = last_time
+
+
+def alpha_parameters(rho_inf: float) -> dict:
+    """alpha_m, alpha_f, gamma, beta of the generalised-alpha method."""
+    alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
+    alpha_f = rho_inf / (rho_inf + 1)
+    gamma = 0.5 - alpha_m + alpha_f
+    beta = 0.25 * (1 - alpha_m + alpha_f) ** 2
+    return {"alpha_m": alpha_m, "alpha_f": alpha_f, "gamma": gamma, "beta": beta}
+
+
+def strain_rates(parts, rates):
+    """Directional derivatives (eps, g, kappa) of the strains at ``parts`` along ``rates``."""
+    u, v, theta = parts
+    stretch_x, stretch_y = (ufl.variable(c) for c in axis_tangent(u, v))
+    angle, curvature = ufl.variable(theta), ufl.variable(theta.dx(0))
+    s = strains_from_gradient(ufl.as_vector([stretch_x, stretch_y]), angle, curvature)
+    du, dv, dtheta = rates
+    directions = ((stretch_x, du.dx(0)), (stretch_y, dv.dx(0)), (angle, dtheta),
+                  (curvature, dtheta.dx(0)))
+
+    def rate(quantity):
+        return sum(ufl.diff(quantity, variable) * direction for variable, direction in directions)
+
+    return rate(s.eps), rate(s.g), rate(s.kappa)
+
+
+class StepDriver:
+    """The step-size driver shared by the time integrators (`GeneralizedAlpha`,
+    `fe_beam.solvers.energy_momentum.EnergyMomentum`): cut-back on a failed step, optional local
+    error
+    control. A subclass provides ``problem``, ``settings``, ``time`` and ``step(dt)`` (raises
+    SolveFailed), ``reject()``, ``accept()``, ``local_error()``."""
+
+
+    def momenta(self) -> dict:
+        """Linear and angular momentum of the current state (the schemes' ``forms``)."""
+        return {name: assemble_scalar(self.forms[name])
+                for name in ("momentum_x", "momentum_y", "angular_momentum")}
+
+    def _unit_load_energy(self) -> float:
+        """Dead-load work at load factor 1 on the last accepted state (the
+        schemes' ``forms["load_potential"]``)."""
+        saved = float(self.problem.load_factor.value)
+        self.problem.load_factor.value = 1.0
+        value = assemble_scalar(self.forms["load_potential"])
+        self.problem.load_factor.value = saved
+        return value
+
+    def _theta_dofs(self) -> np.ndarray:
+        """Local dofs (ghosts included) of theta in the state."""
+        if not hasattr(self, "_theta"):
+            _, dofs = compat.sub_space_collapsed(self.problem.space, 2)
+            self._theta = np.asarray(dofs)
+        return self._theta
+
+    def _motion_dofs(self) -> np.ndarray:
+        """Local dofs of u, v and theta (not the multipliers)."""
+        if not hasattr(self, "_motion"):
+            dofs = [np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
+                    for i in range(3)]
+            self._motion = np.concatenate(dofs)
+        return self._motion
+    def run(self, on_output: Callable[[float, int], None] | None = None,
+            progress: bool = True) -> dict:
+        """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
+        s = self.settings
+        dt, steps, rejected, newton = s.dt, 0, 0, 0
+        length = self.problem.model.length
+        bar = ProgressBar(self.problem.comm, total=s.t_end, label="time", enabled=progress,
+                          unit="s")
+        started = time.perf_counter()
+        if on_output is not None:
+            on_output(self.time, 0)
+        try:
+            while self.time < s.t_end * (1 - 1e-12):
+                trial = min(dt, s.t_end - self.time)
+                try:
+                    iterations = self.step(trial)
+                except SolveFailed as failure:
+                    self.reject()
+                    rejected += 1
+                    dt = trial / 2
+                    if dt < s.smallest_step:
+                        raise DynamicsFailed(
+                            f"time step fell below {s.smallest_step:.3g} s at t = "
+                            f"{self.time:.6g} s ({failure}); last converged time "
+                            f"{self.time:.6g} s", self.time) from None
+                    bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({failure})")
+                    continue
+                if s.adaptive:
+                    error = self.local_error()
+                    allowed = s.tol * length
+                    factor = 0.9 * (allowed / max(error, 1e-300)) ** (1 / 3)
+                    if error > allowed and trial > s.smallest_step:
+                        self.reject()
+                        rejected += 1
+                        dt = max(trial * max(0.2, factor), s.smallest_step)
+                        continue
+                    dt = min(trial * min(2.0, max(0.2, factor)), s.largest_step)
+                elif dt < s.dt and iterations <= 4:
+                    dt = min(2 * dt, s.dt)  # grow back after a cut-back
+                self.accept()
+                steps += 1
+                newton += iterations
+                bar.update(self.time, f"t = {self.time:.4g} s, dt = {trial:.3g} s")
+                if on_output is not None and (steps % s.output_interval == 0
+                                              or self.time >= s.t_end * (1 - 1e-12)):
+                    on_output(self.time, steps)
+        finally:
+            bar.close()
+        return {"steps": steps, "rejected_steps": rejected, "newton_iterations": newton,
+                "wall_time_s": time.perf_counter() - started}
+
+
+class GeneralizedAlpha(StepDriver):
+    """Generalised-alpha time integration of a `BeamProblem` (all laws and constraints).
+
+    ``load_function(t)`` scales every load, ``motion_function(t)`` the prescribed end values.
+    """
+
+    def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),  # noqa: B008
+                 load_function: Callable[[float], float] = lambda t: 1.0,
+                 motion_function: Callable[[float], float] | None = None,
+                 solver_settings: SolverSettings | None = None, tendons=None):
+        """``tendons``: the problem's `fe_beam.fem.tendons.TendonSet` (its energy hook is in the
+        problem's stored energy), tensions tension_i f_i(t) (``set_time_functions``)."""
+        if problem.model.material.rho <= 0:
+            raise ValueError("dynamics needs material.rho > 0")
+        self.problem = problem
+        self.settings = settings
+        self.damping = damping
+        self.load_function = load_function
+        self.motion_function = motion_function or load_function
+        self.tendons = tendons
+        space, mesh = problem.space, problem.mesh
+        self.q_old, self.v_old, self.a_old = (fem.Function(space) for _ in range(3))
+        params = alpha_parameters(settings.rho_inf)
+        self.params = params
+        const = lambda value: fem.Constant(mesh, float(value))  # noqa: E731
+        self.dt = const(settings.dt)
+        alpha_m, alpha_f, beta, gamma = (const(params[k]) for k in ("alpha_m", "alpha_f",
+                                                                     "beta", "gamma"))
+        self.c = const(damping.c)
+        self.eta = const(damping.kelvin_voigt)
+        self.time = 0.0
+        # extremes of the strains over the accepted states (`fe_beam.fem.rod.StrainRange`)
+        self.watch = StrainWatch()
+        self._trial_range = None
+        w_parts = ufl.split(problem.w)
+        q, v, a = (ufl.split(f) for f in (self.q_old, self.v_old, self.a_old))
+        dt = self.dt
+        a_new = [(w_parts[i] - q[i] - dt * v[i]) / (beta * dt**2) - (1 - 2 * beta) / (2 * beta)
+                 * a[i] for i in range(3)]
+        v_new = [v[i] + dt * ((1 - gamma) * a[i] + gamma * a_new[i]) for i in range(3)]
+        q_mid = tuple((1 - alpha_f) * w_parts[i] + alpha_f * q[i] for i in range(3))
+        v_mid = tuple((1 - alpha_f) * v_new[i] + alpha_f * v[i] for i in range(3))
+        a_mid = tuple((1 - alpha_m) * a_new[i] + alpha_m * a[i] for i in range(3))
+        test = ufl.TestFunction(space)
+        self.residual = (
+            self.inertia(a_mid, test)
+            + self.dissipation(q_mid, v_mid, test)
+            # d/dw of Pi(q_mid) is (1 - alpha_f) Pi'(q_mid): divide it out (rho_inf is fixed).
+            + (1 / (1 - params["alpha_f"])) * ufl.derivative(
+                problem.stored_energy(q_mid) - problem.dead_load_work(q_mid), problem.w, test)
+            + self._constraints(test)
+        )
+        if problem.model.loads.follower:
+            self.residual -= problem.follower_virtual_work(q_mid, test)
+        self.solver = SNESSolver(NonlinearProblem(self.residual, problem.w, problem.bcs),
+                                 (solver_settings or SolverSettings()).for_problem(
+                                     problem.saddle_point, problem.comm),
+                                 prefix="fe_beam_dynamic_",
+                                 state_scale=problem.model.length)
+        if tendons is not None and any(t.controlled_by_pull_in for t in tendons.tendons):
+            # pull-in control: the tensions (applied at t_{n+1-alpha_f}) are unknowns that make
+            # the tendon lengths at t_{n+1} the prescribed ones (Newton with the dynamic tangent)
+            self.solver = PullInSolver(self.solver, tendons)
+        self._energy_forms()
+
+    # --- forms -----------------------------------------------------------------------------------
+    @property
+    def dx_mass(self):
+        return ufl.dx(metadata={"quadrature_degree": 2 * self.problem.model.mesh.degree + 2})
+
+    def inertia(self, acceleration, test):
+        p = self.problem
+        rho_area, rho_inertia = p.rho * p.section_props.A, p.rho * p.section_props.I
+        t = ufl.split(test)
+        return (rho_area * (acceleration[0] * t[0] + acceleration[1] * t[1])
+                + rho_inertia * acceleration[2] * t[2]) * self.dx_mass
+
+    def dissipation(self, state, velocity, test):
+        """Virtual work of viscous (c) and Kelvin-Voigt (eta) damping."""
+        t = ufl.split(test)
+        work = self.c * (velocity[0] * t[0] + velocity[1] * t[1]) * self.dx_mass
+        if self.damping.kelvin_voigt > 0:
+            k = self.problem.stiffness
+            rates = strain_rates(state, velocity)
+            variations = strain_rates(state, t[:3])
+            moduli = (k.EA, k.GA, k.EI)
+            terms = zip(moduli, rates, variations, strict=True)
+            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
+        return work
+
+    def _constraints(self, test):
+        p = self.problem
+        u, v, theta, multipliers = p.fields()
+        term = p.constraint_term((u, v, theta), multipliers)
+        return ufl.derivative(term, p.w, test) if multipliers else 0
+
+    def _energy_forms(self) -> None:
+        p = self.problem
+        # The damping work of a step is exactly what the scheme applies: the force at the
+        # alpha-weighted state and velocity times the displacement increment.
+        self._step_state, self._step_velocity, self._step_increment = (
+            fem.Function(p.space) for _ in range(3))
+        q, v = ufl.split(self.q_old)[:3], ufl.split(self.v_old)[:3]
+        rho_area, rho_inertia = p.rho * p.section_props.A, p.rho * p.section_props.I
+        x = ufl.SpatialCoordinate(p.mesh)[0]
+        dx = self.dx_mass
+        self.forms = {
+            "kinetic": fem.form(0.5 * (rho_area * (v[0] ** 2 + v[1] ** 2)
+                                       + rho_inertia * v[2] ** 2) * dx),
+            "strain": fem.form(p.stored_energy(q)),
+            "load_potential": fem.form(p.dead_load_work(q)),
+            "damping_work": fem.form(self.dissipation(
+                ufl.split(self._step_state)[:3], ufl.split(self._step_velocity)[:3],
+                self._step_increment)),
+            "momentum_x": fem.form(rho_area * v[0] * dx),
+            "momentum_y": fem.form(rho_area * v[1] * dx),
+            "angular_momentum": fem.form((rho_area * ((x + q[0]) * v[1] - q[1] * v[0])
+                                          + rho_inertia * v[2]) * dx),
+        }
+        if p.model.loads.follower:  # the follower force the step applied times the increment
+            self.forms["follower_work"] = fem.form(p.follower_virtual_work(
+                tuple(ufl.split(self._step_state)[:3]), self._step_increment))
+
+    # --- state --------------------------------------------------------------------------------
+    def initialise(self, velocity: Callable | None = None) -> None:
+        """Start from the current ``problem.w`` (e.g. a static solution) at t = 0, with initial
+        velocities ``velocity(x) -> (u_t, v_t, theta_t)`` arrays, and the consistent initial
+        acceleration M a0 = f_ext - f_int - C v0."""
+        self.time = 0.0
+        self._set_time_values(0.0, 0.0)
+        compat.local_array(self.q_old)[:] = compat.local_array(self.problem.w)
+        compat.local_array(self.v_old)[:] = 0.0
+        if velocity is not None:
+            for index in range(3):
+                sub, dofs = compat.sub_space_collapsed(self.problem.space, index)
+                values = fem.Function(sub)
+                values.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
+                                   * np.ones(x.shape[1]))
+                compat.local_array(self.v_old)[np.asarray(dofs)] = values.x.array
+        self._initial_acceleration()
+        self._work = 0.0
+        self._dissipated = 0.0
+        self._load_energy = self._unit_load_energy()
+        self._tendon_work = 0.0
+        self._tendon_lengths = self.tendons.lengths() if self.tendons is not None else None
+        self.energy0 = self.energies()
+
+    def _initial_acceleration(self) -> None:
+        p = self.problem
+        trial, test = ufl.TrialFunction(p.space), ufl.TestFunction(p.space)
+        a_parts, t = ufl.split(trial), ufl.split(test)
+        mass = self.inertia(a_parts[:3], test)
+        for index in range(3, len(a_parts)):  # multipliers: identity, their "acceleration" is 0
+            mass += a_parts[index] * t[index] * ufl.dx
+        u, v, theta, _ = p.fields()
+        state = (u, v, theta)
+        velocity = tuple(ufl.split(self.v_old)[:3])
+        force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
+        force += self.dissipation(state, velocity, test)
+        if p.model.loads.follower:
+            force -= p.follower_virtual_work(state, test)
+        # Fixed dofs have zero acceleration: solve with all prescribed values set to zero.
+        p.set_prescribed_factor(0.0)
+        compat.solve_linear(mass, -force, p.bcs, self.a_old)
+        p.set_prescribed_factor(self.motion_function(0.0))
+        compat.local_array(self.a_old)[p.multiplier_dofs()] = 0.0
+
+    def _set_time_values(self, t_new: float, t_old: float) -> None:
+        p = self.problem
+        p.set_prescribed_factor(self.motion_function(t_new))
+        alpha_f = self.params["alpha_f"]
+        p.load_factor.value = ((1 - alpha_f) * self.load_function(t_new)
+                               + alpha_f * self.load_function(t_old))
+        if self.tendons is not None:  # tensions at t_{n+1-alpha_f}, like the loads
+            self.tendons.set_time(t_new, t_old, alpha_f)
+            if isinstance(self.solver, PullInSolver):  # pull-ins at t_{n+1}, like motions
+                self.solver.set_load_factor(self.tendons.pull_in_factors(t_new))
+
+    def step(self, dt: float) -> int:
+        """Advance by dt (raises SolveFailed, state unchanged in q_old/v_old/a_old)."""
+        t_old, t_new = self.time, self.time + dt
+        self.dt.value = dt
+        self._set_time_values(t_new, t_old)
+        w = compat.local_array(self.problem.w)
+        q, v, a = (compat.local_array(f) for f in (self.q_old, self.v_old, self.a_old))
+        w[:] = q  # same-displacement predictor: robust when accelerations jump (releases)
+        iterations = self.solver.solve()
+        # a state with 1 + e <= 0 anywhere is not one of a real beam: a failed step (cut back)
+        self._trial_range = self.problem.strain_range()  # collective: on every rank
+        reason = self._trial_range.inadmissible()
+        if reason is not None:
+            raise SolveFailed(reason)
+        beta, gamma = self.params["beta"], self.params["gamma"]
+        a_new = (w - q - dt * v) / (beta * dt**2) - (1 - 2 * beta) / (2 * beta) * a
+        v_new = v + dt * ((1 - gamma) * a + gamma * a_new)
+        self._candidate = (w.copy(), v_new, a_new, t_old, t_new)
+        return iterations
+
+    def local_error(self) -> float:
+        """Zienkiewicz-Xie estimate dt^2 |beta - 1/6| |a_{n+1} - a_n| (max over u, v, L*theta)."""
+        _, _, a_new, t_old, t_new = self._candidate
+        dt = t_new - t_old
+        difference = np.abs(a_new - compat.local_array(self.a_old))
+        scale = np.ones_like(difference)
+        scale[self._theta_dofs()] = self.problem.model.length
+        local = float(np.max(difference[self._motion_dofs()] * scale[self._motion_dofs()],
+                             initial=0.0))
+        return global_max(self.problem.comm, local) * dt**2 * abs(self.params["beta"] - 1 / 6)
+
+    def accept(self) -> None:
+        w, v_new, a_new, t_old, t_new = self._candidate
+        alpha_f = self.params["alpha_f"]
+        q_old, v_old = compat.local_array(self.q_old), compat.local_array(self.v_old)
+        compat.local_array(self._step_state)[:] = (1 - alpha_f) * w + alpha_f * q_old
+        compat.local_array(self._step_velocity)[:] = (1 - alpha_f) * v_new + alpha_f * v_old
+        compat.local_array(self._step_increment)[:] = w - q_old
+        self._dissipated += assemble_scalar(self.forms["damping_work"])
+        if "follower_work" in self.forms:  # at the step's load factor (still set)
+            self._work += assemble_scalar(self.forms["follower_work"])
+        load_mid = ((1 - alpha_f) * self.load_function(t_new)
+                    + alpha_f * self.load_function(t_old))
+        compat.local_array(self.q_old)[:] = w
+        compat.local_array(self.v_old)[:] = v_new
+        compat.local_array(self.a_old)[:] = a_new
+        load_energy = self._unit_load_energy()
+        self._work += load_mid * (load_energy - self._load_energy)
+        self._load_energy = load_energy
+        if self.tendons is not None:  # problem.w is the accepted state; tensions of the step
+            lengths = self.tendons.lengths()
+            step = self.tendons.step_work(self._tendon_lengths, lengths)
+            self._tendon_work += step
+            self._work += step
+            self._tendon_lengths = lengths
+        self.time = t_new
+        if self._trial_range is not None:
+            self.watch.observe(self._trial_range)
+
+    def reject(self) -> None:
+        compat.local_array(self.problem.w)[:] = compat.local_array(self.q_old)
+        self._set_time_values(self.time, self.time)
+
+    def energies(self) -> dict:
+        kinetic = assemble_scalar(self.forms["kinetic"])
+        if self.tendons is not None:  # the rod's energy: the tendon potential is work
+            with self.tendons.slack():
+                strain = assemble_scalar(self.forms["strain"])
+        else:
+            strain = assemble_scalar(self.forms["strain"])
+        values = {"kinetic": kinetic, "strain": strain, "external_work": self._work,
+                  "dissipated": self._dissipated}
+        if self.tendons is not None:
+            values["tendon_work"] = self._tendon_work
+        start = getattr(self, "energy0", None)
+        initial = start["kinetic"] + start["strain"] if start else kinetic + strain
+        values["balance_residual"] = (kinetic + strain + self._dissipated - self._work - initial)
+        return values
+
+
+
+def period_from_crossings(times: np.ndarray, signal: np.ndarray) -> float:
+    """Mean period from upward zero crossings (linear interpolation between samples)."""
+    signal = signal - np.mean(signal)
+    crossings = []
+    for i in range(len(signal) - 1):
+        if signal[i] < 0 <= signal[i + 1]:
+            fraction = -signal[i] / (signal[i + 1] - signal[i])
+            crossings.append(times[i] + fraction * (times[i + 1] - times[i]))
+    if len(crossings) < 2:
+        return math.nan
+    return float(np.mean(np.diff(crossings)))
