@@ -64,7 +64,7 @@ from fe_beam import (
 )
 from fe_beam.analyses.transient import _static_prestate
 from fe_beam.baselines import fd_rk
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import GeneralizedAlpha, TimeSettings
 
 LENGTH, E, NU, RHO = 1.0, 1.0e7, 0.3, 1000.0

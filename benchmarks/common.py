@@ -34,7 +34,7 @@ from fe_beam import (  # noqa: E402
     Supports,
 )
 from fe_beam.analytic import ElasticaTip  # noqa: E402
-from fe_beam.config.schema import StaticConfig  # noqa: E402
+from fe_beam.model.studies import StaticConfig  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "results" / "benchmarks"

@@ -33,8 +33,8 @@ from fe_beam import (
 from fe_beam.analyses.static import solve_static
 from fe_beam.analytic import elastica_tip_load
 from fe_beam.cli import quiet_jit_logging
-from fe_beam.config.schema import StaticConfig
 from fe_beam.exports.outputs import plot_deformed_shapes
+from fe_beam.model.studies import StaticConfig
 
 LENGTH, E, K_MAX = 1.0, 1.0e7, 10.0
 

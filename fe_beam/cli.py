@@ -22,7 +22,6 @@ import traceback
 from pathlib import Path
 
 from fe_beam.config.schema import (
-    ConfigError,
     apply_overrides,
     check_command_tables,
     check_partition,
@@ -30,6 +29,7 @@ from fe_beam.config.schema import (
     load_config,
     validate,
 )
+from fe_beam.errors import ConfigError
 from fe_beam.timefunctions import TimeFunctionError
 
 EXIT_INTERNAL = 1

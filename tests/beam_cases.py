@@ -14,7 +14,7 @@ from fe_beam import (
     Supports,
 )
 from fe_beam.analyses.static import solve_static
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 
 E = 1.0e7
 NU = 0.3

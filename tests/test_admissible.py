@@ -32,8 +32,8 @@ from fe_beam import (
 )
 from fe_beam.analyses.static import solve_static
 from fe_beam.cli import main
-from fe_beam.config.schema import StaticConfig
 from fe_beam.fem.rod import StrainRange
+from fe_beam.model.studies import StaticConfig
 
 E, D = 1.0e7, 0.02  # a circular section (the case was a square)
 AREA = math.pi * D**2 / 4

@@ -441,7 +441,7 @@ def test_tension_column_with_other_loads_is_refused(change, named):
     """The load factor tension / tendons.0.tension scales every load: with gravity or a
     second tendon a tension column would fit a model whose gravity (other tendon) changes
     with tendon 0's tension (was: fitted silently). load_factor data are accepted."""
-    from fe_beam.config.schema import ConfigError
+    from fe_beam.errors import ConfigError
 
     raw = {**FINGER, **change}
     model = RodSensitivity(raw, ("material.E",))

@@ -164,7 +164,8 @@ def test_rigid_motions_left_free_by_the_supports(x0, xL, free):
 
 
 def test_set_addresses_arrays_of_tables_by_index():
-    from fe_beam.config.schema import ConfigError, apply_overrides
+    from fe_beam.config.schema import apply_overrides
+    from fe_beam.errors import ConfigError
 
     config = {"tendons": [{"tension": 1.0}, {"tension": 2.0}]}
     changed = apply_overrides(config, ["tendons.1.tension=3.5", "tendons.0.name=flexor"])

@@ -230,7 +230,7 @@ def test_bordered_solve_matches_a_dense_solve():
 def _rod_run(model, tendons=(), comm=MPI.COMM_WORLD):
     from fe_beam import SolverSettings
     from fe_beam.analyses.static import StaticContinuation
-    from fe_beam.config.schema import StaticConfig
+    from fe_beam.model.studies import StaticConfig
 
     config = StaticConfig(model, SolverSettings(), LoadStepping(steps=4), tendons=tuple(tendons))
     return StaticContinuation(config, comm)
@@ -456,8 +456,8 @@ def test_pull_in_needing_a_compressive_tension_is_noted(offset, compressed):
 
     from fe_beam import SolverSettings
     from fe_beam.analyses.static import solve_static
-    from fe_beam.config.schema import StaticConfig
     from fe_beam.fem.tendons import Tendon
+    from fe_beam.model.studies import StaticConfig
 
     tendon = Tendon(paths=(((0.0, offset), (1.0, offset)),), pull_in=0.0)
     model = cantilever(elements=8, constraint="none", tip_force=(0.0, 1e-3))

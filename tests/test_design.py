@@ -11,7 +11,7 @@ from tomlio import dump_toml
 
 from fe_beam.analyses.design import parse_design, run_design
 from fe_beam.cli import main
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 
 E, B, L = 1.0e7, 0.02, 1.0
 

@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from fe_beam import BeamProblem, Loads, Supports
 from fe_beam.analyses.transient import _static_prestate
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import Damping, GeneralizedAlpha, TimeSettings, period_from_crossings
 from fe_beam.solvers.modes import natural_frequencies
 

@@ -384,7 +384,7 @@ def test_tendon_like_potential_in_strain_space_is_balanced():
 def test_extra_energy_hook_is_refused_with_a_config_error():
     """A problem with an extra_energy hook (tendons: not in strain space) is a user mistake for
     this scheme (one-sentence ConfigError, exit 2 from the CLI), not a wrong answer."""
-    from fe_beam.config.schema import ConfigError
+    from fe_beam.errors import ConfigError
 
     tendon_set = tendons.TendonSet([tendons.Tendon.linear(0.005, 0.005, L, tension=1.0)], L)
     problem = BeamProblem(rod(0.02, elements=4), breakpoints=tendon_set.breakpoints,

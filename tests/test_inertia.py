@@ -16,7 +16,7 @@ from petsc4py import PETSc
 
 from fe_beam import LoadStepping, SolverSettings
 from fe_beam.analyses.static import STABILITY_MAX_DOFS, StaticContinuation
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.critical import spectrum
 from fe_beam.solvers.inertia import inertia, rod_unstable_count, solid_unstable_count
 

@@ -17,7 +17,8 @@ from test_cli_dynamics import DYNAMIC
 from test_config import BASE, dump_toml, edited, names_key
 
 from fe_beam.cli import main
-from fe_beam.config.schema import ConfigError, check_command_tables, check_values, load_config
+from fe_beam.config.schema import check_command_tables, check_values, load_config
+from fe_beam.errors import ConfigError
 from fe_beam.timefunctions import TimeFunctionError, parse_formula
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from fe_beam.config.finger import parse_finger
-from fe_beam.config.schema import ConfigError, load_config, parse_static
+from fe_beam.config.schema import load_config, parse_static
 from fe_beam.config.transient import parse_dynamic
+from fe_beam.errors import ConfigError
 
 EXAMPLES = Path(__file__).parents[1] / "examples"
 

@@ -47,7 +47,7 @@ def test_tension_raises_frequencies_as_string_beam_formula_says(law):
     model = rod(h, Supports("pinned", "roller"), law=law, elements=40,
                 loads=Loads(tip_force=(tension, 0.0)))
     problem = BeamProblem(model)
-    from fe_beam.config.schema import StaticConfig
+    from fe_beam.model.studies import StaticConfig
 
     _static_prestate(problem, StaticConfig(model), progress=False)
     modes = natural_frequencies(problem, 4).bending()

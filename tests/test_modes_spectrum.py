@@ -12,7 +12,7 @@ from mpi4py import MPI
 
 from fe_beam import BeamModel, BeamProblem, Discretisation, Loads, Material, ModelOptions, Supports
 from fe_beam.analyses.transient import _static_prestate
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.modes import natural_frequencies
 
 L = 1.0

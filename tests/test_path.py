@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 from fe_beam import LoadStepping, SolverSettings, Supports
 from fe_beam.analyses.path import follow_path
 from fe_beam.analytic import elastica_clamped_free, elastica_pinned_pinned
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.continuation import ArcLength
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="dense stability: serial")

@@ -11,7 +11,8 @@ from mpi4py import MPI
 
 from fe_beam.analyses.static import StaticContinuation
 from fe_beam.cli import main
-from fe_beam.config.schema import ConfigError, parse_static
+from fe_beam.config.schema import parse_static
+from fe_beam.errors import ConfigError
 
 E, NU, B, H, L = 2.0e11, 0.3, 0.01, 0.02, 1.0
 EI = E * B * H**3 / 12

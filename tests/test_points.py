@@ -24,10 +24,10 @@ from mpi4py import MPI
 
 from fe_beam import LoadStepping, SolverSettings, Supports
 from fe_beam.analyses.static import solve_static
-from fe_beam.config.schema import StaticConfig
 from fe_beam.fem.compat import owned_bc_dofs
 from fe_beam.fem.mpi import global_sum
 from fe_beam.fem.rod import BeamProblem, interval_mesh, smallest_cell_size
+from fe_beam.model.studies import StaticConfig
 
 H = 0.01
 EI = bending_stiffness(H)

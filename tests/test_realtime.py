@@ -23,7 +23,7 @@ from fe_beam import (
 )
 from fe_beam.analyses.finger import parse_finger
 from fe_beam.analyses.static import solve_static
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.realtime import RealtimeSolver, UpdateFailed, set_parameters
 
 TOL = 1e-10

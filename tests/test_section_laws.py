@@ -20,7 +20,8 @@ from ufl.algorithms.apply_derivatives import apply_derivatives
 from fe_beam import runctl
 from fe_beam.analyses.static import solve_static
 from fe_beam.cli import main
-from fe_beam.config.schema import ConfigError, parse_static
+from fe_beam.config.schema import parse_static
+from fe_beam.errors import ConfigError
 from fe_beam.fem.kinematics import Stiffness, Strains, nonstandard_energy, reissner_energy
 from fe_beam.fem.rod import BeamProblem, StrainRange
 from fe_beam.fem.section_laws import (

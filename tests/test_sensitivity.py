@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fe_beam.analyses.sensitivity import RodSensitivity
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 
 TOLERANCE = 1e-6
 

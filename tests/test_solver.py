@@ -10,7 +10,7 @@ from mpi4py import MPI
 
 from fe_beam import BeamProblem, Loads, LoadStepping, Material, SolverSettings
 from fe_beam.analyses.static import solve_static
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver
 
 EI = bending_stiffness(0.01)

@@ -10,7 +10,7 @@ from mpi4py import MPI
 
 from fe_beam import LoadStepping, SolverSettings
 from fe_beam.analyses.static import StaticContinuation, solve_static
-from fe_beam.config.schema import StaticConfig
+from fe_beam.model.studies import StaticConfig
 
 EI = bending_stiffness(0.01)
 EULER = math.pi**2 * EI / 4  # first critical load of the cantilever, L = 1

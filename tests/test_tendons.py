@@ -13,8 +13,8 @@ from fe_beam import BeamModel, BeamProblem, Discretisation, LoadStepping, Materi
 from fe_beam.analyses.finger import parse_finger
 from fe_beam.analyses.static import solve_static
 from fe_beam.baselines.shooting import default_finger, solve_finger
-from fe_beam.config.schema import StaticConfig
 from fe_beam.fem.tendons import Tendon, TendonSet, looped_tendon
+from fe_beam.model.studies import StaticConfig
 
 LENGTH, H = 0.1, 0.01
 EI = E * H**4 / 12

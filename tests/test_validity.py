@@ -21,8 +21,9 @@ from pathlib import Path
 import pytest
 from tomlio import dump_toml
 
-from fe_beam.config.schema import ConfigError, validate
+from fe_beam.config.schema import validate
 from fe_beam.config.validity import parse_validity, resolve_key
+from fe_beam.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 L, B, H, D = 0.1, 0.01, 0.01, 0.003  # length, width, height, tendon offset [m]

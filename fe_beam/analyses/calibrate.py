@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares
 
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 
 __all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
            "check_data", "parse_calibrate", "parameter_kind", "read_data",

@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 
 __all__ = ["DesignProblem", "parse_design", "run_design"]
 

@@ -29,12 +29,10 @@ from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     parse_tendon,
     with_defaults,
 )
-from fe_beam.config.schema import (
-    ConfigError,
-    StaticConfig,
-)
+from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import atomic_write_json, virtual_display
 from fe_beam.fem.tendons import tension_for_target
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.newton import LoadSteppingFailed
 
 __all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]

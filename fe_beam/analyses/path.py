@@ -248,7 +248,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
         check_beam_work,
     )
     from fe_beam.config.path import parse_path
-    from fe_beam.config.schema import ConfigError
+    from fe_beam.errors import ConfigError
     from fe_beam.exports.outputs import BeamXDMFWriter
     from fe_beam.fem import compat
     from fe_beam.progress import ProgressBar

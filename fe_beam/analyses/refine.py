@@ -24,7 +24,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from fe_beam import runctl
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 
 __all__ = [
     "QUANTITIES",

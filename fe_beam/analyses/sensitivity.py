@@ -52,7 +52,7 @@ from petsc4py import PETSc
 from ufl.algorithms import replace
 
 from fe_beam.analyses.calibrate import parameter_kind
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_sum
 from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, LoadStepping, SolveFailed

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam.config.schema import StaticConfig
 from fe_beam.exports.outputs import atomic_write_text
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.solid import evaluate_at_points
 
 __all__ = ["backbone_distance", "rod_backbone", "run_rod", "write_rod_xdmf"]

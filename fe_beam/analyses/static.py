@@ -10,11 +10,11 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
-from fe_beam.config.schema import StaticConfig
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainWatch
 from fe_beam.fem.tendons import PullInSolver, TendonSet
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.continuation import Continuation, NonlinearParameterProblem
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,

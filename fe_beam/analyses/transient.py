@@ -28,7 +28,6 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.static import StaticContinuation, check_beam_work
-from fe_beam.config.schema import ConfigError, StaticConfig
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     DAMPING_KEYS,
     INITIAL_KEYS,
@@ -46,9 +45,11 @@ from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     parse_dynamic,
     parse_modes,
 )
+from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
 from fe_beam.solvers.energy_momentum import EnergyMomentum
 from fe_beam.solvers.newton import (

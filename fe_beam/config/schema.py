@@ -10,13 +10,15 @@ import copy
 import math
 import stat
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
+from fe_beam.errors import ConfigError
 from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import SHAPES, Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
+from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
 
 __all__ = [
@@ -30,10 +32,6 @@ __all__ = [
     "parse_static",
     "validate",
 ]
-
-
-class ConfigError(ValueError):
-    """A user mistake in a configuration (message is shown as is, exit code 2)."""
 
 
 NUMBER = (int, float)
@@ -299,24 +297,6 @@ def check_tables(config: dict, known: tuple[str, ...]) -> None:
     if unknown:
         raise ConfigError(f"unknown table [{shown(unknown[0])[1:-1]}]; known tables: "
                           f"{', '.join(known)}")
-
-
-@dataclass(frozen=True)
-class OutputOptions:
-    xdmf: bool = True
-    plots: bool = True
-    gif: bool = False
-
-
-@dataclass(frozen=True)
-class StaticConfig:
-    model: BeamModel
-    solver: SolverSettings = field(default_factory=SolverSettings)
-    stepping: LoadStepping = field(default_factory=LoadStepping)
-    max_rotation_jump: float = 1.0
-    output: OutputOptions = field(default_factory=OutputOptions)
-    tendons: tuple = ()
-    raw: dict = field(default_factory=dict)
 
 
 def _wrap(builder, *args, **kwargs):

@@ -43,7 +43,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import Strains, strains
 from fe_beam.fem.mpi import assemble_scalar, global_max

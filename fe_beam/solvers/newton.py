@@ -18,7 +18,7 @@ import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.model.settings import (  # noqa: F401  (their home; re-exported)
     LINE_SEARCHES,

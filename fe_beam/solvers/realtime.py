@@ -35,8 +35,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam.config.schema import StaticConfig
 from fe_beam.fem import compat
+from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
     SolveFailed,

@@ -19,7 +19,7 @@ from tomlio import dump_toml
 
 from fe_beam.analyses.solid_driver import parse_solid, run_solid
 from fe_beam.cli import main
-from fe_beam.config.schema import ConfigError
+from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.solid import SILICONE_PRESETS
 
