@@ -53,13 +53,10 @@ from fe_beam.analyses.finger import (
 from fe_beam.analyses.static import StaticContinuation, solve_static
 from fe_beam.baselines import shooting
 from fe_beam.fem.rod import BeamProblem
-from fe_beam.fem.tendons import PullInSolver, TendonSet
-from fe_beam.solvers.newton import (
-    NonlinearProblem,
-    SNESSolver,
-    rotation_jump_check,
-    run_load_stepping,
-)
+from fe_beam.fem.tendons import TendonSet
+from fe_beam.solvers.continuation import run_load_stepping
+from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, rotation_jump_check
+from fe_beam.solvers.pull_in import PullInSolver
 
 TOL = 1e-4  # tip position / L
 INVERSE_TOL = 1e-4  # relative tension error of the inverse solve

@@ -64,7 +64,8 @@ from fe_beam.solid import (
     TendonPath,
     create_finger_mesh,
 )
-from fe_beam.solvers.newton import LoadStepping, SolveFailed, SolverSettings, run_load_stepping
+from fe_beam.solvers.continuation import run_load_stepping
+from fe_beam.solvers.newton import LoadStepping, SolveFailed, SolverSettings
 
 _d = DEFAULT_FINGER
 LENGTH = _d["beam"]["length"]

@@ -30,7 +30,7 @@ _LAZY = {
     "NonlinearProblem": "fe_beam.solvers.newton",
     "SNESSolver": "fe_beam.solvers.newton",
     "SolveFailed": "fe_beam.solvers.newton",
-    "run_load_stepping": "fe_beam.solvers.newton",
+    "run_load_stepping": "fe_beam.solvers.continuation",
 }
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 import os
 import sys
 
+from fe_beam import runctl
+
 
 class ProgressBar:
     """A bar over a continuous quantity (load factor, simulated time) in [0, total]."""
@@ -38,7 +40,6 @@ class ProgressBar:
     def update(self, value: float, message: str = "") -> None:
         """Show ``value``; then raise `fe_beam.runctl.Interrupted` on every rank if any rank
         got SIGINT/SIGTERM (collective)."""
-        from fe_beam import runctl
 
         self._show(value, message)
         runctl.check(self._comm)

@@ -313,14 +313,14 @@ SOLID_COLUMN = {"beam": {"length": 0.2}, "section": {"shape": "rectangle", "b": 
 
 
 def solid_factor(comm=MPI.COMM_WORLD) -> float:
-    from fe_beam.solvers.buckling import run_buckling
+    from fe_beam.analyses.buckling import run_buckling
 
     return run_buckling(json.loads(json.dumps(SOLID_COLUMN)), None, comm,
                         progress=False)["load_factors"][0]
 
 
 def rod_factor(law: str) -> float:
-    from fe_beam.solvers.buckling import run_buckling
+    from fe_beam.analyses.buckling import run_buckling
 
     config = {k: v for k, v in json.loads(json.dumps(SOLID_COLUMN)).items() if k != "solid"}
     config["model"]["law"] = law

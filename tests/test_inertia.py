@@ -179,7 +179,7 @@ def _dense_count(problem) -> int:
 
 def _factors(formulation):
     """`fe-beam buckling`'s load factors of the column (the first two modes)."""
-    from fe_beam.solvers.buckling import run_buckling
+    from fe_beam.analyses.buckling import run_buckling
 
     return run_buckling(_column(formulation), None, MPI.COMM_SELF,
                         progress=False)["load_factors"]

@@ -31,9 +31,11 @@ from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
 )
 from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import atomic_write_json, virtual_display
-from fe_beam.fem.tendons import tension_for_target
+from fe_beam.exports.plotting import legend_inside
 from fe_beam.model.studies import StaticConfig
+from fe_beam.solvers import realtime
 from fe_beam.solvers.newton import LoadSteppingFailed
+from fe_beam.solvers.pull_in import tension_for_target
 
 __all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
 
@@ -69,7 +71,6 @@ def solve_inverse(
     # reached by continuation from the previous equilibrium (a few Newton iterations instead of
     # a full load ramp); from the unloaded state again only if that fails.
     reference = abs(getattr(tendon, control)) or 1.0
-    from fe_beam.solvers import realtime  # the sweep's built problem is reused (no form building)
 
     run = realtime.acquire(
         replace(config, tendons=(replace(tendon, **{control: reference}),)), comm
@@ -218,7 +219,6 @@ def sweep_columns(tendons: int) -> list[exports.Column]:
 
 def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     """The chapter's Figures 3.8 (profiles along s) and 3.9 (backbone), and tension curves."""
-    from fe_beam.exports.plotting import legend_inside
 
     final = result.shapes[-1][1]
     cells = final["cells"]

@@ -6,7 +6,26 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from fe_beam.solvers.continuation import ArcLength, ContinuationFailed
+from fe_beam import exports, runctl
+from fe_beam.analyses.solid import SolidRun, check_solid_work
+from fe_beam.analyses.static import (
+    STABILITY_MAX_DOFS,
+    StaticContinuation,
+    beam_dofs_estimate,
+    check_beam_work,
+)
+from fe_beam.config.path import parse_path
+from fe_beam.errors import ConfigError
+from fe_beam.exports.outputs import BeamXDMFWriter, figure
+from fe_beam.exports.solid import DisplacementXDMF
+from fe_beam.fem import compat
+from fe_beam.progress import ProgressBar
+from fe_beam.solvers.continuation import (
+    ArcLength,
+    Continuation,
+    ContinuationFailed,
+    NonlinearParameterProblem,
+)
 from fe_beam.solvers.critical import (
     CriticalPoint,
     locate_bifurcation,
@@ -14,6 +33,7 @@ from fe_beam.solvers.critical import (
     spectrum,
     switch_branch,
 )
+from fe_beam.solvers.inertia import solid_unstable_count
 
 __all__ = ["PathResult", "follow_path", "point_force_control"]
 
@@ -124,7 +144,6 @@ def point_force_control(run, static, progress: bool = False, prestate: bool = Tr
     else, or when the caller has put ``run`` at that state itself) and then held in full.
     Installs the engine (``run.engine()``) at load factor 0 and returns the setter
     ``push(factor)`` (``[path] parameter = "point_force"``; docs/theory.md, Snap-through)."""
-    from fe_beam.solvers.continuation import Continuation, NonlinearParameterProblem
 
     loads = static.model.loads
     nodal = run.problem.point_force_fields
@@ -164,7 +183,6 @@ PATH_CSV = ("index", "branch", "load_factor", "tension", "tip_u", "tip_v", "tip_
 
 def _path_plot(out, summary: dict) -> None:
     """Load factor vs tip u, v, theta: stable solid, unstable dashed, critical points marked."""
-    from fe_beam.exports.outputs import figure
 
     points = summary.get("path") or []
     if not points:
@@ -211,7 +229,6 @@ def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
     summary with its wall time brought up to date."""
     import time
 
-    from fe_beam import exports
 
     columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
                                      else r["tip"][n[4:]])) for name in PATH_CSV]
@@ -240,19 +257,6 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
 
     from mpi4py import MPI
 
-    from fe_beam import runctl
-    from fe_beam.analyses.static import (
-        STABILITY_MAX_DOFS,
-        StaticContinuation,
-        beam_dofs_estimate,
-        check_beam_work,
-    )
-    from fe_beam.config.path import parse_path
-    from fe_beam.errors import ConfigError
-    from fe_beam.exports.outputs import BeamXDMFWriter
-    from fe_beam.fem import compat
-    from fe_beam.progress import ProgressBar
-    from fe_beam.solvers.continuation import Continuation, NonlinearParameterProblem
 
     comm = comm or MPI.COMM_WORLD
     started = time.perf_counter()
@@ -345,7 +349,6 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
                 unreached += (" (an inextensible beam cannot start from a straight shortened "
                               "state; use constraint = \"unshearable\" or \"none\" and an "
                               "imperfection)")
-    from fe_beam.solvers.continuation import ArcLength
 
     arc = ArcLength(**settings.arc_length_settings())
     result = None
@@ -384,12 +387,6 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
     scaled together) from the undeformed state; the stability from the sparse inertia (tip force
     only), no critical points."""
 
-    from fe_beam import runctl
-    from fe_beam.analyses.solid import SolidRun, check_solid_work
-    from fe_beam.exports.solid import DisplacementXDMF
-    from fe_beam.progress import ProgressBar
-    from fe_beam.solvers.continuation import ArcLength
-    from fe_beam.solvers.inertia import solid_unstable_count
 
     notes = check_solid_work(config, comm, quiet=out is None)
     notes.append("the 3D solid's stability is the sparse inertia of its potential's Hessian "

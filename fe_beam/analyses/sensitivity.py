@@ -52,10 +52,23 @@ from petsc4py import PETSc
 from ufl.algorithms import replace
 
 from fe_beam.analyses.calibrate import parameter_kind
+from fe_beam.analyses.finger import parse_finger
+from fe_beam.analyses.solid_driver import SolidRun, parse_solid
+from fe_beam.analyses.static import StaticContinuation
+from fe_beam.config.finger import with_defaults
+from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_sum
-from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, LoadStepping, SolveFailed
+from fe_beam.fem.solid.geometry import TIP_TAG
+from fe_beam.model.hyperelastic import NeoHookean
+from fe_beam.solvers.newton import (
+    SADDLE_POINT_WORKSPACE,
+    LoadStepping,
+    LoadSteppingFailed,
+    SolveFailed,
+    _agreed,
+)
 
 __all__ = ["OUTPUT_KEYS", "RodSensitivity", "parameter_kind", "parse_output", "sensitivities"]
 
@@ -89,7 +102,6 @@ def _prepare_raw(raw: dict, parameters: Sequence[str]) -> dict:
     I3 not given becomes 0."""
     raw = copy.deepcopy(raw)
     if raw.get("tendons"):  # the finger's defaults (its section among them) made explicit
-        from fe_beam.config.finger import with_defaults
 
         raw = with_defaults(raw)
     section = raw.setdefault("section", {})
@@ -135,7 +147,6 @@ class RodSensitivity:
         """``config``: an already parsed `fe_beam.config.schema.StaticConfig` (with its tendons)
         instead of ``raw`` (a tapered dimension's ``_tip`` parameter then needs the taper given
         in the section: ``dims_tip``)."""
-        from fe_beam.analyses.static import StaticContinuation
 
         self.parameters = list(parameters)
         if len(set(self.parameters)) != len(self.parameters):
@@ -183,11 +194,9 @@ class RodSensitivity:
         kind = kind or ("finger" if raw.get("tendons") else "static")
         raw = _prepare_raw(raw, self.parameters)
         if kind == "finger":
-            from fe_beam.analyses.finger import parse_finger
 
             config, _ = parse_finger({k: v for k, v in raw.items() if k != "calibrate"})
             return config
-        from fe_beam.config.schema import parse_static
 
         if any(k in ("tension", "pull_in", "offset") for k in kinds):
             raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
@@ -460,7 +469,6 @@ class RodSensitivity:
         load factor (cached per load factor); if that fails, load stepping from the nearest
         converged state, and finally from the reference state. Raises
         `fe_beam.solvers.newton.LoadSteppingFailed` when no equilibrium is found."""
-        from fe_beam.solvers.newton import LoadSteppingFailed
 
         load_factor = float(load_factor)
         stepping = stepping or self.stepping
@@ -543,7 +551,6 @@ class RodSensitivity:
         that jumped branch (rotations changed by more than max_rotation_jump, e.g. onto a
         looped or collapsed equilibrium of a coarse mesh) or is inadmissible is a failure, as in
         load stepping: the caller then steps the load (was: accepted, a wrong equilibrium)."""
-        from fe_beam.solvers.newton import _agreed
 
         previous = compat.local_array(self.problem.w).copy()
         self.run.solver.solve()
@@ -895,8 +902,6 @@ class SolidSensitivity:
     """
 
     def __init__(self, raw: dict, parameters: Sequence[str] = (), comm=MPI.COMM_WORLD):
-        from fe_beam.analyses.solid_driver import SolidRun, parse_solid
-        from fe_beam.model.hyperelastic import NeoHookean
 
         config = parse_solid({k: v for k, v in raw.items() if k != "calibrate"})
         self.config, self.comm = config, comm
@@ -1105,6 +1110,5 @@ class SolidSensitivity:
 
 
 def _tip_tag() -> int:
-    from fe_beam.fem.solid.geometry import TIP_TAG
 
     return TIP_TAG

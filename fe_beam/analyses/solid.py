@@ -15,6 +15,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import runctl
+from fe_beam.analyses.solid_modes import run_solid_modes
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, write_rod_xdmf
 from fe_beam.analyses.static import beam_dofs_estimate
 from fe_beam.config.solid import SolidConfig, parse_solid, solid_dofs_estimate
@@ -301,7 +302,6 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
         run.advance(1.0, config.stepping, on_step, progress=progress, label="solid")
         summary["status"] = "converged"
         if config.modes is not None:  # [modes]: 3D modal analysis, the rod's beside it
-            from fe_beam.solvers.solid_modes import run_solid_modes
 
             summary["modes"] = run_solid_modes(run, config, out, comm)
     except LoadSteppingFailed as failure:

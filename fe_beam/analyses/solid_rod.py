@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam.analyses.static import solve_static
 from fe_beam.exports.outputs import atomic_write_text
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.solid import evaluate_at_points
@@ -33,7 +34,6 @@ def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool 
     data:
     status, steps (load factor, tip, tensions), the final backbone at ``stations`` and, on rank
     0, the nodal shapes of every step (``frames``, for the rod XDMF)."""
-    from fe_beam.analyses.static import solve_static
 
     holder = {}
 

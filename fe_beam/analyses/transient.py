@@ -28,6 +28,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.static import StaticContinuation, check_beam_work
+from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     DAMPING_KEYS,
     INITIAL_KEYS,
@@ -49,9 +50,11 @@ from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
+from fe_beam.fem.tendons import TendonSet
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
 from fe_beam.solvers.energy_momentum import EnergyMomentum
+from fe_beam.solvers.modes import natural_frequencies
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
@@ -75,7 +78,6 @@ def _note_pushing_tendons(tendons, tensions, t: float, notes: list, comm) -> Non
 def _tendon_problem(static: StaticConfig, comm):
     """(BeamProblem, TendonSet or None) of a configuration: the tendons' breakpoints are mesh
     vertices and their potential is part of the stored energy."""
-    from fe_beam.fem.tendons import TendonSet
 
     tendons = TendonSet(static.tendons, static.model.length) if static.tendons else None
     problem = BeamProblem(static.model, comm,
@@ -249,7 +251,6 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
 
 def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> DynamicResult:
     """The paper's FD + Runge-Kutta scheme (fe_beam.baselines.fd_rk) on the same config."""
-    from fe_beam.baselines import fd_rk
 
     model = config.static.model
     if model.options.law == "hyperelastic":
@@ -342,7 +343,6 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
 
 def _fd_strains(params, q) -> StrainRange:
     """`StrainRange` of a state of the finite-difference scheme (its midpoint strains)."""
-    from fe_beam.baselines import fd_rk
 
     st = fd_rk.midpoint_strains(params, q)
     gamma = np.arctan2(st["g"], st["E1"])
@@ -351,7 +351,6 @@ def _fd_strains(params, q) -> StrainRange:
 
 
 def _fd_failed(config: DynamicConfig, out: Path | None, comm, params, message: str):
-    from fe_beam.baselines import fd_rk
 
     result = DynamicResult([], {"wall_time_s": 0.0}, "failed", message,
                            dofs=int(fd_rk.free_dofs(params).sum()))
@@ -480,7 +479,6 @@ def _write_gif(path: Path, shapes, length: float) -> None:
 
 def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM_WORLD,
               progress: bool = True) -> dict:
-    from fe_beam.solvers.modes import natural_frequencies
 
     started = time.perf_counter()
     check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)

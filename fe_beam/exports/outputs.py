@@ -33,6 +33,7 @@ import ufl
 from dolfinx import fem
 
 from fe_beam import runctl
+from fe_beam.exports.plotting import legend_inside
 from fe_beam.fem import compat
 
 __all__ = [
@@ -519,7 +520,6 @@ def plot_deformed_shapes(
     reference: list[tuple[str, float, float]] = (),
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points."""
-    from fe_beam.exports.plotting import legend_inside
 
     with figure(path, figsize=(7, 5), layout=False) as (_, axes):
         colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))

@@ -14,6 +14,7 @@ system as the beam (bordered with g_i = dl_i/dw: `PullInSolver`).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -24,9 +25,10 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar
 from fe_beam.model.tendons import Path, Tendon, looped_tendon  # noqa: F401  (re-exported)
-from fe_beam.solvers.newton import SNESSolver
 
-__all__ = ["PullInSolver", "Tendon", "TendonSet", "looped_tendon", "tendon_length_density"]
+__all__ = ["Tendon", "TendonSet", "looped_tendon", "strain_tendon_length_density",
+           "tendon_length_density"]
+
 
 def tendon_length_density(w_parts, delta, delta_prime):
     """|r_c'| with r_c' = r' + delta' d + delta d', d' = -theta' (cos theta, sin theta)."""
@@ -36,6 +38,13 @@ def tendon_length_density(w_parts, delta, delta_prime):
     tangent_x = 1 + u.dx(0) - delta_prime * sin_t - delta * kappa * cos_t
     tangent_y = v.dx(0) + delta_prime * cos_t - delta * kappa * sin_t
     return ufl.sqrt(tangent_x**2 + tangent_y**2)
+
+
+def strain_tendon_length_density(s, delta, delta_prime):
+    """|r_c'| of a tendon at offset delta(x) in terms of the strains (the body-frame form of
+    `tendon_length_density`, from a `fe_beam.fem.kinematics.Strains` ``s``):
+    sqrt((1 + e - delta kappa)^2 + (g + delta')^2)."""
+    return ufl.sqrt((s.one_plus_e - delta * s.kappa) ** 2 + (s.g + delta_prime) ** 2)
 
 
 class TendonSet:
@@ -110,15 +119,14 @@ class TendonSet:
         per tendon, density(strains) = inside * sum over its branches of the body-frame length
         density (the same offsets and entry/anchor indicator as `lengths`; its integral over the
         energy rule is l_i) and tension(t) = tau_i(t) (`tension_at`; 0 for pull-in control)."""
-        from fe_beam.solvers.energy_momentum import tendon_length_density as body_density
 
         if self._problem is not problem:
             self._attach(problem)
         pairs = []
         for index, (inside, deltas) in enumerate(self._geometry):
             def density(s, inside=inside, deltas=deltas):
-                return inside * sum((body_density(s, delta, delta.dx(0)) for delta in deltas),
-                                    ufl.zero())
+                return inside * sum((strain_tendon_length_density(s, delta, delta.dx(0))
+                                     for delta in deltas), ufl.zero())
 
             pairs.append((density, lambda t, i=index: float(self.tension_at(t)[i])))
         return pairs
@@ -189,8 +197,6 @@ class TendonSet:
     def slack(self):
         """Context manager: all tensions 0 inside (the rod's own energy from a form that
         includes the tendon potential, which is linear in the tensions); restored after."""
-        import contextlib
-
         @contextlib.contextmanager
         def zero():
             saved = self.tension_values()
@@ -213,77 +219,3 @@ class TendonSet:
         vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         compat.set_bc(vector, bcs, scale=0.0)
         return vector
-
-
-class PullInSolver:
-    """Pull-in control: the tensions of the pull-in controlled tendons are global unknowns of the
-    beam's Newton system, with the constraints l_i(w) = l_i^0 - load factor * pull_in_i
-    (`fe_beam.solvers.continuation.BorderedConstraintSolver`: one bordered solve per iteration).
-    Same
-    interface as `SNESSolver` so load stepping and time stepping drive it unchanged."""
-
-    def __init__(
-        self, solver: SNESSolver, tendons: TendonSet, tolerance: float = 1e-10, max_it: int = 20
-    ):
-        from fe_beam.solvers.continuation import BorderedConstraintSolver
-
-        self.solver = solver
-        self.problem = solver.problem
-        self.tendons = tendons
-        self.controlled = [i for i, t in enumerate(tendons.tendons) if t.controlled_by_pull_in]
-        self.tolerance = tolerance * tendons.length
-        self.max_it = max_it
-        self.load_factor = 0.0
-        self._bordered = BorderedConstraintSolver(
-            solver, self._get_tensions, self._set_tensions,
-            lambda x: self.tendons.lengths()[self.controlled],
-            lambda x: [self.tendons.gradient(i, self.problem.bcs) for i in self.controlled],
-            self.targets, self.tolerance, max(max_it, solver.settings.max_it),
-        )
-
-    @property
-    def linear_iterations(self) -> int:
-        if self.controlled:
-            return self._bordered.linear_iterations
-        return self.solver.linear_iterations
-
-    def _get_tensions(self) -> np.ndarray:
-        return np.array([float(self.tendons.tensions[i].value) for i in self.controlled])
-
-    def _set_tensions(self, values) -> None:
-        for i, value in zip(self.controlled, values, strict=True):
-            self.tendons.tensions[i].value = float(value)
-
-    def residual_norm(self) -> float:
-        return self.solver.residual_norm()
-
-    def destroy(self) -> None:
-        self.solver.destroy()
-
-    def set_reference_residual(self, value: float | None) -> None:
-        self.solver.set_reference_residual(value)
-        self._bordered.set_reference_residual(value)
-
-    def set_load_factor(self, value) -> None:
-        """Pull-ins are value * pull_in: one factor, or an array (one per controlled tendon)."""
-        self.load_factor = value
-
-    def targets(self) -> np.ndarray:
-        pulls = np.array([self.tendons.tendons[i].pull_in for i in self.controlled])
-        return self.tendons.rest_lengths[self.controlled] - self.load_factor * pulls
-
-    def solve(self) -> int:
-        if not self.controlled:
-            return self.solver.solve()
-        self.solver.set_reference_residual(None)
-        return self._bordered.solve()
-
-
-def tension_for_target(
-    solve_with_tension: Callable[[float], float], target: float, bracket: tuple[float, float]
-) -> float:
-    """Tension at which ``solve_with_tension(tau)`` (e.g. tip angle) equals ``target`` (brentq)."""
-    from scipy.optimize import brentq
-
-    low, high = bracket
-    return brentq(lambda tau: solve_with_tension(tau) - target, low, high, xtol=1e-12, rtol=1e-12)

@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from fe_beam.model.fibre import FibreLaw
 from fe_beam.model.laws import CONSTRAINTS, DEFAULT_SECTION_POINTS, LAWS, MAX_SECTION_POINTS
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
@@ -336,8 +337,6 @@ class BeamModel:
     def _check_hyperelastic(self) -> None:
         """The section law needs the profile (custom sections: svk only), and the rod's E and G
         are the 3D law's small-strain ones (every other output uses them)."""
-        from fe_beam.fem.section_laws import FibreLaw
-
         fibre = FibreLaw.from_solid(self.options.hyperelastic)
         if self.section.shape == "custom" and fibre.material != "svk":
             raise ValueError(

@@ -38,6 +38,7 @@ from fe_beam.progress import ProgressBar
 from fe_beam.solvers.newton import (
     STAGNATION_RTOL,
     LoadSteppingFailed,
+    SNESSolver,
     SolveFailed,
     StepResult,
     _agreed,
@@ -1095,3 +1096,29 @@ def _failure_reasons(failures: list[str]) -> str:
             kinds.add(kind)
             earlier.append(reason)
     return last if not earlier else f"{last}; larger steps: {'; '.join(earlier[:2])}"
+
+
+def run_load_stepping(
+    solver: SNESSolver,
+    set_load_factor: Callable[[float], None],
+    stepping: LoadStepping | None = None,
+    on_converged: Callable[[StepResult], None] | None = None,
+    reject_step: Callable[[np.ndarray, np.ndarray], str | None] | None = None,
+    progress: bool = True,
+    label: str = "load",
+) -> list[StepResult]:
+    """Ramp the load factor from 0 to 1, solving at each step: load control of
+    `fe_beam.solvers.continuation.Continuation` (`Continuation.load_control`) on ``solver`` and
+    ``set_load_factor``.
+
+    The first guess of each step is the secant extrapolation of the last two converged states.
+    ``reject_step(previous, current)`` (local dof arrays) may veto a converged step, e.g. one that
+    jumped to another equilibrium branch; it is then cut back like a diverged step.
+    Raises `LoadSteppingFailed` (a `fe_beam.solvers.continuation.ContinuationFailed`, with
+    ``reason``;
+    the last converged state restored in ``w``) when the increment falls below
+    ``stepping.min_increment``.
+    """
+    engine = Continuation(CallbackProblem(solver, set_load_factor, reject_step), 0.0)
+    return engine.load_control(1.0, stepping, on_converged=on_converged, progress=progress,
+                               label=label)

@@ -18,7 +18,7 @@ Built on the continuation engine `fe_beam.solvers.continuation.Continuation` (it
   corrector lands on the bifurcated branch, not back on the fundamental one.
 
 The tangent's inertia comes from a dense eigenvalue problem (serial, up to
-`fe_beam.analyses.static.STABILITY_MAX_DOFS` dofs, the same restriction to constraint-preserving
+`STABILITY_MAX_DOFS` dofs, the same restriction to constraint-preserving
 directions and Jacobi scaling as `fe_beam.analyses.static.StaticContinuation.stability`); on several
 ranks or beyond that size from a sparse MUMPS LDL^T factorisation (`fe_beam.solvers.inertia`): the
 count only (no eigenvalues, no mode), and bisection then decides on the counts.
@@ -33,9 +33,9 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse
 
-from fe_beam.analyses.static import STABILITY_ZERO
 from fe_beam.fem import compat
 from fe_beam.solvers.continuation import ContinuationFailed, Snapshot
+from fe_beam.solvers.inertia import rod_unstable_count
 
 __all__ = [
     "CriticalPoint",
@@ -46,7 +46,14 @@ __all__ = [
     "switch_branch",
 ]
 
-ZERO = STABILITY_ZERO  # an eigenvalue that counts as zero (fe_beam.analyses.static)
+# the stability check is a dense eigenvalue problem: O(n^3), a few tenths of a second here
+STABILITY_MAX_DOFS = 1500
+# relative size (to the largest) below which an eigenvalue of the Jacobi-scaled tangent counts
+# as zero. The buckling eigenvalue of a slender column is ~1e-8 of the axial ones at L/h = 100
+# and passes zero at the critical load; round-off is ~1e-15. (1e-9 called a column 1.4% past
+# its Euler load at L/h = 100 stable.)
+STABILITY_ZERO = 1e-13
+ZERO = STABILITY_ZERO  # an eigenvalue that counts as zero
 
 
 @dataclass
@@ -91,7 +98,6 @@ def spectrum(run, with_mode: bool = False) -> Spectrum | None:
     None when not available (follower loads or pull-in control: the tangent is not that of an
     energy). On several ranks or beyond STABILITY_MAX_DOFS dofs: the count from the sparse
     inertia (`fe_beam.solvers.inertia.rod_unstable_count`), no eigenvalues, no mode."""
-    from fe_beam.analyses.static import STABILITY_MAX_DOFS
 
     problem, nonlinear = run.problem, run.snes.problem
     pull_in = run.tendons is not None and any(
@@ -100,7 +106,6 @@ def spectrum(run, with_mode: bool = False) -> Spectrum | None:
     if pull_in or run.config.model.loads.follower:
         return None
     if problem.comm.size > 1 or size > STABILITY_MAX_DOFS:
-        from fe_beam.solvers.inertia import rod_unstable_count
 
         return Spectrum(rod_unstable_count(run), np.empty(0), None)
     state = compat.vector_of(nonlinear.w).copy()

@@ -28,10 +28,10 @@ from fe_beam.fem import compat
 from fe_beam.fem.kinematics import axis_tangent, strains_from_gradient
 from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.fem.rod import BeamProblem, StrainWatch
-from fe_beam.fem.tendons import PullInSolver
 from fe_beam.model.settings import SCHEMES, Damping, TimeSettings  # noqa: F401
 from fe_beam.progress import ProgressBar
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
+from fe_beam.solvers.pull_in import PullInSolver
 
 __all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
            "alpha_parameters"]

@@ -48,6 +48,7 @@ from fe_beam.fem import compat
 from fe_beam.fem.kinematics import Strains, strains
 from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.fem.rod import COMPONENTS, BeamProblem, StrainWatch
+from fe_beam.fem.tendons import strain_tendon_length_density as tendon_length_density
 from fe_beam.solvers.dynamics import Damping, StepDriver, TimeSettings
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
@@ -71,12 +72,6 @@ def _rotate_back(cos_t, sin_t, vector):
 def _perp(vector):
     """J vector (rotation by +90 degrees)."""
     return ufl.as_vector([-vector[1], vector[0]])
-
-
-def tendon_length_density(s: Strains, delta, delta_prime):
-    """|r_c'| of a tendon at offset delta(x) in terms of the strains (the body-frame form of
-    `fe_beam.fem.tendons.tendon_length_density`): sqrt((1 + e - delta kappa)^2 + (g + delta')^2)."""
-    return ufl.sqrt((s.one_plus_e - delta * s.kappa) ** 2 + (s.g + delta_prime) ** 2)
 
 
 class EnergyMomentum(StepDriver):

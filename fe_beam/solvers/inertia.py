@@ -23,6 +23,8 @@ import itertools
 import numpy as np
 from petsc4py import PETSc
 
+from fe_beam.fem import compat
+
 __all__ = ["constraint_rows", "inertia", "rod_unstable_count", "solid_unstable_count"]
 
 _PREFIXES = itertools.count()
@@ -91,7 +93,6 @@ def rod_unstable_count(run) -> int:
     `fe_beam.analyses.static.StaticContinuation`, conservative loads): negative(KKT) minus the
     number
     of constraint rows. Collective; any number of ranks and dofs."""
-    from fe_beam.fem import compat
 
     problem, nonlinear = run.problem, run.snes.problem
     state = compat.vector_of(nonlinear.w).copy()
@@ -121,7 +122,6 @@ def solid_unstable_count(problem) -> int | None:
     import ufl
     from dolfinx import fem
 
-    from fe_beam.fem import compat
 
     if any(c.tension != 0 for c in problem.cables):
         return None

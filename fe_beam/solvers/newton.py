@@ -9,7 +9,7 @@ step growth on easy steps and a branch check. Nothing here writes files.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -37,7 +37,6 @@ __all__ = [
     "SolveFailed",
     "SolverSettings",
     "StepResult",
-    "run_load_stepping",
 ]
 
 class SolveFailed(RuntimeError):
@@ -378,34 +377,6 @@ class StepResult:
     iterations: int
     linear_iterations: int
     wall_time_s: float
-
-
-def run_load_stepping(
-    solver: SNESSolver,
-    set_load_factor: Callable[[float], None],
-    stepping: LoadStepping | None = None,
-    on_converged: Callable[[StepResult], None] | None = None,
-    reject_step: Callable[[np.ndarray, np.ndarray], str | None] | None = None,
-    progress: bool = True,
-    label: str = "load",
-) -> list[StepResult]:
-    """Ramp the load factor from 0 to 1, solving at each step: load control of
-    `fe_beam.solvers.continuation.Continuation` (`Continuation.load_control`) on ``solver`` and
-    ``set_load_factor``.
-
-    The first guess of each step is the secant extrapolation of the last two converged states.
-    ``reject_step(previous, current)`` (local dof arrays) may veto a converged step, e.g. one that
-    jumped to another equilibrium branch; it is then cut back like a diverged step.
-    Raises `LoadSteppingFailed` (a `fe_beam.solvers.continuation.ContinuationFailed`, with
-    ``reason``;
-    the last converged state restored in ``w``) when the increment falls below
-    ``stepping.min_increment``.
-    """
-    from fe_beam.solvers.continuation import CallbackProblem, Continuation
-
-    engine = Continuation(CallbackProblem(solver, set_load_factor, reject_step), 0.0)
-    return engine.load_control(1.0, stepping, on_converged=on_converged, progress=progress,
-                               label=label)
 
 
 def _agreed(comm, reason: str | None) -> str | None:

@@ -36,14 +36,11 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam.fem import compat
+from fe_beam.fem.kinematics import strains
 from fe_beam.model.studies import StaticConfig
-from fe_beam.solvers.newton import (
-    LoadSteppingFailed,
-    SolveFailed,
-    StepResult,
-    _agreed,
-    run_load_stepping,
-)
+from fe_beam.solvers.continuation import run_load_stepping
+from fe_beam.solvers.newton import LoadSteppingFailed, SolveFailed, StepResult, _agreed
+from fe_beam.solvers.rod_static import StaticContinuation
 
 __all__ = [
     "PARAMETER_KEYS",
@@ -176,7 +173,6 @@ def acquire(config: StaticConfig, comm=MPI.COMM_WORLD, prefix: str = "fe_beam_st
     the same `structure_key` with the configuration's numbers written in, or a new one. Give it
     back with `release` (it is not shared while out). Collective (the same sequence of calls on
     every rank gives the same hits)."""
-    from fe_beam.analyses.static import StaticContinuation
 
     key = structure_key(config, comm) + (prefix,)
     entry = _CACHE.pop(key, None) if _enabled() else None
@@ -762,7 +758,6 @@ def max_fibre_strain(problem) -> float:
     if not hasattr(problem, "_fibre_expression"):
         import ufl
 
-        from fe_beam.fem.kinematics import strains
 
         u, v, theta, _ = problem.fields()
         s = strains(u, v, theta)

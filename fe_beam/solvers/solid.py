@@ -54,6 +54,11 @@ from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
     Discretization,
     TendonLoad,
 )
+from fe_beam.solvers.continuation import (
+    BorderedConstraintSolver,
+    Continuation,
+    NonlinearParameterProblem,
+)
 from fe_beam.solvers.newton import (
     LoadStepping,
     NonlinearProblem,
@@ -348,7 +353,6 @@ class SolidFingerProblem:
         (`set_load_factor`): its residual is affine in it (tip traction, cable tensions), the
         arc metric weighs the displacement by 1/L^2 and the pressure by 0. Under pull-in
         control: load control only."""
-        from fe_beam.solvers.continuation import NonlinearParameterProblem
 
         metric = compat.vector_of(self.w).duplicate()
         weights = np.zeros(metric.getLocalSize())
@@ -367,7 +371,6 @@ class SolidFingerProblem:
     def engine(self):
         """The continuation engine of the load factor (`fe_beam.solvers.continuation.Continuation`,
         built once); its parameter follows ``load_factor``."""
-        from fe_beam.solvers.continuation import Continuation
 
         if getattr(self, "_engine", None) is None:
             self._engine = Continuation(self.parameter_problem(), self.load_factor)
@@ -544,7 +547,6 @@ class _PullInSolver:
 
     def __init__(self, inner: SNESSolver, cables: list[TendonCable], unloaded,
                  rtol: float = 1e-10, max_it: int = 30):
-        from fe_beam.solvers.continuation import BorderedConstraintSolver
 
         self.inner = inner
         self.solver = inner
