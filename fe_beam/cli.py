@@ -293,7 +293,7 @@ RUNNERS["design"] = run_design_command
 
 
 def run_buckling_command(args, config: dict, comm) -> int:
-    from fe_beam.solvers.buckling import run_buckling
+    from fe_beam.analyses.buckling import run_buckling
 
     summary = run_buckling(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
@@ -350,7 +350,7 @@ def run_solid_command(args, config: dict, comm) -> int:
     if "distance_to_solid" in rod:
         _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
                    f"{rod['distance_to_solid']['max_over_L']:.3g}")
-    from fe_beam.solvers.solid_modes import modes_table  # [modes]: solid vs rod frequencies
+    from fe_beam.analyses.solid_modes import modes_table  # [modes]: solid vs rod frequencies
 
     for line in modes_table(summary.get("modes")):
         _say(comm, line)
