@@ -25,6 +25,25 @@ from fe_beam.model.sections import Section, SectionProperties
 # the finite-element names load dolfinx and PETSc: imported when first used (PEP 562), so that
 # `import fe_beam.config.schema` (validation, `fe-beam --help`) does not load the FE stack
 _LAZY = {
+    # the front door (fe_beam.api) and the configuration layer
+    "run": "fe_beam.api",
+    "ConfigError": "fe_beam.errors",
+    "load_config": "fe_beam.config.schema",
+    "apply_overrides": "fe_beam.config.schema",
+    "validate": "fe_beam.config.schema",
+    "StaticConfig": "fe_beam.model.studies",
+    # drivers and their results (fe_beam.analyses: one per subcommand)
+    "solve_static": "fe_beam.analyses.static",
+    "StaticResult": "fe_beam.analyses.static",
+    "run_finger": "fe_beam.analyses.finger",
+    "run_dynamic": "fe_beam.analyses.transient",
+    "run_modes": "fe_beam.analyses.transient",
+    "DynamicResult": "fe_beam.analyses.transient",
+    # problems and engines for scripting
+    "StaticContinuation": "fe_beam.solvers.rod_static",
+    "SolidFingerProblem": "fe_beam.solvers.solid",
+    "RealtimeSolver": "fe_beam.solvers.realtime",
+    "RodSensitivity": "fe_beam.analyses.sensitivity",
     "BeamProblem": "fe_beam.fem.rod",
     "LoadSteppingFailed": "fe_beam.solvers.newton",
     "NonlinearProblem": "fe_beam.solvers.newton",
@@ -44,6 +63,22 @@ __version__ = "0.1.0"
 __all__ = [
     "BeamModel",
     "BeamProblem",
+    "ConfigError",
+    "DynamicResult",
+    "RealtimeSolver",
+    "RodSensitivity",
+    "SolidFingerProblem",
+    "StaticConfig",
+    "StaticContinuation",
+    "StaticResult",
+    "apply_overrides",
+    "load_config",
+    "run",
+    "run_dynamic",
+    "run_finger",
+    "run_modes",
+    "solve_static",
+    "validate",
     "Discretisation",
     "LoadStepping",
     "LoadSteppingFailed",

@@ -1,0 +1,134 @@
+"""The Python front door: ``fe_beam.run(command, config, out=None, **keys)``.
+
+    import fe_beam
+
+    summary = fe_beam.run("static", "examples/cantilever.toml", **{"mesh.elements": 20})
+    summary["steps"][-1]["tip"]          # the same dict as summary.json of the same CLI run
+
+``config`` is a TOML file or a dict as the TOML would parse; ``keys`` are ``--set`` overrides by
+dotted name (``{"section.h": 0.02, "tendons.0.tension": 1.5}``). The run is the CLI's own
+(`fe_beam.cli`): the same validation, the same driver, the same files and the same summary, so a
+script and a shell give the same numbers. A mistake in the configuration raises
+`fe_beam.ConfigError` with the sentence the CLI prints (exit code 2 there); an analysis that
+stops (exit code 3 there) returns its summary with ``status`` "failed"; SIGINT/SIGTERM during a
+run raise `fe_beam.runctl.Interrupted` after the last good state is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import copy
+import io
+import json
+import os
+import tempfile
+import warnings
+from collections.abc import Mapping
+from pathlib import Path
+
+from fe_beam import cli, runctl
+from fe_beam.analyses.calibrate import check_data
+from fe_beam.config.schema import (
+    apply_overrides,
+    check_command_tables,
+    check_partition,
+    check_values,
+    load_config,
+    validate,
+)
+from fe_beam.errors import ConfigError
+
+__all__ = ["run"]
+
+
+def _overrides(keys: Mapping[str, object]) -> list[str]:
+    """``--set`` assignments (TOML syntax) of dotted keys and Python values."""
+    assignments = []
+    for name, value in keys.items():
+        if "." not in name:
+            raise ConfigError(f"override {name!r}: expected a dotted key such as section.h "
+                              "(table.key, or tendons.0.tension)")
+        assignments.append(f"{name}={_toml(value)}")
+    return assignments
+
+
+def _toml(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(float(value)) if isinstance(value, float) else str(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(item) for item in value) + "]"
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{key} = {_toml(item)}" for key, item in value.items()) + "}"
+    raise ConfigError(f"override value {value!r}: expected a number, string, boolean, list or "
+                      "table")
+
+
+def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLike | None = None,
+        *, comm=None, progress: bool = False, verbose: bool = False, data=None,
+        levels: int | None = None, ratio: float | None = None,
+        quantity: list[str] | None = None, **keys) -> dict:
+    """Run ``fe-beam COMMAND`` from Python and return its summary (the dict of summary.json).
+
+    Args:
+        command: a subcommand of the CLI (static, finger, dynamic, modes, solid, compare,
+            validity, refine, calibrate, design, buckling, path).
+        config: a TOML file, or a dict as the TOML would parse (not modified).
+        out: the output folder; None writes the files into a private temporary folder that is
+            removed before returning (nothing is left behind).
+        comm: an MPI communicator (default: the world, as under ``mpirun``).
+        progress: show the progress bar (the CLI's default; off here).
+        verbose: print what the CLI prints (the result lines) on rank 0.
+        data: ``calibrate``'s measurements (the CLI's ``--data``).
+        levels, ratio, quantity: ``refine``'s ``--levels``, ``--ratio``, ``--quantity``.
+        **keys: overrides by dotted name, as ``--set table.key=value``.
+
+    Raises:
+        ConfigError: a mistake in the configuration, the overrides or the output folder (the
+            CLI's exit code 2), with the CLI's sentence.
+    """
+    if isinstance(config, Mapping):
+        raw = copy.deepcopy(dict(config))
+    else:
+        raw = load_config(config)
+    raw = apply_overrides(raw, _overrides(keys))
+    if command == "calibrate" and data is None:
+        raise ConfigError("fe_beam.run('calibrate', ...) needs data= (the measurements CSV, the "
+                          "CLI's --data)")
+    world = comm if comm is not None else cli._world()
+    with contextlib.ExitStack() as stack:
+        folder = Path(out) if out is not None else Path(
+            stack.enter_context(tempfile.TemporaryDirectory(prefix="fe_beam_run_")))
+        if out is not None:
+            cli._check_output_folder(folder, world)
+        check_values(raw)
+        notes = check_command_tables(command, raw)
+        check_partition(raw, world.size, command)
+        refine = {"levels": None if levels is None else str(levels),
+                  "ratio": None if ratio is None else str(ratio),
+                  "quantities": quantity}
+        validated = validate(command, raw, refine)
+        args = argparse.Namespace(command=command, config=str(config)[:200], out=folder, set=[],
+                                  quiet=not progress, data=data, levels=refine["levels"],
+                                  ratio=refine["ratio"], quantity=quantity)
+        if command == "calibrate":
+            check_data(raw, data)
+        cli.quiet_jit_logging()
+        cli.check_solver_options(validated)
+        try:
+            with runctl.output_session(folder, command, world):
+                sink = contextlib.nullcontext() if verbose and world.rank == 0 else \
+                    contextlib.redirect_stdout(io.StringIO())
+                with sink:
+                    cli.RUNNERS[command](args, raw, world)
+        except (runctl.FolderBusy, runctl.TooLarge) as error:
+            raise ConfigError(str(error)) from None
+        world.barrier()
+        summary = json.loads((folder / "summary.json").read_text())
+    for note in notes:  # what the CLI prints as notes (unused tables): warnings here
+        warnings.warn(f"fe-beam {command}: {note}", stacklevel=2)
+    return summary

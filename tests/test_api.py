@@ -1,0 +1,126 @@
+"""The Python front door `fe_beam.run`: the same summary as summary.json of the same CLI run
+(every command on its example configuration, made coarse by the same overrides for both; the
+numbers bitwise equal, wall times apart), serially and on 2 ranks; mistakes raise
+`fe_beam.ConfigError` with the CLI's sentence; ``out=None`` leaves no file behind; the public
+names of ``fe_beam.__all__`` resolve."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+
+import pytest
+
+import fe_beam
+from fe_beam.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+SOLID_COARSE = {"solid.mesh_size": 0.01, "solid.order": 1, "mesh.elements": 10}
+
+# command, example, overrides (the same for the CLI and the API), extra CLI args / API keywords
+CASES = {
+    "static": ("static", "cantilever.toml", {"mesh.elements": 10, "loads.steps": 3}, {}),
+    "finger": ("finger", "finger.toml", {"mesh.elements": 10}, {}),
+    "finger-inverse": ("finger", "finger.toml", {"mesh.elements": 10, "inverse.tip_angle": 0.3},
+                       {}),
+    "dynamic": ("dynamic", "release.toml", {"mesh.elements": 8, "time.t_end": 0.02}, {}),
+    "modes": ("modes", "release.toml", {"mesh.elements": 8}, {}),
+    "refine": ("refine", "cantilever.toml", {"mesh.elements": 4, "loads.steps": 2},
+               {"levels": 2}),
+    "buckling": ("buckling", "column_buckling.toml", {"mesh.elements": 8}, {}),
+    "path": ("path", "elastica_path.toml", {"mesh.elements": 8, "path.max_steps": 6}, {}),
+    "design": ("design", "finger_design.toml", {"mesh.elements": 8}, {}),
+    "solid": ("solid", "finger_solid.toml", SOLID_COARSE, {}),
+    "compare": ("compare", "finger_solid.toml", SOLID_COARSE | {"compare.tensions": [1.0]}, {}),
+}
+MPI_CASES = ("static", "finger", "buckling")
+
+
+def _numbers(value):
+    """The summary without what differs between two identical runs (wall times, the folder)."""
+    if isinstance(value, dict):
+        return {k: _numbers(v) for k, v in value.items()
+                if "wall_time" not in k and not k.endswith("_s") and k not in ("out", "folder")}
+    if isinstance(value, list):
+        return [_numbers(v) for v in value]
+    return value
+
+
+def _cli_args(overrides: dict, extra: dict) -> list[str]:
+    args = []
+    for key, value in overrides.items():
+        args += ["--set", f"{key}={json.dumps(value)}"]
+    for key, value in extra.items():
+        args += [f"--{key}", str(value)]
+    return args
+
+
+def _compare(name: str, tmp: Path, comm=None):
+    command, example, overrides, extra = CASES[name]
+    config = EXAMPLES / example
+    out = tmp / "cli"
+    code = main([command, str(config), "--out", str(out), "--quiet",
+                 *_cli_args(overrides, extra)])
+    cli_summary = json.loads((out / "summary.json").read_text())
+    api_summary = fe_beam.run(command, config, comm=comm, **extra, **overrides)
+    assert _numbers(api_summary) == _numbers(cli_summary)
+    assert api_summary["status"] == cli_summary["status"]
+    return code, api_summary
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [n for n in CASES if n not in MPI_CASES])
+def test_run_equals_the_cli(name, tmp_path):
+    _compare(name, tmp_path)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("name", MPI_CASES)
+def test_run_equals_the_cli_on_every_rank(name, tmp_path_factory):
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    tmp = Path(comm.bcast(str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None))
+    code, summary = _compare(name, tmp, comm)
+    assert code == 0 and summary["status"] in ("converged", "completed")
+
+
+@pytest.mark.parametrize("overrides, fragment", [
+    ({"mesh.elements": -1}, "mesh.elements"),
+    ({"material.nu": 0.7}, "nu"),
+    ({"loads.tip_force": "up"}, "tip_force"),
+])
+def test_mistakes_raise_config_error_with_the_cli_sentence(overrides, fragment, tmp_path,
+                                                            capsys):
+    config = EXAMPLES / "cantilever.toml"
+    with pytest.raises(fe_beam.ConfigError) as raised:
+        fe_beam.run("static", config, **overrides)
+    code = main(["static", str(config), "--out", str(tmp_path / "o"), "--quiet",
+                 *_cli_args(overrides, {})])
+    printed = capsys.readouterr().err.strip()
+    assert code == 2
+    assert fragment in str(raised.value)
+    assert printed.endswith(str(raised.value)), (printed, str(raised.value))
+
+
+def test_a_dict_config_and_no_files_left(tmp_path, monkeypatch):
+    import tomllib
+
+    config = tomllib.loads((EXAMPLES / "cantilever.toml").read_text())
+    before = json.dumps(config, sort_keys=True)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    summary = fe_beam.run("static", config, **{"mesh.elements": 6, "loads.steps": 2})
+    assert summary["status"] == "converged" and len(summary["steps"]) == 2
+    assert json.dumps(config, sort_keys=True) == before  # the caller's dict is not modified
+    assert list(tmp_path.iterdir()) == []  # the private output folder is gone
+    with pytest.raises(fe_beam.ConfigError, match="dotted key"):
+        fe_beam.run("static", config, elements=6)
+    with pytest.raises(fe_beam.ConfigError, match="unknown command|invalid choice|one of"):
+        fe_beam.run("statics", config)
+
+
+def test_every_public_name_resolves():
+    for name in fe_beam.__all__:
+        assert getattr(fe_beam, name) is not None, name
+    assert fe_beam.ConfigError is fe_beam.config.ConfigError
