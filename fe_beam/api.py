@@ -39,7 +39,10 @@ from fe_beam.config.schema import (
 )
 from fe_beam.errors import ConfigError
 
-__all__ = ["run"]
+__all__ = ["SUMMARY_FILES", "run"]
+
+#: the file that holds a command's summary (summary.json unless named here)
+SUMMARY_FILES = {"refine": "refinement.json"}
 
 
 def _overrides(keys: Mapping[str, object]) -> list[str]:
@@ -72,7 +75,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         *, comm=None, progress: bool = False, verbose: bool = False, data=None,
         levels: int | None = None, ratio: float | None = None,
         quantity: list[str] | None = None, **keys) -> dict:
-    """Run ``fe-beam COMMAND`` from Python and return its summary (the dict of summary.json).
+    """Run ``fe-beam COMMAND`` from Python and return its summary (the dict of summary.json;
+    refine: of refinement.json).
 
     Args:
         command: a subcommand of the CLI (static, finger, dynamic, modes, solid, compare,
@@ -128,7 +132,7 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         except (runctl.FolderBusy, runctl.TooLarge) as error:
             raise ConfigError(str(error)) from None
         world.barrier()
-        summary = json.loads((folder / "summary.json").read_text())
+        summary = json.loads((folder / SUMMARY_FILES.get(command, "summary.json")).read_text())
     for note in notes:  # what the CLI prints as notes (unused tables): warnings here
         warnings.warn(f"fe-beam {command}: {note}", stacklevel=2)
     return summary

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 import fe_beam
+from fe_beam.api import SUMMARY_FILES
 from fe_beam.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -62,7 +63,7 @@ def _compare(name: str, tmp: Path, comm=None):
     out = tmp / "cli"
     code = main([command, str(config), "--out", str(out), "--quiet",
                  *_cli_args(overrides, extra)])
-    cli_summary = json.loads((out / "summary.json").read_text())
+    cli_summary = json.loads((out / SUMMARY_FILES.get(command, "summary.json")).read_text())
     api_summary = fe_beam.run(command, config, comm=comm, **extra, **overrides)
     assert _numbers(api_summary) == _numbers(cli_summary)
     assert api_summary["status"] == cli_summary["status"]
