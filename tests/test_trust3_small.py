@@ -3,6 +3,7 @@
 import json
 import signal
 
+import numpy as np
 from test_validity import run_cli, with_map
 
 from fe_beam import runctl
@@ -44,3 +45,56 @@ def test_validity_ctrl_c_says_which_points_are_done(tmp_path, monkeypatch):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
     assert "2 of 3 points done (0_0, 1_0)" in summary["message"], summary["message"]
+
+
+def _captured_calibration_figure(tmp_path, monkeypatch, load_column):
+    """calibration.png's figure, kept from plt.close (the plot of `fe_beam.calibrate._plot`)."""
+
+
+    from fe_beam import calibrate, outputs
+
+    real = outputs._pyplot()
+    kept = []
+
+    class Keeping:
+        def __getattr__(self, name):
+            return getattr(real, name)
+
+        def close(self, figure=None):
+            kept.append(figure)
+
+    monkeypatch.setattr(outputs, "_pyplot", lambda: Keeping())
+    loads = np.array([0.6, 1.2, 1.8])  # N (tension column, tendons.0.tension = 1.2) or factors
+    factors = loads / 1.2 if load_column == "tension" else loads
+    data = calibrate.CalibrationData(load_column, loads, {
+        "tip_u": -0.002 * factors, "tip_v": 0.008 * factors, "tip_theta": 0.25 * factors})
+    curves = {float(f): {"x": [0.0, 0.1], "y": [0.0, 0.01 * f],
+                         "tip": [-0.002 * f, 0.008 * f, 0.25 * f]} for f in factors}
+    calibrate._plot(tmp_path / "calibration.png", data, curves, factors,
+                    {"parameters": {"material.E": 6e5}})
+    real.close(kept[0])
+    return kept[0], loads, factors
+
+
+def test_calibration_plot_units_and_load_axis(tmp_path, monkeypatch):
+    for column in ("tension", "load_factor"):
+        figure, loads, factors = _captured_calibration_figure(tmp_path, monkeypatch, column)
+        panels = [a for a in figure.axes if a.get_title().startswith("tip")]
+        assert len(panels) == 1
+        tip = panels[0]
+        twins = [a for a in figure.axes if a is not tip and a.bbox.bounds == tip.bbox.bounds]
+        assert len(twins) == 1, "tip_theta [rad] on its own axis"
+        angle = twins[0]
+        assert "mm" in tip.get_ylabel() and "rad" in angle.get_ylabel()
+        labels = {line.get_label(): line for line in tip.get_lines()}
+        assert set(labels) == {"tip_u model", "tip_u data", "tip_v model", "tip_v data"}
+        assert [line.get_label() for line in angle.get_lines()] == ["tip_theta model",
+                                                                    "tip_theta data"]
+        # values: mm on the left axis, rad on the right one, against the data's load column
+        np.testing.assert_allclose(labels["tip_v data"].get_ydata(), 8.0 * factors, rtol=1e-12)
+        np.testing.assert_allclose(angle.get_lines()[1].get_ydata(), 0.25 * factors, rtol=1e-12)
+        np.testing.assert_allclose(labels["tip_u data"].get_xdata(), loads, rtol=1e-12)
+        if column == "tension":
+            assert "tension" in tip.get_xlabel() and "[N]" in tip.get_xlabel()
+        else:
+            assert tip.get_xlabel() == "load factor"
