@@ -98,3 +98,56 @@ def test_calibration_plot_units_and_load_axis(tmp_path, monkeypatch):
             assert "tension" in tip.get_xlabel() and "[N]" in tip.get_xlabel()
         else:
             assert tip.get_xlabel() == "load factor"
+
+
+def _design_rod(**design):
+    return {"beam": {"length": 0.7}, "section": {"shape": "rectangle", "b": 0.015, "h": 0.01},
+            "material": {"E": 2.0e7, "nu": 0.3}, "model": {"law": "reissner"},
+            "mesh": {"elements": 4, "degree": 2}, "loads": {"tip_moment": 0.02, "steps": 4},
+            "output": {"plots": False, "xdmf": False}, "design": design}
+
+
+def test_design_prints_the_minimised_tension_itself(tmp_path, capsys):
+    """objective = "tension": min M with theta_tip = 0.7, h in [9, 11] mm: M = theta E b h^3 /
+    (12 L) at h = 9 mm; the line shows M (not M / 0.04, the scaled objective)."""
+    import re
+
+    from tomlio import dump_toml
+
+    from fe_beam.cli import main
+
+    target, h_lo, top = 0.7, 0.009, 0.04
+    config = _design_rod(variables=["loads.tip_moment", "section.h"],
+                         bounds=[[0.002, top], [h_lo, 0.011]], objective="tension",
+                         tip_angle=target)
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    capsys.readouterr()
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    line = capsys.readouterr().out
+    exact = target * 2.0e7 * 0.015 * h_lo**3 / (12 * 0.7)
+    found = re.search(r"objective loads\.tip_moment = ([0-9.e+-]+) \(minimised\)", line)
+    assert found, line
+    assert abs(float(found.group(1)) - exact) <= 1e-5 * exact, (line, exact)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    minimised = summary["objective"]["minimised"]
+    assert minimised["name"] == "loads.tip_moment"
+    assert abs(minimised["value"] - exact) <= 1e-7 * exact
+    assert abs(summary["objective"]["value"] - minimised["value"] / top) <= 1e-15
+
+
+def test_design_says_finite_differences_with_a_fibre_strain_limit():
+    from mpi4py import MPI
+
+    from fe_beam.design import run_design
+
+    limited = run_design(_design_rod(variables=["section.h"], bounds=[[0.006, 0.02]],
+                                     objective="tip_pose", target={"theta": 0.9},
+                                     max_fibre_strain=0.004), None, MPI.COMM_WORLD)
+    assert limited["gradient"] == "finite-difference"
+    assert any("max_fibre_strain" in n and "finite differences" in n
+               for n in limited["notes"]), limited["notes"]
+    free = run_design(_design_rod(variables=["section.h"], bounds=[[0.006, 0.02]],
+                                  objective="tip_pose", target={"theta": 0.9}), None,
+                      MPI.COMM_WORLD)
+    assert not any("finite differences" in n for n in free["notes"]), free["notes"]
