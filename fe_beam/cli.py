@@ -266,8 +266,11 @@ def run_design_command(args, config: dict, comm) -> int:
         return EXIT_FAILED
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
+    minimised = summary["objective"].get("minimised")
+    shown = (f"{objective:.6g}" if minimised is None else  # the tension, not tension / bound
+             f"{minimised['name']} = {minimised['value']:.6g} (minimised)")
     return _report_fit(comm, "design", summary,
-                       f"design {summary['status']}: {values}; objective {objective:.6g}, KKT "
+                       f"design {summary['status']}: {values}; objective {shown}, KKT "
                        f"residual {summary['kkt_residual']:.2g}, {summary['iterations']} "
                        f"iterations ({summary['gradient']} gradients); results in {args.out}")
 

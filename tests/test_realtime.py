@@ -125,7 +125,7 @@ def test_finger_tension_updates_equal_solve_static(monkeypatch):
             assert solver.tension_values()[0] == tension
             assert_same(tip, solver.state(), fresh(target, monkeypatch=monkeypatch), 0.1)
         # tendon offsets are parameters too (re-interpolated, new rest lengths)
-        change = {"parameters": {"tendons.0.offset_tip": 0.006, "tendons.0.offset_base": 0.007}}
+        change = {"parameters": {"tendons.0.offset_tip": 0.0045, "tendons.0.offset_base": 0.007}}
         target = solver.target(**change)
         tip = solver.update(**change)
         assert_same(tip, solver.state(), fresh(target, monkeypatch=monkeypatch), 0.1)

@@ -605,6 +605,16 @@ def _plot(path: Path, data: CalibrationData, curves: dict, row_factors: np.ndarr
     from fe_beam.exports.outputs import _pyplot
 
     plt = _pyplot()
+    figure = _calibration_figure(plt, data, curves, row_factors, summary)
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+def _calibration_figure(plt, data: CalibrationData, curves: dict, row_factors: np.ndarray,
+                        summary: dict):
+    """The backbone panel and the tip panel: tip_u, tip_v [mm] on the left axis, tip_theta
+    [rad] on its own right axis; the horizontal axis is the data's load column (a tension
+    column: tendon 0's tension [N] = load factor x tendons.0.tension)."""
     figure, axes = plt.subplots(1, 2, figsize=(10, 4.2))
     levels = sorted(curves)
     factors = np.array([lf for lf in levels])
@@ -618,18 +628,31 @@ def _plot(path: Path, data: CalibrationData, curves: dict, row_factors: np.ndarr
     axes[0].set_aspect("equal", adjustable="datalim")
     axes[0].set_title("backbone: data and fitted model")
     axes[0].legend(fontsize=7)
+    scale, xlabel = 1.0, "load factor"
+    if data.load_column == "tension":
+        measured = np.abs(np.asarray(row_factors, dtype=float)) > 0
+        if np.any(measured):
+            scale = float(np.median(np.asarray(data.loads)[measured]
+                                    / np.asarray(row_factors)[measured]))
+            xlabel = "tension of tendon 0 [N]"
+    angle = axes[1].twinx()
+    handles = []
     for index, column in enumerate(("tip_u", "tip_v", "tip_theta")):
-        model_values = [curves[level]["tip"][index] for level in levels]
-        line = axes[1].plot(factors, model_values, "-", label=f"{column} model")[0]
+        axis, unit = (angle, 1.0) if column == "tip_theta" else (axes[1], 1e3)
+        color = f"C{index}"
+        model_values = np.array([curves[level]["tip"][index] for level in levels]) * unit
+        handles += axis.plot(factors * scale, model_values, "-", color=color,
+                             label=f"{column} model")
         if column in data.columns:
-            axes[1].plot(row_factors, data.columns[column], "o", color=line.get_color(),
-                         label=f"{column} data")
-    axes[1].set_xlabel("load factor")
-    axes[1].set_ylabel("tip value [m or rad]")
+            handles += axis.plot(np.asarray(row_factors) * scale,
+                                 np.asarray(data.columns[column]) * unit, "o", color=color,
+                                 label=f"{column} data")
+    axes[1].set_xlabel(xlabel)
+    axes[1].set_ylabel("tip_u, tip_v [mm]")
+    angle.set_ylabel("tip_theta [rad]")
     axes[1].set_title("tip: data and fitted model")
-    axes[1].legend(fontsize=7)
+    axes[1].legend(handles=handles, fontsize=7)
     fitted = ", ".join(f"{k} = {v:.4g}" for k, v in summary["parameters"].items())
     figure.suptitle(fitted, fontsize=8)
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    plt.close(figure)
+    return figure

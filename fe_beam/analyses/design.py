@@ -571,7 +571,7 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         "bounds": {k: [float(a), float(b)] for k, (a, b) in zip(design.variables,
                                                                 design.bounds, strict=True)},
         "objective": {"kind": design.objective, "value": final["objective"],
-                      "initial": initial["objective"]},
+                      "initial": initial["objective"]} | _minimised(design, evaluator, t, t0),
         "constraints": _constraint_summary(design, final),
         "kkt_residual": conditions["kkt_residual"],
         "kkt": conditions,
@@ -581,9 +581,31 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         "tip": final["tip"],
         "history": history,
         "wall_time_s": time.perf_counter() - started,
-        "notes": _target_notes(design, final, conditions),
+        "notes": _target_notes(design, final, conditions) + _gradient_notes(
+            design, gradient_kind[0]),
     }
     return summary | {"_shapes": (start_shape, shape)}
+
+
+def _minimised(design: DesignProblem, evaluator, t, t0) -> dict:
+    """objective = "tension": the minimised variable itself (the objective's value is it
+    divided by its largest bound, the scale SLSQP works in)."""
+    if design.objective != "tension":
+        return {}
+    i = design.force_variable
+    return {"minimised": {"name": design.variables[i], "value": float(evaluator.x(t)[i]),
+                          "initial": float(evaluator.x(t0)[i]),
+                          "scale": float(np.max(np.abs(design.bounds[i])))}}
+
+
+def _gradient_notes(design: DesignProblem, kind: str) -> list[str]:
+    """Finite-difference gradients where adjoint ones would otherwise be used: said."""
+    if design.max_fibre_strain is None or kind != "finite-difference":
+        return []
+    n = len(design.variables)
+    return [f"[design] max_fibre_strain: the gradients are central finite differences (step "
+            f"{FD_STEP:g} of each variable's range, {2 * n} extra equilibria per gradient): the "
+            "fibre-strain constraint is not an output of the adjoint sensitivities"]
 
 
 TARGET_TOLERANCE = 1e-10  # dimensionless objective: a miss of 1e-5 L (or 1e-5 rad)

@@ -102,8 +102,11 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
                 current = spectrum(run)
                 if (current is not None and previous_count is not None
                         and current.unstable != previous_count and not found):
-                    found.append(locate_bifurcation(run, engine, before, entry_after,
-                                                    previous_count, tol))
+                    # a step may cross several: each change of the count is located
+                    for crossing in range(abs(current.unstable - previous_count)):
+                        found.append(locate_bifurcation(run, engine, before, entry_after,
+                                                        previous_count, tol,
+                                                        crossing=crossing))
                 result.critical_points.extend(found)
                 last = record(engine.parameter)
                 beyond = abs(engine.parameter) >= settings.max_load_factor * (1 - 1e-12)

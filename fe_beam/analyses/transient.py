@@ -138,6 +138,14 @@ class DynamicResult:
     strain_range: dict | None = None
 
 
+def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
+    """The configuration's own notes (keys the scheme does not use), said when writing."""
+    notes = list(getattr(config, "notes", ()))
+    if notes and out is not None:
+        runctl.warn(comm, notes)
+    return notes
+
+
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                 progress: bool = True) -> DynamicResult:
     if config.time.scheme.startswith("fd-"):
@@ -148,6 +156,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         steps = config.time.t_end / max(config.time.dt, config.time.max_dt)
     notes = check_beam_work(config.static, steps, comm, " of time stepping",
                             quiet=out is None)
+    notes += _config_notes(config, out, comm)
     if config.time.scheme == "energy-conserving" and config.time.adaptive:
         # measured: a step load on an 8-element cantilever took 59k steps to t = 0.09 s
         note = ("[time] adaptive = true with scheme = \"energy-conserving\": the local error "
@@ -271,6 +280,7 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
                           "\"generalized-alpha\"")
     notes = check_beam_work(config.static, config.time.t_end / config.time.dt, comm,
                             " of time stepping (output times)", quiet=out is None)
+    notes += _config_notes(config, out, comm)
     stiffness = model.stiffness_at(0.0)
     props = model.section.properties(0.0)
     k = model.options.shear_correction if model.options.law == "reissner" else 1.0

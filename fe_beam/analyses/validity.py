@@ -284,9 +284,18 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
                 time.sleep(0.05)
     except runctl.Interrupted as stop:
         bar.close()
+        # the closing line says which points are done (not the inner compare's "load factor 0
+        # of the sweep" of the point that was running)
+        finished_now = sorted(p.name for p in config.points if _finished(out, p) is not None) \
+            if root else sorted(done)
+        total = len(config.points)
+        stop.where = f"{len(finished_now)} of {total} validity points done"
+        stop.written = (f"the finished points ({_names(finished_now)}; points/<i>_<j>.json, "
+                        "reused by a rerun) and summary.json are")
         if root:  # the finished points are on disk; the summary says what is missing
             _write(out, config, started, "interrupted",
-                   f"interrupted ({stop.name}); rerun the command to finish the map", len(done))
+                   f"interrupted ({stop.name}) with {len(finished_now)} of {total} points done "
+                   f"({_names(finished_now)}); rerun the command to finish the map", len(done))
         raise
     finally:
         bar.close()
@@ -295,6 +304,14 @@ def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = Tru
         summary = _write(out, config, started, None, "", len(done))
     summary = comm.bcast(summary, root=0) if comm.size > 1 else summary
     return summary
+
+
+def _names(names: list[str], shown: int = 6) -> str:
+    """'0_0, 0_1, ...' (at most ``shown``), or 'none'."""
+    if not names:
+        return "none"
+    return ", ".join(names[:shown]) + (f", ... ({len(names) - shown} more)"
+                                       if len(names) > shown else "")
 
 
 def _run_workers(raw: dict, config: ValidityConfig, points: list[GridPoint], workers: int,

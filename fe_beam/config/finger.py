@@ -8,8 +8,6 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from fe_beam.config.schema import (
     NUMBER,
     ConfigError,
@@ -21,7 +19,7 @@ from fe_beam.config.schema import (
     parse_static,
     table,
 )
-from fe_beam.model.tendons import Tendon
+from fe_beam.model.tendons import Tendon, check_tendon_inside
 
 __all__ = [
     "DEFAULT_FINGER",
@@ -115,27 +113,6 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
     )
     _wrap(tendon.validate_for, length)
     return tendon, values["steps"]
-
-
-def check_tendon_inside(tendon: Tendon, section, length: float) -> None:
-    """ConfigError if the tendon's offset leaves the section anywhere between entry and anchor
-    (the offset is piecewise linear; the section's extent is sampled finely along x)."""
-    xs = np.linspace(tendon.entry, tendon.anchor, 201)
-    for path in tendon.paths:
-        points = np.array(path, dtype=float)
-        stations = np.union1d(xs, points[:, 0][(points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])])
-        offsets = np.interp(stations, points[:, 0], points[:, 1])
-        for x, offset in zip(stations, offsets, strict=True):
-            extent = section.y_extent(x / length)
-            if extent is None:
-                return
-            low, high = extent
-            margin = 1e-9 * (high - low)
-            if not low - margin <= offset <= high + margin:
-                raise ConfigError(
-                    f"[[tendons]] {tendon.name!r}: offset {offset:.6g} m at x = {x:.6g} m lies "
-                    f"outside the section (y from {low:.6g} to {high:.6g} m about its centroid)"
-                )
 
 
 def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:

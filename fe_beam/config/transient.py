@@ -71,6 +71,7 @@ class DynamicConfig:
     load_function: object = None
     motion_function: object = None
     tendon_functions: tuple = ()  # f_i(t) scaling tendon i's tension (static.tendons)
+    notes: tuple = ()  # what the configuration gives that the run does not use (said once)
 
 
 def _split_time_loads(config: dict) -> tuple[dict, dict]:
@@ -156,7 +157,23 @@ def parse_dynamic(config: dict) -> DynamicConfig:
             "t_{n+1} but the tendon pulls at t_{n+1-alpha_f}: first-order errors); use "
             "constraint = \"none\", or rho_inf = 0 (alpha_f = 0: both at t_{n+1})")
     return DynamicConfig(static, settings, damping, initial["from_static"], _velocity(initial),
-                         load, motion, tendon_functions)
+                         load, motion, tendon_functions, _unused_time_keys(config, settings))
+
+
+def _unused_time_keys(config: dict, settings: TimeSettings) -> tuple:
+    """Notes on [time] keys given but not used by the chosen scheme: rho_inf parametrises
+    generalized-alpha only (the energy-momentum rule has no numerical dissipation; the fd-*
+    schemes are scipy's Runge-Kutta integrators)."""
+    given = config.get("time")
+    if not isinstance(given, dict) or "rho_inf" not in given \
+            or settings.scheme == "generalized-alpha":
+        return ()
+    why = ("the energy-momentum rule has no numerical dissipation to set"
+           if settings.scheme == "energy-conserving"
+           else "scipy's Runge-Kutta integrator has none")
+    return (f"[time] rho_inf = {given['rho_inf']!r} is not used by scheme = "
+            f"\"{settings.scheme}\" and ignored ({why}); it parametrises scheme = "
+            "\"generalized-alpha\" only",)
 
 
 TENDON_TIME_KEYS = ("time_function", "time_table")

@@ -8,6 +8,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
+from fe_beam.errors import ConfigError
+
 __all__ = ["Path", "Tendon", "looped_tendon"]
 
 Path = tuple[tuple[float, float], ...]
@@ -102,3 +106,24 @@ def looped_tendon(
     return Tendon(
         paths=(((0.0, b_left), (length, a_left)), ((0.0, b_right), (length, a_right))), **kwargs
     )
+
+
+def check_tendon_inside(tendon: Tendon, section, length: float) -> None:
+    """ConfigError if the tendon's offset leaves the section anywhere between entry and anchor
+    (the offset is piecewise linear; the section's extent is sampled finely along x)."""
+    xs = np.linspace(tendon.entry, tendon.anchor, 201)
+    for path in tendon.paths:
+        points = np.array(path, dtype=float)
+        stations = np.union1d(xs, points[:, 0][(points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])])
+        offsets = np.interp(stations, points[:, 0], points[:, 1])
+        for x, offset in zip(stations, offsets, strict=True):
+            extent = section.y_extent(x / length)
+            if extent is None:
+                return
+            low, high = extent
+            margin = 1e-9 * (high - low)
+            if not low - margin <= offset <= high + margin:
+                raise ConfigError(
+                    f"[[tendons]] {tendon.name!r}: offset {offset:.6g} m at x = {x:.6g} m lies "
+                    f"outside the section (y from {low:.6g} to {high:.6g} m about its centroid)"
+                )

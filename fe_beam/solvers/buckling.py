@@ -41,6 +41,7 @@ from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_max, global_sum
+from fe_beam.solvers.inertia import inertia
 from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE
 
 __all__ = ["Buckling", "LinearisedProblem", "buckling_modes", "rod_buckling",
@@ -85,6 +86,9 @@ class LinearisedProblem:
     saddle_point: bool = False
     explicit: bool = False
     jacobian: object = None
+    # symmetric K_T and K_geo (conservative loads): positive factors are verified by the
+    # inertia of K_T + lambda K_geo (`_InertiaCount`); False (follower loads): not verified
+    conservative: bool = True
 
 
 class BucklingFailed(ArithmeticError):
@@ -199,12 +203,20 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         if len(positive) >= count or extra >= MAX_EXTRA or len(pairs) < count + extra:
             break
         extra *= 2
-    for matrix in (K, G, B):
-        matrix.destroy()
     positive.sort(key=lambda pair: pair[0])
     negative = sorted((mu for mu, _ in pairs if mu < 0), key=abs)
+    if problem.conservative:
+        try:
+            positive = _verified_positive(SLEPc, K, G, B, positive, pairs, count, fixed,
+                                          problem, notes)
+        finally:
+            for matrix in (K, G, B):
+                matrix.destroy()
+    else:
+        for matrix in (K, G, B):
+            matrix.destroy()
     chosen = positive[:count]
-    if len(chosen) < count:
+    if len(chosen) < count and not problem.conservative:
         notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
                      "factor(s) found (the loads may not compress the structure enough)")
     p = problem.load_factor
@@ -220,6 +232,120 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         shape.name = f"buckling_mode_{index}"
     return Buckling([p + mu for mu, _ in chosen], [s for _, s in chosen], p,
                     [p + mu for mu in negative], notes)
+
+
+# positive factors: an eigenvalue mu of (K_T + mu K_geo) phi = 0 is a crossing of the inertia of
+# K_T + lambda K_geo at lambda = mu; a bracket mu (1 -+ VERIFY_WIDTH) must show it
+VERIFY_WIDTH = 1e-6
+# the search for positive factors beyond those near 0 goes up to this multiple of the largest
+# |factor| found there (doubling, then bisection on the inertia count)
+SEARCH_RANGE = 1e8
+
+
+class _InertiaCount:
+    """N(lambda) = negative(K_T + lambda K_geo) - negative(K_T): for a stable state (K_T positive
+    definite on the constraint-preserving directions) the number of buckling factors in
+    (0, lambda) (Sylvester's law on the pencil; the constraint rows add the same m negative
+    pivots at every lambda). One sparse LDL^T (MUMPS) per value; collective."""
+
+    def __init__(self, K, G):
+        self.K, self.G, self.cache = K, G, {}
+        self.base = self._negative(0.0)
+
+    def _negative(self, value: float) -> int:
+        A = self.K.copy()
+        try:
+            if value:
+                A.axpy(value, self.G)
+            return inertia(A)[0]
+        finally:
+            A.destroy()
+
+    def __call__(self, value: float) -> int:
+        if value not in self.cache:
+            self.cache[value] = self._negative(value) - self.base
+        return self.cache[value]
+
+
+def _verified_positive(SLEPc, K, G, B, positive, pairs, count, fixed, problem, notes):
+    """The first ``count`` positive pairs that are crossings of the inertia of K_T + lambda K_geo
+    (round-off pairs of the pencil, e.g. of the constraint rows, are not: dropped, with a note),
+    completed by a search (shift-and-invert inside the interval that the inertia count
+    brackets) when the one about 0 found fewer or missed one (e.g. behind the many negative
+    factors of a fine mesh)."""
+    counter = _InertiaCount(K, G)
+    dropped: list[float] = []
+
+    def verify(candidates):
+        """Ascending candidates kept while they are crossings, until ``count`` are kept."""
+        kept, index = [], 0
+        candidates = sorted(candidates, key=lambda pair: pair[0])
+        while index < len(candidates) and len(kept) < count:
+            mu = candidates[index][0]
+            group = [c for c in candidates[index:] if c[0] <= mu * (1 + VERIFY_WIDTH) ** 2]
+            top = group[-1][0]
+            available = abs(counter(top * (1 + VERIFY_WIDTH)) - counter(mu * (1 - VERIFY_WIDTH)))
+            kept.extend(group[:available])
+            dropped.extend(c[0] for c in group[available:])
+            index += len(group)
+        return kept
+
+    accepted = verify(positive)
+    largest = max([abs(mu) for mu, _ in pairs] + [1.0])
+    limit = SEARCH_RANGE * largest
+    for _ in range(3):
+        if len(accepted) >= count:
+            upper = accepted[count - 1][0] * (1 + VERIFY_WIDTH)
+            if counter(upper) <= count:
+                break  # none missed below the count-th one
+        else:
+            upper = max(largest, accepted[-1][0] * (1 + VERIFY_WIDTH) if accepted else 0.0)
+            while counter(upper) < count and upper < limit:
+                upper = min(2.0 * upper, limit)
+            if counter(upper) <= len(accepted):
+                break  # no further crossing below the limit
+            if counter(upper) >= count:  # bisect to a tight bracket of the count-th crossing
+                lower = 0.0
+                for _ in range(40):
+                    if upper - lower <= 1e-3 * upper:
+                        break
+                    middle = 0.5 * (lower + upper)
+                    if counter(middle) >= count:
+                        upper = middle
+                    else:
+                        lower = middle
+        # every crossing in (0, upper): shift-and-invert about its middle finds them first
+        wanted = counter(upper)
+        found = _solve_at(SLEPc, K, B, wanted + 4, fixed, problem, 0.5 * upper)
+        inside = verify([(mu, shape) for mu, shape in found if 0 < mu < upper])
+        if len(inside) <= len([mu for mu, _ in accepted if mu < upper]):
+            break  # the search found no more than we had
+        accepted = sorted(inside + [pair for pair in accepted if pair[0] >= upper],
+                          key=lambda pair: pair[0])[:count]
+    p = problem.load_factor
+    if dropped:
+        shown = ", ".join(f"{p + mu:.6g}" for mu in sorted(set(dropped))[:3])
+        notes.append(f"[buckling] {len(set(dropped))} positive eigenvalue(s) of the pencil "
+                     f"dropped ({shown}{', ...' if len(set(dropped)) > 3 else ''}): the inertia "
+                     "of K_T + lambda K_geo does not change there (round-off, not buckling)")
+    if len(accepted) < count:
+        notes.append(f"[buckling] count = {count}: only {len(accepted)} positive buckling load "
+                     f"factor(s) up to {p + limit:.3g} (checked by the inertia of "
+                     "K_T + lambda K_geo): the loads do not buckle the structure further")
+    return accepted
+
+
+def _solve_at(SLEPc, A, B, nev, fixed, problem, target):
+    """`_solve` with shift-and-invert about ``target`` instead of 0."""
+    attempts = ((None, max(2 * nev + 1, nev + 15)), (None, 3 * nev + 21),
+                (SLEPc.EPS.Type.ARNOLDI, 3 * nev + 21))
+    for attempt, (kind, ncv) in enumerate(attempts):
+        try:
+            return _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem, target)
+        except PETSc.Error:
+            if attempt == len(attempts) - 1:
+                raise
+    return []
 
 
 def _solve(SLEPc, A, B, nev, fixed, problem):
@@ -238,7 +364,7 @@ def _solve(SLEPc, A, B, nev, fixed, problem):
     return []
 
 
-def _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem):
+def _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem, target=0.0):
     eps = SLEPc.EPS().create(problem.comm)
     eps.setOptionsPrefix("fe_beam_buckling_")
     eps.setOperators(A, B)
@@ -247,10 +373,10 @@ def _solve_once(SLEPc, A, B, nev, ncv, kind, fixed, problem):
         eps.setType(kind)
     eps.setDimensions(nev, ncv)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
-    eps.setTarget(0.0)
+    eps.setTarget(target)
     transform = eps.getST()
     transform.setType(SLEPc.ST.Type.SINVERT)
-    transform.setShift(0.0)
+    transform.setShift(target)
     ksp = transform.getKSP()
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
@@ -319,7 +445,8 @@ def _rod_linearised(run) -> LinearisedProblem:
         set_load_factor=run._set_load_factor, set_prescribed_factor=problem.set_prescribed_factor,
         load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
         saddle_point=problem.saddle_point,
-        explicit=bool(problem.model.loads.follower or run.tendons))
+        explicit=bool(problem.model.loads.follower or run.tendons),
+        conservative=not problem.model.loads.follower)
 
 
 def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,

@@ -159,11 +159,14 @@ def _tolerance(load_factor: float, tol: float) -> float:
 
 
 def locate_bifurcation(run, engine, before: Snapshot, after: Snapshot, unstable_before: int,
-                       tol: float = 1e-6, max_bisections: int = 60) -> CriticalPoint:
+                       tol: float = 1e-6, max_bisections: int = 60,
+                       crossing: int = 0) -> CriticalPoint:
     """Bisection on the load factor between two converged states whose unstable counts differ
     (``before`` with ``unstable_before``), each trial an equilibrium at a fixed load factor
     solved from ``before`` (`Continuation.solve_at`), until the bracket is narrower than
-    ``tol`` (relative to max(1, |load factor|)). The engine is left at ``after``."""
+    ``tol`` (relative to max(1, |load factor|)). ``crossing``: which change of the count along
+    the step (0: the first; a step whose count changes by k > 1 crossed k points, located
+    one by one with crossing = 0 .. k-1). The engine is left at ``after``."""
     low, high = before.parameter, after.parameter
     low_state = before
     high_state = after
@@ -172,8 +175,14 @@ def locate_bifurcation(run, engine, before: Snapshot, after: Snapshot, unstable_
     # the eigenvalue that crosses zero (ascending index) and the sign it has after the point:
     # its own sign decides each trial (no threshold: the located load factor is then limited
     # by round-off, not by ZERO)
-    index = min(unstable_before, count_after)
     negative_after = count_after > unstable_before
+    if not 0 <= crossing < abs(count_after - unstable_before):
+        raise ValueError(f"crossing {crossing}: the count changes by "
+                         f"{abs(count_after - unstable_before)} in the bracket")
+    index = unstable_before + crossing if negative_after else unstable_before - crossing - 1
+    # the count on either side of this crossing
+    unstable_before = index if negative_after else index + 1
+    count_after = index + 1 if negative_after else index
     for _ in range(max_bisections):
         if abs(high - low) <= _tolerance(high, tol):
             break
@@ -182,8 +191,9 @@ def locate_bifurcation(run, engine, before: Snapshot, after: Snapshot, unstable_
         trial = spectrum(run)
         if trial.values.size:
             crossed = (trial.values[index] < 0) == negative_after
-        else:  # the sparse inertia: the count alone (one eigenvalue crosses in the bracket)
-            crossed = trial.unstable != unstable_before
+        else:  # the sparse inertia: the count alone (past this crossing or not)
+            crossed = (trial.unstable >= count_after if negative_after
+                       else trial.unstable <= count_after)
         if not crossed:
             low, low_state = middle, engine.snapshot()
         else:

@@ -293,7 +293,11 @@ class SNESSolver:
         if iteration == 0:
             reference = self._reference_fnorm
             self._initial_fnorm = fnorm if reference is None else min(fnorm, reference)
-            self._largest_fnorm = max(self._largest_fnorm, self._initial_fnorm)
+            # the largest residual of this solve, committed to _largest_fnorm only when it
+            # converges (`commit_scale`): a diverged trial (a huge first residual far from
+            # equilibrium) must not raise the round-off floor below, which would then accept
+            # unconverged states of later solves
+            self._trial_largest_fnorm = max(self._largest_fnorm, self._initial_fnorm)
             return reason.CONVERGED_FNORM_ABS if fnorm <= atol else reason.ITERATING
         if fnorm <= atol:
             return reason.CONVERGED_FNORM_ABS
@@ -302,14 +306,21 @@ class SNESSolver:
         # Round-off floor: quadratic convergence has stopped (the residual no longer halves)
         # far below the largest load-step residual this solver has seen (a cut-back step can be
         # so small that its own first residual is already near the floor).
+        largest = max(self._largest_fnorm, getattr(self, "_trial_largest_fnorm", 0.0))
         if iteration >= 2 and fnorm > 0.5 * previous and fnorm <= STAGNATION_RTOL * max(
-                self._largest_fnorm, atol):
+                largest, atol):
             return reason.CONVERGED_FNORM_RELATIVE
         if step_norm <= stol * max(xnorm, self.state_scale):
             return reason.CONVERGED_SNORM_RELATIVE
         if iteration >= max_it:
             return reason.DIVERGED_MAX_IT
         return reason.ITERATING
+
+    def commit_scale(self) -> None:
+        """A converged solve's first residual joins the largest load-step residual seen (the
+        scale of the round-off floor of `_converged`)."""
+        self._largest_fnorm = max(self._largest_fnorm, getattr(self, "_trial_largest_fnorm", 0.0))
+        self._trial_largest_fnorm = 0.0
 
     def residual_norm(self) -> float:
         """||F(w)|| at the current state and loads (global)."""
@@ -343,6 +354,7 @@ class SNESSolver:
         self.linear_iterations = self.snes.getLinearSolveIterations()
         if reason <= 0:
             raise SolveFailed(f"SNES diverged ({_reason_name(reason)})")
+        self.commit_scale()
         self._x.copy(w_vec)
         w_vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         return self.snes.getIterationNumber()

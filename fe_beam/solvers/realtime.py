@@ -38,6 +38,7 @@ from mpi4py import MPI
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import strains
 from fe_beam.model.studies import StaticConfig
+from fe_beam.model.tendons import check_tendon_inside
 from fe_beam.solvers.continuation import run_load_stepping
 from fe_beam.solvers.newton import LoadSteppingFailed, SolveFailed, StepResult, _agreed
 from fe_beam.solvers.rod_static import StaticContinuation
@@ -514,6 +515,11 @@ class RealtimeSolver:
         if structure_key(config, self.comm) != structure_key(self.config, self.comm):
             raise ValueError("the update changes the structure of the model (mesh, law, "
                              "supports, tendon path points): build a new solver")
+        if parameters and any(k.startswith(("tendons.", "section.")) for k in parameters):
+            # a tendon outside the section is refused as in the configuration
+            # (ConfigError, a ValueError; the solver keeps its state)
+            for tendon in config.tendons:
+                check_tendon_inside(tendon, config.model.section, config.model.length)
         return config
 
     @property
@@ -582,6 +588,12 @@ class RealtimeSolver:
         if failure is None:
             if config is None:
                 self._tensions = (self._tensions or {}) | tensions
+                # the tendon set's own values too: whatever sets its tensions from them
+                # (`TendonSet.set_tension_controlled`) must see the current ones
+                tendon_set = self.tendons
+                tendon_set.tendons = tuple(
+                    replace(t, tension=tensions[i]) if i in tensions else t
+                    for i, t in enumerate(tendon_set.tendons))
             else:
                 self.config = config
             self.last_iterations = iterations
@@ -589,6 +601,7 @@ class RealtimeSolver:
             return self.tip()
         # fallback: load stepping from the last equilibrium to the new values
         self.statistics["fallbacks"] += 1
+        self._drop_factors()
         if config is None:
             for constant, value in zip(self.tendons.tensions, saved, strict=True):
                 constant.value = value
@@ -610,6 +623,7 @@ class RealtimeSolver:
         except LoadSteppingFailed as error:
             state[:] = previous
             self._apply(old, config, 0.0)
+            self._drop_factors()
             raise UpdateFailed(
                 f"no equilibrium at the new values: Newton from the last equilibrium failed "
                 f"({failure}) and so did load stepping towards them ({error}); the last "
@@ -656,8 +670,15 @@ class RealtimeSolver:
             solver._reference_fnorm = None
         if reason < 0:
             raise SolveFailed(f"Newton diverged (reason {reason})")
+        solver.commit_scale()
         state[:] = x.array
         return iteration
+
+    def _drop_factors(self) -> None:
+        """Forget the last dense LU after a failed Newton: it is the tangent of a diverged
+        iterate, not of the kept equilibrium, and `_chord_step` must not predict with it."""
+        if self._dense_context is not None:
+            self._dense_context.factors = None
 
     def _chord_step(self, state) -> None:
         """Predictor: one Newton step at the new values with the last factorised tangent (the
@@ -688,6 +709,8 @@ class RealtimeSolver:
         a, b = old.model, new.model
 
         def mix(x, y):
+            if fraction == 1.0:  # exactly the new values (not x + (y - x) in round-off)
+                return np.asarray(y, dtype=float)
             return np.asarray(x, dtype=float) + fraction * (np.asarray(y, dtype=float)
                                                             - np.asarray(x, dtype=float))
 

@@ -1,0 +1,81 @@
+"""Issue 20, item 2: `fe-beam buckling` of a rod in pure tension. The constrained laws have no
+buckling load there (the second variation stays positive definite: the inertia of
+K_T + lambda K_geo never changes), so no positive factor may be reported whatever the mesh
+(round-off eigenvalues of the pencil were); the unconstrained Reissner rod has its tensile
+shear buckling at P0 = GA / (1 - GA/EA)^2 (plus a bending term of relative size ~1e-5), which
+must be found on every mesh (it hid behind the many negative factors of a fine mesh)."""
+
+import copy
+
+import pytest
+from mpi4py import MPI
+
+from fe_beam.analyses.buckling import run_buckling
+
+L, B, H, E, NU, PULL = 0.8, 0.02, 0.01, 7.0e10, 0.33, 2500.0  # aluminium strip, 2.5 kN pull
+
+
+def config(law, constraint, elements, supports=("clamped", "free"), count=2):
+    return {"beam": {"length": L}, "section": {"shape": "rectangle", "b": B, "h": H},
+            "material": {"E": E, "nu": NU}, "model": {"law": law, "constraint": constraint},
+            "mesh": {"elements": elements, "degree": 2},
+            "supports": {"x0": supports[0], "xL": supports[1]},
+            "loads": {"tip_force": [PULL, 0.0], "steps": 4},
+            "buckling": {"count": count, "prestress": 0.0},
+            "output": {"plots": False, "xdmf": False}}
+
+
+def buckle(raw):
+    return run_buckling(copy.deepcopy(raw), None, MPI.COMM_WORLD, progress=False)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("law, constraint", [("reissner", "inextensible-unshearable"),
+                                             ("nonstandard", "inextensible"),
+                                             ("nonstandard", "unshearable")])
+@pytest.mark.parametrize("elements", [12, 36])
+def test_constrained_rod_in_tension_does_not_buckle(law, constraint, elements):
+    summary = buckle(config(law, constraint, elements))
+    assert summary["status"] == "completed"
+    assert summary["load_factors"] == [], summary["load_factors"]
+    assert any("only 0 positive buckling load factor(s)" in n and "inertia" in n
+               for n in summary["notes"]), summary["notes"]
+    # the compressive (reversed) factors are still there: Euler's cantilever load / PULL
+    euler = 3.14159265358979**2 * E * B * H**3 / 12 / (4 * L**2) / PULL
+    assert abs(-summary["reversed_load_factors"][0] - euler) <= 2e-4 * euler
+
+
+@pytest.mark.mpi
+def test_reissner_tensile_shear_buckling_on_every_mesh():
+    G = E / (2 * (1 + NU))
+    GA, EA = G * B * H, E * B * H
+    closed = GA / (1 - GA / EA) ** 2 / PULL
+    firsts = []
+    for elements in (12, 36, 48):
+        summary = buckle(config("reissner", "none", elements))
+        factors = summary["load_factors"]
+        assert len(factors) == 2, (elements, factors, summary["notes"])
+        # above the closed form by the bending term only (2.4e-5 here), never below it
+        assert 0 < factors[0] - closed <= 5e-5 * closed, (elements, factors[0], closed)
+        assert factors[0] < factors[1] <= (1 + 1e-3) * closed
+        firsts.append(factors[0])
+    # a mode of long wavelength: the same factor on every mesh
+    assert max(firsts) - min(firsts) <= 1e-9 * closed, firsts
+
+
+@pytest.mark.mpi
+def test_compressed_column_factors_are_kept():
+    """Pinned-roller column: the verification keeps every genuine factor. Under compression
+    the (verified) factors are exactly the reversed (unverified) factors of the same column
+    pulled, and the first is Euler's pi^2 EI / L^2 to the shear/extension correction."""
+    pulled = buckle(config("reissner", "none", 30, supports=("pinned", "roller"), count=3))
+    raw = config("reissner", "none", 30, supports=("pinned", "roller"), count=3)
+    raw["loads"]["tip_force"] = [-PULL, 0.0]
+    summary = buckle(raw)
+    factors = summary["load_factors"]
+    assert len(factors) == 3
+    for factor, reversed_ in zip(factors, pulled["reversed_load_factors"], strict=True):
+        assert abs(factor + reversed_) <= 1e-9 * factor, (factor, reversed_)
+    euler = 3.14159265358979**2 * E * B * H**3 / 12 / L**2 / PULL
+    assert 0 < euler - factors[0] <= 1e-3 * euler  # shear lowers it (P/GA ~ 3e-4)
+    assert not any("dropped" in n for n in summary["notes"])
