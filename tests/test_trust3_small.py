@@ -48,7 +48,8 @@ def test_validity_ctrl_c_says_which_points_are_done(tmp_path, monkeypatch):
 
 
 def _captured_calibration_figure(tmp_path, monkeypatch, load_column):
-    """calibration.png's figure, kept from plt.close (the plot of `fe_beam.analyses.calibrate._plot`)."""
+    """calibration.png's figure, kept from plt.close (the plot of
+    `fe_beam.analyses.calibrate._plot`)."""
 
 
     from fe_beam.analyses import calibrate
