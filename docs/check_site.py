@@ -103,7 +103,9 @@ def check_page(driver, html: Path, page: str, shots: Path) -> list[str]:
     print(f"check_site: {page}: {len(images)} pictures, all loaded"
           if not any("picture" in p for p in problems) else f"check_site: {page}: FAILED",
           f"({len(seen)} local files referenced); screenshot {shot}")
-    if page != "index.html" and "auto_examples/plot_" in page and len(images) < 2:
+    if page == "index.html" and not images:
+        problems.append(f"{page}: expected the front page's picture, found no <img>")
+    if "auto_examples/plot_" in page and len(images) < 2:
         problems.append(f"{page}: expected the example's pictures, found {len(images)} <img>")
     return problems
 

@@ -1,6 +1,7 @@
 """Sphinx configuration of fe_beam's documentation site (`./bootstrap docs`)."""
 
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -29,6 +30,8 @@ extensions = [
     "fe_beam_docs",
 ]
 
+# technical text: "--set" stays two hyphens, quotes stay straight
+smartquotes = False
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 exclude_patterns = ["_build", "notes", "gallery/README.rst", "Thumbs.db", ".DS_Store",
@@ -76,3 +79,19 @@ sphinx_gallery_conf = {
     "plot_gallery": "True",
     "capture_repr": (),
 }
+
+
+# fe_beam's docstrings are plain text with math such as |r - p| (absolute values), which reST
+# would read as substitution references: escape a bar outside ``literals`` before autodoc parses.
+_LITERAL = re.compile(r"(``.*?``)")
+
+
+def _plain_bars(app, what, name, obj, options, lines):
+    for i, line in enumerate(lines):
+        if "|" in line:
+            lines[i] = "".join(part if part.startswith("``") else part.replace("|", r"\|")
+                               for part in _LITERAL.split(line))
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _plain_bars)

@@ -28,8 +28,10 @@ def _run_cli(command, config, out=None, **keys):
     """Stand-in for ``fe_beam.run``: the command line, then its summary.json."""
     out = Path(out or OUT / command)
     sets = [f"--set={key}={json.dumps(value)}" for key, value in keys.items()]
-    subprocess.run([sys.executable, "-m", "fe_beam.cli", command, str(config), "--out", str(out),
-                    "--quiet", *sets], check=True)
+    done = subprocess.run([sys.executable, "-m", "fe_beam.cli", command, str(config), "--out",
+                           str(out), "--quiet", *sets], capture_output=True, text=True)
+    if done.returncode:
+        raise RuntimeError(f"fe-beam {command} exited {done.returncode}: {done.stderr.strip()}")
     return json.loads((out / "summary.json").read_text())
 
 

@@ -24,9 +24,11 @@ OUT = ROOT / "docs" / "_build" / "gallery_runs" / "path"
 def fe_beam(command, config, out, *sets, extra=()):
     """Run ``fe-beam COMMAND examples/CONFIG --out OUT --set ...``; return its summary.json."""
     print("$ fe-beam", command, f"examples/{config}", *(f"--set {s}" for s in sets), *extra)
-    subprocess.run([sys.executable, "-m", "fe_beam.cli", command, str(ROOT / "examples" / config),
-                    "--out", str(OUT / out), "--quiet", *(f"--set={s}" for s in sets), *extra],
-                   check=True)
+    done = subprocess.run([sys.executable, "-m", "fe_beam.cli", command,
+                           str(ROOT / "examples" / config), "--out", str(OUT / out), "--quiet",
+                           *(f"--set={s}" for s in sets), *extra], capture_output=True, text=True)
+    print(done.stdout + done.stderr)
+    done.check_returncode()
     return json.loads((OUT / out / "summary.json").read_text())
 
 
