@@ -50,10 +50,10 @@ path = summary["path"]
 fig, ax = plt.subplots(figsize=(7, 4))
 for branch in sorted({p["branch"] for p in path}):
     points = [p for p in path if p["branch"] == branch]
-    ax.plot([-p["tip"]["v"] for p in points], [p["load_factor"] for p in points], ".-",
+    ax.plot([p["tip"]["v"] for p in points], [p["load_factor"] for p in points], ".-",
             label=f"branch {branch}")
 ax.axhline(euler, color="k", lw=0.8, ls=":", label="Euler load")
-ax.set_xlabel("tip deflection -v [m]")
+ax.set_xlabel("tip deflection v [m]")
 ax.set_ylabel("load factor")
 ax.legend()
 ax.grid(alpha=0.3)
