@@ -63,7 +63,7 @@ def test_every_command_has_a_page(docs_ext, tmp_path):
 
 def test_config_reference_lists_every_key(docs_ext):
     reference, generator = docs_ext
-    from fe_beam.config import SCHEMA
+    from fe_beam.config.schema import SCHEMA
 
     tables = reference.tables()
     assert set(SCHEMA) <= set(tables)

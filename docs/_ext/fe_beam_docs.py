@@ -151,7 +151,8 @@ def config_reference(tables: dict, readers: dict, dims: dict) -> str:
                 f"{{doc}}`fe-beam {c} </generated/commands/{c}>`" for c in who) + ".")
         lines.append("")
         if name == "section":
-            lines.append("The dimensions each shape needs (`fe_beam.sections.SHAPES`; the code "
+            lines.append("The dimensions each shape needs (`fe_beam.model.sections.SHAPES`; the "
+                         "code "
                          "has no help strings for them): " + "; ".join(
                              f"`{shape}`: " + ", ".join(f"`{d}`" for d in names)
                              for shape, names in dims.items()) + ". Any dimension `<dim>` may "

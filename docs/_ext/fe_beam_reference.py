@@ -82,7 +82,7 @@ def common_arguments() -> list[dict]:
 
 def command_tables() -> dict[str, tuple[str, ...]]:
     """The tables each command reads beyond the common ones of `tables()`'s SCHEMA part."""
-    from fe_beam.config import COMMAND_TABLES
+    from fe_beam.config.schema import COMMAND_TABLES
 
     return {name: tuple(names) for name, names in COMMAND_TABLES.items()}
 
@@ -92,7 +92,7 @@ def _type_names(types) -> tuple[str, ...]:
 
 
 def _from_keys(keys: dict) -> dict:
-    from fe_beam.config import REQUIRED as CODE_REQUIRED
+    from fe_beam.config.schema import REQUIRED as CODE_REQUIRED
 
     return {
         name: (_type_names(key.types), REQUIRED if key.default is CODE_REQUIRED else key.default,
@@ -107,25 +107,25 @@ def _undocumented(names, types=()) -> dict:
 
 def tables() -> dict[str, dict[str, tuple]]:
     """{table: {key: (types, default, doc)}} for every configuration table."""
-    from fe_beam.calibrate import CALIBRATE_KEYS
-    from fe_beam.config import NUMBER, SCHEMA
-    from fe_beam.design import DESIGN_KEYS
-    from fe_beam.model.buckling import BUCKLING_KEYS
-    from fe_beam.model.compare import COMPARE_KEYS
-    from fe_beam.model.finger import INVERSE_KEYS, TENDON_KEYS
-    from fe_beam.model.path import PATH_KEYS
-    from fe_beam.model.transient import (
+    from fe_beam.analyses.calibrate import CALIBRATE_KEYS
+    from fe_beam.analyses.design import DESIGN_KEYS
+    from fe_beam.config.buckling import BUCKLING_KEYS
+    from fe_beam.config.compare import COMPARE_KEYS
+    from fe_beam.config.finger import INVERSE_KEYS, TENDON_KEYS
+    from fe_beam.config.path import PATH_KEYS
+    from fe_beam.config.schema import NUMBER, SCHEMA
+    from fe_beam.config.solid import SOLID_KEYS, SOLID_MODES_KEYS
+    from fe_beam.config.transient import (
         DAMPING_KEYS,
         INITIAL_KEYS,
         MODES_KEYS,
         TENDON_TIME_KEYS,
         TIME_KEYS,
     )
-    from fe_beam.model.validity import VALIDITY_KEYS
-    from fe_beam.solid.config import SOLID_KEYS, SOLID_MODES_KEYS
+    from fe_beam.config.validity import VALIDITY_KEYS
 
     result = {name: _from_keys(keys) for name, keys in SCHEMA.items()}
-    # [section]: the shape's dimensions are named by fe_beam.sections.SHAPES (no Key, no help)
+    # [section]: the shape's dimensions are named by fe_beam.model.sections.SHAPES (no Key, no help)
     for names in section_dimensions().values():
         for name in names:
             result["section"].setdefault(name, (_type_names(NUMBER), None, None))
@@ -147,8 +147,8 @@ def tables() -> dict[str, dict[str, tuple]]:
 
 
 def section_dimensions() -> dict[str, tuple[str, ...]]:
-    """{section shape: its dimension keys} (fe_beam.sections.SHAPES)."""
-    from fe_beam.sections import OPTIONAL_CUSTOM, SHAPES
+    """{section shape: its dimension keys} (fe_beam.model.sections.SHAPES)."""
+    from fe_beam.model.sections import OPTIONAL_CUSTOM, SHAPES
 
     return {shape: tuple(names) + tuple(name for name in OPTIONAL_CUSTOM
                                         if shape == "custom" and name not in names)
