@@ -22,6 +22,7 @@ import copy
 import io
 import json
 import os
+import shutil
 import tempfile
 import warnings
 from collections.abc import Mapping
@@ -71,6 +72,12 @@ def _toml(value) -> str:
                       "table")
 
 
+def _remove(folder: Path, comm) -> None:
+    comm.barrier()
+    if comm.rank == 0:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLike | None = None,
         *, comm=None, progress: bool = False, verbose: bool = False, data=None,
         levels: int | None = None, ratio: float | None = None,
@@ -105,8 +112,12 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
                           "CLI's --data)")
     world = comm if comm is not None else cli._world()
     with contextlib.ExitStack() as stack:
-        folder = Path(out) if out is not None else Path(
-            stack.enter_context(tempfile.TemporaryDirectory(prefix="fe_beam_run_")))
+        if out is None:  # one private folder for all ranks (rank 0 makes and removes it)
+            made = tempfile.mkdtemp(prefix="fe_beam_run_") if world.rank == 0 else None
+            folder = Path(world.bcast(made, root=0) if world.size > 1 else made)
+            stack.callback(_remove, folder, world)
+        else:
+            folder = Path(out)
         if out is not None:
             cli._check_output_folder(folder, world)
         check_values(raw)
