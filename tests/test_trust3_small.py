@@ -2,11 +2,14 @@
 
 import json
 import signal
+from pathlib import Path
 
 import numpy as np
 from test_validity import run_cli, with_map
 
 from fe_beam import runctl
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_validity_ctrl_c_says_which_points_are_done(tmp_path, monkeypatch):
@@ -151,3 +154,46 @@ def test_design_says_finite_differences_with_a_fibre_strain_limit():
                                   objective="tip_pose", target={"theta": 0.9}), None,
                       MPI.COMM_WORLD)
     assert not any("finite differences" in n for n in free["notes"]), free["notes"]
+
+
+def test_snap_through_critical_points_report_the_pushed_point(tmp_path, capsys):
+    """A point-force path (a clamped-clamped beam buckled by 1.2 % shortening, pushed at
+    x = 0.4 L): every critical point has the pushed point's u, v, theta (the clamped tip does
+    not move), lying between those of the two path points around it; the line says so."""
+    import tomllib
+
+    from tomlio import dump_toml
+
+    from fe_beam.cli import main
+
+    config = tomllib.loads((ROOT / "examples" / "snap_through.toml").read_text())
+    config["mesh"]["elements"] = 12
+    config["material"]["E"] = 2.0e7
+    config["loads"]["end_displacement"] = [-0.012, 0.0]
+    config["loads"]["point_forces"] = [[0.4, 0.0, -100 * 2.0e7 * 1e-8 / 12]]
+    config["path"]["max_steps"] = 45
+    config["output"]["plots"] = False
+    path = tmp_path / "snap.toml"
+    path.write_text(dump_toml(config))
+    capsys.readouterr()
+    code = main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    out = capsys.readouterr().out
+    assert code == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    points = summary["path"]
+    critical = summary["critical_points"]
+    assert len(critical) >= 2 and any(c["kind"] == "limit" for c in critical)
+    for c in critical:
+        assert c["point"]["x"] == 0.4
+        assert abs(c["point"]["v"]) > 1e-3  # the pushed point, not the clamped tip (v = 0)
+        # the path point just before the critical point and the one after it (in path order)
+        lf = c["load_factor"]
+        # (a limit point's load factor is beyond both: within two steps of them)
+        pairs = [(a, b) for a, b in zip(points, points[1:], strict=False)
+                 if max(abs(lf - a["load_factor"]), abs(lf - b["load_factor"]))
+                 <= 2 * abs(a["load_factor"] - b["load_factor"]) + 1e-9
+                 and min(a["point"]["v"], b["point"]["v"]) - 1e-9 <= c["point"]["v"]
+                 <= max(a["point"]["v"], b["point"]["v"]) + 1e-9]
+        assert pairs, (c, [(p["load_factor"], p["point"]["v"]) for p in points])
+    lines = [x for x in out.splitlines() if " point at load factor " in x]
+    assert len(lines) == len(critical) and all("point x = 0.4 m" in x for x in lines), out
