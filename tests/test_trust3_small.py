@@ -5,6 +5,7 @@ import signal
 from pathlib import Path
 
 import numpy as np
+import pytest
 from test_validity import run_cli, with_map
 
 from fe_beam import runctl
@@ -197,3 +198,37 @@ def test_snap_through_critical_points_report_the_pushed_point(tmp_path, capsys):
         assert pairs, (c, [(p["load_factor"], p["point"]["v"]) for p in points])
     lines = [x for x in out.splitlines() if " point at load factor " in x]
     assert len(lines) == len(critical) and all("point x = 0.4 m" in x for x in lines), out
+
+
+@pytest.mark.mpi
+def test_finger_progress_bar_counts_the_load_steps(monkeypatch):
+    """steps = 3: the bar's total is 3 steps and it reaches 3 (was 0..1, shown "0/1")."""
+    from fe_beam import continuation
+    from fe_beam.finger import parse_finger
+    from fe_beam.static import solve_static
+
+    bars = []
+
+    class Recording:
+        def __init__(self, comm, total, label, enabled=True, unit=""):
+            self.total, self.values = total, []
+            bars.append(self)
+
+        def update(self, value, message=""):
+            self.values.append(value)
+
+        def note(self, message):
+            pass
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(continuation, "ProgressBar", Recording)
+    config, _ = parse_finger({"mesh": {"elements": 6, "degree": 2}, "loads": {"steps": 3},
+                              "tendons": [{"name": "t", "offset_base": 0.006,
+                                           "offset_tip": 0.003, "tension": 0.8}],
+                              "output": {"plots": False, "xdmf": False}})
+    result = solve_static(config, None, progress=True, record_shapes=False)
+    assert result.status == "converged"
+    assert len(bars) == 1 and bars[0].total == 3
+    assert bars[0].values == pytest.approx([1.0, 2.0, 3.0], rel=1e-12)
