@@ -232,3 +232,47 @@ def test_finger_progress_bar_counts_the_load_steps(monkeypatch):
     assert result.status == "converged"
     assert len(bars) == 1 and bars[0].total == 3
     assert bars[0].values == pytest.approx([1.0, 2.0, 3.0], rel=1e-12)
+
+
+CALIBRATION_FINGER = {"beam": {"length": 0.1},
+                      "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
+                      "material": {"E": 0.6e6, "nu": 0.45},
+                      "mesh": {"elements": 6, "degree": 2}, "loads": {"steps": 4},
+                      "tendons": [{"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.9}],
+                      "solver": {"rtol": 1e-12}}
+
+
+@pytest.mark.mpi
+def test_calibrate_continues_from_lower_loads_when_the_start_has_no_equilibrium():
+    """Data of E = 0.6 MPa at tensions 0.4 .. 1.9 N; start E = 0.07 MPa: the non-standard
+    law's largest moment (0.703 EI/h at the tip) is below 1.9 N x 4 mm there, so the start
+    has no equilibrium at the highest tensions. The fit starts from the lower tensions and
+    recovers E; a start with no equilibrium even at 0.4 N is refused in one sentence."""
+    from fe_beam.calibrate import CalibrationData, CalibrationSpec, calibrate
+    from fe_beam.config import ConfigError
+    from fe_beam.sensitivity import RodSensitivity
+
+    parameters = ("material.E",)
+    tensions = np.array([0.4, 0.9, 1.4, 1.9])
+    model = RodSensitivity(CALIBRATION_FINGER, parameters)
+    try:
+        model.set_values(np.array([0.6e6]))
+        columns = {c: [] for c in ("tip_u", "tip_v", "tip_theta")}
+        for tension in tensions:
+            model.solve(tension / 1.9)
+            for c, value in zip(columns, model.outputs(list(columns)), strict=True):
+                columns[c].append(value)
+        data = CalibrationData("tension", tensions, {k: np.array(v) for k, v in
+                                                     columns.items()})
+        model.set_values(np.array([0.07e6]))
+        summary = calibrate(None, data, CalibrationSpec(parameters), model=model)
+        assert summary["status"] == "converged", summary["message"]
+        assert abs(summary["parameters"]["material.E"] - 0.6e6) <= 1e-6 * 0.6e6
+        assert summary["initial"]["material.E"] == 0.07e6
+        assert any("no equilibrium at tension" in n and "continued" in n
+                   for n in summary["notes"]), summary["notes"]
+        model.set_values(np.array([0.004e6]))
+        with pytest.raises(ConfigError, match="no equilibrium even at the data's lowest load"):
+            calibrate(None, data, CalibrationSpec(parameters), model=model)
+    finally:
+        model.destroy()
