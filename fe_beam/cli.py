@@ -322,9 +322,11 @@ def run_path_command(args, config: dict, comm) -> int:
     for note in summary.get("notes", []):
         _say(comm, f"fe-beam path: note: {note}", sys.stderr)
     for point in summary["critical_points"]:
-        tip = point["tip"]
-        _say(comm, f"{point['kind']} point at load factor {point['load_factor']:.8g}: tip u = "
-                   f"{tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+        # a point-force path: where the force pushes (the path's "point"), not the tip
+        tip, where = (point["point"], f"point x = {point['point']['x']:.6g} m") \
+            if "point" in point else (point["tip"], "tip")
+        _say(comm, f"{point['kind']} point at load factor {point['load_factor']:.8g}: {where} "
+                   f"u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
     _say(comm, f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
     return _exit_code(comm, summary, "fe-beam path")

@@ -2,11 +2,15 @@
 
 import json
 import signal
+from pathlib import Path
 
 import numpy as np
+import pytest
 from test_validity import run_cli, with_map
 
 from fe_beam import runctl
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_validity_ctrl_c_says_which_points_are_done(tmp_path, monkeypatch):
@@ -152,3 +156,124 @@ def test_design_says_finite_differences_with_a_fibre_strain_limit():
                                   objective="tip_pose", target={"theta": 0.9}), None,
                       MPI.COMM_WORLD)
     assert not any("finite differences" in n for n in free["notes"]), free["notes"]
+
+
+def test_snap_through_critical_points_report_the_pushed_point(tmp_path, capsys):
+    """A point-force path (a clamped-clamped beam buckled by 1.2 % shortening, pushed at
+    x = 0.4 L): every critical point has the pushed point's u, v, theta (the clamped tip does
+    not move), lying between those of the two path points around it; the line says so."""
+    import tomllib
+
+    from tomlio import dump_toml
+
+    from fe_beam.cli import main
+
+    config = tomllib.loads((ROOT / "examples" / "snap_through.toml").read_text())
+    config["mesh"]["elements"] = 12
+    config["material"]["E"] = 2.0e7
+    config["loads"]["end_displacement"] = [-0.012, 0.0]
+    config["loads"]["point_forces"] = [[0.4, 0.0, -100 * 2.0e7 * 1e-8 / 12]]
+    config["path"]["max_steps"] = 45
+    config["output"]["plots"] = False
+    path = tmp_path / "snap.toml"
+    path.write_text(dump_toml(config))
+    capsys.readouterr()
+    code = main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    out = capsys.readouterr().out
+    assert code == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    points = summary["path"]
+    critical = summary["critical_points"]
+    assert len(critical) >= 2 and any(c["kind"] == "limit" for c in critical)
+    for c in critical:
+        assert c["point"]["x"] == 0.4
+        assert abs(c["point"]["v"]) > 1e-3  # the pushed point, not the clamped tip (v = 0)
+        # the path point just before the critical point and the one after it (in path order)
+        lf = c["load_factor"]
+        # (a limit point's load factor is beyond both: within two steps of them)
+        pairs = [(a, b) for a, b in zip(points, points[1:], strict=False)
+                 if max(abs(lf - a["load_factor"]), abs(lf - b["load_factor"]))
+                 <= 2 * abs(a["load_factor"] - b["load_factor"]) + 1e-9
+                 and min(a["point"]["v"], b["point"]["v"]) - 1e-9 <= c["point"]["v"]
+                 <= max(a["point"]["v"], b["point"]["v"]) + 1e-9]
+        assert pairs, (c, [(p["load_factor"], p["point"]["v"]) for p in points])
+    lines = [x for x in out.splitlines() if " point at load factor " in x]
+    assert len(lines) == len(critical) and all("point x = 0.4 m" in x for x in lines), out
+
+
+@pytest.mark.mpi
+def test_finger_progress_bar_counts_the_load_steps(monkeypatch):
+    """steps = 3: the bar's total is 3 steps and it reaches 3 (was 0..1, shown "0/1")."""
+    from fe_beam.analyses.finger import parse_finger
+    from fe_beam.analyses.static import solve_static
+    from fe_beam.solvers import continuation
+
+    bars = []
+
+    class Recording:
+        def __init__(self, comm, total, label, enabled=True, unit=""):
+            self.total, self.values = total, []
+            bars.append(self)
+
+        def update(self, value, message=""):
+            self.values.append(value)
+
+        def note(self, message):
+            pass
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(continuation, "ProgressBar", Recording)
+    config, _ = parse_finger({"mesh": {"elements": 6, "degree": 2}, "loads": {"steps": 3},
+                              "tendons": [{"name": "t", "offset_base": 0.006,
+                                           "offset_tip": 0.003, "tension": 0.8}],
+                              "output": {"plots": False, "xdmf": False}})
+    result = solve_static(config, None, progress=True, record_shapes=False)
+    assert result.status == "converged"
+    assert len(bars) == 1 and bars[0].total == 3
+    assert bars[0].values == pytest.approx([1.0, 2.0, 3.0], rel=1e-12)
+
+
+CALIBRATION_FINGER = {"beam": {"length": 0.1},
+                      "section": {"shape": "rectangle", "b": 0.02, "h": 0.02, "h_tip": 0.01},
+                      "material": {"E": 0.6e6, "nu": 0.45},
+                      "mesh": {"elements": 6, "degree": 2}, "loads": {"steps": 4},
+                      "tendons": [{"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.9}],
+                      "solver": {"rtol": 1e-12}}
+
+
+@pytest.mark.mpi
+def test_calibrate_continues_from_lower_loads_when_the_start_has_no_equilibrium():
+    """Data of E = 0.6 MPa at tensions 0.4 .. 1.9 N; start E = 0.07 MPa: the non-standard
+    law's largest moment (0.703 EI/h at the tip) is below 1.9 N x 4 mm there, so the start
+    has no equilibrium at the highest tensions. The fit starts from the lower tensions and
+    recovers E; a start with no equilibrium even at 0.4 N is refused in one sentence."""
+    from fe_beam.analyses.calibrate import CalibrationData, CalibrationSpec, calibrate
+    from fe_beam.analyses.sensitivity import RodSensitivity
+    from fe_beam.config import ConfigError
+
+    parameters = ("material.E",)
+    tensions = np.array([0.4, 0.9, 1.4, 1.9])
+    model = RodSensitivity(CALIBRATION_FINGER, parameters)
+    try:
+        model.set_values(np.array([0.6e6]))
+        columns = {c: [] for c in ("tip_u", "tip_v", "tip_theta")}
+        for tension in tensions:
+            model.solve(tension / 1.9)
+            for c, value in zip(columns, model.outputs(list(columns)), strict=True):
+                columns[c].append(value)
+        data = CalibrationData("tension", tensions, {k: np.array(v) for k, v in
+                                                     columns.items()})
+        model.set_values(np.array([0.07e6]))
+        summary = calibrate(None, data, CalibrationSpec(parameters), model=model)
+        assert summary["status"] == "converged", summary["message"]
+        assert abs(summary["parameters"]["material.E"] - 0.6e6) <= 1e-6 * 0.6e6
+        assert summary["initial"]["material.E"] == 0.07e6
+        assert any("no equilibrium at tension" in n and "continued" in n
+                   for n in summary["notes"]), summary["notes"]
+        model.set_values(np.array([0.004e6]))
+        with pytest.raises(ConfigError, match="no equilibrium even at the data's lowest load"):
+            calibrate(None, data, CalibrationSpec(parameters), model=model)
+    finally:
+        model.destroy()

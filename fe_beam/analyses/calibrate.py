@@ -327,6 +327,63 @@ class _Residuals:
         return r, jac
 
 
+def _data_rows(data: CalibrationData, rows: np.ndarray) -> CalibrationData:
+    return CalibrationData(data.load_column, data.loads[rows],
+                           {k: v[rows] for k, v in data.columns.items()},
+                           None if data.s is None else data.s[rows])
+
+
+def _continue_from_lower_loads(model, data: CalibrationData, spec: CalibrationSpec,
+                               scale: np.ndarray, factors: np.ndarray, q: np.ndarray,
+                               bounds) -> tuple[np.ndarray, list[str]]:
+    """A start (scaled parameters ``q``) without an equilibrium at the data's higher loads:
+    fit the data of the loads it reaches, then of those the fitted parameters reach, up to
+    all of them; returns the scaled parameters to start the full fit from and a note.
+    ConfigError when the start has no equilibrium at the lowest load, or a fit to the lower
+    loads reaches no further one."""
+    levels = sorted(set(factors.tolist()))
+    checks = [_Residuals(model, _data_rows(data, factors == level), spec, scale,
+                         factors[factors == level]) for level in levels]
+
+    def reached(x) -> int:
+        for count, check in enumerate(checks):
+            if not np.all(np.isfinite(check.trial(x, 1))):
+                return count
+        return len(checks)
+
+    column = "tension" if data.load_column == "tension" else "load factor"
+    loads = {level: float(data.loads[factors == level][0]) for level in levels}
+    given = ", ".join(f"{k} = {v:.6g}" for k, v in zip(spec.parameters, q * scale,
+                                                       strict=True))
+    done = reached(q)
+    if done == 0:
+        raise ConfigError(f"[calibrate] the start values ({given}) have no equilibrium even at "
+                          f"the data's lowest load ({column} {loads[levels[0]]:.6g}): give "
+                          "start values nearer the data in the configuration")
+    first = done
+    while done < len(levels):
+        rows = factors <= levels[done - 1]
+        part = _Residuals(model, _data_rows(data, rows), spec, scale, factors[rows])
+        size = len(part.evaluate(q)[0])
+        fit = least_squares(lambda x, part=part, size=size: part.trial(x, size), q,
+                            jac=lambda x, part=part: part.evaluate(x)[1], bounds=bounds,
+                            method="trf", x_scale="jac", max_nfev=100)
+        q = fit.x
+        further = reached(q)
+        if further <= done:
+            fitted = ", ".join(f"{k} = {v:.6g}" for k, v in zip(spec.parameters, q * scale,
+                                                                strict=True))
+            raise ConfigError(
+                f"[calibrate] the start values ({given}) have no equilibrium at {column} "
+                f"{loads[levels[first]]:.6g}, and the fit to the data up to "
+                f"{loads[levels[done - 1]]:.6g} ({fitted}) none at {loads[levels[done]]:.6g}: "
+                "give start values nearer the data in the configuration")
+        done = further
+    return q, [f"the start values ({given}) have no equilibrium at {column} "
+               f"{loads[levels[first]]:.6g} and above: the fit started from the data up to "
+               f"{loads[levels[first - 1]]:.6g} and was continued to the higher loads"]
+
+
 def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None,
               model=None, tolerance: float = 1e-12, curves: bool = False) -> dict:
     """Fit ``spec.parameters`` to ``data`` (collective). Returns the summary dict (parameters,
@@ -361,10 +418,17 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             bad = spec.parameters[int(np.flatnonzero((start < low) | (start > high))[0])]
             raise ConfigError(f"[calibrate] the start value of {bad!r} lies outside its bounds")
         residuals = _Residuals(model, data, spec, scale, factors)
-        # the start must have equilibria (else LoadSteppingFailed: exit 3); a trial parameter
-        # set without one gives non-finite residuals, which the trust-region method rejects
-        # (it shrinks the region) instead of ending the fit
-        r0, jac0 = residuals.evaluate(start / scale)
+        # the start must have equilibria: one without any at the higher loads is first fitted
+        # to the lower loads' data, continued upwards (`_continue_from_lower_loads`; a start
+        # with none at the lowest load is refused); a trial parameter set without one gives
+        # non-finite residuals, which the trust-region method rejects (it shrinks the region)
+        # instead of ending the fit
+        q0, start_notes = start / scale, []
+        if not np.all(np.isfinite(residuals.trial(q0, 1))):
+            residuals.failed, residuals.history = 0, []
+            q0, start_notes = _continue_from_lower_loads(model, data, spec, scale, factors, q0,
+                                                         (low / scale, high / scale))
+        r0, jac0 = residuals.evaluate(q0)
         size_r = len(r0)
         # a parameter the data do not depend on (e.g. material.rho without gravity, or only
         # unloaded data) has no best value: the optimiser would report any number as fitted
@@ -375,7 +439,7 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
                               "influence the data (zero sensitivity of every measured value): "
                               "remove it from parameters or give data it changes")
         fit = least_squares(lambda q: residuals.trial(q, size_r),
-                            start / scale, jac=lambda q: residuals.evaluate(q)[1],
+                            q0, jac=lambda q: residuals.evaluate(q)[1],
                             bounds=(low / scale, high / scale), method="trf",
                             x_scale="jac", xtol=tolerance, ftol=tolerance, gtol=tolerance,
                             max_nfev=200)
@@ -435,7 +499,7 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "function_evaluations": int(fit.nfev),
             "history": residuals.history,
             "wall_time_s": time.perf_counter() - started,
-            "notes": bound_notes + ([] if errors is not None or len(free) == 0 else [
+            "notes": start_notes + bound_notes + ([] if errors is not None or len(free) == 0 else [
                 "no standard errors: as many data as parameters, or parameters the data cannot "
                 "tell apart (J^T J singular)"]) + ([
                 f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]

@@ -218,6 +218,27 @@ def _path_plot(out, summary: dict) -> None:
         axes[0].legend(fontsize=7)
 
 
+def _critical_summary(point, problem, at: float | None) -> dict:
+    """A critical point's summary; on a point-force path also the ``point`` {x, u, v, theta}
+    where the force pushes (the path's own "point"; the clamped tip of a snap-through beam
+    does not move), read from the point's state once (collective)."""
+    entry = point.summary()
+    if at is None or point.snapshot is None:
+        return entry
+    values = getattr(point, "_point_values", None)
+    if values is None:
+        w = compat.local_array(problem.w)
+        saved = w.copy()
+        try:
+            w[:] = point.snapshot.state
+            values = {"x": at, **problem.point_values(at)}
+        finally:
+            w[:] = saved
+        point._point_values = values
+    entry["point"] = values
+    return entry
+
+
 def _interrupted(summary: dict, stop) -> None:
     """The summary's status and message of a path stopped by a signal after its last point."""
     last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
@@ -312,7 +333,9 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
             at = loads.point_forces[0][0]
             record["point"] = {"x": at, **problem.point_values(at)}
         summary["path"].append(record)
-        summary["critical_points"] = [c.summary() for c in result.critical_points]
+        at = loads.point_forces[0][0] if settings.parameter == "point_force" else None
+        summary["critical_points"] = [_critical_summary(c, problem, at)
+                                      for c in result.critical_points]
         files.on_step(record)
         bar.update(min(len(summary["path"]) - 1, settings.max_steps),
                    f"load factor {entry['load_factor']:.4g}")

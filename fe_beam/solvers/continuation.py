@@ -627,7 +627,10 @@ class Continuation:
         lam, increment = 0.0, 1.0 / stepping.steps
         previous = state.copy()
         before_previous, previous_increment = None, None
-        bar = ProgressBar(self.comm, total=1.0, label=label, enabled=progress)
+        # the bar counts load steps (the configured ones: "2/4"; a cut-back step shows its
+        # fraction of one), not the fraction of the way ("0/1" for any number of steps)
+        bar = ProgressBar(self.comm, total=stepping.steps, label=label, enabled=progress,
+                          unit="step")
         failures: list[str] = []  # why the tries since the last converged step failed
         size = _StepSize(increment, stepping.min_increment, stepping.max_increment,
                          stepping.cut_factor, stepping.grow_factor, stepping.easy_iterations,
@@ -698,7 +701,8 @@ class Continuation:
                 if on_converged is not None:
                     on_converged(point)
                 self._emit(point)
-                bar.update(lam, f"{label} factor {lam:.4f}, {iterations} Newton its")
+                bar.update(lam * stepping.steps,
+                           f"{label} factor {lam:.4f}, {iterations} Newton its")
                 size.converged(iterations)
         finally:
             bar.close()
