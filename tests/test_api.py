@@ -35,7 +35,10 @@ CASES = {
     "solid": ("solid", "finger_solid.toml", SOLID_COARSE, {}),
     "compare": ("compare", "finger_solid.toml", SOLID_COARSE | {"compare.tensions": [1.0]}, {}),
 }
-MPI_CASES = ("static", "finger")  # buckling on 2 ranks: two runs differ (see the issue note)
+MPI_CASES = ("static", "finger", "buckling")
+# two identical 2-rank eigenvalue solves (SLEPc + parallel MUMPS) agree to round-off, not bitwise
+# (measured: 1.644908547816125 vs 1.6449085478161232 on column_buckling)
+PARALLEL_RTOL = 1e-12
 
 
 def _numbers(value):
@@ -48,6 +51,22 @@ def _numbers(value):
     return value
 
 
+def _assert_same(a, b, rtol: float, where: str = "summary") -> None:
+    """Equal structures; floats equal (rtol = 0) or within rtol relative."""
+    if isinstance(a, dict):
+        assert set(a) == set(b), where
+        for key in a:
+            _assert_same(a[key], b[key], rtol, f"{where}.{key}")
+    elif isinstance(a, list):
+        assert len(a) == len(b), where
+        for index, (x, y) in enumerate(zip(a, b)):
+            _assert_same(x, y, rtol, f"{where}[{index}]")
+    elif isinstance(a, float) and isinstance(b, float) and rtol:
+        assert abs(a - b) <= rtol * max(abs(a), abs(b)), (where, a, b)
+    else:
+        assert a == b, (where, a, b)
+
+
 def _cli_args(overrides: dict, extra: dict) -> list[str]:
     args = []
     for key, value in overrides.items():
@@ -57,7 +76,7 @@ def _cli_args(overrides: dict, extra: dict) -> list[str]:
     return args
 
 
-def _compare(name: str, tmp: Path, comm=None):
+def _compare(name: str, tmp: Path, comm=None, rtol: float = 0.0):
     command, example, overrides, extra = CASES[name]
     config = EXAMPLES / example
     out = tmp / "cli"
@@ -65,7 +84,7 @@ def _compare(name: str, tmp: Path, comm=None):
                  *_cli_args(overrides, extra)])
     cli_summary = json.loads((out / SUMMARY_FILES.get(command, "summary.json")).read_text())
     api_summary = fe_beam.run(command, config, comm=comm, **extra, **overrides)
-    assert _numbers(api_summary) == _numbers(cli_summary)
+    _assert_same(_numbers(api_summary), _numbers(cli_summary), rtol)
     assert api_summary["status"] == cli_summary["status"]
     return code, api_summary
 
@@ -83,7 +102,7 @@ def test_run_equals_the_cli_on_every_rank(name, tmp_path_factory):
 
     comm = MPI.COMM_WORLD
     tmp = Path(comm.bcast(str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None))
-    code, summary = _compare(name, tmp, comm)
+    code, summary = _compare(name, tmp, comm, PARALLEL_RTOL if comm.size > 1 else 0.0)
     assert code == 0 and summary["status"] in ("converged", "completed")
 
 
