@@ -228,14 +228,14 @@ class EnergyMomentum(StepDriver):
             multiplier, check = new[3 + offset], tp[3 + offset]
             residual += (multiplier * test_variation[index[name]]
                          + check * pi1[index[name]]) * dx_e
-        # dead loads at the mean load factor of the step (problem.load_factor)
-        lam = p.load_factor
-        body = p.distributed + p.rho * props.A * p.gravity
-        residual -= lam * ufl.dot(body, dr) * p.dx_loads
+        # dead loads at the mean load factor of the step (problem.load_factor): the rod's own
+        # dead-load work (`BeamProblem.dead_load_work`: every dead load, point forces included)
+        # on the variation (Delta r, phi'(psi) psi): it is linear in the state, so this is its
+        # exact discrete gradient; the tip moment works through d phi = phi'(psi) d psi
         safe = ufl.conditional(ufl.lt(abs(psi), SERIES), 1.0, psi)
         ratio = ufl.conditional(ufl.lt(abs(psi), SERIES), 1 - psi**2 / 12 + psi**4 / 80,
                                 2 * ufl.atan(safe / 2) / safe)
-        residual -= lam * p.tip_moment * ratio * tp[2] * p.ds_tip
+        residual -= p.dead_load_work((tp[0], tp[1], ratio * tp[2]))
         self._follower_work = None
         if p.model.loads.follower:
             # theta_n + atan(psi/2) = (theta_n + theta_{n+1}) / 2 exactly (|Dtheta| < pi)
@@ -246,8 +246,6 @@ class EnergyMomentum(StepDriver):
             self._step_state, self._step_increment = (fem.Function(p.space) for _ in range(2))
             self._follower_work = fem.form(p.follower_virtual_work(
                 tuple(ufl.split(self._step_state)[:3]), self._step_increment))
-        else:
-            residual -= lam * ufl.dot(p.tip_force, dr) * p.ds_tip
         self.residual = residual
         # state update at the Gauss points (evaluated on the candidate before it is accepted)
         points = self._gauss_points
