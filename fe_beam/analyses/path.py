@@ -19,6 +19,7 @@ from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import BeamXDMFWriter, figure
 from fe_beam.exports.solid import DisplacementXDMF
 from fe_beam.fem import compat
+from fe_beam.model.loads import given
 from fe_beam.progress import ProgressBar
 from fe_beam.solvers.continuation import (
     ArcLength,
@@ -165,9 +166,7 @@ def point_force_control(run, static, progress: bool = False, prestate: bool = Tr
         forces(factor)
 
     supports = static.model.supports
-    others = (any(t.tension for t in static.tendons or ()) or any(loads.tip_force)
-              or loads.tip_moment or any(loads.distributed) or any(loads.gravity)
-              or loads.end_displacement is not None or loads.end_rotation is not None
+    others = (any(t.tension for t in static.tendons or ()) or given(loads, ("point_forces",))
               or any(supports.prescribed_x0.values()) or any(supports.prescribed_xL.values()))
     if prestate and others:  # the state without the point forces, from the undeformed one
         Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
@@ -353,9 +352,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
             constant.value = factor * tension
 
         others = (any(t.tension for i, t in enumerate(static.tendons) if i != settings.tendon)
-                  or any(loads.tip_force) or loads.tip_moment or any(loads.distributed)
-                  or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
-                  or loads.end_displacement is not None or loads.end_rotation is not None)
+                  or given(loads))
         if others:  # the state with the tendon slack: load-stepped from the undeformed one
             try:
                 Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(

@@ -51,6 +51,7 @@ from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
 from fe_beam.fem.tendons import TendonSet
+from fe_beam.model.loads import unsupported
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
 from fe_beam.solvers.energy_momentum import EnergyMomentum
@@ -273,10 +274,11 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
         raise ConfigError("[time] scheme = fd-*: supports clamped/free or pinned/roller, "
                           "viscous damping only, no initial velocity")
     loads = model.loads
-    if loads.follower or any(loads.gravity):
+    missing = unsupported(loads, "fd")  # fd_rk would drop them (fe_beam.model.loads)
+    if loads.follower or "gravity" in missing:
         raise ConfigError("[time] scheme = fd-*: no follower loads or gravity")
-    if loads.point_forces:  # fd_rk takes tip and distributed loads only: would drop them
-        raise ConfigError("[time] scheme = fd-* takes no [loads] point_forces; use scheme = "
+    if missing:
+        raise ConfigError(f"[time] scheme = fd-* takes no [loads] {missing[0]}; use scheme = "
                           "\"generalized-alpha\"")
     notes = check_beam_work(config.static, config.time.t_end / config.time.dt, comm,
                             " of time stepping (output times)", quiet=out is None)

@@ -41,6 +41,7 @@ from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_max, global_sum
+from fe_beam.model.loads import scaled
 from fe_beam.solvers.inertia import inertia
 from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE
 
@@ -489,29 +490,11 @@ def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
 
 # --- the command ------------------------------------------------------------------------------
 def load_scale_record(model, factor: float) -> dict:
-    """The rod's applied loads times ``factor`` (the nonzero ones): the critical loads."""
-    loads = model.loads
-    record = {}
-    for name in ("tip_force", "distributed", "gravity"):
-        value = getattr(loads, name)
-        if any(value):
-            record[name] = [factor * c for c in value]
-    if loads.tip_moment:
-        record["tip_moment"] = factor * loads.tip_moment
+    """The rod's applied loads times ``factor`` (those that act, `fe_beam.model.loads`) and its
+    prescribed end values: the critical loads."""
+    record = scaled(model.loads, factor)
     for end in ("x0", "xL"):
         values = getattr(model.supports, f"prescribed_{end}")
         if values:
             record[f"prescribed_{end}"] = {k: factor * v for k, v in values.items()}
-    for name in ("end_displacement", "point_forces"):
-        value = getattr(loads, name, None)
-        if value:
-            record[name] = (np.asarray(value, dtype=float) * _scaling(name, factor)).tolist()
-    if getattr(loads, "end_rotation", None) is not None:
-        record["end_rotation"] = factor * loads.end_rotation
     return record
-
-
-def _scaling(name: str, factor: float):
-    if name == "point_forces":  # [x, Px, Py]: the position is not scaled
-        return np.array([1.0, factor, factor])
-    return factor

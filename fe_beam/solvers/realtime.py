@@ -37,6 +37,7 @@ from mpi4py import MPI
 
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import strains
+from fe_beam.model.loads import LOADS
 from fe_beam.model.studies import StaticConfig
 from fe_beam.model.tendons import check_tendon_inside
 from fe_beam.solvers.continuation import run_load_stepping
@@ -116,11 +117,9 @@ def apply_config(run, config: StaticConfig) -> None:
         problem.section_dims[name].value = float(value)
     for name, value in model.section.dims_tip.items():
         problem.section_dims_tip[name].value = float(value)
-    loads = model.loads
-    problem.tip_force.value[:] = np.asarray(loads.tip_force, dtype=float)
-    problem.tip_moment.value = float(loads.tip_moment)
-    problem.distributed.value[:] = np.asarray(loads.distributed, dtype=float)
-    problem.gravity.value[:] = np.asarray(loads.gravity, dtype=float)
+    for name, kind in LOADS.items():  # the loads the rod problem holds as constants
+        if kind.realtime:
+            getattr(problem, name).value = np.asarray(getattr(model.loads, name), dtype=float)
     problem.model = model
     compat.local_array(problem.w)[:] = 0.0
     if run.tendons is not None:
@@ -505,11 +504,11 @@ class RealtimeSolver:
                 values[f"tendons.{index}.{what}"] = value
         config = set_parameters(self.config, values)
         if loads:
-            unknown = [k for k in loads if k not in ("tip_force", "tip_moment", "distributed",
-                                                     "gravity")]
+            updatable = [name for name, kind in LOADS.items() if kind.realtime]
+            unknown = [k for k in loads if k not in updatable]
             if unknown:
-                raise KeyError(f"loads.{unknown[0]}: the loads are tip_force, tip_moment, "
-                               "distributed and gravity")
+                raise KeyError(f"loads.{unknown[0]}: the loads are {', '.join(updatable[:-1])} "
+                               f"and {updatable[-1]}")
             model = config.model
             config = replace(config, model=replace(model, loads=replace(model.loads, **loads)))
         if structure_key(config, self.comm) != structure_key(self.config, self.comm):
@@ -723,10 +722,10 @@ class RealtimeSolver:
         for name in a.section.dims_tip:
             problem.section_dims_tip[name].value = float(mix(a.section.dims_tip[name],
                                                      b.section.dims_tip[name]))
-        problem.tip_force.value[:] = mix(a.loads.tip_force, b.loads.tip_force)
-        problem.tip_moment.value = float(mix(a.loads.tip_moment, b.loads.tip_moment))
-        problem.distributed.value[:] = mix(a.loads.distributed, b.loads.distributed)
-        problem.gravity.value[:] = mix(a.loads.gravity, b.loads.gravity)
+        for name, kind in LOADS.items():
+            if kind.realtime:
+                getattr(problem, name).value = np.asarray(
+                    mix(getattr(a.loads, name), getattr(b.loads, name)), dtype=float)
         tendons = self.tendons
         if not tendons:
             return
