@@ -71,3 +71,25 @@ def test_the_realtime_solver_updates_exactly_the_flagged_loads():
         with pytest.raises(KeyError, match="point_forces: the loads are tip_force, tip_moment, "
                                            "distributed and gravity"):
             solver.update(loads={"point_forces": VALUES["point_forces"]})
+
+
+def test_the_law_registry_lists_every_law_and_the_closed_forms():
+    from fe_beam.model.laws import LAW_KINDS, LAWS, ROD_LAWS
+
+    assert tuple(LAW_KINDS) == LAWS
+    assert {n: k.closed_form for n, k in LAW_KINDS.items() if k.closed_form} == ROD_LAWS
+
+
+def test_commands_refuse_a_law_without_the_capability():
+    from fe_beam.analyses.sensitivity import RodSensitivity
+
+    config = {table: dict(values) for table, values in EXAMPLE.items()}
+    config["model"] = {"law": "hyperelastic", "section_points": 3}
+    config["loads"] = {"tip_force": [0.0, -1.0]}
+    with pytest.raises(fe_beam.ConfigError, match="fd-.*nonstandard and reissner only.*"
+                                                  "hyperelastic"):
+        fe_beam.run("dynamic", config)
+    static = {k: v for k, v in config.items() if k != "time"}
+    with pytest.raises(fe_beam.ConfigError, match='"nonstandard" and "reissner" .*not '
+                                                  '"hyperelastic"'):
+        RodSensitivity(static, ["material.E"])

@@ -62,6 +62,7 @@ from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_sum
 from fe_beam.fem.solid.geometry import TIP_TAG
 from fe_beam.model.hyperelastic import NeoHookean
+from fe_beam.model.laws import LAW_KINDS
 from fe_beam.solvers.newton import (
     SADDLE_POINT_WORKSPACE,
     LoadStepping,
@@ -156,9 +157,10 @@ class RodSensitivity:
             config = self._parse(raw, kinds, kind)
         elif not config.tendons and any(k in ("tension", "pull_in", "offset") for k in kinds):
             raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
-        if config.model.options.law == "hyperelastic":
-            raise ConfigError("sensitivities support model.law = \"nonstandard\" and "
-                              "\"reissner\" (not \"hyperelastic\")")
+        if not LAW_KINDS[config.model.options.law].differentiable:
+            laws = " and ".join(f'"{n}"' for n, kind in LAW_KINDS.items() if kind.differentiable)
+            raise ConfigError(f"sensitivities support model.law = {laws} (not "
+                              f"\"{config.model.options.law}\")")
         self.config = config
         self.comm = comm
         self.run = StaticContinuation(config, comm, prefix=f"fe_beam_sens{id(self)}_")

@@ -51,6 +51,7 @@ from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
 from fe_beam.fem.tendons import TendonSet
+from fe_beam.model.laws import LAW_KINDS
 from fe_beam.model.loads import unsupported
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
@@ -263,9 +264,10 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     """The paper's FD + Runge-Kutta scheme (fe_beam.baselines.fd_rk) on the same config."""
 
     model = config.static.model
-    if model.options.law == "hyperelastic":
-        raise ConfigError("[time] scheme = fd-* has the non-standard and Reissner laws only, not "
-                          "[model] law = \"hyperelastic\"; use scheme = \"generalized-alpha\"")
+    if not LAW_KINDS[model.options.law].fd:
+        laws = " and ".join(name for name, kind in LAW_KINDS.items() if kind.fd)
+        raise ConfigError(f"[time] scheme = fd-* has the laws {laws} only, not [model] law = "
+                          f"\"{model.options.law}\"; use scheme = \"generalized-alpha\"")
     if model.section.tapered or model.options.constraint != "none":
         raise ConfigError("[time] scheme = fd-*: only uniform sections without constraints")
     supports = {("clamped", "free"): "clamped-free", ("pinned", "roller"): "pinned-roller"}

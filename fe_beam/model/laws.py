@@ -18,6 +18,8 @@ __all__ = [
     "DEFAULT_SECTION_POINTS",
     "LAWS",
     "MAX_SECTION_POINTS",
+    "LAW_KINDS",
+    "LawKind",
     "ROD_LAWS",
     "NonStandard",
     "Reissner",
@@ -108,6 +110,31 @@ class Reissner:
 
 #: the laws whose energy is a closed form in the section stiffnesses, by config name
 ROD_LAWS = {law.name: law for law in (NonStandard, Reissner)}
+
+
+@dataclass(frozen=True)
+class LawKind:
+    """A rod law (``[model] law``) and what supports it: ``fd`` the paper's FD + Runge-Kutta
+    schemes, ``differentiable`` the adjoint sensitivities, ``numbers_compiled`` whether its
+    constants are compiled into the forms (a real-time update of them rebuilds the problem)."""
+
+    name: str
+    help: str
+    closed_form: type | None = None
+    fd: bool = False
+    differentiable: bool = False
+    numbers_compiled: bool = False
+
+
+#: the rod laws with their capability flags (a new law: its dataclass and one entry here)
+LAW_KINDS: dict[str, LawKind] = {kind.name: kind for kind in (
+    LawKind("nonstandard", "the non-standard hyperelastic energy (2nd, 3rd, 4th moments)",
+            NonStandard, fd=True, differentiable=True),
+    LawKind("reissner", "the classical Reissner law EA, kGA, EI", Reissner, fd=True,
+            differentiable=True),
+    LawKind("hyperelastic", "the uniaxial fibre energy of a 3D hyperelastic law integrated "
+            "over the section", numbers_compiled=True),
+)}
 
 
 def closed_form_law(name: str, stiffness: Stiffness):

@@ -37,6 +37,7 @@ from mpi4py import MPI
 
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import strains
+from fe_beam.model.laws import LAW_KINDS
 from fe_beam.model.loads import LOADS
 from fe_beam.model.studies import StaticConfig
 from fe_beam.model.tendons import check_tendon_inside
@@ -89,7 +90,7 @@ def structure_key(config: StaticConfig, comm) -> tuple:
     section = model.section
     # A custom section's height and the hyperelastic section rule use the dimensions as
     # numbers: key on all of them there.
-    numbers_compiled = section.shape == "custom" or model.options.law == "hyperelastic"
+    numbers_compiled = section.shape == "custom" or LAW_KINDS[model.options.law].numbers_compiled
     section_key = (repr(section) if numbers_compiled
                    else (section.shape, tuple(sorted(section.dims)),
                          tuple(sorted(section.dims_tip))))
