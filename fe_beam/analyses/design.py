@@ -45,12 +45,20 @@ import copy
 import math
 import re
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from fe_beam import analyses
+from fe_beam.config.design import (
+    DesignProblem,
+    parse_design,
+)
+from fe_beam.config.finger import parse_finger, with_defaults
+from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError
+from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.solvers.realtime import RealtimeSolver, max_fibre_strain, set_parameters, structure_key
 
 __all__ = ["DesignProblem", "parse_design", "run_design"]
 
@@ -63,8 +71,6 @@ def _check_in_place(design: DesignProblem, config, comm) -> None:
     """Every variable must change numbers held by Constants only (one solver for all
     evaluations): a custom section's dimensions (its height sqrt(12 I / A)) and those of a
     hyperelastic section rule are compiled into the forms. ConfigError naming the variable."""
-    from fe_beam.solvers.realtime import set_parameters, structure_key
-
     base = structure_key(config, comm)
     for key, initial, (low, high) in zip(design.variables, design.initial, design.bounds,
                                          strict=True):
@@ -89,7 +95,6 @@ class Evaluator:
         installed and supports the variables and outputs."""
         from dataclasses import replace
 
-        from fe_beam.solvers.realtime import RealtimeSolver
 
         self.design = design
         _check_in_place(design, config, comm)
@@ -140,8 +145,6 @@ class Evaluator:
             f = abs(self.x(t)[i]) / np.max(np.abs(design.bounds[i]))
         inequality, equality = [], []
         if design.max_fibre_strain is not None:
-            from fe_beam.solvers.realtime import max_fibre_strain
-
             inequality.append(1.0 - max_fibre_strain(problem) / design.max_fibre_strain)
         if design.objective == "tension":
             equality.append(tip["theta"] - design.tip_angle)
@@ -173,11 +176,11 @@ def _adjoint_model(design: DesignProblem, raw: dict, comm):
     if design.max_fibre_strain is not None:
         return None
     try:
-        from fe_beam.analyses.sensitivity import RodSensitivity
+        sensitivity = analyses.sensitivity
     except ImportError:
         return None
     try:
-        return RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
+        return sensitivity.RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
     except (ConfigError, ValueError, KeyError):
         return None
 
@@ -415,7 +418,6 @@ def _constraint_summary(design: DesignProblem, values: dict) -> dict:
 
 
 def _shape(evaluator: Evaluator):
-    from fe_beam.exports.outputs import BeamXDMFWriter
 
     writer = BeamXDMFWriter(evaluator.solver.problem, None)
     try:
@@ -425,7 +427,6 @@ def _shape(evaluator: Evaluator):
 
 
 def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float) -> None:
-    from fe_beam.exports.outputs import _pyplot
 
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6, 5))
@@ -454,15 +455,11 @@ def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float
 
 def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> dict:
     """Parse, optimise, write summary.json and design.png under ``out``."""
-    from fe_beam.config.schema import parse_static
-    from fe_beam.exports.outputs import atomic_write_json
 
     design, rest = parse_design(config)
     rest = copy.deepcopy(rest)
     rest.pop("inverse", None)
     if "tendons" in rest:  # the finger's defaults written out (every table explicit)
-        from fe_beam.config.finger import with_defaults
-
         rest = with_defaults(rest)
     section = rest.get("section")
     for key in design.variables:
@@ -473,8 +470,6 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
                 and match.group(1) in section:
             section[key[len("section."):]] = section[match.group(1)]
     if "tendons" in rest:
-        from fe_beam.analyses.finger import parse_finger
-
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)
