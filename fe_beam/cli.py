@@ -85,10 +85,17 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def analysis(module: str):
+    """The driver module ``fe_beam.analyses.<module>``: the one in sys.modules (a stand-in
+    installed there replaces it), else imported now through the lazy `fe_beam.analyses`
+    package."""
+    return sys.modules.get(f"{analyses.__name__}.{module}") or getattr(analyses, module)
+
+
 def driver(spec: CommandSpec):
     """The function that runs ``spec``'s command (``spec.driver``, "module:function" of
     `fe_beam.analyses`; its module, and with it the finite-element stack, is imported now)."""
-    return getattr(getattr(analyses, spec.driver_module), spec.driver_function)
+    return getattr(analysis(spec.driver_module), spec.driver_function)
 
 
 def _say(comm, text: str, stream=None) -> None:
@@ -594,6 +601,8 @@ def _main(argv: list[str] | None = None) -> int:
         check_partition(config, comm.size, args.command)
         refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
                   "quantities": getattr(args, "quantity", None)}
+        if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
+            refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
         validated = validate(args.command, config, refine)
         if args.command == "calibrate":  # the data file too, before the FE stack is loaded
             check_data(config, args.data)

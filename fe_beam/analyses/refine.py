@@ -18,7 +18,6 @@ no MPI); `run_refinement` solves the levels, `write_outputs` writes ``refinement
 from __future__ import annotations
 
 import copy
-import importlib
 import math
 import sys
 from dataclasses import asdict, dataclass, field, replace
@@ -198,10 +197,11 @@ def analyse_sequence(
 
 # --- plan: what each level solves --------------------------------------------------------------
 def _solid_driver():
-    """The solid driver module, looked up in sys.modules at call time (a stand-in installed
-    there replaces it; a driver without ``parse_solid`` needs [solid] mesh_size)."""
+    """The solid driver module: the one in sys.modules (a stand-in installed there replaces it;
+    a driver without ``parse_solid`` needs [solid] mesh_size), else imported now through the
+    lazy `fe_beam.analyses` package."""
     try:
-        return importlib.import_module("fe_beam.analyses.solid_driver")
+        return sys.modules.get("fe_beam.analyses.solid_driver") or analyses.solid_driver
     except ModuleNotFoundError as error:
         raise ConfigError(
             f"[solid] configurations need fe_beam.analyses.solid_driver ({error})") from None

@@ -34,7 +34,8 @@ class CommandSpec:
     """One subcommand. ``tables``: the tables it reads besides the rod's; ``arguments``: its
     command-line options beyond CONFIG, --out, --set and --quiet, as (flags, argparse keywords);
     ``parse(config, options)``: the validated configuration (``options``: the values of
-    ``arguments``, by name; refine's "levels", "ratio", "quantities"); ``driver``:
+    ``arguments``, by name: refine's "levels", "ratio", "quantities", and its "solid_parser",
+    the solid driver's validation, default `fe_beam.config.solid.parse_solid`); ``driver``:
     "module:function" of `fe_beam.analyses` that runs it; ``sorts_tables``: the command sorts
     its tables itself (no `check_command_tables` notes)."""
 
@@ -72,7 +73,8 @@ def _parse_design(config: dict, options: dict):
 
 def _parse_refine(config: dict, options: dict):
     return plan_refinement(config, options.get("levels"), options.get("ratio"),
-                           options.get("quantities"))
+                           options.get("quantities"),
+                           solid_parser=options.get("solid_parser", parse_solid))
 
 
 CALIBRATE_ARGUMENTS = (
