@@ -52,6 +52,7 @@ __all__ = [
 ]
 
 UNITS = {"tip.u": "m", "tip.v": "m", "tip.theta": "rad"}
+SOLID_DRIVER = "fe_beam.analyses.solid_driver"  # the solid configurations' driver
 NOISE_RTOL = 1e-10  # |d_k| below this fraction of max |q| is round-off / solver noise
 MIN_ORDER = 0.5  # below it 1 / (r^p - 1) amplifies noise: coarse meshes, no extrapolation
 
@@ -201,7 +202,7 @@ def _solid_driver():
     a driver without ``parse_solid`` needs [solid] mesh_size), else imported now through the
     lazy `fe_beam.analyses` package."""
     try:
-        return sys.modules.get("fe_beam.analyses.solid_driver") or analyses.solid_driver
+        return sys.modules.get(SOLID_DRIVER) or analyses.solid_driver
     except ModuleNotFoundError as error:
         raise ConfigError(
             f"[solid] configurations need fe_beam.analyses.solid_driver ({error})") from None

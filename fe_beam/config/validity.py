@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from fe_beam.config.compare import RODS, CompareConfig, parse_compare
 from fe_beam.config.finger import TENDON_KEYS
-from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, table
+from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, check_values, table
 from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS
 
 __all__ = [
@@ -288,8 +288,6 @@ def parse_validity(raw: dict) -> ValidityConfig:
             point = point_config(raw, laws, settings)
             where = f"{given['x']} = {xv!r}" + (f", {y} = {yv!r}" if y is not None else "")
             try:
-                from fe_beam.config.schema import check_values
-
                 check_values(point)
                 parsed = parse_compare(point)
                 if ratio is not None:
