@@ -27,7 +27,8 @@ The residuals are weight * (model - data); with m residuals and n parameters the
 standard errors are sqrt(diag(s^2 (J^T J)^-1)), s^2 = |r|^2 / (m - n) (J the weighted
 residuals' Jacobian at the optimum), and ``correlation`` the matching correlation matrix.
 
-The input checks here are free of dolfinx and PETSc (`parse_calibrate`, `read_data`).
+The input checks are free of dolfinx and PETSc and live in the config layer
+(`fe_beam.config.calibrate`: `parse_calibrate`, `read_data`, `check_data`; imported back here).
 """
 
 from __future__ import annotations

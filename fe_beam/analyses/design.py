@@ -35,8 +35,8 @@ dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``ev
 ``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
 shapes, targets).
 
-Validation (`parse_design`) imports no FE code: a bad [design] table is a ConfigError (exit
-2, one sentence).
+Validation (`fe_beam.config.design.parse_design`, imported back here) imports no FE code: a bad
+[design] table is a ConfigError (exit 2, one sentence).
 """
 
 from __future__ import annotations
