@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
-import logging
 import os
 import re
 import sys
@@ -21,37 +20,28 @@ import time
 import traceback
 from pathlib import Path
 
-from fe_beam.config.schema import (
-    apply_overrides,
-    check_command_tables,
-    check_partition,
-    check_values,
-    load_config,
-    validate,
-)
+from fe_beam import analyses, runctl
+from fe_beam.config.calibrate import check_data
+from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
+from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
 from fe_beam.errors import ConfigError
+from fe_beam.lazy import LazyModule
+from fe_beam.logs import quiet_jit_logging
 from fe_beam.timefunctions import TimeFunctionError
+
+# The engines the CLI names load dolfinx and PETSc: imported when first used, so that
+# ``fe-beam --help`` and a configuration mistake answer without them. The drivers are reached
+# through the lazy `fe_beam.analyses` package (`driver`).
+newton = LazyModule("fe_beam.solvers.newton")
+realtime = LazyModule("fe_beam.solvers.realtime")
+solid_modes = LazyModule("fe_beam.analyses.solid_modes")
 
 EXIT_INTERNAL = 1
 EXIT_USAGE = 2
 EXIT_FAILED = 3
 
-COMMANDS = {
-    "static": "large-deflection statics of a planar beam (load stepping, SNES)",
-    "finger": "tendon-driven tapered soft finger (reduced Cosserat rod with [[tendons]])",
-    "design": "optimise section sizes, tendon offsets, tensions or loads for a target ([design])",
-    "dynamic": "nonlinear dynamics (generalised-alpha, or the paper's FD + Runge-Kutta)",
-    "modes": "natural frequencies and mode shapes (about the undeformed or a static state)",
-    "solid": "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod alongside",
-    "compare": "tension sweep: 3D solid vs the rod with the non-standard and Reissner laws",
-    "validity": "map of where the rod agrees with the 3D solid over two config keys "
-                "([validity])",
-    "refine": "mesh-refinement study: observed order and Richardson extrapolation of the tip",
-    "calibrate": "fit rod/finger parameters ([calibrate]) to measured tip poses and backbone "
-                 "points (--data DATA.csv), with standard errors",
-    "buckling": "linear buckling load factors and modes of the rod or the 3D solid ([buckling])",
-    "path": "arc-length path following with limit and bifurcation points ([path])",
-}
+#: The subcommands and their help (`fe_beam.config.registry.REGISTRY`).
+COMMANDS = {name: spec.help for name, spec in REGISTRY.items()}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -75,8 +65,8 @@ def _parser() -> argparse.ArgumentParser:
         description="Finite-element analysis of slender bodies that bend a lot.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name, help_text in COMMANDS.items():
-        command = sub.add_parser(name, help=help_text, description=help_text)
+    for name, spec in REGISTRY.items():
+        command = sub.add_parser(name, help=spec.help, description=spec.help)
         command.add_argument("config", help="TOML configuration file")
         command.add_argument(
             "--out", type=_output_folder, default=None,
@@ -90,25 +80,22 @@ def _parser() -> argparse.ArgumentParser:
             help="override a config value, e.g. --set section.h=0.01",
         )
         command.add_argument("--quiet", action="store_true", help="no progress bar")
-    from fe_beam.analyses.refine import add_refine_arguments
-
-    add_refine_arguments(sub.choices["refine"])
-    sub.choices["calibrate"].add_argument("--data", required=True, metavar="DATA.csv",
-                                          help="measurements (fe_beam.analyses.calibrate: columns)")
+        for flags, keywords in spec.arguments:
+            command.add_argument(*flags, **keywords)
     return parser
 
 
-class _WarningsOnly(logging.Filter):
-    def filter(self, record: logging.LogRecord) -> bool:
-        return record.levelno >= logging.WARNING
+def analysis(module: str):
+    """The driver module ``fe_beam.analyses.<module>``: the one in sys.modules (a stand-in
+    installed there replaces it), else imported now through the lazy `fe_beam.analyses`
+    package."""
+    return sys.modules.get(f"{analyses.__name__}.{module}") or getattr(analyses, module)
 
 
-def quiet_jit_logging() -> None:
-    """Drop FFCx/setuptools JIT chatter: it logs every compilation at INFO on the root logger
-    and resets the root level while doing so, so a level alone does not hold."""
-    root = logging.getLogger()
-    if not any(isinstance(f, _WarningsOnly) for f in root.filters):
-        root.addFilter(_WarningsOnly())
+def driver(spec: CommandSpec):
+    """The function that runs ``spec``'s command (``spec.driver``, "module:function" of
+    `fe_beam.analyses`; its module, and with it the finite-element stack, is imported now)."""
+    return getattr(analysis(spec.driver_module), spec.driver_function)
 
 
 def _say(comm, text: str, stream=None) -> None:
@@ -118,10 +105,8 @@ def _say(comm, text: str, stream=None) -> None:
 
 def _warn_notes(comm, notes) -> None:
     """The run's notes on stderr, each once (set-up warnings were printed when they arose)."""
-    from fe_beam.runctl import WARNED
-
     for note in notes or []:
-        if note not in WARNED:
+        if note not in runctl.WARNED:
             _say(comm, f"fe-beam: warning: {note}", sys.stderr)
 
 
@@ -146,12 +131,10 @@ def _finish(comm, result, out) -> int:
     return 0
 
 
-def run_static(args, config: dict, comm) -> int:
-    from fe_beam.analyses.static import solve_static
-    from fe_beam.config.schema import parse_static
-
-    parsed = parse_static(config)
-    result = solve_static(parsed, args.out, comm, progress=not args.quiet)
+# --- one runner per command: run(args, validated, config, comm, driver) -> exit code; the drivers
+# of static, finger, dynamic and modes take the validated configuration, the others the raw one
+def run_static(args, validated, config: dict, comm, solve_static) -> int:
+    result = solve_static(validated.parsed, args.out, comm, progress=not args.quiet)
     for step in result.steps[-1:]:
         tip = step["tip"]
         _say(
@@ -162,10 +145,8 @@ def run_static(args, config: dict, comm) -> int:
     return _finish(comm, result, args.out)
 
 
-def run_finger(args, config: dict, comm) -> int:
-    from fe_beam.analyses.finger import parse_finger, run_finger
-
-    parsed, target = parse_finger(config)
+def run_finger(args, validated, config: dict, comm, run_finger) -> int:
+    parsed, target = validated.parsed
     result, inverse = run_finger(
         parsed, args.out, comm, progress=not args.quiet, target=target
     )
@@ -188,11 +169,8 @@ def run_finger(args, config: dict, comm) -> int:
     return _finish(comm, result, args.out)
 
 
-def run_dynamic(args, config: dict, comm) -> int:
-    from fe_beam.analyses.transient import parse_dynamic, run_dynamic
-
-    parsed = parse_dynamic(config)
-    result = run_dynamic(parsed, args.out, comm, progress=not args.quiet)
+def run_dynamic(args, validated, config: dict, comm, run_dynamic) -> int:
+    result = run_dynamic(validated.parsed, args.out, comm, progress=not args.quiet)
     if result.history:
         last = result.history[-1]
         tip = last["tip"]
@@ -207,11 +185,8 @@ def run_dynamic(args, config: dict, comm) -> int:
     return 0
 
 
-def run_modes(args, config: dict, comm) -> int:
-    from fe_beam.analyses.transient import parse_modes, run_modes
-    from fe_beam.runctl import WARNED
-
-    static, modes = parse_modes(config)
+def run_modes(args, validated, config: dict, comm, run_modes) -> int:
+    static, modes = validated.parsed
     summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
     if summary["status"] == "failed":  # the static pre-state was not reached
         _say(comm, f"fe-beam modes: {summary['message']}", sys.stderr)
@@ -228,7 +203,7 @@ def run_modes(args, config: dict, comm) -> int:
                    f"{f' +- {abs(imag):.6g} i' if imag else ''} rad^2/s^2 "
                    f"(growth rate {mode['growth_rate']:.6g} 1/s)")
     for note in summary.get("notes", []):
-        if note in WARNED:
+        if note in runctl.WARNED:
             continue  # printed as a warning when it arose
         kind = "warning" if note.startswith("the state is unstable") else "note"
         _say(comm, f"fe-beam modes: {kind}: {note}", sys.stderr)
@@ -240,27 +215,15 @@ def run_modes(args, config: dict, comm) -> int:
     return 0
 
 
-RUNNERS = {"static": run_static, "finger": run_finger, "dynamic": run_dynamic,
-           "modes": run_modes}
-
-
-def run_refine(args, config: dict, comm) -> int:
-    from fe_beam.analyses.refine import run_refine_command
-
+def run_refine(args, validated, config: dict, comm, run_refine_command) -> int:
     return run_refine_command(args, config, comm, say=lambda text, stream=None: _say(
         comm, text, stream))
 
 
-RUNNERS["refine"] = run_refine
-
-
-def run_design_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.design import run_design
-    from fe_beam.solvers.realtime import UpdateFailed
-
+def run_design_command(args, validated, config: dict, comm, run_design) -> int:
     try:
         summary = run_design(config, args.out, comm, progress=not args.quiet)
-    except UpdateFailed as failure:  # a trial design without equilibrium (was: internal error)
+    except realtime.UpdateFailed as failure:  # a trial design without equilibrium
         _say(comm, f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
                    "[design] bounds)", sys.stderr)
         return EXIT_FAILED
@@ -292,12 +255,7 @@ def _report_fit(comm, command: str, summary: dict, line: str) -> int:
     return _exit_code(comm, summary, f"fe-beam {command}")
 
 
-RUNNERS["design"] = run_design_command
-
-
-def run_buckling_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.buckling import run_buckling
-
+def run_buckling_command(args, validated, config: dict, comm, run_buckling) -> int:
     summary = run_buckling(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
         _say(comm, f"fe-beam buckling: note: {note}", sys.stderr)
@@ -312,12 +270,7 @@ def run_buckling_command(args, config: dict, comm) -> int:
     return 0
 
 
-RUNNERS["buckling"] = run_buckling_command
-
-
-def run_path_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.path import run_path
-
+def run_path_command(args, validated, config: dict, comm, run_path) -> int:
     summary = run_path(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
         _say(comm, f"fe-beam path: note: {note}", sys.stderr)
@@ -332,12 +285,7 @@ def run_path_command(args, config: dict, comm) -> int:
     return _exit_code(comm, summary, "fe-beam path")
 
 
-RUNNERS["path"] = run_path_command
-
-
-def run_solid_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.solid_driver import run_solid
-
+def run_solid_command(args, validated, config: dict, comm, run_solid) -> int:
     summary = run_solid(config, args.out, comm, progress=not args.quiet)
     for note in summary.get("notes", []):
         _say(comm, f"fe-beam solid: note: {note}", sys.stderr)
@@ -355,18 +303,14 @@ def run_solid_command(args, config: dict, comm) -> int:
     if "distance_to_solid" in rod:
         _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
                    f"{rod['distance_to_solid']['max_over_L']:.3g}")
-    from fe_beam.analyses.solid_modes import modes_table  # [modes]: solid vs rod frequencies
-
-    for line in modes_table(summary.get("modes")):
+    for line in solid_modes.modes_table(summary.get("modes")):  # [modes]: solid vs rod
         _say(comm, line)
     _say(comm, f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {args.out}")
     return _exit_code(comm, summary, "fe-beam")
 
 
-def run_compare_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.compare import run_compare
-
+def run_compare_command(args, validated, config: dict, comm, run_compare) -> int:
     summary = run_compare(config, args.out, comm, progress=not args.quiet)
     for row in summary["table"]:
         where = f"tension {row['tension']:.4g} N" if "tension" in row else (
@@ -385,13 +329,7 @@ def run_compare_command(args, config: dict, comm) -> int:
     return _exit_code(comm, summary, "fe-beam")
 
 
-RUNNERS["solid"] = run_solid_command
-RUNNERS["compare"] = run_compare_command
-
-
-def run_validity_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.validity import run_validity
-
+def run_validity_command(args, validated, config: dict, comm, run_validity) -> int:
     summary = run_validity(config, args.out, comm, progress=not args.quiet,
                            say=lambda text: _say(comm, text, sys.stderr))
     for entry in summary["departures"].values():
@@ -403,16 +341,10 @@ def run_validity_command(args, config: dict, comm) -> int:
     return _exit_code(comm, summary, "fe-beam validity")
 
 
-RUNNERS["validity"] = run_validity_command
-
-
-def run_calibrate_command(args, config: dict, comm) -> int:
-    from fe_beam.analyses.calibrate import run_calibrate
-    from fe_beam.solvers.newton import LoadSteppingFailed
-
+def run_calibrate_command(args, validated, config: dict, comm, run_calibrate) -> int:
     try:
         summary = run_calibrate(config, args.data, args.out, comm, quiet=args.quiet)
-    except LoadSteppingFailed as failure:
+    except newton.LoadSteppingFailed as failure:
         _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
              sys.stderr)
         return EXIT_FAILED
@@ -423,7 +355,12 @@ def run_calibrate_command(args, config: dict, comm) -> int:
                        f"results in {args.out}")
 
 
-RUNNERS["calibrate"] = run_calibrate_command
+#: The printing runner of each command (the commands and their drivers: the registry).
+RUNNERS = {"static": run_static, "finger": run_finger, "design": run_design_command,
+           "dynamic": run_dynamic, "modes": run_modes, "solid": run_solid_command,
+           "compare": run_compare_command, "validity": run_validity_command,
+           "refine": run_refine, "calibrate": run_calibrate_command,
+           "buckling": run_buckling_command, "path": run_path_command}
 
 
 def _check_output_folder(out: Path, comm) -> None:
@@ -578,16 +515,15 @@ def _parse_arguments(argv, comm) -> argparse.Namespace:
         return _parser().parse_args(argv)
 
 
-def _run_locked(args, config: dict, comm) -> int:
+def _run_locked(args, validated, config: dict, comm) -> int:
     """Run a command holding the lock of its output folder, with SIGINT/SIGTERM noticed at step
     boundaries (fe_beam.runctl): one line on stderr and exit 130/143 instead of a traceback."""
-    from fe_beam import runctl
-
     session = None
     try:
         with runctl.output_session(args.out, args.command, comm) as session:
             runctl.check(comm, runctl.BEFORE)
-            code = RUNNERS[args.command](args, config, comm)
+            run = driver(REGISTRY[args.command])
+            code = RUNNERS[args.command](args, validated, config, comm, run)
             runctl.check(comm, runctl.AFTER)
             return code
     except (runctl.FolderBusy, runctl.TooLarge) as error:
@@ -600,8 +536,6 @@ def _run_locked(args, config: dict, comm) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from fe_beam import runctl
-
     with runctl.signals_deferred():
         return _main(argv)
 
@@ -651,11 +585,8 @@ def _world():
 def check_solver_options(validated) -> None:
     """PETSc's verdict on the configuration's PETSc options (ConfigError naming the first one
     it rejects), before the run starts: the finite-element stack is loaded by now."""
-    if validated.petsc_options:
-        from fe_beam.solvers.newton import check_petsc_options
-
-        for options in validated.petsc_options:
-            check_petsc_options(options)
+    for options in validated.petsc_options:
+        newton.check_petsc_options(options)
 
 
 def _main(argv: list[str] | None = None) -> int:
@@ -675,15 +606,15 @@ def _main(argv: list[str] | None = None) -> int:
         check_partition(config, comm.size, args.command)
         refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
                   "quantities": getattr(args, "quantity", None)}
+        if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
+            refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
         validated = validate(args.command, config, refine)
         if args.command == "calibrate":  # the data file too, before the FE stack is loaded
-            from fe_beam.analyses.calibrate import check_data
-
             check_data(config, args.data)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()
         check_solver_options(validated)
-        code = _run_locked(args, config, world)
+        code = _run_locked(args, validated, config, world)
         for note in notes if code != EXIT_USAGE else []:  # a usage error is one sentence
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
         return code

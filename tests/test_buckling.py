@@ -291,7 +291,7 @@ def test_example_runs_and_gives_euler_loads(tmp_path):
     no note about unused tables."""
     from pathlib import Path
 
-    from fe_beam.config.schema import check_command_tables, load_config
+    from fe_beam.config import check_command_tables, load_config
 
     example = Path(__file__).resolve().parents[1] / "examples" / "column_buckling.toml"
     assert check_command_tables("buckling", load_config(example)) == []

@@ -143,30 +143,6 @@ def upward_imports(graph) -> list[str]:
     return sorted(found)
 
 
-# What the house still owes (issue 21, next step: the command registry moves `validate` and the
-# parsers of calibrate, design and refine into the config layer, and validity's per-point
-# workers into its driver). The same imports are listed in pyproject's `ignore_imports`. These
-# lists only shrink: any other upward import, function-local import or cycle fails.
-KNOWN_UPWARD = {
-    "fe_beam.config.schema -> fe_beam.analyses.calibrate",
-    "fe_beam.config.schema -> fe_beam.analyses.design",
-    "fe_beam.config.schema -> fe_beam.analyses.refine",
-    "fe_beam.config.validity -> fe_beam.analyses.validity",
-    "fe_beam.config.validity -> fe_beam.cli",
-}
-KNOWN_CYCLES = (
-    {"fe_beam.config.buckling", "fe_beam.config.compare", "fe_beam.config.finger",
-     "fe_beam.config.material_laws", "fe_beam.config.path", "fe_beam.config.schema",
-     "fe_beam.config.solid", "fe_beam.config.transient", "fe_beam.config.validity"},
-    {"fe_beam.analyses.calibrate", "fe_beam.analyses.sensitivity"},
-)
-KNOWN_LOCAL_MODULES = {  # modules that still import fe_beam modules inside functions
-    "fe_beam.cli", "fe_beam.config.buckling", "fe_beam.config.path", "fe_beam.config.schema",
-    "fe_beam.config.solid", "fe_beam.config.validity", "fe_beam.analyses.calibrate",
-    "fe_beam.analyses.design", "fe_beam.analyses.refine", "fe_beam.analyses.validity",
-}
-
-
 def test_the_package_has_no_import_cycle_and_no_function_local_import():
     graph = import_graph()
     found = cycles(graph)
@@ -176,17 +152,9 @@ def test_the_package_has_no_import_cycle_and_no_function_local_import():
     print(f"\nimport graph: {len(graph)} modules, {sum(map(len, graph.values()))} edges, "
           f"{sum(len(c) for c in found)} modules in cycles, {len(local)} function-local "
           f"imports, {len(upward)} upward imports")
-    assert set(upward) <= KNOWN_UPWARD, "imports that climb a layer:\n" + "\n".join(
-        sorted(set(upward) - KNOWN_UPWARD))
-    new_local = [edge for edge in local if edge.split(" -> ")[0] not in KNOWN_LOCAL_MODULES]
-    assert not new_local, "function-local imports between fe_beam modules:\n" + "\n".join(
-        new_local)
-    # without the known upward imports, only the two known cycles remain (validate and the
-    # parsers; calibrate and sensitivity sharing parameter_kind), and nothing joins them
-    pruned = {m: {t: k for t, k in edges.items() if f"{m} -> {t}" not in KNOWN_UPWARD}
-              for m, edges in graph.items()}
-    new = [c for c in cycles(pruned) if not any(set(c) <= known for known in KNOWN_CYCLES)]
-    assert not new, f"import cycles: {new}"
+    assert not found, f"import cycles: {found}"
+    assert not local, "function-local imports between fe_beam modules:\n" + "\n".join(local)
+    assert not upward, "imports that climb a layer:\n" + "\n".join(upward)
 
 
 def test_the_checker_sees_cycles_local_imports_and_strings(tmp_path):

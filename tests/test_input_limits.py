@@ -17,7 +17,7 @@ from test_cli_dynamics import DYNAMIC
 from test_config import BASE, dump_toml, edited, names_key
 
 from fe_beam.cli import main
-from fe_beam.config.schema import check_command_tables, check_values, load_config
+from fe_beam.config import check_command_tables, check_values, load_config
 from fe_beam.errors import ConfigError
 from fe_beam.timefunctions import TimeFunctionError, parse_formula
 

@@ -48,7 +48,7 @@ LOADED = f"[m for m in {HEAVY!r} if m in sys.modules]"
 def test_every_example_validates_without_the_fe_stack():
     code = f"""
 import json, sys
-from fe_beam.config.schema import apply_overrides, load_config, validate
+from fe_beam.config import apply_overrides, load_config, validate
 done = []
 for name, commands in {EXAMPLES!r}.items():
     config = load_config("examples/" + name)
@@ -77,7 +77,7 @@ import fe_beam, fe_beam.config.schema, fe_beam.model, fe_beam.model.beam, fe_bea
 import fe_beam.model.settings, fe_beam.model.tendons, fe_beam.model.solid, fe_beam.config.finger
 import fe_beam.config.transient, fe_beam.config.compare, fe_beam.config.solid
 import fe_beam.analyses.solid_driver
-import fe_beam.analyses.refine
+import fe_beam.config.refine
 from fe_beam.analyses.solid_driver import parse_solid
 print(json.dumps({{"loaded": {LOADED}}}))
 """

@@ -93,7 +93,7 @@ def test_tendon_tension_path_equals_fe_beam_finger(tmp_path, tip_force):
     """The tension of the flexor from 0 to 2 N (with a tip force: held in full, the path
     starting from the state it bends alone) equals fe-beam finger at the path's tensions."""
     from fe_beam.analyses.finger import run_finger
-    from fe_beam.config.schema import validate
+    from fe_beam.config import validate
 
     config = _finger(tmp_path)
     if tip_force:
@@ -126,7 +126,7 @@ def test_end_displacement_path_equals_fe_beam_static(tmp_path):
     """parameter = "end_displacement": the prescribed tip deflection scaled from 0 to 1 ends
     where fe-beam static (load stepping) ends."""
     from fe_beam.analyses.static import solve_static
-    from fe_beam.config.schema import validate
+    from fe_beam.config import validate
 
     config = load_config(EXAMPLES / "elastica_path.toml")
     config["model"]["constraint"] = "none"
@@ -299,7 +299,7 @@ def test_path_model_layer_imports_no_fe_stack():
     import sys
 
     code = ("import sys, fe_beam.config.path; "
-            "from fe_beam.config.schema import validate, load_config;"
+            "from fe_beam.config import validate, load_config;"
             f"validate('path', load_config({str(EXAMPLES / 'elastica_path.toml')!r}));"
             "print([m for m in ('dolfinx', 'petsc4py', 'mpi4py', 'ufl') if m in sys.modules])")
     root = Path(__file__).resolve().parents[1]

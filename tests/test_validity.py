@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 from tomlio import dump_toml
 
-from fe_beam.config.schema import validate
+from fe_beam.config import validate
 from fe_beam.config.validity import parse_validity, resolve_key
 from fe_beam.errors import ConfigError
 
@@ -145,7 +145,7 @@ def test_validation_loads_no_fe_stack():
 
     code = (
         "import json, sys\n"
-        "from fe_beam.config.schema import validate, ConfigError\n"
+        "from fe_beam.config import validate, ConfigError\n"
         f"config = {with_map()!r}\n"
         "validate('validity', config)\n"
         "from fe_beam.config.schema import load_config\n"

@@ -7,7 +7,8 @@ used (PEP 562), so that ``from fe_beam import analyses`` stays light.
 import importlib
 
 DRIVERS = ("static", "finger", "transient", "compare", "validity", "refine", "calibrate",
-           "design", "path", "buckling", "sensitivity", "solid", "solid_rod", "solid_driver")
+           "design", "path", "buckling", "sensitivity", "solid", "solid_rod", "solid_driver",
+           "solid_modes")
 
 
 def __getattr__(name: str):

@@ -35,8 +35,8 @@ dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``ev
 ``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
 shapes, targets).
 
-Validation (`parse_design`) imports no FE code: a bad [design] table is a ConfigError (exit
-2, one sentence).
+Validation (`fe_beam.config.design.parse_design`, imported back here) imports no FE code: a bad
+[design] table is a ConfigError (exit 2, one sentence).
 """
 
 from __future__ import annotations
@@ -45,225 +45,25 @@ import copy
 import math
 import re
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from fe_beam import analyses
+from fe_beam.config.design import (
+    DesignProblem,
+    parse_design,
+)
+from fe_beam.config.finger import parse_finger, with_defaults
+from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError
+from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.solvers.realtime import RealtimeSolver, max_fibre_strain, set_parameters, structure_key
 
 __all__ = ["DesignProblem", "parse_design", "run_design"]
 
-OBJECTIVES = ("tip_pose", "backbone", "tension")
-DESIGN_KEYS = ("variables", "bounds", "objective", "target", "points", "tip_angle",
-               "max_fibre_strain", "max_iterations")
-MATERIAL_KEYS = ("E", "nu", "G", "rho")
-SECTION_DIMS = {"rectangle": ("b", "h"), "circle": ("d",), "tube": ("d", "t"),
-                "t-section": ("b", "h", "tf", "tw"), "custom": ("A", "I", "I3", "I4")}
-FORCE_LIKE = re.compile(r"^(tendons\.\d+\.tension|loads\.tip_moment|loads\.tip_force\.[01])$")
-POSITIVE = re.compile(r"^(section\.|material\.(E|G)$)")
 FD_STEP = 1e-6  # of each variable's range
 DESIGN_RTOL = 1e-12
-
-
-@dataclass
-class DesignProblem:
-    """A parsed [design] table."""
-
-    variables: list[str]
-    bounds: np.ndarray  # (n, 2)
-    objective: str
-    initial: np.ndarray
-    target: dict = field(default_factory=dict)
-    points: list = field(default_factory=list)
-    tip_angle: float | None = None
-    max_fibre_strain: float | None = None
-    max_iterations: int = 100
-
-    @property
-    def force_variable(self) -> int | None:
-        for i, key in enumerate(self.variables):
-            if FORCE_LIKE.match(key):
-                return i
-        return None
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
-        value)
-
-
-def _initial_value(config: dict, key: str):
-    """The configuration's value of a design variable (after the finger's defaults), or a
-    ConfigError naming the key: unknown key, or a key whose value is not a number."""
-    parts = key.split(".")
-    head = parts[0]
-    where = f"[design] variables: {key!r}"
-    if head == "material" and len(parts) == 2:
-        material = config.get("material", {})
-        if parts[1] not in MATERIAL_KEYS:
-            raise ConfigError(f"{where} is not a design variable; material variables are "
-                              f"{', '.join('material.' + k for k in MATERIAL_KEYS)}")
-        if parts[1] not in material:
-            raise ConfigError(f"{where} is not set in [material] (give it there first)")
-        return material[parts[1]]
-    if head == "section" and len(parts) == 2:
-        section = config.get("section", {})
-        shape = section.get("shape", "rectangle")
-        name = parts[1]
-        dims = SECTION_DIMS.get(shape, ())
-        if name == "shape":
-            raise ConfigError(f"{where} is not numeric (a section shape): design variables "
-                              "must be numbers")
-        base = name[:-4] if name.endswith("_tip") else name
-        if base not in dims:
-            raise ConfigError(f"{where} is not a dimension of section shape {shape!r} "
-                              f"(dimensions: {', '.join(dims)} and their _tip values)")
-        if name in section:
-            return section[name]
-        if name.endswith("_tip") and base in section:
-            return section[base]  # an untapered dimension starts a taper from its value
-        raise ConfigError(f"{where} is not set in [section]")
-    if head == "loads" and len(parts) in (2, 3):
-        loads = config.get("loads", {})
-        if key == "loads.tip_moment":
-            return loads.get("tip_moment", 0.0)
-        if len(parts) == 3 and parts[1] in ("tip_force", "distributed") and parts[2] in ("0",
-                                                                                          "1"):
-            return list(loads.get(parts[1], [0.0, 0.0]))[int(parts[2])]
-        if len(parts) == 2 and parts[1] in ("follower", "steps"):
-            raise ConfigError(f"{where} is not a numeric design variable")
-        raise ConfigError(f"{where} is not a design variable; load variables are "
-                          "loads.tip_moment, loads.tip_force.0/1, loads.distributed.0/1")
-    if head == "tendons" and len(parts) >= 3:
-        tendons = config.get("tendons", [])
-        if not parts[1].isdigit() or int(parts[1]) >= len(tendons):
-            raise ConfigError(f"{where}: the tendon index must be 0 .. {len(tendons) - 1}")
-        tendon = tendons[int(parts[1])]
-        what = parts[2]
-        if what in ("tension", "pull_in", "offset_base", "offset_tip") and len(parts) == 3:
-            if what not in tendon:
-                raise ConfigError(f"{where} is not set for that tendon")
-            return tendon[what]
-        if what == "path" and len(parts) == 4 and parts[3].isdigit():
-            path = tendon.get("path")
-            if not isinstance(path, list) or int(parts[3]) >= len(path):
-                raise ConfigError(f"{where}: the tendon has no path point {parts[3]} "
-                                  "(path = [[x, offset], ...])")
-            return path[int(parts[3])][1]
-        if what in ("name", "entry", "anchor", "steps", "paths"):
-            raise ConfigError(f"{where} is not a numeric design variable (a tendon's "
-                              "tension, pull_in, offset_base, offset_tip or path.<point>)")
-        raise ConfigError(f"{where} is not a design variable (a tendon has tension, "
-                          "pull_in, offset_base, offset_tip and path.<point>)")
-    if head in ("model", "mesh", "beam", "supports", "solver", "output"):
-        raise ConfigError(f"{where} is not a numeric design variable: the design varies "
-                          "section.*, material.*, loads.* and tendons.<i>.* values")
-    raise ConfigError(f"{where} is not a design variable; use section.<dim>[_tip], "
-                      "material.E/nu/G/rho, loads.tip_moment, loads.tip_force.<k>, "
-                      "tendons.<i>.tension/offset_base/offset_tip/path.<j>")
-
-
-def parse_design(config: dict) -> tuple[DesignProblem, dict]:
-    """The [design] table (FE-free checks) and the configuration without it."""
-    given = config.get("design")
-    if not isinstance(given, dict):
-        raise ConfigError("fe-beam design needs a [design] table (variables, bounds, "
-                          "objective)")
-    unknown = [k for k in given if k not in DESIGN_KEYS]
-    if unknown:
-        raise ConfigError(f"[design] unknown key {unknown[0]!r}; allowed: "
-                          f"{', '.join(DESIGN_KEYS)}")
-    rest = {k: v for k, v in config.items() if k != "design"}
-    if "tendons" in rest:
-        from fe_beam.config.finger import with_defaults
-
-        merged = with_defaults(rest)
-    else:
-        merged = rest
-    variables = given.get("variables")
-    if not (isinstance(variables, list) and variables
-            and all(isinstance(v, str) for v in variables)):
-        raise ConfigError("[design] variables must be a non-empty list of keys such as "
-                          "[\"section.h_tip\", \"tendons.0.offset_tip\"]")
-    if len(set(variables)) != len(variables):
-        raise ConfigError("[design] variables must be distinct")
-    initial = []
-    for key in variables:
-        value = _initial_value(merged, key)
-        if not _is_number(value):
-            raise ConfigError(f"[design] variables: {key!r} is not numeric (its value is "
-                              f"{value!r}): design variables must be numbers")
-        initial.append(float(value))
-    bounds = given.get("bounds")
-    if isinstance(bounds, dict):  # {variable = [low, high], ...}
-        missing = [v for v in variables if v not in bounds]
-        extra = [k for k in bounds if k not in variables]
-        if missing or extra:
-            what = f"missing {missing[0]!r}" if missing else f"{extra[0]!r} is not a variable"
-            raise ConfigError(f"[design] bounds: give one [low, high] for each variable "
-                              f"({what})")
-        bounds = [bounds[v] for v in variables]
-    ok = (isinstance(bounds, list) and len(bounds) == len(variables)
-          and all(isinstance(b, list) and len(b) == 2 and all(_is_number(x) for x in b)
-                  for b in bounds))
-    if not ok:
-        raise ConfigError(f"[design] bounds must be one [low, high] pair of numbers per "
-                          f"variable ({len(variables)} pairs)")
-    bounds = np.array(bounds, dtype=float)
-    for key, (low, high), value in zip(variables, bounds, initial, strict=True):
-        if not low < high:
-            raise ConfigError(f"[design] bounds of {key!r}: low {low:g} must be < high "
-                              f"{high:g}")
-        if POSITIVE.match(key) and not (low > 0 or key == "section.I3"):
-            raise ConfigError(f"[design] bounds of {key!r} must be > 0 (got low {low:g})")
-        if not low <= value <= high:
-            raise ConfigError(f"[design] the configuration's {key} = {value:g} lies outside "
-                              f"its bounds [{low:g}, {high:g}]")
-    objective = given.get("objective")
-    if objective not in OBJECTIVES:
-        raise ConfigError(f"[design] objective must be one of {', '.join(OBJECTIVES)}; got "
-                          f"{objective!r}")
-    problem = DesignProblem(list(variables), bounds, objective, np.array(initial))
-    if objective == "tip_pose":
-        target = given.get("target")
-        if not (isinstance(target, dict) and target
-                and all(k in ("u", "v", "theta") and _is_number(v) for k, v in target.items())):
-            raise ConfigError("[design] objective = \"tip_pose\" needs target = {u = .., v = "
-                              ".., theta = ..} (any of them, numbers)")
-        problem.target = {k: float(v) for k, v in target.items()}
-    elif objective == "backbone":
-        points = given.get("points")
-        if not (isinstance(points, list) and points and all(
-                isinstance(p, list) and len(p) == 3 and all(_is_number(x) for x in p)
-                for p in points)):
-            raise ConfigError("[design] objective = \"backbone\" needs points = [[s, x, y], "
-                              "...] (reference arclength s, target position x, y; numbers)")
-        problem.points = [tuple(float(x) for x in p) for p in points]
-    else:
-        angle = given.get("tip_angle")
-        if not _is_number(angle):
-            raise ConfigError("[design] objective = \"tension\" needs tip_angle = <number> "
-                              "(rad), the tip angle to hold")
-        forces = [v for v in variables if FORCE_LIKE.match(v)]
-        if len(forces) != 1:
-            raise ConfigError("[design] objective = \"tension\" minimises one force-like "
-                              "variable: exactly one of tendons.<i>.tension, loads.tip_moment, "
-                              f"loads.tip_force.<k> must be among the variables (got "
-                              f"{len(forces)})")
-        problem.tip_angle = float(angle)
-    strain = given.get("max_fibre_strain")
-    if strain is not None:
-        if not (_is_number(strain) and strain > 0):
-            raise ConfigError(f"[design] max_fibre_strain must be a number > 0, got {strain!r}")
-        problem.max_fibre_strain = float(strain)
-    iterations = given.get("max_iterations", 100)
-    if not (isinstance(iterations, int) and not isinstance(iterations, bool)
-            and 1 <= iterations <= 10000):
-        raise ConfigError(f"[design] max_iterations must be an integer from 1 to 10000, got "
-                          f"{iterations!r}")
-    problem.max_iterations = iterations
-    return problem, rest
 
 
 # --- evaluation ----------------------------------------------------------------------------------
@@ -271,8 +71,6 @@ def _check_in_place(design: DesignProblem, config, comm) -> None:
     """Every variable must change numbers held by Constants only (one solver for all
     evaluations): a custom section's dimensions (its height sqrt(12 I / A)) and those of a
     hyperelastic section rule are compiled into the forms. ConfigError naming the variable."""
-    from fe_beam.solvers.realtime import set_parameters, structure_key
-
     base = structure_key(config, comm)
     for key, initial, (low, high) in zip(design.variables, design.initial, design.bounds,
                                          strict=True):
@@ -297,7 +95,6 @@ class Evaluator:
         installed and supports the variables and outputs."""
         from dataclasses import replace
 
-        from fe_beam.solvers.realtime import RealtimeSolver
 
         self.design = design
         _check_in_place(design, config, comm)
@@ -348,8 +145,6 @@ class Evaluator:
             f = abs(self.x(t)[i]) / np.max(np.abs(design.bounds[i]))
         inequality, equality = [], []
         if design.max_fibre_strain is not None:
-            from fe_beam.solvers.realtime import max_fibre_strain
-
             inequality.append(1.0 - max_fibre_strain(problem) / design.max_fibre_strain)
         if design.objective == "tension":
             equality.append(tip["theta"] - design.tip_angle)
@@ -381,11 +176,11 @@ def _adjoint_model(design: DesignProblem, raw: dict, comm):
     if design.max_fibre_strain is not None:
         return None
     try:
-        from fe_beam.analyses.sensitivity import RodSensitivity
+        sensitivity = analyses.sensitivity
     except ImportError:
         return None
     try:
-        return RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
+        return sensitivity.RodSensitivity(raw, [_adjoint_key(k) for k in design.variables], comm)
     except (ConfigError, ValueError, KeyError):
         return None
 
@@ -645,7 +440,6 @@ def _constraint_summary(design: DesignProblem, values: dict) -> dict:
 
 
 def _shape(evaluator: Evaluator):
-    from fe_beam.exports.outputs import BeamXDMFWriter
 
     writer = BeamXDMFWriter(evaluator.solver.problem, None)
     try:
@@ -655,7 +449,6 @@ def _shape(evaluator: Evaluator):
 
 
 def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float) -> None:
-    from fe_beam.exports.outputs import _pyplot
 
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6, 5))
@@ -684,15 +477,11 @@ def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float
 
 def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> dict:
     """Parse, optimise, write summary.json and design.png under ``out``."""
-    from fe_beam.config.schema import parse_static
-    from fe_beam.exports.outputs import atomic_write_json
 
     design, rest = parse_design(config)
     rest = copy.deepcopy(rest)
     rest.pop("inverse", None)
     if "tendons" in rest:  # the finger's defaults written out (every table explicit)
-        from fe_beam.config.finger import with_defaults
-
         rest = with_defaults(rest)
     section = rest.get("section")
     for key in design.variables:
@@ -703,8 +492,6 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
                 and match.group(1) in section:
             section[key[len("section."):]] = section[match.group(1)]
     if "tendons" in rest:
-        from fe_beam.analyses.finger import parse_finger
-
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)

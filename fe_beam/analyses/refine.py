@@ -23,8 +23,16 @@ import sys
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
-from fe_beam import runctl
+from fe_beam import analyses, runctl
+from fe_beam.config.refine import (
+    QUANTITIES,
+    RefinementPlan,
+    add_refine_arguments,
+    plan_refinement,
+)
 from fe_beam.errors import ConfigError
+from fe_beam.exports import Exports, PlotExport, SummaryExport, TableExport, figure
+from fe_beam.progress import ProgressBar
 
 __all__ = [
     "QUANTITIES",
@@ -43,15 +51,10 @@ __all__ = [
     "write_outputs",
 ]
 
-QUANTITIES = ("tip.u", "tip.v", "tip.theta")
 UNITS = {"tip.u": "m", "tip.v": "m", "tip.theta": "rad"}
-MAX_LEVELS = 8
-MAX_RATIO = 4.0
-MAX_ROD_ELEMENTS = 20_000  # finest rod mesh: ~1e5 dofs per load step is already minutes
-MAX_SOLID_FACTOR = 8.0  # finest solid mesh_size >= first / 8 (512 times the tetrahedra)
+SOLID_DRIVER = "fe_beam.analyses.solid_driver"  # the solid configurations' driver
 NOISE_RTOL = 1e-10  # |d_k| below this fraction of max |q| is round-off / solver noise
 MIN_ORDER = 0.5  # below it 1 / (r^p - 1) amplifies noise: coarse meshes, no extrapolation
-ROD_TABLES_REJECTED = ("time", "initial", "damping", "modes")
 
 
 # --- numerics (pure) ---------------------------------------------------------------------------
@@ -194,209 +197,25 @@ def analyse_sequence(
 
 
 # --- plan: what each level solves --------------------------------------------------------------
-@dataclass(frozen=True)
-class RefinementPlan:
-    """Validated study settings; ``kind`` is "rod", "finger" or "solid"."""
-
-    kind: str
-    levels: int
-    ratio: float
-    quantities: tuple[str, ...]
-    base: float  # elements (rod, finger) or mesh_size (solid) of level 0
-    length: float | None = None  # rod length, for h = L / elements
-    parsed: object = None  # StaticConfig of rods and fingers
-    raw: dict = field(default_factory=dict)
-    notes: tuple[str, ...] = ()
-
-    @property
-    def refined(self) -> str:
-        return "solid.mesh_size" if self.kind == "solid" else "mesh.elements"
-
-    def size(self, level: int):
-        """elements (int) or mesh_size (float) of a level."""
-        if self.kind == "solid":
-            return self.base / self.ratio**level
-        return int(round(self.base * self.ratio**level))
-
-    def h(self, level: int) -> float:
-        return self.size(level) if self.kind == "solid" else self.length / self.size(level)
-
-
-def _shown(value) -> str:
-    return value if isinstance(value, str) and value.strip() else repr(value)
-
-
-def _parse_levels(text, source: str) -> int:
-    value = text
-    if isinstance(text, str):
-        try:
-            value = int(text.strip())
-        except ValueError:
-            raise ConfigError(
-                f"{source} must be an integer from 2 to {MAX_LEVELS}; got {_shown(text)}"
-            ) from None
-    if isinstance(value, bool) or not isinstance(value, int) or not 2 <= value <= MAX_LEVELS:
-        raise ConfigError(f"{source} must be an integer from 2 to {MAX_LEVELS}; got {_shown(text)}")
-    return value
-
-
-def _parse_ratio(text, source: str) -> float:
-    value = text
-    if isinstance(text, str):
-        try:
-            value = float(text.strip())
-        except ValueError:
-            value = None
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, (int, float))
-        or not math.isfinite(value)
-        or not 1 < value <= MAX_RATIO
-    ):
-        raise ConfigError(f"{source} must be a number in (1, {MAX_RATIO:g}]; got {_shown(text)}")
-    return float(value)
-
-
-def _parse_quantities(given, source: str) -> tuple[str, ...]:
-    if given is None:
-        return QUANTITIES
-    items = [given] if isinstance(given, str) else given
-    if not isinstance(items, list) or not all(isinstance(i, str) for i in items):
-        raise ConfigError(f"{source} must be one of {', '.join(QUANTITIES)}; got {given!r}")
-    names = [n.strip() for item in items for n in item.split(",") if n.strip()]
-    unknown = [n for n in names if n not in QUANTITIES]
-    if unknown or not names:
-        bad = unknown[0] if unknown else given
-        raise ConfigError(
-            f"{source}: unknown quantity {bad!r}; choose from {', '.join(QUANTITIES)}"
-        )
-    return tuple(dict.fromkeys(names))
-
-
-def plan_refinement(config: dict, levels=None, ratio=None, quantities=None) -> RefinementPlan:
-    """Validate a study before anything is solved; raises `ConfigError` (one sentence).
-
-    CLI values (strings, ``None`` when not given) override an optional ``[refine]`` table
-    (``levels``, ``ratio``, ``quantity``) of the configuration.
-    """
-    config = copy.deepcopy(config)
-    settings = config.pop("refine", {})
-    if not isinstance(settings, dict):
-        raise ConfigError("[refine] must be a table")
-    unknown = [k for k in settings if k not in ("levels", "ratio", "quantity")]
-    if unknown:
-        raise ConfigError(f"[refine] unknown key {unknown[0]!r}; allowed: levels, ratio, quantity")
-    if levels is None and "levels" not in settings:
-        raise ConfigError(f"--levels is required (an integer from 2 to {MAX_LEVELS})")
-    levels = _parse_levels(
-        levels if levels is not None else settings["levels"],
-        "--levels" if levels is not None else "[refine] levels",
-    )
-    ratio_source = "--ratio" if ratio is not None else "[refine] ratio"
-    ratio = _parse_ratio(ratio if ratio is not None else settings.get("ratio", 2), ratio_source)
-    quantity_source = "--quantity" if quantities is not None else "[refine] quantity"
-    quantities = _parse_quantities(
-        quantities if quantities is not None else settings.get("quantity"), quantity_source
-    )
-    if "solid" in config:
-        return _plan_solid(config, levels, ratio, quantities)
-    present = [name for name in ROD_TABLES_REJECTED if name in config]
-    if present:
-        raise ConfigError(
-            f"refine runs static rod, finger ([[tendons]]) and solid ([solid]) configurations; "
-            f"this one has [{present[0]}] (a dynamic or modal analysis)"
-        )
-    notes = ()
-    if "tendons" in config:
-        from fe_beam.config.finger import parse_finger
-
-        parsed, target = parse_finger(config)
-        kind = "finger"
-        if target is not None:
-            notes = ("[inverse] is ignored: each level runs the forward tension sweep",)
-    else:
-        from fe_beam.config.schema import parse_static
-
-        parsed, kind = parse_static(config), "rod"
-    elements = parsed.model.mesh.elements
-    counts = [elements * ratio**k for k in range(levels)]
-    if any(abs(n - round(n)) > 1e-9 * n for n in counts):
-        raise ConfigError(
-            f"--ratio {ratio:g} with [mesh] elements = {elements} gives a fractional number of "
-            f"elements within {levels} levels; use an integer ratio or another elements count"
-        )
-    if round(counts[-1]) > MAX_ROD_ELEMENTS:
-        raise ConfigError(
-            f"--levels {levels} with --ratio {ratio:g} needs {round(counts[-1])} elements on the "
-            f"finest level (from [mesh] elements = {elements}; at most {MAX_ROD_ELEMENTS})"
-        )
-    return RefinementPlan(
-        kind,
-        levels,
-        ratio,
-        quantities,
-        elements,
-        length=parsed.model.length,
-        parsed=parsed,
-        raw=config,
-        notes=notes,
-    )
-
-
 def _solid_driver():
-    import importlib
-
+    """The solid driver module: the one in sys.modules (a stand-in installed there replaces it;
+    a driver without ``parse_solid`` needs [solid] mesh_size), else imported now through the
+    lazy `fe_beam.analyses` package."""
     try:
-        return importlib.import_module("fe_beam.analyses.solid_driver")
+        return sys.modules.get(SOLID_DRIVER) or analyses.solid_driver
     except ModuleNotFoundError as error:
         raise ConfigError(
             f"[solid] configurations need fe_beam.analyses.solid_driver ({error})") from None
 
 
-def _plan_solid(config: dict, levels: int, ratio: float, quantities) -> RefinementPlan:
-    """Solid levels divide ``[solid] mesh_size`` (the driver's default when not given) by
-    ratio**k; the driver's own validation runs on the first and the finest level up front."""
-    factor = ratio ** (levels - 1)
-    if factor > MAX_SOLID_FACTOR * (1 + 1e-12):
-        raise ConfigError(
-            f"--levels {levels} with --ratio {ratio:g} refines the mesh size {factor:g} times "
-            f"(at most {MAX_SOLID_FACTOR:g}: the tetrahedra grow with its cube)"
-        )
-    if not isinstance(config["solid"], dict):
-        raise ConfigError("[solid] must be a table")
-    parse = getattr(_solid_driver(), "parse_solid", None)
-    size = config["solid"].get("mesh_size")
-    if parse is not None:
-        size = parse(config).sizes.size  # fills the default mesh_size
-    if isinstance(size, bool) or not isinstance(size, (int, float)) or not size > 0:
-        raise ConfigError(
-            f"[solid] mesh_size must be a number > 0 to refine (level k uses mesh_size / "
-            f"ratio**k); got {size!r}"
-        )
-    if not math.isfinite(size):
-        raise ConfigError(f"[solid] mesh_size must be finite; got {size!r}")
-    config["solid"] = dict(config["solid"], mesh_size=float(size))
-    if parse is not None:
-        finest = copy.deepcopy(config)
-        finest["solid"]["mesh_size"] = size / factor
-        try:
-            parse(finest)  # e.g. the driver's limit on the number of tetrahedra
-        except ConfigError as error:
-            raise ConfigError(
-                f"the finest level ({levels} levels, ratio {ratio:g}) fails: {error}"
-            ) from None
-    return RefinementPlan("solid", levels, ratio, quantities, float(size), raw=config)
-
-
 # --- solving the levels --------------------------------------------------------------------------
 def _solve_rod(plan: RefinementPlan, level: int, comm) -> dict:
-    from fe_beam.analyses.static import solve_static
 
     parsed = plan.parsed
     mesh = replace(parsed.model.mesh, elements=plan.size(level))
     config = replace(parsed, model=replace(parsed.model, mesh=mesh))
     # nothing is written per level: no shapes, only the tip of each converged step
-    result = solve_static(config, None, comm, progress=False, record_shapes=False)
+    result = analyses.static.solve_static(config, None, comm, progress=False, record_shapes=False)
     return {
         "status": result.status,
         "message": result.message,
@@ -476,8 +295,6 @@ def run_refinement(
 ) -> dict:
     """Solve every level (coarse to fine), writing the outputs after each; stops at the first
     level that does not converge. Returns the summary (see `study_summary`)."""
-    from fe_beam.exports import Exports
-    from fe_beam.progress import ProgressBar
 
     solve = _solve_solid if plan.kind == "solid" else _solve_rod
     bar = ProgressBar(comm, total=plan.levels, label="refine", enabled=progress, unit="level")
@@ -556,7 +373,6 @@ def csv_rows(summary: dict) -> tuple[list[str], list[list]]:
 def _exports(out: Path, content, plot: bool = True) -> list:
     """refinement.json, refinement.csv (rewritten whole: the analysis of earlier levels changes
     with each new one) and, with ``plot``, refinement.png once the study has finished."""
-    from fe_beam.exports import PlotExport, SummaryExport, TableExport
 
     out = Path(out)
     return [SummaryExport(out / "refinement.json", content),
@@ -571,7 +387,6 @@ def _draw(out: Path, summary: dict) -> None:
 
 def write_outputs(out: Path, summary: dict, plot: bool = True) -> None:
     """refinement.json, refinement.csv (atomic) and, with ``plot``, refinement.png."""
-    from fe_beam.exports import Exports
 
     Exports(_exports(out, lambda: summary, plot=False)).finish(summary)
     if plot:
@@ -581,7 +396,6 @@ def write_outputs(out: Path, summary: dict, plot: bool = True) -> None:
 def plot_convergence(summary: dict, path: Path) -> None:
     """Log-log |q_k - q*| (q* the finest extrapolation) and |d_k| against h, one panel per
     quantity, with a line of the observed slope through the finest point."""
-    from fe_beam.exports import figure
 
     quantities = summary["quantities"]
     done = [r for r in summary["levels"] if r["values"]]
@@ -739,31 +553,6 @@ def format_table(summary: dict) -> str:
     return "\n".join(lines)
 
 
-# --- command line --------------------------------------------------------------------------------
-def add_refine_arguments(parser) -> None:
-    """The options of ``fe-beam refine`` beyond CONFIG, --out, --set and --quiet (parsed as
-    text and validated by `plan_refinement`, so mistakes are one-line errors)."""
-    parser.add_argument(
-        "--levels",
-        default=None,
-        metavar="N",
-        help=f"number of meshes, 2 to {MAX_LEVELS} (3 or more give an observed order)",
-    )
-    parser.add_argument(
-        "--ratio",
-        default=None,
-        metavar="R",
-        help="refinement ratio between levels (default 2): elements * R**k or mesh_size / R**k",
-    )
-    parser.add_argument(
-        "--quantity",
-        action="append",
-        default=None,
-        metavar="KEY",
-        help=f"quantity of interest, one of {', '.join(QUANTITIES)} (default: all three)",
-    )
-
-
 def run_refine_command(args, config: dict, comm, say=None) -> int:
     """``fe-beam refine``: 0 done, 3 a level did not converge (ConfigError -> the CLI's exit 2)."""
 
@@ -773,7 +562,9 @@ def run_refine_command(args, config: dict, comm, say=None) -> int:
         elif comm.rank == 0:
             print(text, file=stream, flush=True)
 
-    plan = plan_refinement(config, args.levels, args.ratio, args.quantity)
+    solid_parser = getattr(_solid_driver(), "parse_solid", None) if "solid" in config else None
+    plan = plan_refinement(config, args.levels, args.ratio, args.quantity,
+                           solid_parser=solid_parser)
     summary = run_refinement(
         plan, args.out, comm, progress=not args.quiet, config_path=str(args.config), report=emit
     )

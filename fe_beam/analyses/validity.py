@@ -35,7 +35,9 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import analyses, runctl
+from fe_beam.analyses.validity_workers import worker_point, worker_start
+from fe_beam.config.compare import parse_compare
 from fe_beam.config.validity import (  # noqa: F401  (their home; re-exported)
     VALIDITY_KEYS,
     GridPoint,
@@ -45,6 +47,7 @@ from fe_beam.config.validity import (  # noqa: F401  (their home; re-exported)
 )
 from fe_beam.exports.outputs import atomic_write_json, figure, write_csv
 from fe_beam.progress import ProgressBar
+from fe_beam.solvers.newton import LoadSteppingFailed
 
 __all__ = ["VALIDITY_KEYS", "parse_validity", "richardson_error", "run_validity"]
 
@@ -91,12 +94,9 @@ def _tip_error(rod_tip: dict, solid_tip: dict, length: float) -> dict:
 def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig, comm) -> dict:
     """Solve the point's solid on the second mesh (the code of ``fe-beam compare``:
     `fe_beam.analyses.solid.SolidRun`) and estimate the configured mesh's error."""
-    from fe_beam.analyses.solid import SolidRun
-    from fe_beam.config.compare import parse_compare
-
     ratio, order = config.second_mesh_ratio, config.order
     parsed = parse_compare(second_mesh(point.raw, point.parsed, ratio)).solid
-    run = SolidRun(parsed, comm)
+    run = analyses.solid.SolidRun(parsed, comm)
     last = {}
     try:
         run.advance(1.0, parsed.stepping, last.update, progress=False, label="second mesh")
@@ -127,14 +127,12 @@ def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig,
 def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
     """One point of the map (collective on ``comm``): ``fe-beam compare`` at full load, the
     errors, and (``second_mesh_ratio``) the solid on the second mesh."""
-    from fe_beam.analyses.compare import run_compare
-
     started = time.perf_counter()
     record = {"i": point.i, "j": point.j, "x": point.x, "y": point.y, "hash": point.hash,
               "status": "converged", "message": "", "solid": None, "rod": {}}
     length = point.parsed.solid.length
     try:
-        compared = run_compare(point.raw, None, comm, progress=False)
+        compared = analyses.compare.run_compare(point.raw, None, comm, progress=False)
         if compared["table"]:
             row = compared["table"][-1]
             record["solid"] = {k: row["solid"][k] for k in ("tip", "backbone",
@@ -172,8 +170,6 @@ def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
 
 
 def _reason(error: BaseException) -> str:
-    from fe_beam.solvers.newton import LoadSteppingFailed
-
     if isinstance(error, LoadSteppingFailed):
         return str(error)
     return f"{type(error).__name__}: {error}"
@@ -316,13 +312,12 @@ def _names(names: list[str], shown: int = 6) -> str:
 
 def _run_workers(raw: dict, config: ValidityConfig, points: list[GridPoint], workers: int,
                  finished, comm) -> None:
-    """Solve ``points`` in ``workers`` new processes (`fe_beam.config.validity.worker_point`),
-    calling ``finished(point, record)`` here as each one ends; Ctrl-C (noticed here: the
-    workers ignore it) ends the workers and raises `fe_beam.runctl.Interrupted`."""
+    """Solve ``points`` in ``workers`` new processes
+    (`fe_beam.analyses.validity_workers.worker_point`), calling ``finished(point, record)`` here
+    as each one ends; Ctrl-C (noticed here: the workers ignore it) ends the workers and raises
+    `fe_beam.runctl.Interrupted`."""
     import multiprocessing
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
-    from fe_beam.config.validity import worker_point, worker_start
 
     index = {p.name: k for k, p in enumerate(config.points)}
     executor = ProcessPoolExecutor(max_workers=workers, initializer=worker_start,

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fe_beam.config.schema import NUMBER, ConfigError, Key, table
+from fe_beam.config.finger import parse_finger
+from fe_beam.config.schema import NUMBER, ConfigError, Key, parse_static, table
+from fe_beam.config.solid import parse_solid
 
 __all__ = ["BUCKLING_KEYS", "BucklingSettings", "parse_buckling"]
 
@@ -38,8 +40,6 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
     settings = BucklingSettings(**table(config, "buckling", BUCKLING_KEYS))
     rest = {key: value for key, value in config.items() if key != "buckling"}
     if "solid" in rest:
-        from fe_beam.config.solid import parse_solid
-
         solid = parse_solid(rest)
         pulled = [name for name, load in zip(solid.tendon_names, solid.tendon_loads, strict=False)
                   if load.tension or load.pull_in]
@@ -55,8 +55,6 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
                               "a tip force to buckle under")
         return "solid", solid, settings
     if rest.get("tendons"):
-        from fe_beam.config.finger import parse_finger
-
         static, _ = parse_finger({k: v for k, v in rest.items() if k != "inverse"})
         pulled = [t.name for t in static.tendons if t.controlled_by_pull_in]
         tensioned = [t.name for t in static.tendons if t.tension]
@@ -75,8 +73,6 @@ def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:
                               "buckling needs tension-controlled tendons (give tension, not "
                               "pull_in)")
         return "rod", _loaded(static), settings
-    from fe_beam.config.schema import parse_static
-
     return "rod", _loaded(parse_static(rest)), settings
 
 

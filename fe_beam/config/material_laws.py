@@ -7,7 +7,8 @@ Constants default to the small-strain match of ``[material]`` E, nu, or come fro
 
 from __future__ import annotations
 
-from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, table
+from fe_beam.config.keys import NUMBER, SCHEMA, Key, table
+from fe_beam.errors import ConfigError
 from fe_beam.model.hyperelastic import LAWS, SILICONE_PRESETS, VOLUMETRIC_LAWS, HyperelasticLaw
 
 __all__ = ["LAW_CONSTANTS", "MATERIALS", "MATERIAL_KEYS", "hyperelastic_law"]

@@ -7,7 +7,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fe_beam.config.schema import NUMBER, ConfigError, Key, table
+from fe_beam.config.finger import parse_finger
+from fe_beam.config.schema import NUMBER, ConfigError, Key, parse_static, table
+from fe_beam.config.solid import parse_solid
 
 __all__ = ["PARAMETERS", "PATH_KEYS", "PathSettings", "parse_path"]
 
@@ -86,12 +88,8 @@ def parse_path(config: dict):
     if "solid" in rest:
         return "solid", _solid(rest, settings), settings
     if rest.get("tendons"):
-        from fe_beam.config.finger import parse_finger
-
         static, _ = parse_finger({k: v for k, v in rest.items() if k != "inverse"})
     else:
-        from fe_beam.config.schema import parse_static
-
         static = parse_static(rest)
     tendons = list(static.tendons or ())
     pulled = [t.name for t in tendons if t.controlled_by_pull_in]
@@ -143,8 +141,6 @@ def _solid(rest: dict, settings: PathSettings):
     """The 3D solid's configuration: the load factor scales the tip force and the tendon
     tensions; its stability is counted at every point (sparse inertia; tip force only), but
     critical points are not located and branches not switched."""
-    from fe_beam.config.solid import parse_solid
-
     if settings.parameter != "load_factor":
         raise ConfigError(f"[path] parameter = {settings.parameter!r}: the path of the 3D solid "
                           "takes parameter = \"load_factor\" only (tip force and tensions "

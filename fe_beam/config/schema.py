@@ -10,138 +10,40 @@ import copy
 import math
 import stat
 import tomllib
-from dataclasses import dataclass
 from pathlib import Path
 
+from fe_beam.config.keys import (
+    NUMBER,
+    OTHER_TABLES,
+    SCHEMA,
+    Key,
+    _wrap,
+    check_tables,
+    table,
+)
+from fe_beam.config.material_laws import MATERIAL_KEYS, hyperelastic_law
 from fe_beam.errors import ConfigError
 from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
 from fe_beam.model.materials import Material
-from fe_beam.model.sections import SHAPES, Section
+from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
 from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
 
 __all__ = [
+    "NUMBER",
+    "OTHER_TABLES",
+    "SCHEMA",
     "ConfigError",
+    "Key",
     "OutputOptions",
     "StaticConfig",
     "apply_overrides",
-    "check_command_tables",
     "check_values",
     "load_config",
     "parse_static",
-    "validate",
 ]
 
-
-NUMBER = (int, float)
-REQUIRED = object()
-
-
-@dataclass(frozen=True)
-class Key:
-    types: tuple
-    default: object = None
-    doc: str = ""
-
-
-# Tables and keys every command understands; commands read the tables they need. A key not
-# listed here is a mistake (typically a typo) and is reported, never ignored.
-SCHEMA: dict[str, dict[str, Key]] = {
-    "beam": {"length": Key(NUMBER, REQUIRED, "beam length L [m]")},
-    "section": {"shape": Key((str,), "rectangle", f"one of {', '.join(SHAPES)}")},
-    "material": {
-        "E": Key(NUMBER, REQUIRED, "Young's modulus [Pa]"),
-        "nu": Key(NUMBER, None, "Poisson's ratio (or give G)"),
-        "G": Key(NUMBER, None, "shear modulus [Pa] (or give nu)"),
-        "rho": Key(NUMBER, 0.0, "density [kg/m^3]"),
-    },
-    "model": {
-        "law": Key((str,), "nonstandard", "nonstandard | reissner | hyperelastic"),
-        "constraint": Key(
-            (str,), "none", "none | inextensible | unshearable | inextensible-unshearable"
-        ),
-        "shear_correction": Key(NUMBER, 1.0, "k of the Reissner law"),
-        # law = "hyperelastic" only: the 3D law (same keys, meaning and defaults as [solid])
-        "material": Key((str,), None, "hyperelastic: neo-hookean (default) | mooney-rivlin | "
-                        "yeoh | svk"),
-        "preset": Key((str,), None, "hyperelastic: silicone preset (sets the constants)"),
-        "mu": Key(NUMBER, None, "hyperelastic: shear modulus [Pa] (neo-hookean, svk)"),
-        "c10": Key(NUMBER, None, "hyperelastic: C10 [Pa] (mooney-rivlin, yeoh)"),
-        "c01": Key(NUMBER, None, "hyperelastic: C01 [Pa] (mooney-rivlin)"),
-        "c20": Key(NUMBER, None, "hyperelastic: C20 [Pa] (yeoh)"),
-        "c30": Key(NUMBER, None, "hyperelastic: C30 [Pa] (yeoh)"),
-        "kappa": Key(NUMBER, None, "hyperelastic: bulk modulus [Pa] (default from [material] "
-                     "nu)"),
-        "volumetric": Key((str,), None, "hyperelastic: simo_taylor (default) | quadratic"),
-        "section_points": Key((int,), None, "hyperelastic: Gauss points per section part "
-                              "(default 6)"),
-    },
-    "mesh": {
-        "elements": Key((int,), 50, "number of elements"),
-        "degree": Key((int,), 2, "1 or 2"),
-    },
-    "supports": {
-        "x0": Key((str, list), "clamped", "clamped | pinned | roller | free | [components]"),
-        "xL": Key((str, list), "free", "clamped | pinned | roller | free | [components]"),
-    },
-    "loads": {
-        "tip_force": Key((list,), [0.0, 0.0], "[Px, Py] at x = L [N]"),
-        "tip_moment": Key(NUMBER, 0.0, "moment at x = L [N m], counterclockwise"),
-        "follower": Key((bool,), False, "tip force follows the tip section"),
-        "distributed": Key((list,), [0.0, 0.0], "[qx, qy] per unit length [N/m]"),
-        "gravity": Key((list,), [0.0, 0.0], "[gx, gy] acceleration [m/s^2]"),
-        "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
-        "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
-        "point_forces": Key((list,), [], "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
-        "end_displacement": Key((list,), None, "[du, dv] prescribed at x = L [m]"),
-        "end_rotation": Key(NUMBER, None, "rotation prescribed at x = L [rad]"),
-        "steps": Key((int,), 10, "initial number of load steps"),
-        "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
-        "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),
-        "motion_function": Key((str,), None, "dynamic: scale of prescribed end values"),
-    },
-    "solver": {
-        "rtol": Key(NUMBER, 1e-9, "relative residual tolerance"),
-        "atol": Key(NUMBER, 1e-300, "absolute residual tolerance (units of the residual)"),
-        "stol": Key(NUMBER, 1e-11, "relative step tolerance"),
-        "max_it": Key((int,), 25, "Newton iterations per step"),
-        "line_search": Key((str,), "basic", "basic | bt | l2 | cp"),
-        "linear_solver": Key((str,), "auto", "auto | mumps | lu | gamg | gmres-ilu"),
-        "petsc_options": Key((dict,), {}, "any PETSc option, without prefix"),
-        "adaptive": Key((bool,), True, "cut back / grow load steps"),
-        "min_increment": Key(NUMBER, 1e-5, "smallest load-factor increment"),
-        "max_increment": Key(NUMBER, None, "largest load-factor increment: easy steps grow up "
-                             "to it (default 1/steps: never beyond the first increment)"),
-        "easy_iterations": Key((int,), 4, "a load step converged in at most this many Newton "
-                               "iterations lets the next one grow (up to max_increment)"),
-        "max_rotation_jump": Key(NUMBER, 1.0, "branch check: largest rotation change per step"),
-        "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
-                           "memory; fe_beam.runctl)"),
-    },
-    "output": {
-        "xdmf": Key((bool,), True, "write XDMF for ParaView"),
-        "plots": Key((bool,), True, "write PNG plots"),
-        "gif": Key((bool,), False, "dynamic: animated GIF of the deformed beam"),
-    },
-}
-# Tables owned by other commands (validated by them).
-OTHER_TABLES = (
-    "design",
-    "time",
-    "initial",
-    "damping",
-    "modes",
-    "tendons",
-    "solid",
-    "finger",
-    "compare",
-    "refine",
-    "calibrate",
-    "buckling",
-    "validity",
-    "path",
-)
 
 
 MAX_CONFIG_BYTES = 256 * 2**20
@@ -238,76 +140,6 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
     return config
 
 
-def _type_name(types: tuple) -> str:
-    names = {
-        int: "an integer",
-        float: "a number",
-        str: "a string",
-        bool: "true/false",
-        list: "a list",
-        dict: "a table",
-    }
-    if set(types) == {int, float}:
-        return "a number"
-    return " or ".join(names[t] for t in types)
-
-
-def _checked(table: str, key: str, value, spec: Key):
-    ok = isinstance(value, spec.types) and not (isinstance(value, bool) and bool not in spec.types)
-    if not ok:
-        raise ConfigError(
-            f"[{table}] {key} must be {_type_name(spec.types)} ({spec.doc}); got {shown(value)}"
-        )
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ConfigError(f"[{table}] {key} must be finite; got {value!r}")
-    if spec.types == (int,) and abs(value) > MAX_COUNT:
-        raise ConfigError(f"[{table}] {key} = {shown(value)} is out of range ({spec.doc}; an "
-                          f"integer from -{MAX_COUNT} to {MAX_COUNT})")
-    return value
-
-
-def table(
-    config: dict, name: str, schema: dict[str, Key] | None = None, open_keys=lambda key: False
-) -> dict:
-    """A validated table with defaults filled in (unknown keys and wrong types are errors)."""
-    schema = SCHEMA[name] if schema is None else schema
-    given = config.get(name, {})
-    if isinstance(given, list):
-        raise ConfigError(f"[{name}] must be one table, written [{name}]; the config has an "
-                          f"array of tables [[{name}]]")
-    if not isinstance(given, dict):
-        raise ConfigError(f"[{name}] must be a table; got {shown(given)}")
-    unknown = [k for k in given if k not in schema and not open_keys(k)]
-    if unknown:
-        raise ConfigError(f"[{name}] unknown key {shown(unknown[0])}; allowed: {', '.join(schema)}")
-    values = {}
-    for key, spec in schema.items():
-        if key in given:
-            values[key] = _checked(name, key, given[key], spec)
-        elif spec.default is REQUIRED:
-            raise ConfigError(f"[{name}] {key} is required ({spec.doc})")
-        else:
-            values[key] = copy.deepcopy(spec.default)
-    values.update({k: v for k, v in given.items() if k not in schema})
-    return values
-
-
-def check_tables(config: dict, known: tuple[str, ...]) -> None:
-    unknown = [name for name in config if name not in known]
-    if unknown:
-        raise ConfigError(f"unknown table [{shown(unknown[0])[1:-1]}]; known tables: "
-                          f"{', '.join(known)}")
-
-
-def _wrap(builder, *args, **kwargs):
-    """Run a dataclass constructor, turning its ValueError into a ConfigError."""
-    try:
-        return builder(*args, **kwargs)
-    except ConfigError:
-        raise
-    except (ValueError, TypeError) as error:
-        raise ConfigError(str(error)) from None
-
 
 def parse_section(config: dict) -> Section:
     values = table(config, "section", open_keys=lambda key: True)
@@ -341,8 +173,6 @@ def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
             raise ConfigError(f"[model] {given[0]} applies to law = \"hyperelastic\" only; got "
                               f"law = {shown(model['law'])}")
         return _wrap(Material, **table(config, "material")), {}
-    from fe_beam.config.material_laws import MATERIAL_KEYS, hyperelastic_law
-
     values = dict(law_keys)
     values["material"] = values["material"] or "neo-hookean"
     values["volumetric"] = values["volumetric"] or "simo_taylor"
@@ -490,7 +320,6 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
 
 
 # --- checks over the whole configuration, before any command reads it ---------------------------
-MAX_COUNT = 2**31 - 1  # integer keys are counts (elements, steps, iterations): C ints downstream
 # Magnitudes of nonzero numbers (SI units): beyond them products of a few numbers overflow or
 # underflow, or the factorisations meet "zero" pivots; no physical input of a rod is near them.
 MAGNITUDES = (1e-30, 1e30)
@@ -584,77 +413,6 @@ def _check_pairs(config: dict) -> None:
                 raise ConfigError(f"[time] {small} = {a:g} s must not exceed {large} = {b:g} s")
 
 
-# Tables each command reads besides the rod's (SCHEMA). A table another command reads is refused
-# when ignoring it would change the answer (tendons pull on the beam; [inverse] asks a question
-# the command does not answer) and noted otherwise. refine sorts its configurations itself.
-COMMAND_TABLES = {
-    "design": ("tendons", "design", "inverse"),
-    "static": (),
-    "finger": ("tendons", "inverse"),
-    "dynamic": ("time", "initial", "damping", "modes", "tendons"),
-    "modes": ("time", "initial", "damping", "modes", "tendons"),
-    "solid": ("tendons", "solid", "compare", "modes"),
-    "compare": ("tendons", "solid", "compare"),
-    "calibrate": ("tendons", "inverse", "calibrate"),
-    "buckling": ("tendons", "solid", "buckling"),
-    "validity": ("tendons", "solid", "compare", "validity"),
-    "path": ("tendons", "solid", "path"),
-}
-REFUSED_UNUSED = ("tendons", "inverse")
-DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
-
-
-def _readers(name: str) -> str:
-    commands = [command for command, tables in COMMAND_TABLES.items() if name in tables]
-    if name in ("tendons", "solid", "refine"):
-        commands.append("refine")
-    if not commands:
-        return "no command"
-    listed = commands[0] if len(commands) == 1 else (
-        f"{', '.join(commands[:-1])} and {commands[-1]}")
-    return f"fe-beam {listed}"
-
-
-def check_command_tables(command: str, config: dict) -> list[str]:
-    """ConfigError for a table the command would silently ignore although it changes the
-    answer; notes (sentences) for other tables and keys the command does not use."""
-    if command not in COMMAND_TABLES:
-        return []
-    used = COMMAND_TABLES[command]
-    unused: dict[str, list[str]] = {}
-    for name in config:
-        if name in SCHEMA or name in used or name not in OTHER_TABLES + ("inverse",):
-            continue
-        if name in REFUSED_UNUSED:
-            what = "[[tendons]]" if name == "tendons" else f"[{name}]"
-            hint = ("fe-beam finger for a rod pulled by tendons" if name == "tendons"
-                    else "fe-beam finger for the tension that reaches a target")
-            raise ConfigError(
-                f"fe-beam {command} does not use {what}, which is read by {_readers(name)}: "
-                f"run {hint}, or remove {what}")
-        unused.setdefault(_readers(name), []).append(f"[{name}]")
-    notes = []
-    for readers, names in unused.items():
-        listed = names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
-        verb = "is" if len(names) == 1 else "are"
-        notes.append(f"{listed} {verb} not used by fe-beam {command} and ignored (read by "
-                     f"{readers})")
-    loads = config.get("loads")
-    if command not in ("dynamic", "modes") and isinstance(loads, dict):
-        timed = [key for key in DYNAMIC_LOAD_KEYS if key in loads]
-        if timed:
-            notes.append(f"[loads] {timed[0]} is read by fe-beam dynamic only; fe-beam {command} "
-                         "applies the loads in full")
-    tendons = config.get("tendons")
-    if command not in ("dynamic", "modes") and isinstance(tendons, list):
-        timed = [key for t in tendons if isinstance(t, dict)
-                 for key in ("time_function", "time_table") if key in t]
-        if timed:
-            notes.append(f"[[tendons]] {timed[0]} is read by fe-beam dynamic only; fe-beam "
-                         f"{command} applies the tensions in full")
-    return notes
-
-
 def check_partition(config: dict, ranks: int, command: str = "static") -> None:
     """Every MPI rank needs at least one element of the rod mesh (dolfinx 0.5 crashes on a rank
     that owns none), and a 3D solid mesh finer than its cross-section (coarser ones give NaN or
@@ -682,103 +440,3 @@ def _check_solid_partition(config: dict, ranks: int) -> None:
         f"[solid] mesh_size = {size:g} m is larger than the cross-section ({max(dimensions):g} m):"
         f" such a coarse 3D mesh does not run on {ranks} MPI ranks; use mesh_size <= "
         f"{max(dimensions):g} m, or run on one rank")
-
-
-# --- one entry point: a whole configuration of any command, without the finite-element stack ----
-@dataclass(frozen=True)
-class Validated:
-    """A configuration validated for ``command``: ``parsed`` is what the command's parser
-    returns (`StaticConfig`; finger: (StaticConfig, InverseTarget | None); dynamic:
-    `fe_beam.config.transient.DynamicConfig`; modes: (StaticConfig, [modes] table); solid:
-    `fe_beam.config.solid.SolidConfig`; compare: `fe_beam.config.compare.CompareConfig`; refine:
-    `fe_beam.analyses.refine.RefinementPlan`). ``petsc_options`` lists the solver settings whose
-    PETSc
-    options PETSc itself still has to accept (`fe_beam.solvers.newton.check_petsc_options`, where
-    the
-    solver is built: the CLI checks them before the run starts)."""
-
-    command: str
-    parsed: object
-    petsc_options: tuple[dict, ...] = ()
-
-
-COMMANDS = ("static", "finger", "dynamic", "modes", "solid", "compare", "refine", "calibrate",
-            "design", "buckling", "validity", "path")
-
-
-def _solver_settings(parsed) -> list:
-    """The SolverSettings inside a parsed configuration (duck-typed: no imports)."""
-    if isinstance(parsed, tuple):
-        return [s for part in parsed for s in _solver_settings(part)]
-    found = []
-    for name in ("solver", "static", "rod", "solid", "parsed"):
-        value = getattr(parsed, name, None)
-        if isinstance(value, SolverSettings):
-            found.append(value)
-        elif value is not None and not isinstance(value, (dict, str, int, float)):
-            found.extend(_solver_settings(value))
-    return found
-
-
-def validate(command: str, config: dict, refine: dict | None = None) -> Validated:
-    """Validate the whole configuration ``config`` (the parsed TOML, after ``--set``) for
-    ``command`` as the command's own parser does, raising ConfigError (one sentence naming the
-    key) for the first mistake. Imports no dolfinx, PETSc or mpi4py: `fe-beam` answers a
-    mistake before loading them. ``refine``: the refine command's --levels, --ratio, --quantity
-    (strings or None)."""
-    if command not in COMMANDS:
-        raise ConfigError(f"unknown command {command!r}; one of {', '.join(COMMANDS)}")
-    check_values(config)
-    if command == "static":
-        parsed = parse_static(config)
-    elif command == "finger":
-        from fe_beam.config.finger import parse_finger
-
-        parsed = parse_finger(config)
-    elif command in ("dynamic", "modes"):
-        from fe_beam.config.transient import parse_dynamic, parse_modes
-
-        parsed = parse_dynamic(config) if command == "dynamic" else parse_modes(config)
-    elif command == "solid":
-        from fe_beam.config.solid import parse_solid
-
-        parsed = parse_solid(config)
-    elif command == "compare":
-        from fe_beam.config.compare import parse_compare
-
-        parsed = parse_compare(config)
-    elif command == "buckling":
-        from fe_beam.config.buckling import parse_buckling
-
-        parsed = parse_buckling(config)
-    elif command == "validity":
-        from fe_beam.config.validity import parse_validity
-
-        parsed = parse_validity(config)
-    elif command == "path":
-        from fe_beam.config.path import parse_path
-
-        parsed = parse_path(config)
-    elif command == "calibrate":
-        from fe_beam.analyses.calibrate import parse_calibrate
-        from fe_beam.config.finger import parse_finger
-
-        parsed = parse_finger(config)[0] if config.get("tendons") else parse_static(config)
-        parse_calibrate(config)
-    elif command == "design":
-        from fe_beam.analyses.design import parse_design
-        from fe_beam.config.finger import parse_finger
-
-        rest = parse_design(config)[1]
-        parsed = parse_finger(rest)[0] if rest.get("tendons") else parse_static(rest)
-    else:
-        from fe_beam.analyses.refine import plan_refinement
-
-        refine = refine or {}
-        parsed = plan_refinement(config, refine.get("levels"), refine.get("ratio"),
-                                 refine.get("quantities"))
-    options = []
-    for settings in _solver_settings(parsed):
-        if settings.petsc_options and settings.petsc_options not in options:
-            options.append(dict(settings.petsc_options))
-    return Validated(command, parsed, tuple(options))

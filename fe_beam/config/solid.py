@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from fe_beam.config.finger import parse_finger
 from fe_beam.config.material_laws import (  # noqa: F401
     LAW_CONSTANTS,
     MATERIALS,
@@ -230,8 +231,6 @@ def _check_rod_only_settings(raw: dict, loads: dict) -> None:
 
 def _rod_static(raw: dict, law: HyperelasticLaw, section, tip_force) -> StaticConfig:
     """The rod's StaticConfig: the same tables, E and G from the 3D law's small-strain limit."""
-    from fe_beam.config.finger import parse_finger
-
     rod = {k: copy.deepcopy(v) for k, v in raw.items() if k not in SOLID_ONLY_TABLES}
     rho = table(raw, "material", MATERIAL_KEYS)["rho"]
     rod["material"] = {"E": law.young_modulus, "G": law.shear_modulus, "rho": rho}

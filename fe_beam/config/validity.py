@@ -23,8 +23,10 @@ import json
 import math
 from dataclasses import dataclass
 
-from fe_beam.config.compare import CompareConfig, parse_compare
-from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, table
+from fe_beam.config.compare import RODS, CompareConfig, parse_compare
+from fe_beam.config.finger import TENDON_KEYS
+from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, check_values, table
+from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS
 
 __all__ = [
     "DEFAULT_LAWS",
@@ -95,14 +97,12 @@ class ValidityConfig:
     @property
     def solid(self):
         """The first point's solid configuration (its solver settings are every point's:
-        `fe_beam.config.schema.validate` has PETSc check their options)."""
+        `fe_beam.config.registry.validate` has PETSc check their options)."""
         return self.points[0].parsed.solid
 
 
 def _known_keys(name: str) -> dict:
     """The keys (with their Key) a table understands when they are not written."""
-    from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS
-
     if name == "solid":
         return SOLID_KEYS
     if name == "material":
@@ -111,8 +111,6 @@ def _known_keys(name: str) -> dict:
         return {key: Key(NUMBER, None) for key in _SECTION_KEYS if key != "shape"} | {
             "shape": SCHEMA["section"]["shape"]}
     if name == "tendons":
-        from fe_beam.config.finger import TENDON_KEYS
-
         return TENDON_KEYS
     return SCHEMA.get(name, {})
 
@@ -265,8 +263,6 @@ def parse_validity(raw: dict) -> ValidityConfig:
         raise ConfigError(f"[validity] x_values and y_values make {count} points; a map takes at "
                           f"most {MAX_POINTS} (every point is a 3D solve)")
     laws = given["laws"]
-    from fe_beam.config.compare import RODS
-
     if (not isinstance(laws, list) or not laws or any(law not in RODS for law in laws)
             or len(set(laws)) != len(laws)):
         raise ConfigError(f"[validity] laws must be a list of distinct names from "
@@ -292,8 +288,6 @@ def parse_validity(raw: dict) -> ValidityConfig:
             point = point_config(raw, laws, settings)
             where = f"{given['x']} = {xv!r}" + (f", {y} = {yv!r}" if y is not None else "")
             try:
-                from fe_beam.config.schema import check_values
-
                 check_values(point)
                 parsed = parse_compare(point)
                 if ratio is not None:
@@ -313,38 +307,3 @@ def second_mesh(point: dict, parsed: CompareConfig, ratio: float) -> dict:
     raw = copy.deepcopy(point)
     raw.setdefault("solid", {})["mesh_size"] = parsed.solid.sizes.size / ratio
     return raw
-
-
-# --- entry points of the worker processes (``workers`` > 1) --------------------------------------
-# Here, in a module that imports no finite-element code, so that a new ("spawn") worker process
-# can start PETSc its own way before dolfinx loads.
-def worker_start() -> None:
-    """Set up a worker process: Ctrl-C is the parent's to handle (it ends the workers), PETSc
-    without its signal handlers, no progress bars, no JIT chatter."""
-    import os
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:  # Linux: end with the parent, however it ends (prctl PR_SET_PDEATHSIG = 1)
-        import ctypes
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, int(signal.SIGKILL))
-    except (OSError, AttributeError):
-        pass
-    os.environ["FE_BEAM_PROGRESS"] = "0"
-    import petsc4py
-
-    petsc4py.init(["fe-beam", "-no_signal_handler"])
-    from fe_beam.cli import quiet_jit_logging
-
-    quiet_jit_logging()
-
-
-def worker_point(raw: dict, index: int) -> dict:
-    """Solve point ``index`` of the map of ``raw`` in this worker process (on COMM_SELF)."""
-    from mpi4py import MPI
-
-    from fe_beam.analyses.validity import solve_point
-
-    config = parse_validity(raw)
-    return solve_point(config.points[index], config, MPI.COMM_SELF)
