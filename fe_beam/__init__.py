@@ -30,7 +30,7 @@ _LAZY = {
     "ConfigError": "fe_beam.errors",
     "load_config": "fe_beam.config.schema",
     "apply_overrides": "fe_beam.config.schema",
-    "validate": "fe_beam.config.schema",
+    "validate": "fe_beam.config.registry",
     "StaticConfig": "fe_beam.model.studies",
     # drivers and their results (fe_beam.analyses: one per subcommand)
     "solve_static": "fe_beam.analyses.static",

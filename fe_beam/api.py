@@ -29,15 +29,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fe_beam import cli, runctl
-from fe_beam.analyses.calibrate import check_data
-from fe_beam.config.schema import (
-    apply_overrides,
-    check_command_tables,
-    check_partition,
-    check_values,
-    load_config,
-    validate,
-)
+from fe_beam.config.schema import apply_overrides, load_config
 from fe_beam.errors import ConfigError
 
 __all__ = ["SUMMARY_FILES", "run"]
@@ -120,26 +112,20 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
             folder = Path(out)
         if out is not None:
             cli._check_output_folder(folder, world)
-        check_values(raw)
-        notes = check_command_tables(command, raw)
-        check_partition(raw, world.size, command)
-        refine = {"levels": None if levels is None else str(levels),
-                  "ratio": None if ratio is None else str(ratio),
-                  "quantities": quantity}
-        validated = validate(command, raw, refine)
-        args = argparse.Namespace(command=command, config=str(config)[:200], out=folder, set=[],
-                                  quiet=not progress, data=data, levels=refine["levels"],
-                                  ratio=refine["ratio"], quantity=quantity)
-        if command == "calibrate":
-            check_data(raw, data)
+        args = argparse.Namespace(
+            command=command, config=str(config)[:200], out=folder, set=[], quiet=not progress,
+            data=None if data is None else str(data),
+            levels=None if levels is None else str(levels),
+            ratio=None if ratio is None else str(ratio), quantity=quantity)
+        notes: list[str] = []
+        validated = cli.prepare(args, raw, world, notes)
         cli.quiet_jit_logging()
         cli.check_solver_options(validated)
         try:
-            with runctl.output_session(folder, command, world):
-                sink = contextlib.nullcontext() if verbose and world.rank == 0 else \
-                    contextlib.redirect_stdout(io.StringIO())
-                with sink:
-                    cli.RUNNERS[command](args, raw, world)
+            sink = contextlib.nullcontext() if verbose and world.rank == 0 else \
+                contextlib.redirect_stdout(io.StringIO())
+            with sink:
+                cli.execute(args, validated, raw, world)
         except (runctl.FolderBusy, runctl.TooLarge) as error:
             raise ConfigError(str(error)) from None
         world.barrier()

@@ -518,19 +518,14 @@ def _parse_arguments(argv, comm) -> argparse.Namespace:
 def _run_locked(args, validated, config: dict, comm) -> int:
     """Run a command holding the lock of its output folder, with SIGINT/SIGTERM noticed at step
     boundaries (fe_beam.runctl): one line on stderr and exit 130/143 instead of a traceback."""
-    session = None
+    sessions = []
     try:
-        with runctl.output_session(args.out, args.command, comm) as session:
-            runctl.check(comm, runctl.BEFORE)
-            run = driver(REGISTRY[args.command])
-            code = RUNNERS[args.command](args, validated, config, comm, run)
-            runctl.check(comm, runctl.AFTER)
-            return code
+        return execute(args, validated, config, comm, sessions.append)
     except (runctl.FolderBusy, runctl.TooLarge) as error:
         _say(comm, f"fe-beam {args.command}: {error}", sys.stderr)
         return EXIT_USAGE
     except runctl.Interrupted as stop:
-        wrote = session is None or bool(session.files)  # known on rank 0, which prints
+        wrote = not sessions or sessions[0] is None or bool(sessions[0].files)  # rank 0 prints
         _say(comm, stop.line(args.out, wrote), sys.stderr)
         return stop.exit_code
 
@@ -589,6 +584,38 @@ def check_solver_options(validated) -> None:
         newton.check_petsc_options(options)
 
 
+def prepare(args, config: dict, comm, notes: list[str]):
+    """Every check of a configuration before the run, without the finite-element stack (the
+    CLI and `fe_beam.run` alike): values, the tables the command reads (``notes`` gets the
+    notes on the others), the partition over ``comm``, the command's parser (`validate`) and
+    calibrate's data file. Returns the `Validated` configuration; ConfigError otherwise."""
+    check_values(config)
+    notes.extend(check_command_tables(args.command, config))
+    check_partition(config, comm.size, args.command)
+    refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
+              "quantities": getattr(args, "quantity", None)}
+    if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
+        refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
+    validated = validate(args.command, config, refine)
+    if args.command == "calibrate":  # the data file too, before the FE stack is loaded
+        check_data(config, args.data)
+    return validated
+
+
+def execute(args, validated, config: dict, comm, on_session=None) -> int:
+    """Run the command's driver and its report (the lines the CLI prints) inside the output
+    folder's session (given to ``on_session``); its exit code. FolderBusy, TooLarge and
+    Interrupted propagate."""
+    with runctl.output_session(args.out, args.command, comm) as session:
+        if on_session is not None:
+            on_session(session)
+        runctl.check(comm, runctl.BEFORE)
+        run = driver(REGISTRY[args.command])
+        code = RUNNERS[args.command](args, validated, config, comm, run)
+        runctl.check(comm, runctl.AFTER)
+        return code
+
+
 def _main(argv: list[str] | None = None) -> int:
     comm = _world() if launched_by_mpi() else SerialComm()
     args = _parse_arguments(argv, comm)
@@ -601,16 +628,7 @@ def _main(argv: list[str] | None = None) -> int:
     def work() -> int:
         _check_output_folder(args.out, comm)
         config = apply_overrides(load_config(args.config), args.set)
-        check_values(config)
-        notes.extend(check_command_tables(args.command, config))
-        check_partition(config, comm.size, args.command)
-        refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
-                  "quantities": getattr(args, "quantity", None)}
-        if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
-            refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
-        validated = validate(args.command, config, refine)
-        if args.command == "calibrate":  # the data file too, before the FE stack is loaded
-            check_data(config, args.data)
+        validated = prepare(args, config, comm, notes)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()
         check_solver_options(validated)

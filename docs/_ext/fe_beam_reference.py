@@ -1,9 +1,9 @@
 """Everything the documentation reads from fe_beam's internals, in one place.
 
 The command pages and the configuration reference are generated from what this module returns
-(docs/_ext/fe_beam_docs.py). Today it reads the argparse parser (`fe_beam.cli._parser`), the
-schema (`fe_beam.config.SCHEMA`) and the key tables of the other commands; when fe_beam has a
-command registry, re-point these functions at it and nothing else in docs/ changes.
+(docs/_ext/fe_beam_docs.py). It reads the command registry (`fe_beam.config.registry.REGISTRY`:
+each command's tables; its help and arguments through the CLI's parser, which is built from the
+registry), the schema (`fe_beam.config.keys.SCHEMA`) and the key tables of the other commands.
 
 Public interface:
 
@@ -82,9 +82,9 @@ def common_arguments() -> list[dict]:
 
 def command_tables() -> dict[str, tuple[str, ...]]:
     """The tables each command reads beyond the common ones of `tables()`'s SCHEMA part."""
-    from fe_beam.config.schema import COMMAND_TABLES
+    from fe_beam.config.registry import REGISTRY
 
-    return {name: tuple(names) for name, names in COMMAND_TABLES.items()}
+    return {name: tuple(spec.tables) for name, spec in REGISTRY.items()}
 
 
 def _type_names(types) -> tuple[str, ...]:
@@ -92,7 +92,7 @@ def _type_names(types) -> tuple[str, ...]:
 
 
 def _from_keys(keys: dict) -> dict:
-    from fe_beam.config.schema import REQUIRED as CODE_REQUIRED
+    from fe_beam.config.keys import REQUIRED as CODE_REQUIRED
 
     return {
         name: (_type_names(key.types), REQUIRED if key.default is CODE_REQUIRED else key.default,
@@ -107,13 +107,13 @@ def _undocumented(names, types=()) -> dict:
 
 def tables() -> dict[str, dict[str, tuple]]:
     """{table: {key: (types, default, doc)}} for every configuration table."""
-    from fe_beam.analyses.calibrate import CALIBRATE_KEYS
-    from fe_beam.analyses.design import DESIGN_KEYS
     from fe_beam.config.buckling import BUCKLING_KEYS
+    from fe_beam.config.calibrate import CALIBRATE_KEYS
     from fe_beam.config.compare import COMPARE_KEYS
+    from fe_beam.config.design import DESIGN_KEYS
     from fe_beam.config.finger import INVERSE_KEYS, TENDON_KEYS
+    from fe_beam.config.keys import NUMBER, SCHEMA
     from fe_beam.config.path import PATH_KEYS
-    from fe_beam.config.schema import NUMBER, SCHEMA
     from fe_beam.config.solid import SOLID_KEYS, SOLID_MODES_KEYS
     from fe_beam.config.transient import (
         DAMPING_KEYS,

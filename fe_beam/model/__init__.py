@@ -1,7 +1,7 @@
 """The model layer: what a problem is, as validated dataclasses, with no finite-element code.
 
 Nothing here imports dolfinx, PETSc or mpi4py (a test checks it), so a configuration is
-validated (`fe_beam.config.schema.validate`) without loading the finite-element stack. The
+validated (`fe_beam.config.validate`) without loading the finite-element stack. The
 finite-element
 side (`fe_beam.fem.rod.BeamProblem`, `fe_beam.solvers.newton`, `fe_beam.solid`) takes these objects.
 
