@@ -196,6 +196,22 @@ class FolderBusy(Exception):
 _session: OutputSession | None = None
 
 
+OWNER_WAIT_S = 1.0  # how long a run that lost the lock waits for the owner to write its pid
+
+
+def _lock_owner(fd: int) -> list[str]:
+    """The owner's "pid host command" from the lock file, read again for up to OWNER_WAIT_S
+    while it is empty: the owner writes it right after taking the lock (two runs started
+    together would otherwise name "another process" instead of the pid)."""
+    deadline = time.monotonic() + OWNER_WAIT_S
+    while True:
+        os.lseek(fd, 0, os.SEEK_SET)
+        owner = os.read(fd, 400).decode(errors="replace").split()
+        if owner or time.monotonic() > deadline:
+            return owner
+        time.sleep(0.01)
+
+
 class OutputSession:
     """Lock of an output folder for one command (rank 0 only), and the record of its files."""
 
@@ -223,7 +239,7 @@ class OutputSession:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             try:
-                owner = os.read(fd, 400).decode(errors="replace").split()
+                owner = _lock_owner(fd)
             finally:
                 os.close(fd)
             who = f"pid {owner[0]}" if owner else "another process"
