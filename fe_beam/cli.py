@@ -24,7 +24,7 @@ from fe_beam import analyses, runctl
 from fe_beam.config.calibrate import check_data
 from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
 from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
-from fe_beam.errors import ConfigError
+from fe_beam.errors import ConfigError, LoadSteppingFailed, UpdateFailed
 from fe_beam.lazy import LazyModule
 from fe_beam.logs import quiet_jit_logging
 from fe_beam.timefunctions import TimeFunctionError
@@ -33,7 +33,6 @@ from fe_beam.timefunctions import TimeFunctionError
 # ``fe-beam --help`` and a configuration mistake answer without them. The drivers are reached
 # through the lazy `fe_beam.analyses` package (`driver`).
 newton = LazyModule("fe_beam.solvers.newton")
-realtime = LazyModule("fe_beam.solvers.realtime")
 solid_modes = LazyModule("fe_beam.analyses.solid_modes")
 
 EXIT_INTERNAL = 1
@@ -223,7 +222,7 @@ def run_refine(args, validated, config: dict, comm, run_refine_command) -> int:
 def run_design_command(args, validated, config: dict, comm, run_design) -> int:
     try:
         summary = run_design(config, args.out, comm, progress=not args.quiet)
-    except realtime.UpdateFailed as failure:  # a trial design without equilibrium
+    except UpdateFailed as failure:  # a trial design without equilibrium
         _say(comm, f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
                    "[design] bounds)", sys.stderr)
         return EXIT_FAILED
@@ -344,7 +343,7 @@ def run_validity_command(args, validated, config: dict, comm, run_validity) -> i
 def run_calibrate_command(args, validated, config: dict, comm, run_calibrate) -> int:
     try:
         summary = run_calibrate(config, args.data, args.out, comm, quiet=args.quiet)
-    except newton.LoadSteppingFailed as failure:
+    except LoadSteppingFailed as failure:
         _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
              sys.stderr)
         return EXIT_FAILED

@@ -18,7 +18,11 @@ import ufl
 from dolfinx import fem
 from petsc4py import PETSc
 
-from fe_beam.errors import ConfigError
+from fe_beam.errors import (  # noqa: F401  (their home; re-exported)
+    ConfigError,
+    LoadSteppingFailed,
+    SolveFailed,
+)
 from fe_beam.fem import compat
 from fe_beam.model.settings import (  # noqa: F401  (their home; re-exported)
     LINE_SEARCHES,
@@ -38,21 +42,6 @@ __all__ = [
     "SolverSettings",
     "StepResult",
 ]
-
-class SolveFailed(RuntimeError):
-    """SNES did not converge (the iterate is left as SNES left it)."""
-
-
-class LoadSteppingFailed(RuntimeError):
-    """Load stepping gave up; the state of ``last_load_factor`` has been restored. Raised by
-    the engine as its subclass `fe_beam.solvers.continuation.ContinuationFailed`, which carries the
-    cause in ``reason`` (never parse the message)."""
-
-    def __init__(self, message: str, last_load_factor: float, results: list[StepResult]):
-        super().__init__(message)
-        self.last_load_factor = last_load_factor
-        self.results = results
-
 
 _PETSC_ERRORS = {56: "not supported", 62: "invalid argument", 63: "out of range or not a "
                  "number", 86: "unknown type"}

@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from mpi4py import MPI
 
+from fe_beam.errors import UpdateFailed  # noqa: F401  (its home; re-exported)
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import strains
 from fe_beam.model.laws import LAW_KINDS
@@ -61,16 +62,6 @@ __all__ = [
 # Most cached problems kept (least recently used ones are destroyed beyond it);
 # FE_BEAM_PROBLEM_CACHE=0 switches the cache off.
 CACHE_SIZE = 8
-
-
-class UpdateFailed(RuntimeError):
-    """No equilibrium was reached for the new values (neither by Newton from the last
-    equilibrium nor by load stepping towards them); the last equilibrium and its values are
-    restored. ``reached`` is the fraction of the way to the new values that converged."""
-
-    def __init__(self, message: str, reached: float):
-        super().__init__(message)
-        self.reached = reached
 
 
 # --- what shapes the forms -----------------------------------------------------------------------
