@@ -17,9 +17,7 @@ run raise `fe_beam.runctl.Interrupted` after the last good state is written.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import copy
-import io
 import json
 import os
 import shutil
@@ -29,6 +27,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fe_beam import cli, runctl
+from fe_beam.config.registry import REGISTRY
 from fe_beam.config.schema import apply_overrides, load_config
 from fe_beam.errors import ConfigError
 
@@ -36,6 +35,9 @@ __all__ = ["SUMMARY_FILES", "run"]
 
 #: the file that holds a command's summary (summary.json unless named here)
 SUMMARY_FILES = {"refine": "refinement.json"}
+#: commands whose study lives in its folder (resumable points): out=None runs them in a
+#: private temporary folder, removed afterwards
+NEEDS_A_FOLDER = ("validity",)
 
 
 def _overrides(keys: Mapping[str, object]) -> list[str]:
@@ -81,8 +83,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         command: a subcommand of the CLI (static, finger, dynamic, modes, solid, compare,
             validity, refine, calibrate, design, buckling, path).
         config: a TOML file, or a dict as the TOML would parse (not modified).
-        out: the output folder; None writes the files into a private temporary folder that is
-            removed before returning (nothing is left behind).
+        out: the output folder; None writes nothing (validity, a resumable study, runs in a
+            private temporary folder removed before returning).
         comm: an MPI communicator (default: the world, as under ``mpirun``).
         progress: show the progress bar (the CLI's default; off here).
         verbose: print what the CLI prints (the result lines) on rank 0.
@@ -103,14 +105,12 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         raise ConfigError("fe_beam.run('calibrate', ...) needs data= (the measurements CSV, the "
                           "CLI's --data)")
     world = comm if comm is not None else cli._world()
-    with contextlib.ExitStack() as stack:
-        if out is None:  # one private folder for all ranks (rank 0 makes and removes it)
-            made = tempfile.mkdtemp(prefix="fe_beam_run_") if world.rank == 0 else None
-            folder = Path(world.bcast(made, root=0) if world.size > 1 else made)
-            stack.callback(_remove, folder, world)
-        else:
-            folder = Path(out)
-        if out is not None:
+    folder = None if out is None else Path(out)
+    if command in NEEDS_A_FOLDER and folder is None:
+        made = tempfile.mkdtemp(prefix="fe_beam_run_") if world.rank == 0 else None
+        folder = Path(world.bcast(made, root=0) if world.size > 1 else made)
+    try:
+        if folder is not None:
             cli._check_output_folder(folder, world)
         args = argparse.Namespace(
             command=command, config=str(config)[:200], out=folder, set=[], quiet=not progress,
@@ -121,15 +121,23 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         validated = cli.prepare(args, raw, world, notes)
         cli.quiet_jit_logging()
         cli.check_solver_options(validated)
-        try:
-            sink = contextlib.nullcontext() if verbose and world.rank == 0 else \
-                contextlib.redirect_stdout(io.StringIO())
-            with sink:
-                cli.execute(args, validated, raw, world)
-        except (runctl.FolderBusy, runctl.TooLarge) as error:
-            raise ConfigError(str(error)) from None
-        world.barrier()
-        summary = json.loads((folder / SUMMARY_FILES.get(command, "summary.json")).read_text())
+
+        def echo(stream: str, text: str) -> None:
+            if verbose:
+                cli.report_line(world, stream, text)
+
+        results = []
+        if folder is None:  # nothing written: the driver alone
+            results.append(cli.driver(REGISTRY[command])(validated, None, world,
+                                                         progress=progress, echo=echo))
+        else:
+            try:
+                cli.execute(args, validated, raw, world, on_result=results.append, echo=echo)
+            except (runctl.FolderBusy, runctl.TooLarge) as error:
+                raise ConfigError(str(error)) from None
+    finally:
+        if out is None and folder is not None:
+            _remove(folder, world)
     for note in notes:  # what the CLI prints as notes (unused tables): warnings here
         warnings.warn(f"fe-beam {command}: {note}", stacklevel=2)
-    return summary
+    return results[0].summary()

@@ -24,7 +24,7 @@ from fe_beam import analyses, runctl
 from fe_beam.config.calibrate import check_data
 from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
 from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
-from fe_beam.errors import ConfigError, LoadSteppingFailed, UpdateFailed
+from fe_beam.errors import ConfigError
 from fe_beam.lazy import LazyModule
 from fe_beam.logs import quiet_jit_logging
 from fe_beam.timefunctions import TimeFunctionError
@@ -33,7 +33,6 @@ from fe_beam.timefunctions import TimeFunctionError
 # ``fe-beam --help`` and a configuration mistake answer without them. The drivers are reached
 # through the lazy `fe_beam.analyses` package (`driver`).
 newton = LazyModule("fe_beam.solvers.newton")
-solid_modes = LazyModule("fe_beam.analyses.solid_modes")
 
 EXIT_INTERNAL = 1
 EXIT_USAGE = 2
@@ -102,264 +101,10 @@ def _say(comm, text: str, stream=None) -> None:
         print(text, file=stream or sys.stdout, flush=True)
 
 
-def _warn_notes(comm, notes) -> None:
-    """The run's notes on stderr, each once (set-up warnings were printed when they arose)."""
-    for note in notes or []:
-        if note not in runctl.WARNED:
-            _say(comm, f"fe-beam: warning: {note}", sys.stderr)
-
-
-def _finish(comm, result, out) -> int:
-    """The closing line of a static-type run, and its exit code."""
-    _warn_notes(comm, getattr(result, "notes", None))
-    stability = result.steps[-1].get("stability") if result.steps else None
-    if stability and not stability["stable"]:
-        _say(comm, "fe-beam: warning: the final equilibrium is unstable (the tangent stiffness "
-                   f"has {stability['energy_decreasing_directions']} direction(s) of decreasing "
-                   "energy): the beam would buckle or snap away from it. A small imperfection "
-                   "(e.g. a tiny transverse load) lets load stepping follow the stable branch",
-             sys.stderr)
-    _say(
-        comm,
-        f"{len(result.steps)} load steps, {result.dofs} dofs, "
-        f"{result.wall_time_s:.2f} s; results in {out}",
-    )
-    if result.status != "converged":
-        _say(comm, f"fe-beam: {result.message}", sys.stderr)
-        return EXIT_FAILED
-    return 0
-
-
-# --- one runner per command: run(args, validated, config, comm, driver) -> exit code; the drivers
-# of static, finger, dynamic and modes take the validated configuration, the others the raw one
-def run_static(args, validated, config: dict, comm, solve_static) -> int:
-    result = solve_static(validated.parsed, args.out, comm, progress=not args.quiet)
-    for step in result.steps[-1:]:
-        tip = step["tip"]
-        _say(
-            comm,
-            f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
-            f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad",
-        )
-    return _finish(comm, result, args.out)
-
-
-def run_finger(args, validated, config: dict, comm, run_finger) -> int:
-    parsed, target = validated.parsed
-    result, inverse = run_finger(
-        parsed, args.out, comm, progress=not args.quiet, target=target
-    )
-    for step in result.steps[-1:]:
-        tip = step["tip"]
-        tensions = ", ".join(f"{t:.6g}" for t in step["tensions"])
-        pulls = ", ".join(f"{p:.6g}" for p in step["pull_ins"])
-        _say(
-            comm,
-            f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
-            f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad",
-        )
-    if inverse:
-        _say(
-            comm,
-            f"inverse: tension {inverse['tension']:.8g} N, pull-in {inverse['pull_in']:.6g} m "
-            f"give {inverse['target']} = {inverse['target_value']:g} "
-            f"({inverse['evaluations']} solves, {inverse['wall_time_s']:.2f} s)",
-        )
-    return _finish(comm, result, args.out)
-
-
-def run_dynamic(args, validated, config: dict, comm, run_dynamic) -> int:
-    result = run_dynamic(validated.parsed, args.out, comm, progress=not args.quiet)
-    if result.history:
-        last = result.history[-1]
-        tip = last["tip"]
-        _say(comm, f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, "
-                   f"theta = {tip['theta']:.6g} rad")
-    _warn_notes(comm, getattr(result, "notes", None))
-    _say(comm, f"{result.info.get('steps', len(result.history))} time steps, {result.dofs} dofs, "
-               f"{result.info.get('wall_time_s', 0.0):.2f} s; results in {args.out}")
-    if result.status != "completed":
-        _say(comm, f"fe-beam: {result.message}", sys.stderr)
-        return EXIT_FAILED
-    return 0
-
-
-def run_modes(args, validated, config: dict, comm, run_modes) -> int:
-    static, modes = validated.parsed
-    summary = run_modes(static, modes, args.out, comm, progress=not args.quiet)
-    if summary["status"] == "failed":  # the static pre-state was not reached
-        _say(comm, f"fe-beam modes: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    kinds = summary.get("mode_kinds") or [
-        "bending" if share > 0.5 else "axial" for share in summary["transverse_fraction"]]
-    for index, (frequency, kind) in enumerate(zip(summary["frequencies_hz"], kinds, strict=True),
-                                              start=1):
-        label = "rigid body" if kind == "rigid" else kind
-        _say(comm, f"mode {index}: {frequency:.6g} Hz ({label})")
-    for index, mode in enumerate(summary.get("unstable_modes", []), start=1):
-        imag = mode.get("eigenvalue_imag") or 0.0  # flutter: a complex pair a +- i b
-        _say(comm, f"unstable mode {index}: omega^2 = {mode['eigenvalue']:.6g}"
-                   f"{f' +- {abs(imag):.6g} i' if imag else ''} rad^2/s^2 "
-                   f"(growth rate {mode['growth_rate']:.6g} 1/s)")
-    for note in summary.get("notes", []):
-        if note in runctl.WARNED:
-            continue  # printed as a warning when it arose
-        kind = "warning" if note.startswith("the state is unstable") else "note"
-        _say(comm, f"fe-beam modes: {kind}: {note}", sys.stderr)
-    found = len(summary["frequencies_hz"])
-    if found < modes["count"]:
-        _say(comm, f"fe-beam modes: note: [modes] count = {modes['count']} asked for more modes "
-                   f"than were found ({found}; the model has {summary['dofs']} dofs)", sys.stderr)
-    _say(comm, f"results in {args.out}")
-    return 0
-
-
-def run_refine(args, validated, config: dict, comm, run_refine_command) -> int:
-    return run_refine_command(args, config, comm, say=lambda text, stream=None: _say(
-        comm, text, stream))
-
-
-def run_design_command(args, validated, config: dict, comm, run_design) -> int:
-    try:
-        summary = run_design(config, args.out, comm, progress=not args.quiet)
-    except UpdateFailed as failure:  # a trial design without equilibrium
-        _say(comm, f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
-                   "[design] bounds)", sys.stderr)
-        return EXIT_FAILED
-    values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
-    objective = summary["objective"]["value"]
-    minimised = summary["objective"].get("minimised")
-    shown = (f"{objective:.6g}" if minimised is None else  # the tension, not tension / bound
-             f"{minimised['name']} = {minimised['value']:.6g} (minimised)")
-    return _report_fit(comm, "design", summary,
-                       f"design {summary['status']}: {values}; objective {shown}, KKT "
-                       f"residual {summary['kkt_residual']:.2g}, {summary['iterations']} "
-                       f"iterations ({summary['gradient']} gradients); results in {args.out}")
-
-
-def _exit_code(comm, summary: dict, who: str) -> int:
-    """0 for a converged run, else its message on stderr after ``who`` and EXIT_FAILED."""
-    if summary["status"] != "converged":
-        _say(comm, f"{who}: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    return 0
-
-
-def _report_fit(comm, command: str, summary: dict, line: str) -> int:
-    """Notes on stderr, the result line on stdout; exit 3 when the fit/optimum did not
-    converge (calibrate, design)."""
-    for note in summary.get("notes", []):
-        _say(comm, f"fe-beam {command}: note: {note}", sys.stderr)
-    _say(comm, line)
-    return _exit_code(comm, summary, f"fe-beam {command}")
-
-
-def run_buckling_command(args, validated, config: dict, comm, run_buckling) -> int:
-    summary = run_buckling(config, args.out, comm, progress=not args.quiet)
-    for note in summary.get("notes", []):
-        _say(comm, f"fe-beam buckling: note: {note}", sys.stderr)
-    if summary["status"] != "completed":
-        _say(comm, f"fe-beam buckling: {summary['message']}", sys.stderr)
-        return EXIT_FAILED
-    _say(comm, f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
-               f"{summary['prestress']:g}")
-    for index, factor in enumerate(summary["load_factors"], start=1):
-        _say(comm, f"{index:>4}  {factor:>14.8g}")
-    _say(comm, f"{summary['dofs']} dofs, {summary['wall_time_s']:.2f} s; results in {args.out}")
-    return 0
-
-
-def run_path_command(args, validated, config: dict, comm, run_path) -> int:
-    summary = run_path(config, args.out, comm, progress=not args.quiet)
-    for note in summary.get("notes", []):
-        _say(comm, f"fe-beam path: note: {note}", sys.stderr)
-    for point in summary["critical_points"]:
-        # a point-force path: where the force pushes (the path's "point"), not the tip
-        tip, where = (point["point"], f"point x = {point['point']['x']:.6g} m") \
-            if "point" in point else (point["tip"], "tip")
-        _say(comm, f"{point['kind']} point at load factor {point['load_factor']:.8g}: {where} "
-                   f"u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
-    _say(comm, f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
-               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    return _exit_code(comm, summary, "fe-beam path")
-
-
-def run_solid_command(args, validated, config: dict, comm, run_solid) -> int:
-    summary = run_solid(config, args.out, comm, progress=not args.quiet)
-    for note in summary.get("notes", []):
-        _say(comm, f"fe-beam solid: note: {note}", sys.stderr)
-    for step in summary["steps"][-1:]:
-        tip = step["tip"]
-        _say(comm, f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
-                   f"stretch {step['max_principal_stretch']:.4g} "
-                   f"({step['max_principal_stretch_bulk']:.4g} away from the tendon ends)")
-    rod = summary.get("rod") or {}
-    if rod.get("steps"):
-        tip = rod["steps"][-1]["tip"]
-        _say(comm, f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.4g}: "
-                   f"tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g}")
-    if "distance_to_solid" in rod:
-        _say(comm, f"rod vs 3D: max_x |r_rod - r_solid| / L = "
-                   f"{rod['distance_to_solid']['max_over_L']:.3g}")
-    for line in solid_modes.modes_table(summary.get("modes")):  # [modes]: solid vs rod
-        _say(comm, line)
-    _say(comm, f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
-               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    return _exit_code(comm, summary, "fe-beam")
-
-
-def run_compare_command(args, validated, config: dict, comm, run_compare) -> int:
-    summary = run_compare(config, args.out, comm, progress=not args.quiet)
-    for row in summary["table"]:
-        where = f"tension {row['tension']:.4g} N" if "tension" in row else (
-            f"load factor {row['load_factor']:.4g}")
-        parts = [f"3D theta {row['solid']['tip']['theta']:.4g}"]
-        for law, rod in row["rod"].items():
-            if "distance_over_L" in rod:
-                parts.append(f"{law} theta {rod['tip']['theta']:.4g}, "
-                             f"d/L {rod['distance_over_L']:.3g}")
-            else:
-                parts.append(f"{law} {rod['status']}")
-        _say(comm, f"{where}: " + "; ".join(parts))
-    for entry in summary["departures"].values():
-        _say(comm, entry["statement"])
-    _say(comm, f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    return _exit_code(comm, summary, "fe-beam")
-
-
-def run_validity_command(args, validated, config: dict, comm, run_validity) -> int:
-    summary = run_validity(config, args.out, comm, progress=not args.quiet,
-                           say=lambda text: _say(comm, text, sys.stderr))
-    for entry in summary["departures"].values():
-        _say(comm, entry["statement"])
-    counts = summary["counts"]
-    _say(comm, f"{counts['finished']} of {counts['total']} points ({counts['computed']} computed, "
-               f"{counts['skipped']} already finished, {counts['failed']} failed), "
-               f"{summary['wall_time_s']:.2f} s; results in {args.out}")
-    return _exit_code(comm, summary, "fe-beam validity")
-
-
-def run_calibrate_command(args, validated, config: dict, comm, run_calibrate) -> int:
-    try:
-        summary = run_calibrate(config, args.data, args.out, comm, quiet=args.quiet)
-    except LoadSteppingFailed as failure:
-        _say(comm, f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}",
-             sys.stderr)
-        return EXIT_FAILED
-    fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
-    return _report_fit(comm, "calibrate", summary,
-                       f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
-                       f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; "
-                       f"results in {args.out}")
-
-
-#: The printing runner of each command (the commands and their drivers: the registry).
-RUNNERS = {"static": run_static, "finger": run_finger, "design": run_design_command,
-           "dynamic": run_dynamic, "modes": run_modes, "solid": run_solid_command,
-           "compare": run_compare_command, "validity": run_validity_command,
-           "refine": run_refine, "calibrate": run_calibrate_command,
-           "buckling": run_buckling_command, "path": run_path_command}
+def report_line(comm, stream: str, text: str) -> None:
+    """One line of a driver's report (`fe_beam.analyses.result.Report`), printed on rank 0:
+    "out" to stdout, "err" to stderr."""
+    _say(comm, text, sys.stderr if stream == "err" else None)
 
 
 def _check_output_folder(out: Path, comm) -> None:
@@ -592,7 +337,8 @@ def prepare(args, config: dict, comm, notes: list[str]):
     notes.extend(check_command_tables(args.command, config))
     check_partition(config, comm.size, args.command)
     refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
-              "quantities": getattr(args, "quantity", None)}
+              "quantities": getattr(args, "quantity", None),
+              "data": getattr(args, "data", None), "config_path": str(args.config)}
     if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
         refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
     validated = validate(args.command, config, refine)
@@ -601,18 +347,24 @@ def prepare(args, config: dict, comm, notes: list[str]):
     return validated
 
 
-def execute(args, validated, config: dict, comm, on_session=None) -> int:
-    """Run the command's driver and its report (the lines the CLI prints) inside the output
-    folder's session (given to ``on_session``); its exit code. FolderBusy, TooLarge and
-    Interrupted propagate."""
+def execute(args, validated, config: dict, comm, on_session=None, on_result=None,
+            echo=None) -> int:
+    """Run the command's driver (`fe_beam.analyses.result`: ``run(validated, out, comm,
+    progress, echo)``) inside the output folder's session (given to ``on_session``); its
+    report goes to ``echo(stream, text)`` (default: printed on rank 0), its `Result` to
+    ``on_result``; returns its exit code. FolderBusy, TooLarge and Interrupted propagate."""
     with runctl.output_session(args.out, args.command, comm) as session:
         if on_session is not None:
             on_session(session)
         runctl.check(comm, runctl.BEFORE)
         run = driver(REGISTRY[args.command])
-        code = RUNNERS[args.command](args, validated, config, comm, run)
+        result = run(validated, args.out, comm, progress=not args.quiet,
+                     echo=echo if echo is not None else (
+                         lambda stream, text: report_line(comm, stream, text)))
         runctl.check(comm, runctl.AFTER)
-        return code
+        if on_result is not None:
+            on_result(result)
+        return result.exit_code
 
 
 def _main(argv: list[str] | None = None) -> int:

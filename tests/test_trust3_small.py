@@ -54,8 +54,6 @@ def test_validity_ctrl_c_says_which_points_are_done(tmp_path, monkeypatch):
 def _captured_calibration_figure(tmp_path, monkeypatch, load_column):
     """calibration.png's figure, kept from plt.close (the plot of
     `fe_beam.analyses.calibrate._plot`)."""
-
-
     from fe_beam.analyses import calibrate
     from fe_beam.exports import outputs
     real = outputs._pyplot()
@@ -69,6 +67,7 @@ def _captured_calibration_figure(tmp_path, monkeypatch, load_column):
             kept.append(figure)
 
     monkeypatch.setattr(outputs, "_pyplot", lambda: Keeping())
+    monkeypatch.setattr(calibrate, "_pyplot", lambda: Keeping())  # bound at its import
     loads = np.array([0.6, 1.2, 1.8])  # N (tension column, tendons.0.tension = 1.2) or factors
     factors = loads / 1.2 if load_column == "tension" else loads
     data = calibrate.CalibrationData(load_column, loads, {

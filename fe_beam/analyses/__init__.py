@@ -8,7 +8,7 @@ import importlib
 
 DRIVERS = ("static", "finger", "transient", "compare", "validity", "refine", "calibrate",
            "design", "path", "buckling", "sensitivity", "solid", "solid_rod", "solid_driver",
-           "solid_modes")
+           "solid_modes", "dynamic", "modes", "result")
 
 
 def __getattr__(name: str):

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from fe_beam.analyses.result import EXIT_FAILED, Report, Result
 from fe_beam.analyses.solid import SolidRun, check_solid_work
 from fe_beam.analyses.static import StaticContinuation, check_beam_work
 from fe_beam.config.buckling import parse_buckling
@@ -22,7 +23,7 @@ from fe_beam.solvers.buckling import (
 )
 from fe_beam.solvers.newton import LoadSteppingFailed
 
-__all__ = ["run_buckling"]
+__all__ = ["run", "run_buckling"]
 
 
 def run_buckling(config: dict, out: Path | None, comm=MPI.COMM_WORLD,
@@ -147,3 +148,23 @@ def _run_solid(config, settings, out, comm, progress) -> dict:
         if comm.rank == 0:
             atomic_write_json(out / "summary.json", summary)
     return summary
+
+
+def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam buckling`` (the driver contract, `fe_beam.analyses.result`)."""
+    kind, parsed, settings = validated.parsed
+    summary = (_run_solid if kind == "solid" else _run_rod)(parsed, settings, out, comm,
+                                                             progress)
+    report = Report(echo)
+    for note in summary.get("notes", []):
+        report.err(f"fe-beam buckling: note: {note}")
+    if summary["status"] != "completed":
+        report.err(f"fe-beam buckling: {summary['message']}")
+        return Result("buckling", summary, EXIT_FAILED, report.lines)
+    report.out(f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
+               f"{summary['prestress']:g}")
+    for index, factor in enumerate(summary["load_factors"], start=1):
+        report.out(f"{index:>4}  {factor:>14.8g}")
+    report.out(f"{summary['dofs']} dofs, {summary['wall_time_s']:.2f} s; results in {out}")
+    return Result("buckling", summary, 0, report.lines)

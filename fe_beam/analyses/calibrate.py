@@ -42,6 +42,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from fe_beam import analyses
+from fe_beam.analyses.result import EXIT_FAILED, Report, Result, fit_report, world
 from fe_beam.config.calibrate import (
     CalibrationData,
     CalibrationSpec,
@@ -50,11 +51,11 @@ from fe_beam.config.calibrate import (
     parse_calibrate,
     read_data,
 )
-from fe_beam.errors import ConfigError
+from fe_beam.errors import ConfigError, LoadSteppingFailed
 from fe_beam.exports.outputs import _pyplot, atomic_write_json
-from fe_beam.solvers.newton import LoadSteppingFailed, SolveFailed
+from fe_beam.solvers.newton import SolveFailed
 
-__all__ = ["CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
+__all__ = ["run", "CalibrationData", "CalibrationSpec", "calibrate", "default_bounds",
            "check_data", "parse_calibrate", "parameter_kind", "read_data",
            "run_calibrate"]
 
@@ -494,3 +495,24 @@ def _calibration_figure(plt, data: CalibrationData, curves: dict, row_factors: n
     figure.suptitle(fitted, fontsize=8)
     figure.tight_layout()
     return figure
+
+
+def run(validated, out: Path | None, comm=None, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam calibrate`` (the driver contract, `fe_beam.analyses.result`); the data file is
+    ``validated.options["data"]``."""
+    report = Report(echo)
+    comm = comm if comm is not None else world()
+    try:
+        summary = run_calibrate(validated.config, validated.options["data"], out, comm,
+                                quiet=not progress)
+    except LoadSteppingFailed as failure:
+        report.err(f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}")
+        return Result("calibrate", {"status": "failed", "message": str(failure)}, EXIT_FAILED,
+                      report.lines)
+    fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
+    code = fit_report(report, "calibrate", summary,
+                      f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "
+                      f"{summary['iterations']} iterations, {summary['wall_time_s']:.2f} s; "
+                      f"results in {out}")
+    return Result("calibrate", summary, code, report.lines)

@@ -31,6 +31,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid import SolidRun
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod
 from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
@@ -47,7 +48,7 @@ from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
 from fe_beam.exports.outputs import _pyplot
 from fe_beam.solvers.newton import LoadSteppingFailed
 
-__all__ = ["COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
+__all__ = ["run", "COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
 
 def crossing(factors, distances, threshold: float) -> dict | None:
     """First load factor at which ``distances`` exceed ``threshold`` (linear interpolation
@@ -68,11 +69,16 @@ def crossing(factors, distances, threshold: float) -> dict | None:
 
 
 def run_compare(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """`compare_run` of ``raw`` parsed (for scripts that hold the TOML dict)."""
+    return compare_run(parse_compare(raw), out, comm, progress)
+
+
+def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
     """Run the sweep; write ``summary.json``, ``compare.csv`` and the plots into ``out`` (if not
     None, by rank 0) after every sweep point; return the summary dict (``status`` "converged", or
     "failed" when the solid stopped before the end of the sweep)."""
     started = time.perf_counter()
-    config = parse_compare(raw)
+    config = parsed
     solid = config.solid
     out = None if out is None else Path(out)
     root = comm.rank == 0
@@ -317,3 +323,25 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
         axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
+
+
+def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam compare`` (the driver contract, `fe_beam.analyses.result`)."""
+    summary = compare_run(validated.parsed, out, comm, progress)
+    report = Report(echo)
+    for row in summary["table"]:
+        where = f"tension {row['tension']:.4g} N" if "tension" in row else (
+            f"load factor {row['load_factor']:.4g}")
+        parts = [f"3D theta {row['solid']['tip']['theta']:.4g}"]
+        for law, rod in row["rod"].items():
+            if "distance_over_L" in rod:
+                parts.append(f"{law} theta {rod['tip']['theta']:.4g}, "
+                             f"d/L {rod['distance_over_L']:.3g}")
+            else:
+                parts.append(f"{law} {rod['status']}")
+        report.out(f"{where}: " + "; ".join(parts))
+    for entry in summary["departures"].values():
+        report.out(entry["statement"])
+    report.out(f"{summary['wall_time_s']:.2f} s; results in {out}")
+    return Result("compare", summary, exit_code(report, summary, "fe-beam"), report.lines)

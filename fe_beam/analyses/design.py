@@ -50,17 +50,18 @@ from pathlib import Path
 import numpy as np
 
 from fe_beam import analyses
+from fe_beam.analyses.result import EXIT_FAILED, Report, Result, fit_report, world
 from fe_beam.config.design import (
     DesignProblem,
     parse_design,
 )
 from fe_beam.config.finger import parse_finger, with_defaults
 from fe_beam.config.schema import parse_static
-from fe_beam.errors import ConfigError
+from fe_beam.errors import ConfigError, UpdateFailed
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
 from fe_beam.solvers.realtime import RealtimeSolver, max_fibre_strain, set_parameters, structure_key
 
-__all__ = ["DesignProblem", "parse_design", "run_design"]
+__all__ = ["run", "DesignProblem", "parse_design", "run_design"]
 
 FD_STEP = 1e-6  # of each variable's range
 DESIGN_RTOL = 1e-12
@@ -503,3 +504,27 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
         if parsed.output.plots:
             _plot(out, summary, shapes, design, parsed.model.length)
     return summary
+
+
+def run(validated, out: Path | None, comm=None, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam design`` (the driver contract, `fe_beam.analyses.result`)."""
+    report = Report(echo)
+    comm = comm if comm is not None else world()
+    try:
+        summary = run_design(validated.config, out, comm, progress=progress)
+    except UpdateFailed as failure:  # a trial design without equilibrium
+        report.err(f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
+                   "[design] bounds)")
+        return Result("design", {"status": "failed", "message": str(failure)}, EXIT_FAILED,
+                      report.lines)
+    values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
+    objective = summary["objective"]["value"]
+    minimised = summary["objective"].get("minimised")
+    shown = (f"{objective:.6g}" if minimised is None else  # the tension, not tension / bound
+             f"{minimised['name']} = {minimised['value']:.6g} (minimised)")
+    code = fit_report(report, "design", summary,
+                      f"design {summary['status']}: {values}; objective {shown}, KKT "
+                      f"residual {summary['kkt_residual']:.2g}, {summary['iterations']} "
+                      f"iterations ({summary['gradient']} gradients); results in {out}")
+    return Result("design", summary, code, report.lines)

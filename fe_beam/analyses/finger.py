@@ -17,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.analyses.static import StaticResult, solve_static
 from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     DEFAULT_FINGER,
@@ -37,7 +38,7 @@ from fe_beam.solvers import realtime
 from fe_beam.solvers.newton import LoadSteppingFailed
 from fe_beam.solvers.pull_in import tension_for_target
 
-__all__ = ["DEFAULT_FINGER", "parse_finger", "run_finger", "tension_for_tip_angle"]
+__all__ = ["DEFAULT_FINGER", "parse_finger", "run", "run_finger", "tension_for_tip_angle"]
 
 def tension_for_tip_angle(
     config: StaticConfig,
@@ -168,6 +169,7 @@ def run_finger(
     comm=MPI.COMM_WORLD,
     progress=True,
     target: InverseTarget | float | None = None,
+    stability: bool | None = None,
 ) -> tuple[StaticResult, dict]:
     """The finger's tension (or pull-in) sweep, then the inverse solve if ``target`` is given;
     with ``out``, summary.json, the sweep CSV, XDMF and the chapter's figures are written
@@ -189,7 +191,8 @@ def run_finger(
     sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
                                 empty=False)] if out is not None else [])
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
-                          record_shapes=out is not None, extra_exports=sweep)
+                          record_shapes=out is not None, extra_exports=sweep,
+                          stability=stability)
     # after the sweep: summary.json again (with the inverse solve) and the chapter's pictures
     draw = (lambda _: plot_finger(out, result, config)) if config.output.plots else None
     after = exports.Exports([exports.SummaryExport(out / "summary.json"),
@@ -202,10 +205,12 @@ def run_finger(
         try:
             inverse = solve_inverse(config, target, comm, sweep=result.steps)
         except runctl.Interrupted as stop:
-            after.finish(result.summary(extra | stop.stopped(
-                "the inverse solve (the sweep is complete)", "during the inverse solve")))
+            result.extra = extra | stop.stopped(
+                "the inverse solve (the sweep is complete)", "during the inverse solve")
+            after.finish(result.summary())
             raise
-    after.finish(result.summary(extra | ({"inverse": inverse} if inverse else {})))
+    result.extra = extra | ({"inverse": inverse} if inverse else {})
+    after.finish(result.summary())
     return result, inverse
 
 
@@ -271,7 +276,9 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
             axis.grid(alpha=0.3)
     reason = render_3d_skipped(out / "finger_3d.png", final, config)
     if reason is not None:
-        note_skipped_picture(out, f"finger_3d.png was not made: {reason}")
+        note = f"finger_3d.png was not made: {reason}"
+        note_skipped_picture(out, note)
+        result.notes.append(note)  # the summary of the run (rank 0, which draws) says it too
 
 
 def note_skipped_picture(out: Path, note: str) -> None:
@@ -346,3 +353,25 @@ def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None
     plotter.add_axes()
     plotter.screenshot(str(path))
     plotter.close()
+
+
+def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam finger`` (the driver contract, `fe_beam.analyses.result`)."""
+    parsed, target = validated.parsed
+    result, inverse = run_finger(parsed, out, comm, progress=progress, target=target,
+                                 stability=True)
+    report = Report(echo)
+    for step in result.steps[-1:]:
+        tip = step["tip"]
+        tensions = ", ".join(f"{t:.6g}" for t in step["tensions"])
+        pulls = ", ".join(f"{p:.6g}" for p in step["pull_ins"])
+        report.out(f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
+                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+    if inverse:
+        report.out(f"inverse: tension {inverse['tension']:.8g} N, pull-in "
+                   f"{inverse['pull_in']:.6g} m give {inverse['target']} = "
+                   f"{inverse['target_value']:g} ({inverse['evaluations']} solves, "
+                   f"{inverse['wall_time_s']:.2f} s)")
+    code = closing_of_steps(report, result, out)
+    return Result("finger", result.summary(), code, report.lines, result)

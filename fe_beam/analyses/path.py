@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid import SolidRun, check_solid_work
 from fe_beam.analyses.static import (
     STABILITY_MAX_DOFS,
@@ -36,7 +37,7 @@ from fe_beam.solvers.critical import (
 )
 from fe_beam.solvers.inertia import solid_unstable_count
 
-__all__ = ["PathResult", "follow_path", "point_force_control"]
+__all__ = ["run", "PathResult", "follow_path", "point_force_control"]
 
 
 @dataclass
@@ -271,6 +272,11 @@ def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
 
 
 def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
+    """`follow_configured_path` of ``config`` parsed (for scripts that hold the TOML dict)."""
+    return follow_configured_path(parse_path(config), out, comm, progress)
+
+
+def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dict:
     """`fe-beam path` on a validated configuration (rod or finger): arc-length continuation
     with critical points (`follow_path`); writes summary.json (after every point), path.csv,
     path.png, path.xdmf (states) and critical_modes.xdmf into ``out`` and returns the summary.
@@ -283,7 +289,7 @@ def run_path(config: dict, out, comm=None, progress: bool = True) -> dict:
 
     comm = comm or MPI.COMM_WORLD
     started = time.perf_counter()
-    kind, static, settings = parse_path(config)
+    kind, static, settings = parsed
     if kind == "solid":
         return _run_solid_path(static, settings, out, comm, progress, started)
     notes = check_beam_work(static, settings.max_steps, comm, " of path following",
@@ -460,3 +466,21 @@ def _run_solid_path(config, settings, out, comm, progress, started) -> dict:
         bar.close()
         files.finish(content())
     return summary
+
+
+def run(validated, out, comm=None, progress: bool = True, echo=None) -> Result:
+    """``fe-beam path`` (the driver contract, `fe_beam.analyses.result`)."""
+    summary = follow_configured_path(validated.parsed, out, comm, progress)
+    report = Report(echo)
+    for note in summary.get("notes", []):
+        report.err(f"fe-beam path: note: {note}")
+    for point in summary["critical_points"]:
+        # a point-force path: where the force pushes (the path's "point"), not the tip
+        tip, where = (point["point"], f"point x = {point['point']['x']:.6g} m") \
+            if "point" in point else (point["tip"], "tip")
+        report.out(f"{point['kind']} point at load factor {point['load_factor']:.8g}: {where} "
+                   f"u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+    report.out(f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
+               f"{summary['wall_time_s']:.2f} s; results in {out}")
+    code = exit_code(report, summary, "fe-beam path")
+    return Result("path", summary, code, report.lines)

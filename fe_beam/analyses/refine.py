@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from fe_beam import analyses, runctl
+from fe_beam.analyses.result import EXIT_FAILED, Report, Result, world
 from fe_beam.config.refine import (
     QUANTITIES,
     RefinementPlan,
@@ -575,3 +576,25 @@ def run_refine_command(args, config: dict, comm, say=None) -> int:
         emit(f"fe-beam: refinement stopped: {summary['message']}", sys.stderr)
         return 3
     return 0
+
+
+def run(validated, out: Path | None, comm=None, progress: bool = True, echo=None) -> Result:
+    """``fe-beam refine`` (the driver contract, `fe_beam.analyses.result`): each level's line
+    as it finishes, then the table; the summary is refinement.json's."""
+    report = Report(echo)
+    comm = comm if comm is not None else world()
+
+    def emit(text: str, stream=sys.stdout) -> None:
+        (report.err if stream is sys.stderr else report.out)(text)
+
+    summary = run_refinement(validated.parsed, out, comm, progress=progress,
+                             config_path=str(validated.options.get("config_path", "")),
+                             report=emit)
+    report.out(format_table(summary))
+    total = sum(r["wall_time_s"] or 0.0 for r in summary["levels"])
+    report.out(f"{len(summary['levels'])} levels, {total:.2f} s; results in {out}")
+    code = 0
+    if summary["status"] != "completed":
+        report.err(f"fe-beam: refinement stopped: {summary['message']}")
+        code = EXIT_FAILED
+    return Result("refine", summary, code, report.lines)

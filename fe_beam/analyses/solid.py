@@ -15,7 +15,8 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import runctl
-from fe_beam.analyses.solid_modes import run_solid_modes
+from fe_beam.analyses.result import Report, Result, exit_code
+from fe_beam.analyses.solid_modes import modes_table, run_solid_modes
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, write_rod_xdmf
 from fe_beam.analyses.static import beam_dofs_estimate
 from fe_beam.config.solid import SolidConfig, parse_solid, solid_dofs_estimate
@@ -47,7 +48,7 @@ def _import_gmsh() -> None:
 
 _import_gmsh()
 
-__all__ = ["SolidRun", "check_solid_work", "run_solid"]
+__all__ = ["run", "SolidRun", "check_solid_work", "run_solid"]
 
 # --- the 3D run ---------------------------------------------------------------------------------
 
@@ -180,6 +181,11 @@ class SolidRun:
 
 
 def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
+    """`solid_run` of ``raw`` parsed (for scripts that hold the TOML dict)."""
+    return solid_run(parse_solid(raw), out, comm, progress)
+
+
+def solid_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True) -> dict:
     """Validate ``raw`` (the parsed TOML), run the rod companion and the 3D load stepping, write
     results into ``out`` (if not None) and return the summary dict.
 
@@ -191,7 +197,7 @@ def run_solid(raw: dict, out: Path | None, comm=MPI.COMM_WORLD, progress: bool =
     and ``load_displacement.png``.
     """
     started = time.perf_counter()
-    config = parse_solid(raw)
+    config = parsed
     notes = check_solid_work(config, comm, quiet=out is None)
     out = None if out is None else Path(out)
     root = comm.rank == 0
@@ -375,3 +381,31 @@ def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
             axis.set_ylabel(f"tip {key} [{unit}]")
             axis.grid(alpha=0.3)
             axis.legend(fontsize=7)
+
+
+def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam solid`` (the driver contract, `fe_beam.analyses.result`)."""
+    summary = solid_run(validated.parsed, out, comm, progress)
+    report = Report(echo)
+    for note in summary.get("notes", []):
+        report.err(f"fe-beam solid: note: {note}")
+    for step in summary["steps"][-1:]:
+        tip = step["tip"]
+        report.out(f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
+                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
+                   f"stretch {step['max_principal_stretch']:.4g} "
+                   f"({step['max_principal_stretch_bulk']:.4g} away from the tendon ends)")
+    rod = summary.get("rod") or {}
+    if rod.get("steps"):
+        tip = rod["steps"][-1]["tip"]
+        report.out(f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.4g}: "
+                   f"tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g}")
+    if "distance_to_solid" in rod:
+        report.out(f"rod vs 3D: max_x |r_rod - r_solid| / L = "
+                   f"{rod['distance_to_solid']['max_over_L']:.3g}")
+    for line in modes_table(summary.get("modes")):  # [modes]: solid vs rod
+        report.out(line)
+    report.out(f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "
+               f"{summary['wall_time_s']:.2f} s; results in {out}")
+    return Result("solid", summary, exit_code(report, summary, "fe-beam"), report.lines)

@@ -9,6 +9,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.fem.rod import BeamProblem
 from fe_beam.fem.section_laws import SOLID_NAMES
@@ -26,7 +27,7 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
     check_beam_work,
 )
 
-__all__ = ["StaticContinuation", "StaticResult", "solve_static"]
+__all__ = ["StaticContinuation", "StaticResult", "run", "solve_static"]
 
 
 @dataclass
@@ -39,10 +40,13 @@ class StaticResult:
     message: str = ""
     notes: list[str] = field(default_factory=list)
     strain_range: dict | None = None
+    #: what the driver adds to the summary (the model, set-up notes, the finger's tendons ...)
+    extra: dict = field(default_factory=dict)
 
     def summary(self, extra: dict | None = None) -> dict:
-        """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's."""
-        extra = dict(extra or {})
+        """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's;
+        without ``extra``, the driver's own (``self.extra``)."""
+        extra = dict(self.extra if extra is None else extra)
         notes = list(extra.pop("notes", []))
         data = {
             "status": self.status,
@@ -76,6 +80,7 @@ def solve_static(
     extra_summary: dict | None = None,
     on_step=None,
     record_shapes: bool = True,
+    stability: bool | None = None,
     extra_exports: list | None = None,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
@@ -84,7 +89,8 @@ def solve_static(
     ``pull_ins``. ``on_step(problem, record)`` is called after each converged step (on all ranks),
     e.g. to sample profiles along the beam. ``record_shapes=False`` skips the per-step deformed
     shapes and profiles (``result.shapes``) and the stability check of the final state
-    (``steps[-1]["stability"]``, `StaticContinuation.stability`) when nothing is written: a
+    (``steps[-1]["stability"]``, `StaticContinuation.stability`; ``stability`` True/False
+    decides that alone) when nothing is written: a
     solve-only run (benchmarks, sweeps) then costs the Newton iterations alone.
 
     summary.json (status "running" meanwhile), load_displacement.csv and the XDMF file are
@@ -110,6 +116,7 @@ def solve_static(
     extra = {"model": _model_summary(config)} | (extra_summary or {})
     if notes:
         extra["notes"] = list(extra.get("notes", [])) + notes
+    result.extra = extra
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
@@ -142,9 +149,10 @@ def solve_static(
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
         result.status = "converged"
-        stability = run.stability() if record_shapes else None
-        if stability is not None:
-            result.steps[-1]["stability"] = stability
+        checked = run.stability() if (record_shapes if stability is None else stability) \
+            else None
+        if checked is not None:
+            result.steps[-1]["stability"] = checked
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:
@@ -230,3 +238,16 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)
+
+
+def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam static`` (the driver contract, `fe_beam.analyses.result`)."""
+    result = solve_static(validated.parsed, out, comm, progress=progress, stability=True)
+    report = Report(echo)
+    for step in result.steps[-1:]:
+        tip = step["tip"]
+        report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
+                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+    code = closing_of_steps(report, result, out)
+    return Result("static", result.summary(), code, report.lines, result)

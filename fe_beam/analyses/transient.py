@@ -191,7 +191,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             files = exports.Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
-            summary = _dynamic_summary(result, config, result.info["wall_time_s"])
+            summary = dynamic_summary(result, config, result.info["wall_time_s"])
             files.finish(summary | {"prestate": prestate})
             return result
     if tendons is not None:
@@ -217,10 +217,10 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     shapes = []
     files = exports.Exports(_history_exports(
         out, config, writer,
-        lambda: _dynamic_summary(result, config, time.perf_counter() - started),
+        lambda: dynamic_summary(result, config, time.perf_counter() - started),
         lambda _: _plot_dynamic(out, result, shapes, config)
         if config.static.output.plots and result.history else None), comm)
-    files.start(_dynamic_summary(result, config, 0.0))  # status "running"
+    files.start(dynamic_summary(result, config, 0.0))  # status "running"
 
     def record(t: float, step: int) -> None:
         energies = integrator.energies()
@@ -256,7 +256,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         integrator.solver.destroy()
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
-        files.finish(_dynamic_summary(result, config, result.info["wall_time_s"]))
+        files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
     return result
 
 
@@ -416,7 +416,7 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
     return files
 
 
-def _dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
+def dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -> dict:
     return {
         "status": result.status, "message": result.message, "history": result.history,
         "dofs": result.dofs, "wall_time_s": wall, "solver": result.info,
@@ -436,7 +436,7 @@ def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfi
     files = exports.Exports(_history_exports(out, config, draw=draw), comm)
     for record in result.history:
         files.on_step(record)
-    files.finish(_dynamic_summary(result, config, wall))
+    files.finish(dynamic_summary(result, config, wall))
 
 
 def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
@@ -588,3 +588,4 @@ def _modes_summary(result) -> dict:
             "rigid_body_modes": result.rigid_body_modes, "unstable_modes": unstable,
             "unstable_count": result.unstable_count, "stable": result.unstable_count == 0,
             "notes": notes}
+_dynamic_summary = dynamic_summary  # the name tests and scripts used

@@ -36,6 +36,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import analyses, runctl
+from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.validity_workers import worker_point, worker_start
 from fe_beam.config.compare import parse_compare
 from fe_beam.config.validity import (  # noqa: F401  (their home; re-exported)
@@ -49,7 +50,7 @@ from fe_beam.exports.outputs import atomic_write_json, figure, write_csv
 from fe_beam.progress import ProgressBar
 from fe_beam.solvers.newton import LoadSteppingFailed
 
-__all__ = ["VALIDITY_KEYS", "parse_validity", "richardson_error", "run_validity"]
+__all__ = ["run", "VALIDITY_KEYS", "parse_validity", "richardson_error", "run_validity"]
 
 THRESHOLDS = (0.01, 0.05)
 POINTS = "points"
@@ -225,11 +226,17 @@ def _statements(points: list[dict], config: ValidityConfig, total: int) -> dict:
 
 def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = True,
                  say=None) -> dict:
+    """`validity_run` of ``raw`` parsed (for scripts that hold the TOML dict)."""
+    return validity_run(raw, parse_validity(raw), out, comm, progress, say)
+
+
+def validity_run(raw: dict, parsed, out: Path, comm=MPI.COMM_WORLD, progress: bool = True,
+                 say=None) -> dict:
     """Compute the map's unfinished points (each rank its share, on COMM_SELF when there are
     several ranks), writing each into ``out/points`` as it finishes; then summary.json,
     validity.csv and validity.png (rank 0). Returns the summary (every rank)."""
     started = time.perf_counter()
-    config = parse_validity(raw)
+    config = parsed
     out = Path(out)
     root = comm.rank == 0
 
@@ -534,3 +541,20 @@ def _plot_map(path: Path, points: list[dict], config: ValidityConfig) -> None:
             axis.set_ylabel(config.y)
             note = (" (labels: solid mesh error)" if config.second_mesh_ratio else "")
             axis.set_title(f"rod ({law}) vs 3D solid: 1 % and 5 % contours{note}", fontsize=8)
+
+
+def run(validated, out: Path, comm=MPI.COMM_WORLD, progress: bool = True,
+        echo=None) -> Result:
+    """``fe-beam validity`` (the driver contract, `fe_beam.analyses.result`): the map is a
+    resumable study, so it needs its folder (``out``)."""
+    report = Report(echo)
+    summary = validity_run(validated.config, validated.parsed, out, comm, progress,
+                           say=report.err)
+    for entry in summary["departures"].values():
+        report.out(entry["statement"])
+    counts = summary["counts"]
+    report.out(f"{counts['finished']} of {counts['total']} points ({counts['computed']} "
+               f"computed, {counts['skipped']} already finished, {counts['failed']} failed), "
+               f"{summary['wall_time_s']:.2f} s; results in {out}")
+    code = exit_code(report, summary, "fe-beam validity")
+    return Result("validity", summary, code, report.lines)

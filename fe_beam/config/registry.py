@@ -8,7 +8,7 @@ argument parser and finds its drivers here (`fe_beam.cli`)."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from fe_beam.config.buckling import parse_buckling
 from fe_beam.config.calibrate import parse_calibrate
@@ -84,49 +84,49 @@ CALIBRATE_ARGUMENTS = (
 
 _SPECS = (
     CommandSpec("static", "large-deflection statics of a planar beam (load stepping, SNES)",
-                (), lambda config, options: parse_static(config), "static:solve_static"),
+                (), lambda config, options: parse_static(config), "static:run"),
     CommandSpec("finger", "tendon-driven tapered soft finger (reduced Cosserat rod with "
                           "[[tendons]])",
                 ("tendons", "inverse"), lambda config, options: parse_finger(config),
-                "finger:run_finger"),
+                "finger:run"),
     CommandSpec("design", "optimise section sizes, tendon offsets, tensions or loads for a "
                           "target ([design])",
-                ("tendons", "design", "inverse"), _parse_design, "design:run_design"),
+                ("tendons", "design", "inverse"), _parse_design, "design:run"),
     CommandSpec("dynamic", "nonlinear dynamics (generalised-alpha, or the paper's FD + "
                            "Runge-Kutta)",
                 ("time", "initial", "damping", "modes", "tendons"),
-                lambda config, options: parse_dynamic(config), "transient:run_dynamic"),
+                lambda config, options: parse_dynamic(config), "dynamic:run"),
     CommandSpec("modes", "natural frequencies and mode shapes (about the undeformed or a static "
                          "state)",
                 ("time", "initial", "damping", "modes", "tendons"),
-                lambda config, options: parse_modes(config), "transient:run_modes"),
+                lambda config, options: parse_modes(config), "modes:run"),
     CommandSpec("solid", "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod "
                          "alongside",
                 ("tendons", "solid", "compare", "modes"),
-                lambda config, options: parse_solid(config), "solid_driver:run_solid"),
+                lambda config, options: parse_solid(config), "solid:run"),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",
                 ("tendons", "solid", "compare"), lambda config, options: parse_compare(config),
-                "compare:run_compare"),
+                "compare:run"),
     CommandSpec("validity", "map of where the rod agrees with the 3D solid over two config keys "
                             "([validity])",
                 ("tendons", "solid", "compare", "validity"),
-                lambda config, options: parse_validity(config), "validity:run_validity"),
+                lambda config, options: parse_validity(config), "validity:run"),
     CommandSpec("refine", "mesh-refinement study: observed order and Richardson extrapolation of "
                           "the tip",
-                ("tendons", "solid", "refine"), _parse_refine, "refine:run_refine_command",
+                ("tendons", "solid", "refine"), _parse_refine, "refine:run",
                 arguments=REFINE_ARGUMENTS, sorts_tables=True),
     CommandSpec("calibrate", "fit rod/finger parameters ([calibrate]) to measured tip poses and "
                              "backbone points (--data DATA.csv), with standard errors",
                 ("tendons", "inverse", "calibrate"), _parse_calibrate,
-                "calibrate:run_calibrate", arguments=CALIBRATE_ARGUMENTS),
+                "calibrate:run", arguments=CALIBRATE_ARGUMENTS),
     CommandSpec("buckling", "linear buckling load factors and modes of the rod or the 3D solid "
                             "([buckling])",
                 ("tendons", "solid", "buckling"), lambda config, options: parse_buckling(config),
-                "buckling:run_buckling"),
+                "buckling:run"),
     CommandSpec("path", "arc-length path following with limit and bifurcation points ([path])",
                 ("tendons", "solid", "path"), lambda config, options: parse_path(config),
-                "path:run_path"),
+                "path:run"),
 )
 
 #: The subcommands, in the order of ``fe-beam --help``.
@@ -208,6 +208,11 @@ class Validated:
     command: str
     parsed: object
     petsc_options: tuple[dict, ...] = ()
+    #: the configuration it was parsed from (the TOML after --set) and the command's options
+    #: (refine: levels, ratio, quantities; calibrate: data): studies that vary configuration
+    #: keys (validity, calibrate, design) read them
+    config: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
 
 
 def _solver_settings(parsed) -> list:
@@ -238,4 +243,4 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
     for settings in _solver_settings(parsed):
         if settings.petsc_options and settings.petsc_options not in options:
             options.append(dict(settings.petsc_options))
-    return Validated(command, parsed, tuple(options))
+    return Validated(command, parsed, tuple(options), config, dict(refine or {}))

@@ -76,6 +76,11 @@ def atomic_write_json(path: str | Path, data) -> None:
     atomic_write_text(path, json.dumps(data, indent=2, default=_jsonable) + "\n")
 
 
+def as_json(data):
+    """``data`` as summary.json holds it (tuples as lists, numpy numbers as Python's)."""
+    return json.loads(json.dumps(data, default=_jsonable))
+
+
 def _jsonable(value):
     if isinstance(value, np.generic):
         return value.item()
