@@ -6,12 +6,10 @@ The beam paper's Figure 2 (a): a slender cantilever (L/h = 100) made inextensibl
 with Lagrange multipliers, loaded at the tip to k = P L^2 / EI = 10 in ten steps, against the
 elliptic-integral elastica (Mattiasson 1981). This example drives fe_beam from Python:
 ``fe_beam.run(command, config, out=None, **keys)`` runs one command like ``fe-beam`` does and
-returns its ``summary.json`` as a dict; ``keys`` are dotted ``--set`` overrides.
+returns its ``summary.json`` as a dict; ``keys`` are dotted ``--set`` overrides. With
+``out=None`` nothing is written and the dict is the same (the driver's `Result.summary()`).
 """
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -24,26 +22,12 @@ ROOT = next(p for p in Path.cwd().resolve().parents if (p / "examples").is_dir()
 OUT = ROOT / "docs" / "_build" / "gallery_runs" / "cantilever_api"
 
 
-def _run_cli(command, config, out=None, **keys):
-    """Stand-in for ``fe_beam.run``: the command line, then its summary.json."""
-    out = Path(out or OUT / command)
-    sets = [f"--set={key}={json.dumps(value)}" for key, value in keys.items()]
-    done = subprocess.run([sys.executable, "-m", "fe_beam.cli", command, str(config), "--out",
-                           str(out), "--quiet", *sets], capture_output=True, text=True)
-    if done.returncode:
-        raise RuntimeError(f"fe-beam {command} exited {done.returncode}: {done.stderr.strip()}")
-    return json.loads((out / "summary.json").read_text())
-
-
-# TODO(api): fe_beam.run lands on another branch; until then the stand-in above runs the CLI.
-run = getattr(fe_beam, "run", None) or _run_cli
-
 # %%
 # The configuration is ``examples/cantilever.toml`` (a steel cantilever) with overrides: the
 # section of the paper's case (a), the constraint, the load k = 10 and a coarser mesh.
 L, E, h = 1.0, 1.0e7, 0.01
 EI = E * h**4 / 12
-summary = run(
+summary = fe_beam.run(
     "static", ROOT / "examples" / "cantilever.toml", out=OUT / "figure2",
     **{"material.E": E, "section.b": h, "section.h": h,
        "model.constraint": "inextensible-unshearable",
