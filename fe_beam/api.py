@@ -1,13 +1,14 @@
-"""The Python front door: ``fe_beam.run(command, config, out=None, **keys)``.
+"""The Python front door: ``fe_beam.run(command, config, out=None, **keys)``::
 
     import fe_beam
 
     summary = fe_beam.run("static", "examples/cantilever.toml", **{"mesh.elements": 20})
     summary["steps"][-1]["tip"]          # the same dict as summary.json of the same CLI run
 
-``config`` is a TOML file or a dict as the TOML would parse; ``keys`` are ``--set`` overrides by
-dotted name (``{"section.h": 0.02, "tendons.0.tension": 1.5}``). The run is the CLI's own
-(`fe_beam.cli`): the same validation, the same driver, the same files and the same summary, so a
+``config`` is a TOML file or a dict as the TOML would parse; the keyword arguments are
+``--set`` overrides by dotted name (``{"section.h": 0.02, "tendons.0.tension": 1.5}``). The
+run is the CLI's own (`fe_beam.cli.prepare`, the command's driver of the registry): the same
+validation, the same driver and the same summary (`fe_beam.analyses.result.Result`), so a
 script and a shell give the same numbers. A mistake in the configuration raises
 `fe_beam.ConfigError` with the sentence the CLI prints (exit code 2 there); an analysis that
 stops (exit code 3 there) returns its summary with ``status`` "failed"; SIGINT/SIGTERM during a
@@ -79,22 +80,18 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
     """Run ``fe-beam COMMAND`` from Python and return its summary (the dict of summary.json;
     refine: of refinement.json).
 
-    Args:
-        command: a subcommand of the CLI (static, finger, dynamic, modes, solid, compare,
-            validity, refine, calibrate, design, buckling, path).
-        config: a TOML file, or a dict as the TOML would parse (not modified).
-        out: the output folder; None writes nothing (validity, a resumable study, runs in a
-            private temporary folder removed before returning).
-        comm: an MPI communicator (default: the world, as under ``mpirun``).
-        progress: show the progress bar (the CLI's default; off here).
-        verbose: print what the CLI prints (the result lines) on rank 0.
-        data: ``calibrate``'s measurements (the CLI's ``--data``).
-        levels, ratio, quantity: ``refine``'s ``--levels``, ``--ratio``, ``--quantity``.
-        **keys: overrides by dotted name, as ``--set table.key=value``.
+    ``command`` is a subcommand of the CLI (static, finger, dynamic, modes, solid, compare,
+    validity, refine, calibrate, design, buckling, path); ``config`` a TOML file or a dict as
+    the TOML would parse (not modified); ``out`` the output folder, or None: nothing is written
+    (validity, a resumable study, runs in a private temporary folder removed before
+    returning). ``comm`` is an MPI communicator (default: the world, as under ``mpirun``);
+    ``progress`` shows the progress bar; ``verbose`` prints the CLI's report on rank 0.
+    ``data`` is calibrate's measurements (the CLI's ``--data``); ``levels``, ``ratio`` and
+    ``quantity`` are refine's options. The remaining keyword arguments are overrides by
+    dotted name, as ``--set table.key=value``.
 
-    Raises:
-        ConfigError: a mistake in the configuration, the overrides or the output folder (the
-            CLI's exit code 2), with the CLI's sentence.
+    Raises `fe_beam.ConfigError` for a mistake in the configuration, the overrides or the
+    output folder (the CLI's exit code 2), with the CLI's sentence.
     """
     if isinstance(config, Mapping):
         raw = copy.deepcopy(dict(config))

@@ -142,7 +142,10 @@ def _output_folder_problem(out: Path) -> str | None:
             missing.append(folder)
             folder = folder.parent
         for folder in reversed(missing):
-            folder.mkdir()
+            try:
+                folder.mkdir()
+            except FileExistsError:  # another run (started together) made it: not ours
+                continue
             made.append(folder)
         probe = out / f".fe-beam-probe-{os.getpid()}"
         probe.write_bytes(b"")

@@ -63,6 +63,7 @@ from fe_beam.fem.mpi import assemble_scalar, global_sum
 from fe_beam.fem.solid.geometry import TIP_TAG
 from fe_beam.model.hyperelastic import NeoHookean
 from fe_beam.model.laws import LAW_KINDS
+from fe_beam.model.loads import LOADS
 from fe_beam.solvers.newton import (
     SADDLE_POINT_WORKSPACE,
     LoadStepping,
@@ -74,7 +75,9 @@ from fe_beam.solvers.newton import (
 __all__ = ["OUTPUT_KEYS", "RodSensitivity", "parameter_kind", "parse_output", "sensitivities"]
 
 OUTPUT_KEYS = ("tip_u", "tip_v", "tip_theta", "x@S", "y@S", "pull_in.<i>", "tension.<i>")
-LOAD_VECTORS = {"tip_force": "tip_force", "distributed": "distributed", "gravity": "gravity"}
+#: the differentiable vector loads (fe_beam.model.loads): their components are parameters
+LOAD_VECTORS = {name: name for name, kind in LOADS.items()
+                if kind.differentiable and kind.kind == "vector"}
 
 
 def parse_output(name: str, length: float | None = None) -> tuple:

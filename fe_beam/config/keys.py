@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 from fe_beam.errors import ConfigError
+from fe_beam.model.loads import LOADS
 from fe_beam.model.sections import SHAPES
 from fe_beam.timefunctions import shown
 
@@ -26,6 +27,14 @@ class Key:
 
 # Tables and keys every command understands; commands read the tables they need. A key not
 # listed here is a mistake (typically a typo) and is reported, never ignored.
+def _load_key(kind) -> Key:
+    """The [loads] key of a registered load (`fe_beam.model.loads.LoadKind`)."""
+    types = NUMBER if kind.kind == "scalar" else (list,)
+    default = None if kind.motion else {"vector": [0.0, 0.0], "scalar": 0.0, "points": []}[
+        kind.kind]
+    return Key(types, default, kind.help)
+
+
 SCHEMA: dict[str, dict[str, Key]] = {
     "beam": {"length": Key(NUMBER, REQUIRED, "beam length L [m]")},
     "section": {"shape": Key((str,), "rectangle", f"one of {', '.join(SHAPES)}")},
@@ -65,16 +74,15 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "xL": Key((str, list), "free", "clamped | pinned | roller | free | [components]"),
     },
     "loads": {
-        "tip_force": Key((list,), [0.0, 0.0], "[Px, Py] at x = L [N]"),
-        "tip_moment": Key(NUMBER, 0.0, "moment at x = L [N m], counterclockwise"),
+        # the loads of the registry (fe_beam.model.loads), in its order
+        "tip_force": _load_key(LOADS["tip_force"]),
+        "tip_moment": _load_key(LOADS["tip_moment"]),
         "follower": Key((bool,), False, "tip force follows the tip section"),
-        "distributed": Key((list,), [0.0, 0.0], "[qx, qy] per unit length [N/m]"),
-        "gravity": Key((list,), [0.0, 0.0], "[gx, gy] acceleration [m/s^2]"),
+        **{name: _load_key(LOADS[name]) for name in ("distributed", "gravity")},
         "prescribed_x0": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = 0"),
         "prescribed_xL": Key((dict,), {}, "{u|v|theta = value} of fixed components at x = L"),
-        "point_forces": Key((list,), [], "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
-        "end_displacement": Key((list,), None, "[du, dv] prescribed at x = L [m]"),
-        "end_rotation": Key(NUMBER, None, "rotation prescribed at x = L [rad]"),
+        **{name: _load_key(kind) for name, kind in LOADS.items()
+           if name not in ("tip_force", "tip_moment", "distributed", "gravity")},
         "steps": Key((int,), 10, "initial number of load steps"),
         "time_function": Key((str,), None, "dynamic: load scale f(t), a formula in t"),
         "time_table": Key((list,), None, "dynamic: load scale as [[t, f], ...]"),

@@ -36,6 +36,7 @@ from fe_beam.config.schema import (
     table,
 )
 from fe_beam.model.hyperelastic import SILICONE_PRESETS, VOLUMETRIC_LAWS, HyperelasticLaw
+from fe_beam.model.loads import LOADS
 from fe_beam.model.settings import SOLID_LINEAR_SOLVERS, LoadStepping, SolverSettings
 from fe_beam.model.solid import (
     ANCHORS,
@@ -88,11 +89,11 @@ SOLID_KEYS: dict[str, Key] = {
 MATERIAL_KEYS = SCHEMA["material"] | {
     "E": Key(NUMBER, None, "Young's modulus [Pa] (not with a [solid] preset)")
 }
-#: [loads] keys of the rod that have no 3D counterpart (must keep their defaults)
-UNSUPPORTED_LOADS = (
-    "tip_moment", "follower", "distributed", "gravity", "prescribed_x0", "prescribed_xL",
-    "time_function", "time_table", "motion_function",
-    "point_forces", "end_displacement", "end_rotation",  # rod only: the solid would drop them
+#: [loads] keys of the rod that have no 3D counterpart (must keep their defaults): the loads
+#: the registry does not flag ``solid`` (fe_beam.model.loads) and the rod's other load keys
+UNSUPPORTED_LOADS = tuple(name for name, kind in LOADS.items() if not kind.solid) + (
+    "follower", "prescribed_x0", "prescribed_xL", "time_function", "time_table",
+    "motion_function",
 )
 #: tables that configure only the 3D model or other commands (removed from the rod's config)
 SOLID_ONLY_TABLES = ("solid", "compare", "refine")

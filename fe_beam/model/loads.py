@@ -4,9 +4,10 @@ Each entry names a field of `fe_beam.model.beam.Loads` (and the ``[loads]`` key 
 name) and says what it is and who applies it, so that the commands and engines read flags
 instead of keeping their own lists:
 
-- ``kind``: ``"vector"`` (a pair of components), ``"scalar"``, ``"points"`` (rows ``[x, Px,
-  Py]``: the position is not scaled by the load factor) or ``"motion"`` (a prescribed end
-  displacement or rotation: a Dirichlet condition, displacement control);
+- ``kind``: ``"vector"`` (a pair of components), ``"scalar"`` or ``"points"`` (rows ``[x, Px,
+  Py]``: the position is not scaled by the load factor);
+- ``motion``: a prescribed end displacement or rotation (a Dirichlet condition: displacement
+  control), absent (None) unless given;
 - ``follower``: can be a follower load (``[loads] follower = true``);
 - ``solid``: the 3D solid applies it (`fe_beam.config.solid`);
 - ``fd``: the paper's FD + Runge-Kutta schemes apply it (``[time] scheme = "fd-*"``);
@@ -30,6 +31,7 @@ class LoadKind:
     name: str
     kind: str
     help: str
+    motion: bool = False
     follower: bool = False
     solid: bool = False
     fd: bool = False
@@ -40,7 +42,7 @@ class LoadKind:
         """Whether a value of this load acts (nonzero)."""
         if value is None:
             return False
-        if self.kind == "motion":
+        if self.motion:
             return True  # a prescribed motion acts even where it holds a value 0
         if self.kind == "points":
             return any(row[1] or row[2] for row in value)
@@ -52,7 +54,7 @@ class LoadKind:
         """The value at load factor ``factor`` (point positions are not scaled)."""
         if self.kind == "points":
             return [[row[0], factor * row[1], factor * row[2]] for row in value]
-        if self.kind in ("vector",) or isinstance(value, (tuple, list)):
+        if self.kind == "vector":
             return [factor * c for c in value]
         return factor * value
 
@@ -66,9 +68,9 @@ LOADS: dict[str, LoadKind] = {kind.name: kind for kind in (
              differentiable=True),
     LoadKind("gravity", "vector", "[gx, gy] acceleration [m/s^2]", realtime=True,
              differentiable=True),
-    LoadKind("point_forces", "points", "[[x, Px, Py], ...] dead forces at 0 < x <= L"),
-    LoadKind("end_displacement", "motion", "[du, dv] prescribed at x = L [m]"),
-    LoadKind("end_rotation", "motion", "rotation prescribed at x = L [rad]"),
+    LoadKind("point_forces", "points", "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
+    LoadKind("end_displacement", "vector", "[du, dv] prescribed at x = L [m]", motion=True),
+    LoadKind("end_rotation", "scalar", "rotation prescribed at x = L [rad]", motion=True),
 )}
 
 
