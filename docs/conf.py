@@ -8,6 +8,7 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(DOCS / "_ext"))
+sys.path.insert(0, str(DOCS / "gallery"))  # the examples share docs/gallery/_gallery.py
 sys.path.insert(0, str(ROOT))
 os.environ.setdefault("FE_BEAM_PROGRESS", "0")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
