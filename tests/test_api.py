@@ -148,3 +148,51 @@ def test_every_public_name_resolves():
     for name in fe_beam.__all__:
         assert getattr(fe_beam, name) is not None, name
     assert fe_beam.ConfigError is fe_beam.config.ConfigError
+
+
+CALIBRATION = """
+[beam]
+length = 0.1
+[section]
+shape = "rectangle"
+b = 0.02
+h = 0.02
+h_tip = 0.01
+[material]
+E = 0.5e6
+nu = 0.45
+[mesh]
+elements = 4
+[[tendons]]
+offset_base = 0.008
+offset_tip = 0.003
+tension = 2.0
+[loads]
+steps = 4
+[calibrate]
+parameters = ["material.E"]
+"""
+
+
+@pytest.mark.slow
+def test_run_equals_the_cli_for_calibrate_and_validity(tmp_path):
+    """The two commands with inputs beyond the configuration: calibrate's data file (``data=``)
+    and validity's map (a resumable study: ``out=None`` runs it in a private folder)."""
+    config = tmp_path / "finger.toml"
+    config.write_text(CALIBRATION)
+    data = tmp_path / "data.csv"
+    data.write_text("tension,tip_v,tip_theta\n1.0,0.0078,0.2\n2.0,0.0157,0.41\n")
+    assert main(["calibrate", str(config), "--data", str(data), "--out", str(tmp_path / "c"),
+                 "--quiet"]) == 0
+    cli_summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    _assert_same(_numbers(fe_beam.run("calibrate", config, data=data)), _numbers(cli_summary),
+                 0.0)
+
+    overrides = SOLID_COARSE | {"solid.mesh_size": 0.008, "validity.x_values": [1.0],
+                                "validity.y_values": [0.012], "validity.second_mesh_ratio": 0.8}
+    example = EXAMPLES / "finger_validity.toml"
+    assert main(["validity", str(example), "--out", str(tmp_path / "v"), "--quiet",
+                 *_cli_args(overrides, {})]) == 0
+    cli_summary = json.loads((tmp_path / "v" / "summary.json").read_text())
+    _assert_same(_numbers(fe_beam.run("validity", example, **overrides)),
+                 _numbers(cli_summary), 0.0)

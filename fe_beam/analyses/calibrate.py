@@ -255,13 +255,15 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         # a parameter stopped by its bound is not a least-squares estimate: no standard error
         # for it, and the others' are those with it held there
         # (trust-region iterates stay strictly inside: one close to a bound, 1e-6 of its
-        # scale, with the misfit's gradient pushing outwards is stopped by it)
+        # scale, whose unconstrained Gauss-Newton step points outwards is stopped by it; the
+        # step, not the gradient alone: with coupled parameters the gradient of one may point
+        # inwards while the joint minimum lies beyond its bound)
         near = 1e-6 * np.maximum(scale, np.abs(np.where(np.isfinite(low), low, 0.0)))
-        push = jac_p.T @ r  # half the gradient of |r|^2 by p
-        cosine = push / np.maximum(np.linalg.norm(jac_p, axis=0) * np.linalg.norm(r), 1e-300)
+        step = np.linalg.lstsq(jac_p, -r, rcond=None)[0]
+        outward = 1e-8 * np.maximum(scale, np.abs(values))
         at_bound = ((np.asarray(fit.active_mask) != 0)
-                    | ((values <= low + near) & (cosine > 1e-8))
-                    | ((values >= high - near) & (cosine < -1e-8)))
+                    | ((values <= low + near) & (step < -outward))
+                    | ((values >= high - near) & (step > outward)))
         free = np.flatnonzero(~at_bound)
         errors = correlation = None
         if len(free):
