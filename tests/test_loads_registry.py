@@ -93,3 +93,23 @@ def test_commands_refuse_a_law_without_the_capability():
     with pytest.raises(fe_beam.ConfigError, match='"nonstandard" and "reissner" .*not '
                                                   '"hyperelastic"'):
         RodSensitivity(static, ["material.E"])
+
+
+def test_a_reused_problem_takes_the_new_point_forces(monkeypatch):
+    """Solves that differ only in loads the rod problem does not hold as constants (point
+    forces become mesh vertices and form terms) must not share a built problem: the second
+    took the first one's forces (a wrong tip, exit 0). Each answer equals a solve with the
+    cache of built problems off."""
+    config = {table: dict(values) for table, values in EXAMPLE.items() if table != "time"}
+    cases = ([], [[0.5, 0.0, -2.0]], [[0.25, 1.0, -3.0]], [])
+    cached = []
+    for forces in cases:
+        config["loads"] = {"point_forces": forces, "tip_force": [0.0, -0.5]}
+        cached.append(fe_beam.run("static", config)["steps"][-1]["tip"])
+    monkeypatch.setenv("FE_BEAM_PROBLEM_CACHE", "0")
+    for forces, tip in zip(cases, cached, strict=True):
+        config["loads"] = {"point_forces": forces, "tip_force": [0.0, -0.5]}
+        fresh = fe_beam.run("static", config)["steps"][-1]["tip"]
+        for key in ("u", "v", "theta"):
+            assert tip[key] == pytest.approx(fresh[key], rel=1e-10, abs=1e-15), (forces, key)
+    assert len({round(t["v"], 12) for t in cached}) == 3  # the forces change the answer

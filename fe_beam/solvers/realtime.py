@@ -90,6 +90,10 @@ def structure_key(config: StaticConfig, comm) -> tuple:
         id(comm), comm.size, float(model.length), model.mesh.elements, model.mesh.degree,
         options.law, options.constraint, repr(options.hyperelastic), options.section_points,
         section_key, repr(model.supports), bool(model.loads.follower),
+        # the loads the problem does not hold as constants (point forces: mesh vertices and
+        # forms; end motions: Dirichlet values) are part of its structure
+        tuple((name, repr(getattr(model.loads, name))) for name, kind in LOADS.items()
+              if not kind.realtime),
         tuple(_tendon_geometry(t) for t in config.tendons), repr(config.solver),
         float(config.max_rotation_jump),
     )
