@@ -287,6 +287,7 @@ def note_skipped_picture(out: Path, note: str) -> None:
     import sys
 
     print(f"fe-beam: note: {note}", file=sys.stderr, flush=True)
+    runctl.WARNED.add(note)  # said: the run's report does not repeat it
     path = out / "summary.json"
     try:
         summary = json.loads(path.read_text())

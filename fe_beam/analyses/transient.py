@@ -138,6 +138,8 @@ class DynamicResult:
     dofs: int = 0
     notes: list = field(default_factory=list)
     strain_range: dict | None = None
+    #: the last converged static pre-state of a run whose pre-state failed (summary "prestate")
+    prestate: dict | None = None
 
 
 def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
@@ -186,13 +188,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
                                    dofs=problem.global_dofs, notes=notes + watch.notes(),
                                    strain_range=watch.summary())
-            prestate = _prestate_record(problem, failure)
+            result.prestate = _prestate_record(problem, failure)
             writer = BeamXDMFWriter(problem, xdmf)
             files = exports.Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
-            summary = dynamic_summary(result, config, result.info["wall_time_s"])
-            files.finish(summary | {"prestate": prestate})
+            files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
             return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
@@ -425,7 +426,8 @@ def dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -
         "scheme": config.time.scheme,
         "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
         "notes": list(result.notes),
-    } | ({"strain_range": result.strain_range} if result.strain_range else {})
+    } | ({"strain_range": result.strain_range} if result.strain_range else {}) | (
+        {"prestate": result.prestate} if result.prestate is not None else {})
 
 
 def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfig, wall: float,
