@@ -18,11 +18,13 @@ run raise `fe_beam.runctl.Interrupted` after the last good state is written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import copy
 import json
 import os
 import shutil
 import tempfile
+import threading
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -53,6 +55,10 @@ def _overrides(keys: Mapping[str, object]) -> list[str]:
 
 
 def _toml(value) -> str:
+    if hasattr(value, "item") and getattr(value, "shape", None) == ():  # a numpy scalar
+        value = value.item()
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):  # a numpy array
+        value = value.tolist()
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):
@@ -110,7 +116,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         if folder is not None:
             cli._check_output_folder(folder, world)
         args = argparse.Namespace(
-            command=command, config=str(config)[:200], out=folder, set=[], quiet=not progress,
+            command=command, config="<dict>" if isinstance(config, Mapping) else str(config),
+            out=folder, set=[], quiet=not progress,
             data=None if data is None else str(data),
             levels=None if levels is None else str(levels),
             ratio=None if ratio is None else str(ratio), quantity=quantity)
@@ -124,14 +131,18 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
                 cli.report_line(world, stream, text)
 
         results = []
-        if folder is None:  # nothing written: the driver alone
-            results.append(cli.driver(REGISTRY[command])(validated, None, world,
-                                                         progress=progress, echo=echo))
-        else:
-            try:
-                cli.execute(args, validated, raw, world, on_result=results.append, echo=echo)
-            except (runctl.FolderBusy, runctl.TooLarge) as error:
-                raise ConfigError(str(error)) from None
+        deferred = (runctl.signals_deferred() if threading.current_thread()
+                    is threading.main_thread() else contextlib.nullcontext())
+        try:
+            with deferred:  # SIGINT/SIGTERM stop at a step boundary (runctl.Interrupted)
+                if folder is None:  # nothing written: the driver alone
+                    results.append(cli.driver(REGISTRY[command])(
+                        validated, None, world, progress=progress, echo=echo))
+                else:
+                    cli.execute(args, validated, raw, world, on_result=results.append,
+                                echo=echo)
+        except (runctl.FolderBusy, runctl.TooLarge) as error:
+            raise ConfigError(str(error)) from None
     finally:
         if out is None and folder is not None:
             _remove(folder, world)

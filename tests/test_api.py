@@ -196,3 +196,18 @@ def test_run_equals_the_cli_for_calibrate_and_validity(tmp_path):
     cli_summary = json.loads((tmp_path / "v" / "summary.json").read_text())
     _assert_same(_numbers(fe_beam.run("validity", example, **overrides)),
                  _numbers(cli_summary), 0.0)
+
+
+def test_numpy_values_and_work_beyond_the_limits(tmp_path):
+    """Overrides may be numpy numbers and arrays; work beyond the up-front limits is the CLI's
+    exit 2 (`fe_beam.ConfigError` here), with or without an output folder."""
+    import numpy as np
+
+    config = EXAMPLES / "cantilever.toml"
+    summary = fe_beam.run("static", config, **{"mesh.elements": np.int64(6),
+                                                "loads.steps": np.int32(2),
+                                                "loads.tip_force": np.array([0.0, -1.0])})
+    assert summary["status"] == "converged" and len(summary["steps"]) == 2
+    for out in (None, tmp_path / "large"):
+        with pytest.raises(fe_beam.ConfigError, match="allow_large"):
+            fe_beam.run("static", config, out=out, **{"loads.steps": 2_000_000})

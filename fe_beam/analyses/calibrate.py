@@ -42,7 +42,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from fe_beam import analyses
-from fe_beam.analyses.result import EXIT_FAILED, Report, Result, fit_report, world
+from fe_beam.analyses.result import Report, Result, failed, fit_report, world
 from fe_beam.config.calibrate import (
     CalibrationData,
     CalibrationSpec,
@@ -510,8 +510,8 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
                                 quiet=not progress)
     except LoadSteppingFailed as failure:
         report.err(f"fe-beam calibrate: no equilibrium for a trial parameter set: {failure}")
-        return Result("calibrate", {"status": "failed", "message": str(failure)}, EXIT_FAILED,
-                      report.lines)
+        return failed("calibrate", out, comm,
+                      f"no equilibrium for a trial parameter set: {failure}", report)
     fitted = ", ".join(f"{k} = {v:.6g}" for k, v in summary["parameters"].items())
     code = fit_report(report, "calibrate", summary,
                       f"fitted {fitted}; residual norm {summary['residual_norm']:.3g}, "

@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from fe_beam import analyses
-from fe_beam.analyses.result import EXIT_FAILED, Report, Result, fit_report, world
+from fe_beam.analyses.result import Report, Result, failed, fit_report, world
 from fe_beam.config.design import (
     DesignProblem,
     parse_design,
@@ -516,8 +516,8 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
     except UpdateFailed as failure:  # a trial design without equilibrium
         report.err(f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
                    "[design] bounds)")
-        return Result("design", {"status": "failed", "message": str(failure)}, EXIT_FAILED,
-                      report.lines)
+        return failed("design", out, comm, f"no equilibrium for a trial design: {failure}",
+                      report)
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     objective = summary["objective"]["value"]
     minimised = summary["objective"].get("minimised")

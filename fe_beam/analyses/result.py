@@ -13,12 +13,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from fe_beam import runctl
-from fe_beam.exports.outputs import as_json
+from fe_beam.exports.outputs import as_json, atomic_write_json
 
-__all__ = ["EXIT_FAILED", "Report", "Result", "closing_of_steps", "exit_code", "fit_report",
-           "world"]
+__all__ = ["EXIT_FAILED", "Report", "Result", "closing_of_steps", "exit_code", "failed",
+           "fit_report", "world"]
 
 EXIT_FAILED = 3
 
@@ -103,6 +104,17 @@ def closing_of_steps(report: Report, result, out) -> int:
         report.err(f"fe-beam: {result.message}")
         return EXIT_FAILED
     return 0
+
+
+def failed(command: str, out, comm, message: str, report: Report) -> Result:
+    """The result of a run that stopped before its driver wrote a summary (e.g. a trial
+    design without equilibrium): status "failed" with ``message``, written as summary.json
+    into ``out`` (so no earlier run's summary is left there as this one's), EXIT_FAILED."""
+    summary = {"status": "failed", "message": message}
+    if out is not None and comm.rank == 0:
+        Path(out).mkdir(parents=True, exist_ok=True)
+        atomic_write_json(Path(out) / "summary.json", summary)
+    return Result(command, summary, EXIT_FAILED, report.lines)
 
 
 def world():

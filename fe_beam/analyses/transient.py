@@ -267,8 +267,9 @@ def _run_finite_differences(config: DynamicConfig, out: Path | None, comm) -> Dy
     model = config.static.model
     if not LAW_KINDS[model.options.law].fd:
         laws = " and ".join(name for name, kind in LAW_KINDS.items() if kind.fd)
-        raise ConfigError(f"[time] scheme = fd-* has the laws {laws} only, not [model] law = "
-                          f"\"{model.options.law}\"; use scheme = \"generalized-alpha\"")
+        raise ConfigError(f"[time] scheme = fd-* has the laws {laws} only (the non-standard "
+                          f"and Reissner laws), not [model] law = \"{model.options.law}\"; use "
+                          "scheme = \"generalized-alpha\"")
     if model.section.tapered or model.options.constraint != "none":
         raise ConfigError("[time] scheme = fd-*: only uniform sections without constraints")
     supports = {("clamped", "free"): "clamped-free", ("pinned", "roller"): "pinned-roller"}
@@ -499,7 +500,8 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
               progress: bool = True) -> dict:
 
     started = time.perf_counter()
-    check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm)
+    check_beam_work(static, static.stepping.steps if modes["prestress"] else None, comm,
+                    quiet=out is None)
     problem, tendons = _tendon_problem(static, comm)
     if out is not None and comm.rank == 0:
         atomic_write_json(out / "summary.json", {"status": "running", "message": ""})
