@@ -67,7 +67,7 @@ sphinx_gallery_conf = {
     "examples_dirs": "gallery",
     "gallery_dirs": "auto_examples",
     "filename_pattern": r"/plot_",
-    "ignore_pattern": r"/_",
+    "ignore_pattern": r"(^|/)_[^/]*\.py$",  # shared helpers (docs/gallery/_gallery.py)
     "abort_on_example_error": True,
     "only_warn_on_example_error": False,
     "download_all_examples": False,

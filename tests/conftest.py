@@ -20,6 +20,10 @@ _running = {"test": "(collecting)", "sigterm": None}
 
 def pytest_runtest_logstart(nodeid, location):
     _running["test"] = nodeid
+    if _GUARDED:
+        # PETSc's C-level handler can come back (the PyPI stack's suite ended with its exit
+        # code 15 while this guard was installed): put the guard back before every test
+        signal.signal(signal.SIGTERM, _stray_sigterm)
 
 
 def _stray_sigterm(signum, frame):
@@ -54,8 +58,11 @@ def _guard_sigterm() -> None:
     except ImportError:
         return
     signal.signal(signal.SIGTERM, _stray_sigterm)
+    global _GUARDED
+    _GUARDED = True
 
 
+_GUARDED = False
 _guard_sigterm()
 
 
