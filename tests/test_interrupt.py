@@ -50,7 +50,7 @@ def _environment() -> dict:
 def _start(kind: str, out: Path) -> subprocess.Popen:
     return subprocess.Popen([str(FE_BEAM), *CASES[kind], "--out", str(out), *QUIET],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_environment())
+                            env=_environment(), start_new_session=True)
 
 
 def _steps(kind: str, summary: dict) -> list[tuple[float, float | None]]:

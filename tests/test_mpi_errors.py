@@ -4,7 +4,9 @@ seconds, with one message and the exit code of its kind (2 user mistake, 3 analy
 
 Each case is a real ``mpirun`` job with a timeout, so a hang fails the test instead of CI."""
 
+import contextlib
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -27,9 +29,23 @@ def mpirun(tmp_path, *command, ranks=2):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
     started = time.monotonic()
-    process = subprocess.run(
+    # its own session: a launcher that ends its job by signalling the process group (MPICH's
+    # hydra) must not reach the pytest process (the PyPI stack's suite ended with exit 15,
+    # SIGTERM, at a later test); on a timeout the whole job is killed
+    job = subprocess.Popen(
         [*mpirun_command(ranks, pass_env=("PYTHONPATH",)), sys.executable, *command],
-        capture_output=True, text=True, timeout=TIMEOUT_S, env=env, cwd=tmp_path)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
+        start_new_session=True)
+    try:
+        stdout, stderr = job.communicate(timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(job.pid, signal.SIGKILL)
+        job.communicate()
+        raise
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(job.pid, signal.SIGKILL)  # no rank or proxy outlives its test
+    process = subprocess.CompletedProcess(job.args, job.returncode, stdout, stderr)
     return process, time.monotonic() - started
 
 

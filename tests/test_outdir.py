@@ -34,7 +34,7 @@ def _environment() -> dict:
 def _start(command: str, config: Path, out: Path, *extra) -> subprocess.Popen:
     return subprocess.Popen([str(FE_BEAM), command, str(config), "--out", str(out), "--quiet",
                              *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_environment())
+                            env=_environment(), start_new_session=True)
 
 
 def _busy_message(code: int, err: str, pid: int) -> None:
