@@ -11,6 +11,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
+from test_calibrate import CONFIG as CALIBRATE_CONFIG
 
 import fe_beam
 from fe_beam.api import SUMMARY_FILES
@@ -150,28 +151,8 @@ def test_every_public_name_resolves():
     assert fe_beam.ConfigError is fe_beam.config.ConfigError
 
 
-CALIBRATION = """
-[beam]
-length = 0.1
-[section]
-shape = "rectangle"
-b = 0.02
-h = 0.02
-h_tip = 0.01
-[material]
-E = 0.5e6
-nu = 0.45
-[mesh]
-elements = 4
-[[tendons]]
-offset_base = 0.008
-offset_tip = 0.003
-tension = 2.0
-[loads]
-steps = 4
-[calibrate]
-parameters = ["material.E"]
-"""
+# the configuration of tests/test_calibrate.py's command tests, fitting E alone
+CALIBRATION = CALIBRATE_CONFIG.format(parameters='["material.E"]', extra="")
 
 
 @pytest.mark.slow
