@@ -13,7 +13,8 @@ import operator
 import warnings
 from collections.abc import Callable
 
-__all__ = ["TimeFunctionError", "parse_formula", "table_function", "time_function"]
+__all__ = ["Profile", "TimeFunctionError", "parse_formula", "parse_profile", "table_function",
+           "time_function"]
 
 
 class TimeFunctionError(ValueError):
@@ -115,9 +116,8 @@ def _compile(node: ast.AST, text: str, variable: str = "t") -> Callable[[float],
         f"pi, e, + - * / ** ^ %, comparisons, 'a if cond else b' and {', '.join(FUNCTIONS)})")
 
 
-def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
-    """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``
-    (``variable`` names the argument, e.g. "x" for initial velocity profiles)."""
+def _parse_tree(text: str) -> ast.Expression:
+    """The checked AST of a formula (TimeFunctionError naming what is wrong)."""
     if not isinstance(text, str) or not text.strip():
         raise TimeFunctionError(f"a time formula must be a non-empty string, got {shown(text)}")
     if len(text) > MAX_LENGTH:
@@ -141,6 +141,13 @@ def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
         raise TimeFunctionError(
             f"the formula {shown(text)} is nested more than {MAX_DEPTH} levels deep (count "
             "operators and parentheses); write it shorter, or as time_table = [[t, f], ...]")
+    return tree
+
+
+def parse_formula(text: str, variable: str = "t") -> Callable[[float], float]:
+    """A callable f(t) from a formula such as ``"min(t/0.1, 1)"`` or ``"sin(2*pi*3*t)"``
+    (``variable`` names the argument, e.g. "x" for initial velocity profiles)."""
+    tree = _parse_tree(text)
     function = _compile(tree, text, variable)
 
     def evaluate(t: float) -> float:
@@ -182,3 +189,130 @@ def time_function(formula: str | None = None, table=None) -> Callable[[float], f
     if table is not None:
         return table_function(table)
     return parse_formula(formula if formula is not None else "1")
+
+
+class Profile:
+    """A function of the arclength s along the rod: a number, or a safe formula in ``s`` and
+    named constants (e.g. ``L``), such as ``"0.004*cos(pi*s/(2*L))"`` (tendon routings, initial
+    curvatures).
+
+    ``profile(s)`` evaluates it on a float; ``profile.symbolic(s, backend)`` builds the same
+    expression from another arithmetic (e.g. UFL: ``backend`` maps the function names to its
+    functions, and "conditional"/"lt"/"le"/"gt"/"ge" to its comparisons), so that a finite-element
+    form holds the formula itself, with exact derivatives.
+    """
+
+    def __init__(self, value, constants: dict | None = None, variable: str = "s"):
+        self.constants = dict(constants or {})
+        self.variable = variable
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.text, self.constant = None, float(value)
+            if not math.isfinite(self.constant):
+                raise TimeFunctionError(f"{shown(value)} is not a finite number")
+            return
+        self.text, self.constant = value, None
+        self.tree = _parse_tree(value)
+        self._check_names(self.tree)
+
+    def _check_names(self, tree) -> None:
+        allowed = {self.variable, *self.constants, *CONSTANTS}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Name) and node.id not in allowed | set(FUNCTIONS):
+                raise TimeFunctionError(
+                    f"unknown name {shown(node.id)} in {shown(self.text)} (use "
+                    f"{', '.join([self.variable, *self.constants])}, pi, e and "
+                    f"{', '.join(FUNCTIONS)})")
+            if isinstance(node, ast.Call) and not (
+                    isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS
+                    and not node.keywords):
+                name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(
+                    node.func)
+                raise TimeFunctionError(
+                    f"{shown(self.text)}: function {shown(name)} is not allowed (allowed, "
+                    f"positional arguments only: {', '.join(FUNCTIONS)})")
+            if isinstance(node, ast.Compare) and not (
+                    len(node.ops) == 1 and type(node.ops[0]) in COMPARE):
+                raise TimeFunctionError(f"{shown(self.text)}: {shown(ast.unparse(node))} is "
+                                        "not allowed (one comparison at a time)")
+            allowed_nodes = (ast.Expression, ast.Constant, ast.Name, ast.BinOp, ast.UnaryOp,
+                             ast.Compare, ast.IfExp, ast.Call, ast.Load, ast.operator,
+                             ast.unaryop, ast.cmpop)
+            if not isinstance(node, allowed_nodes) or (
+                    isinstance(node, ast.BinOp) and type(node.op) not in BINARY) or (
+                    isinstance(node, ast.UnaryOp) and type(node.op) not in UNARY) or (
+                    isinstance(node, ast.Constant) and (isinstance(node.value, bool) or not
+                                                        isinstance(node.value, (int, float)))):
+                raise TimeFunctionError(
+                    f"{shown(self.text)}: {shown(ast.unparse(node))} is not allowed in a "
+                    f"formula (use numbers, {self.variable}, pi, e, + - * / ** ^ %, "
+                    f"comparisons, 'a if cond else b' and {', '.join(FUNCTIONS)})")
+
+    @property
+    def is_constant(self) -> bool:
+        return self.constant is not None
+
+    def __call__(self, s: float) -> float:
+        if self.constant is not None:
+            return self.constant
+        try:
+            value = float(self.symbolic(float(s), None))
+        except (ArithmeticError, ValueError, TypeError) as error:
+            raise TimeFunctionError(
+                f"{shown(self.text)} cannot be evaluated at {self.variable} = {s:g}: {error}"
+            ) from None
+        if not math.isfinite(value):
+            raise TimeFunctionError(f"{shown(self.text)} is not finite at {self.variable} = "
+                                    f"{s:g}")
+        return value
+
+    def symbolic(self, s, backend: dict | None):
+        """The formula evaluated on ``s`` with ``backend``'s functions (None: Python's math)."""
+        if self.constant is not None:
+            return self.constant
+        return self._value(self.tree.body, s, backend)
+
+    def _value(self, node, s, backend):
+        functions = FUNCTIONS if backend is None else backend
+        if isinstance(node, ast.Constant):
+            return float(node.value)
+        if isinstance(node, ast.Name):
+            if node.id == self.variable:
+                return s
+            if node.id in self.constants:
+                return float(self.constants[node.id])
+            return CONSTANTS[node.id]
+        if isinstance(node, ast.BinOp):
+            return BINARY[type(node.op)](self._value(node.left, s, backend),
+                                         self._value(node.right, s, backend))
+        if isinstance(node, ast.UnaryOp):
+            return UNARY[type(node.op)](self._value(node.operand, s, backend))
+        if isinstance(node, ast.Compare):
+            left = self._value(node.left, s, backend)
+            right = self._value(node.comparators[0], s, backend)
+            name = {ast.Lt: "lt", ast.LtE: "le", ast.Gt: "gt", ast.GtE: "ge"}[
+                type(node.ops[0])]
+            if backend is None:
+                return 1.0 if COMPARE[type(node.ops[0])](left, right) else 0.0
+            return backend["conditional"](backend[name](left, right), 1.0, 0.0)
+        if isinstance(node, ast.IfExp):
+            test = self._value(node.test, s, backend)
+            body = self._value(node.body, s, backend)
+            other = self._value(node.orelse, s, backend)
+            if backend is None:
+                return body if test else other
+            return backend["conditional"](backend["gt"](test, 0.5), body, other)
+        if isinstance(node, ast.Call):
+            arguments = [self._value(a, s, backend) for a in node.args]
+            return functions[node.func.id](*arguments)
+        raise TimeFunctionError(f"{shown(self.text)}: cannot evaluate {ast.unparse(node)}")
+
+    def __repr__(self) -> str:
+        return repr(self.constant if self.constant is not None else self.text)
+
+
+def parse_profile(value, constants: dict | None = None, variable: str = "s") -> Profile:
+    """A `Profile` of a number or a formula in ``variable`` (and ``constants``), evaluated once
+    at 0 so that a formula that cannot even start fails here."""
+    profile = Profile(value, constants, variable)
+    profile(0.0)
+    return profile
