@@ -12,11 +12,16 @@ __all__ = [
     "ElasticaColumn",
     "ElasticaTip",
     "SnapThroughPath",
+    "SpatialRodShape",
+    "circle_under_tendon",
     "elastica_clamped_free",
     "elastica_clamped_free_at_load",
     "elastica_pinned_pinned",
     "elastica_pinned_pinned_at_load",
     "elastica_tip_load",
+    "helix_under_end_moment",
+    "lateral_torsional_buckling_cantilever",
+    "lateral_torsional_buckling_constant",
     "snap_through_symmetric",
     "timoshenko_cantilever_deflection",
 ]
@@ -234,3 +239,203 @@ def snap_through_symmetric(shortening: float, points: int = 61) -> SnapThroughPa
     best = minimize_scalar(negative_force, bracket=tuple(heights[top - 1: top + 2]),
                            tol=1e-12)
     return SnapThroughPath(d, heights, force, axial, float(best.x), float(-best.fun))
+
+
+# --- spatial rods (MODEL.md section 8): helix, lateral-torsional buckling, tendon circle -----
+
+
+def _rotation(axis_angle):
+    """Rodrigues: the rotation matrix exp(phi^) of the rotation vector ``phi``."""
+    import numpy as np
+
+    phi = np.asarray(axis_angle, dtype=float)
+    theta = float(np.linalg.norm(phi))
+    hat = np.array([[0.0, -phi[2], phi[1]], [phi[2], 0.0, -phi[0]], [-phi[1], phi[0], 0.0]])
+    if theta < 1e-8:
+        return np.eye(3) + hat + 0.5 * hat @ hat
+    return (np.eye(3) + math.sin(theta) / theta * hat
+            + (1 - math.cos(theta)) / theta**2 * hat @ hat)
+
+
+@dataclass(frozen=True)
+class SpatialRodShape:
+    """Centreline and frame of a spatial rod at the abscissae ``s``.
+
+    ``position`` (n, 3) r(s), ``frame`` (n, 3, 3) R(s) (columns d1, d2, d3), ``tip_position``
+    r(L), ``tip_frame`` R(L); ``curvature`` the centreline curvature, ``twist_rate`` the rate of
+    the body twist about d1 added to the rigid rotation (helix), ``radius``, ``pitch`` (axial
+    advance per reference length, helix) and ``axis`` (unit helix or circle axis).
+    """
+
+    s: object
+    position: object
+    frame: object
+    tip_position: object
+    tip_frame: object
+    curvature: float
+    twist_rate: float
+    radius: float
+    pitch: float
+    axis: object
+
+
+def helix_under_end_moment(L: float, EI: float, GJ: float, M, s=None) -> SpatialRodShape:
+    """Straight isotropic Kirchhoff rod (inextensible, unshearable, EI_y = EI_z = EI, torsion
+    GJ) clamped at s = 0 (r = 0, R = I) under a dead end moment ``M`` (world 3-vector), no force.
+
+    Derivation. With no force n = 0, so m' = 0: m = M everywhere. The strain is
+    u = C^-1 R^T M, C = diag(GJ, EI, EI) = EI I + (GJ - EI) e1 e1^T, and the world angular rate
+    w = R u = M / EI + (1/GJ - 1/EI) (t . M) t, t = d1. Hence t' = w x t = (M / EI) x t: t.M =
+    |M| cos(alpha) is constant (alpha the angle between M and e1) and t precesses about
+    a = M / |M| at the rate kappa = |M| / EI, so
+
+        R(s) = exp(s (M/EI)^) exp(s c e1^),    c = |M| cos(alpha) (1/GJ - 1/EI)
+
+    (check: R' = (M/EI)^ R + R (c e1)^ = (M/EI + c t)^ R = w^ R). The centreline is the
+    integral of t(s) = exp(kappa s a^) e1:
+
+        r(s) = sin(kappa s)/kappa e1 + (1 - cos(kappa s))/kappa (a x e1)
+               + (s - sin(kappa s)/kappa) cos(alpha) a,
+
+    a helix about the line through (a x e1) / kappa along a, of radius sin(alpha) / kappa,
+    advancing cos(alpha) along a per unit length, with curvature |t'| = kappa sin(alpha) =
+    |(u2, u3)|. For GJ = EI the body twist vanishes (c = 0) and R(s) is the rigid rotation
+    exp(s (M/EI)^).
+
+    ``s``: abscissae (default 101 points on [0, L]). Returns a :class:`SpatialRodShape`
+    (``curvature`` = |M| sin(alpha) / EI the bending curvature, ``twist_rate`` = c, ``radius``,
+    ``pitch`` = cos(alpha), ``axis`` = a).
+    """
+    import numpy as np
+
+    for name, value in (("L", L), ("EI", EI), ("GJ", GJ)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be > 0, got {value!r}")
+    M = np.asarray(M, dtype=float)
+    if M.shape != (3,) or not np.all(np.isfinite(M)):
+        raise ValueError(f"M must be a finite 3-vector, got {M!r}")
+    s = np.linspace(0.0, L, 101) if s is None else np.atleast_1d(np.asarray(s, dtype=float))
+    e1 = np.array([1.0, 0.0, 0.0])
+    size = float(np.linalg.norm(M))
+    if size == 0.0:
+        pos = np.outer(s, e1)
+        frames = np.repeat(np.eye(3)[None], len(s), axis=0)
+        return SpatialRodShape(s, pos, frames, np.array([L, 0.0, 0.0]), np.eye(3), 0.0, 0.0,
+                               math.inf, 1.0, e1)
+    a = M / size
+    kappa = size / EI
+    cos_a = float(a @ e1)
+    c = size * cos_a * (1 / GJ - 1 / EI)
+    side = np.cross(a, e1)
+
+    def shape(si):
+        ks = kappa * si
+        sinc = si * (math.sin(ks) / ks if ks != 0 else 1.0)
+        vers = si * ((1 - math.cos(ks)) / ks if ks != 0 else 0.0)
+        return sinc * e1 + vers * side + (si - sinc) * cos_a * a, \
+            _rotation(si * M / EI) @ _rotation(si * c * e1)
+
+    pos = np.array([shape(si)[0] for si in s])
+    frames = np.array([shape(si)[1] for si in s])
+    tip_r, tip_R = shape(float(L))
+    sin_a = math.sqrt(max(0.0, 1 - cos_a**2))
+    return SpatialRodShape(s, pos, frames, tip_r, tip_R, size * sin_a / EI, c, sin_a / kappa,
+                           cos_a, a)
+
+
+def lateral_torsional_buckling_constant() -> float:
+    """The constant 4.0126 of :func:`lateral_torsional_buckling_cantilever`, computed.
+
+    Timoshenko & Gere, Theory of Elastic Stability (1961), section 6.3: a narrow cantilever with
+    a load P at the centroid of its end section, lateral twist phi(x), x measured from the
+    free end. The torque balance of the slightly twisted beam (strong-axis bending stiffness
+    taken infinite) gives
+
+        GJ phi'' + P^2 x^2 / EI_y phi = 0,   phi'(0) = 0 (free end),  phi(L) = 0 (clamp).
+
+    The solutions of y'' + g^2 x^2 y = 0 are sqrt(x) Z_{+-1/4}(g x^2 / 2) with g^2 =
+    P^2 / (EI_y GJ); phi'(0) = 0 keeps sqrt(x) J_{-1/4}(g x^2 / 2) (the J_{1/4} branch starts
+    like x), and phi(L) = 0 requires J_{-1/4}(gamma) = 0 with gamma = g L^2 / 2 =
+    P L^2 / (2 sqrt(EI_y GJ)). The first root gamma_1 = 2.00629... gives
+    P_cr = 2 gamma_1 sqrt(EI_y GJ) / L^2 = 4.0126 sqrt(EI_y GJ) / L^2.
+    """
+    from scipy.special import jv
+
+    gamma = brentq(lambda x: jv(-0.25, x), 1.5, 2.5, xtol=1e-15, rtol=1e-15)
+    return 2.0 * gamma
+
+
+def lateral_torsional_buckling_cantilever(L: float, EIy: float, GJ: float) -> float:
+    """Critical tip load P_cr = 4.0126 sqrt(EI_y GJ) / L^2 of a narrow cantilever loaded at the
+    centroid of its free end in the plane of its stiff axis (Timoshenko & Gere 1961, 6.3; the
+    constant is computed in :func:`lateral_torsional_buckling_constant`).
+
+    EI_y is the lateral (weak-axis) bending stiffness, E int z^2 dA with the load along y (the h
+    direction) and b << h. The classical result neglects the in-plane deflection (EI_z -> inf)
+    and warping; the pre-buckling in-plane deflection of a finite EI_z raises P_cr by a relative
+    amount of order EI_y / EI_z.
+    """
+    for name, value in (("L", L), ("EIy", EIy), ("GJ", GJ)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be > 0, got {value!r}")
+    return lateral_torsional_buckling_constant() * math.sqrt(EIy * GJ) / L**2
+
+
+def circle_under_tendon(L: float, EI, EA, tau: float, y: float, z: float,
+                        s=None) -> SpatialRodShape:
+    """Straight uniform rod, clamped at s = 0 (R = I), with one straight tendon at constant
+    body offset (0, y, z) from the base to the tip, tension ``tau``.
+
+    Cut rod and tendon together at s: the part beyond carries no external load. The tendon
+    stays parallel to d1 (shown below), so the balance of the part beyond s, loaded by -n, -m at
+    r and by the cut tendon's pull -tau d1
+    at R r_i, gives n = -tau d1 (compression tau: v1 = 1 - tau / EA, no shear, so a shearable
+    rod gives the same) and m = -(R r_i) x tau d1 = tau R (e1 x r_i):
+
+        m_b = tau (0, -z, y),   u = (0, -tau z / EI_y, tau y / EI_z)  (constant, u1 = 0),
+
+    so R(s) = exp(s u^) and, u being perpendicular to r_i and e1, u x r_i is along d1: the
+    tendon tangent w = v + u x r_i is along d1 indeed. The centreline is a circle of curvature
+    |u| / v1 (per deformed length) in the plane normal to u (the offset's plane for an isotropic
+    section, EI_y = EI_z; a +y offset bends toward +y: u3 > 0):
+
+        r(s) = v1 [sin(k s)/k e1 + (1 - cos(k s))/k (a x e1)],   k = |u|, a = u / k.
+
+    ``EI``: EI (isotropic) or (EI_y, EI_z). ``EA``: None (or inf) for the inextensible rod.
+    Returns a :class:`SpatialRodShape` (``curvature`` = k / v1, ``radius`` = v1 / k,
+    ``twist_rate`` = 0, ``pitch`` = 0, ``axis`` = a).
+    """
+    import numpy as np
+
+    if np.ndim(EI) == 0:
+        EIy = EIz = float(EI)
+    else:
+        EIy, EIz = (float(v) for v in EI)
+    for name, value in (("L", L), ("EI_y", EIy), ("EI_z", EIz)):
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be > 0, got {value!r}")
+    if not (tau >= 0 and math.isfinite(tau)):
+        raise ValueError(f"tau must be >= 0, got {tau!r}")
+    v1 = 1.0 if EA is None or math.isinf(EA) else 1.0 - tau / float(EA)
+    if not v1 > 0:
+        raise ValueError(f"tau / EA must be < 1, got {tau!r} / {EA!r}")
+    s = np.linspace(0.0, L, 101) if s is None else np.atleast_1d(np.asarray(s, dtype=float))
+    e1 = np.array([1.0, 0.0, 0.0])
+    u = np.array([0.0, -tau * z / EIy, tau * y / EIz])
+    k = float(np.linalg.norm(u))
+    if k == 0.0:
+        pos = v1 * np.outer(s, e1)
+        frames = np.repeat(np.eye(3)[None], len(s), axis=0)
+        return SpatialRodShape(s, pos, frames, v1 * L * e1, np.eye(3), 0.0, 0.0, math.inf, 0.0,
+                               e1)
+    a = u / k
+    side = np.cross(a, e1)
+
+    def shape(si):
+        return v1 * (math.sin(k * si) / k * e1 + (1 - math.cos(k * si)) / k * side), \
+            _rotation(si * u)
+
+    pos = np.array([shape(si)[0] for si in s])
+    frames = np.array([shape(si)[1] for si in s])
+    tip_r, tip_R = shape(float(L))
+    return SpatialRodShape(s, pos, frames, tip_r, tip_R, k / v1, 0.0, v1 / k, 0.0, a)

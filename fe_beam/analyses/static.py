@@ -11,6 +11,11 @@ from mpi4py import MPI
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
+from fe_beam.exports.spatial import (
+    SpatialXDMFWriter,
+    plot_spatial_load_displacement,
+    plot_spatial_shapes,
+)
 from fe_beam.fem.rod import BeamProblem
 from fe_beam.fem.section_laws import SOLID_NAMES
 from fe_beam.model.studies import StaticConfig
@@ -118,10 +123,12 @@ def solve_static(
         extra["notes"] = list(extra.get("notes", [])) + notes
     result.extra = extra
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
-    writer = BeamXDMFWriter(problem, xdmf_path) if (record_shapes or xdmf_path) else None
+    writer_kind = SpatialXDMFWriter if problem.spatial else BeamXDMFWriter
+    writer = writer_kind(problem, xdmf_path) if (record_shapes or xdmf_path) else None
     states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
     files = exports.Exports(states + ([
-        exports.CSVExport(out / "load_displacement.csv", CSV_COLUMNS),
+        exports.CSVExport(out / "load_displacement.csv",
+                          SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS),
         exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
         exports.PlotExport(lambda _: _write_plots(out, result, config)
                            if config.output.plots and result.shapes else None),
@@ -136,7 +143,7 @@ def solve_static(
                 "pull_ins": tendons.pull_ins().tolist(),
             }
         result.steps.append(entry)
-        result.notes, result.strain_range = run.watch.notes(), run.watch.summary()
+        result.notes, result.strain_range = run.watch.notes() + run.notes, run.watch.summary()
         if on_step is not None:
             on_step(problem, entry)
         result.wall_time_s = time.perf_counter() - started
@@ -162,7 +169,8 @@ def solve_static(
         raise
     finally:
         realtime.release(run)
-        result.notes = run.watch.notes() + compressed_tendon_notes(tendons, result.steps)
+        result.notes = run.watch.notes() + run.notes + compressed_tendon_notes(tendons,
+                                                                             result.steps)
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
         files.finish(result.summary(extra))  # pictures unless interrupted
@@ -207,6 +215,10 @@ def _model_summary(config: StaticConfig) -> dict:
     m = config.model
     law = {"hyperelastic": hyperelastic_summary(m.options)} if m.options.law == "hyperelastic" \
         else {}
+    if getattr(m, "kinematics", "planar") == "spatial":
+        law["kinematics"] = "spatial"
+        law["initial_curvature"] = [p.constant if p.is_constant else p.text
+                                    for p in m.initial_curvature]
     return {
         "length": m.length,
         "law": m.options.law,
@@ -225,6 +237,13 @@ def _model_summary(config: StaticConfig) -> dict:
 CSV_COLUMNS = [exports.Column("load_factor", lambda s: s["load_factor"]), *exports.tip_columns(),
                exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 CSV_HEADER = [c.name for c in CSV_COLUMNS]
+#: load_displacement.csv of a spatial rod: the tip displacement and rotation vector
+SPATIAL_CSV_COLUMNS = [
+    exports.Column("load_factor", lambda s: s["load_factor"]),
+    *[exports.Column(f"tip_{k}", lambda s, k=k: s["tip"][k]) for k in ("u", "v", "w")],
+    *[exports.Column(f"tip_rotation_{k}", lambda s, i=i: s["tip"]["rotation_vector"][i])
+      for i, k in enumerate("xyz")],
+    exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
@@ -234,6 +253,13 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
         shapes.append(result.shapes[-1])
     m = config.model
     title = f"{m.options.law} law, constraint {m.options.constraint}"
+    if getattr(m, "kinematics", "planar") == "spatial":
+        plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length)
+        factors = [s["load_factor"] for s in result.steps]
+        tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w",
+                                                                  "rotation_vector")}
+        plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
+        return
     plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
@@ -247,6 +273,12 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     report = Report(echo)
     for step in result.steps[-1:]:
         tip = step["tip"]
+        if "w" in tip:
+            rotation = ", ".join(f"{c:.6g}" for c in tip["rotation_vector"])
+            report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
+                       f"v = {tip['v']:.6g} m, w = {tip['w']:.6g} m, rotation vector "
+                       f"[{rotation}] rad")
+            continue
         report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
                    f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
     code = closing_of_steps(report, result, out)

@@ -36,7 +36,9 @@ def _load_key(kind) -> Key:
 
 
 SCHEMA: dict[str, dict[str, Key]] = {
-    "beam": {"length": Key(NUMBER, REQUIRED, "beam length L [m]")},
+    "beam": {"length": Key(NUMBER, REQUIRED, "beam length L [m]"),
+             "initial_curvature": Key((list,), None, "spatial: intrinsic curvature [k_twist, "
+                                      "k_y, k_z] [1/m], numbers or formulas of s and L")},
     "section": {"shape": Key((str,), "rectangle", f"one of {', '.join(SHAPES)}")},
     "material": {
         "E": Key(NUMBER, REQUIRED, "Young's modulus [Pa]"),
@@ -45,6 +47,8 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "rho": Key(NUMBER, 0.0, "density [kg/m^3]"),
     },
     "model": {
+        "kinematics": Key((str,), "planar", "planar (u, v, theta in the x-y plane) | spatial "
+                          "(3D centreline and rotations)"),
         "law": Key((str,), "nonstandard", "nonstandard | reissner | hyperelastic"),
         "constraint": Key(
             (str,), "none", "none | inextensible | unshearable | inextensible-unshearable"
@@ -112,6 +116,13 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "gif": Key((bool,), False, "dynamic: animated GIF of the deformed beam"),
     },
 }
+# spatial rods take vectors where planar ones take a number
+for _name, _doc in (("tip_moment", "moment at x = L [N m]: a number (about z), or [Mx, My, Mz] "
+                     "for spatial rods"),
+                    ("end_rotation", "rotation prescribed at x = L [rad]: a number (about z), "
+                     "or a rotation vector [x, y, z] for spatial rods")):
+    SCHEMA["loads"][_name] = Key(NUMBER + (list,), SCHEMA["loads"][_name].default, _doc)
+
 # Tables owned by other commands (validated by them).
 OTHER_TABLES = (
     "design",

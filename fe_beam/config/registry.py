@@ -46,6 +46,8 @@ class CommandSpec:
     driver: str
     arguments: tuple[tuple[tuple[str, ...], dict], ...] = ()
     sorts_tables: bool = False
+    #: runs spatial rods (``[model] kinematics = "spatial"``); the others refuse them
+    spatial: bool = False
 
     @property
     def driver_module(self) -> str:
@@ -84,11 +86,11 @@ CALIBRATE_ARGUMENTS = (
 
 _SPECS = (
     CommandSpec("static", "large-deflection statics of a planar beam (load stepping, SNES)",
-                (), lambda config, options: parse_static(config), "static:run"),
+                (), lambda config, options: parse_static(config), "static:run", spatial=True),
     CommandSpec("finger", "tendon-driven tapered soft finger (reduced Cosserat rod with "
                           "[[tendons]])",
                 ("tendons", "inverse"), lambda config, options: parse_finger(config),
-                "finger:run"),
+                "finger:run", spatial=True),
     CommandSpec("design", "optimise section sizes, tendon offsets, tensions or loads for a "
                           "target ([design])",
                 ("tendons", "design", "inverse"), _parse_design, "design:run"),
@@ -238,6 +240,12 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
     if command not in REGISTRY:
         raise ConfigError(f"unknown command {command!r}; one of {', '.join(COMMANDS)}")
     check_values(config)
+    model = config.get("model")
+    if isinstance(model, dict) and model.get("kinematics") == "spatial" \
+            and not REGISTRY[command].spatial:
+        runs = [spec.name for spec in _SPECS if spec.spatial]
+        raise ConfigError(f"fe-beam {command} does not run spatial rods yet ([model] kinematics "
+                          f"= \"spatial\"); the commands that do: {', '.join(runs)}")
     parsed = REGISTRY[command].parse(config, refine or {})
     options = []
     for settings in _solver_settings(parsed):

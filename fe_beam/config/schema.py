@@ -27,6 +27,7 @@ from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, S
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
+from fe_beam.model.spatial import SpatialLoads, SpatialRodModel, SpatialSupports
 from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
 
@@ -183,10 +184,19 @@ def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
     return material, {"hyperelastic": law, "section_points": points}
 
 
-def parse_model(config: dict) -> BeamModel:
+def parse_model(config: dict) -> BeamModel | SpatialRodModel:
     beam = table(config, "beam")
     model = table(config, "model")
+    kinematics = model.pop("kinematics")
+    if kinematics not in ("planar", "spatial"):
+        raise ConfigError(f"[model] kinematics must be \"planar\" or \"spatial\"; got "
+                          f"{shown(kinematics)}")
     material, law_options = _rod_material(config, model)
+    if kinematics == "spatial":
+        return _parse_spatial_model(config, beam, model, material, law_options)
+    if beam["initial_curvature"] is not None:
+        raise ConfigError("[beam] initial_curvature needs [model] kinematics = \"spatial\" (the "
+                          "planar rod is straight)")
     mesh = table(config, "mesh")
     supports = table(config, "supports")
     loads = table(config, "loads")
@@ -216,6 +226,44 @@ def parse_model(config: dict) -> BeamModel:
             end_displacement=loads["end_displacement"],
             end_rotation=loads["end_rotation"],
         ),
+    )
+
+
+def _parse_spatial_model(config, beam, model, material, law_options) -> SpatialRodModel:
+    """The `SpatialRodModel` of a configuration with ``[model] kinematics = "spatial"``."""
+    mesh = table(config, "mesh")
+    supports = table(config, "supports")
+    loads = table(config, "loads")
+    section = parse_section(config)
+    if model["law"] == "hyperelastic":
+        raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
+                          "\"spatial\" yet (use \"nonstandard\" or \"reissner\")")
+    return _wrap(
+        SpatialRodModel,
+        length=beam["length"],
+        section=section,
+        material=material,
+        options=_wrap(ModelOptions, **model, **law_options),
+        mesh=_wrap(Discretisation, **mesh),
+        supports=_wrap(
+            SpatialSupports,
+            x0=_support(supports["x0"]),
+            xL=_support(supports["xL"]),
+            prescribed_x0=loads["prescribed_x0"],
+            prescribed_xL=loads["prescribed_xL"],
+        ),
+        loads=_wrap(
+            SpatialLoads,
+            tip_force=loads["tip_force"],
+            tip_moment=loads["tip_moment"],
+            follower=loads["follower"],
+            distributed=loads["distributed"],
+            gravity=loads["gravity"],
+            point_forces=loads["point_forces"],
+            end_displacement=loads["end_displacement"],
+            end_rotation=loads["end_rotation"],
+        ),
+        initial_curvature=beam["initial_curvature"],
     )
 
 

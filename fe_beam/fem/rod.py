@@ -237,6 +237,10 @@ class BeamProblem:
     changes never recompile forms.
     """
 
+    #: the unknowns' names, in the mixed space's order (before the multipliers)
+    components = COMPONENTS
+    spatial = False
+
     def __init__(
         self,
         model: BeamModel,
@@ -408,7 +412,7 @@ class BeamProblem:
     def point_dofs(self, name: str, x: float, what: str = "point") -> np.ndarray:
         """Owned local dofs (in w) of component ``name`` at the mesh point x: exactly one dof
         over all ranks (RuntimeError otherwise: x is not a vertex, or is found twice)."""
-        index = COMPONENTS.index(name)
+        index = self.components.index(name)
         sub, parent_dofs = compat.sub_space_collapsed(self.space, index)
         collapsed = compat.locate_dofs_geometrical(sub, self.point_marker(x))
         dofs = np.asarray(parent_dofs)[collapsed]
@@ -426,7 +430,7 @@ class BeamProblem:
         for end in ("x0", "xL"):
             values = getattr(self.model.supports, f"prescribed_{end}")
             for name in self.model.supports.fixed(end):
-                index = COMPONENTS.index(name)
+                index = self.components.index(name)
                 sub, _ = compat.sub_space_collapsed(self.space, index)
                 dofs = compat.locate_dofs_geometrical(
                     (self.space.sub(index), sub), self.end_markers[end]
@@ -534,7 +538,7 @@ class BeamProblem:
         exactly one rank; see `point_dofs`)."""
         if end is not None:
             return self.point_dofs(name, self.end_x[end], f"end {end} at")
-        index = COMPONENTS.index(name)
+        index = self.components.index(name)
         _, parent_dofs = compat.sub_space_collapsed(self.space, index)
         parent_dofs = np.asarray(parent_dofs)
         owned = self.space.dofmap.index_map.size_local * self.space.dofmap.index_map_bs
@@ -545,13 +549,13 @@ class BeamProblem:
         if not hasattr(self, "_end_dofs"):
             self._end_dofs = {}
         if end not in self._end_dofs:
-            self._end_dofs[end] = {n: self.component_dofs(n, end) for n in COMPONENTS}
+            self._end_dofs[end] = {n: self.component_dofs(n, end) for n in self.components}
         return self._values_at(self._end_dofs[end])
 
     def point_values(self, x: float) -> dict:
         """{u, v, theta} at a mesh vertex x (exactly one owner; RuntimeError if x is not a
         vertex)."""
-        return self._values_at({n: self.point_dofs(n, x) for n in COMPONENTS})
+        return self._values_at({n: self.point_dofs(n, x) for n in self.components})
 
     def end_reaction(self, end: str = "xL") -> dict:
         """The support's force and moment on the beam at an end, {Fx, Fy, M} (global axes;

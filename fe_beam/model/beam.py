@@ -209,7 +209,9 @@ def _pair(name: str, value) -> tuple[float, float]:
         and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
     )
     if not ok or not all(_finite(c) for c in value):
-        raise ValueError(f"loads.{name} must be a pair of numbers [x, y], got {value!r}")
+        hint = (" (3 components need [model] kinematics = \"spatial\")"
+                if isinstance(value, (list, tuple)) and len(value) == 3 else "")
+        raise ValueError(f"loads.{name} must be a pair of numbers [x, y], got {value!r}{hint}")
     return float(value[0]), float(value[1])
 
 
@@ -241,7 +243,9 @@ class Loads:
         for name in ("tip_force", "distributed", "gravity"):
             object.__setattr__(self, name, _pair(name, getattr(self, name)))
         if isinstance(self.tip_moment, bool) or not isinstance(self.tip_moment, (int, float)):
-            raise ValueError(f"loads.tip_moment must be a number, got {self.tip_moment!r}")
+            hint = (" (a vector moment needs [model] kinematics = \"spatial\")"
+                    if isinstance(self.tip_moment, (list, tuple)) else "")
+            raise ValueError(f"loads.tip_moment must be a number, got {self.tip_moment!r}{hint}")
         if not isinstance(self.follower, bool):
             raise ValueError(f"loads.follower must be true or false, got {self.follower!r}")
         object.__setattr__(self, "point_forces", _point_forces(self.point_forces))

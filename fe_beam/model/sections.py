@@ -16,7 +16,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["SHAPES", "Section", "SectionProperties", "layered_properties"]
+__all__ = ["SHAPES", "Section", "SectionProperties", "SpatialSectionProperties",
+           "layered_properties", "rectangle_torsion_constant"]
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,59 @@ def _t_section(b, h, tf, tw):
     return area, inertia, i3, i4, h
 
 
+def rectangle_torsion_constant(b, h, tanh=math.tanh, terms: int = 12):
+    """Saint-Venant torsion constant of a b x h rectangle (t = min, w = max):
+
+        J = t^3 w / 3 (1 - 192 t / (pi^5 w) sum_{n odd} tanh(n pi w / 2t) / n^5)
+
+    (Timoshenko & Goodier; 12 odd terms: the series' remainder is below 1e-13 relative). ``b``
+    and ``h`` may be UFL expressions with ``tanh`` = ufl.tanh; which of them is the thinner is
+    decided on their float values by the caller (`Section.spatial_properties`) and passed in
+    order: here ``b`` <= ``h`` is assumed when ``b`` is not a float."""
+    if isinstance(b, (int, float)) and isinstance(h, (int, float)) and b > h:
+        b, h = h, b
+    t, w = b, h
+    series = sum(tanh((2 * k + 1) * math.pi * w / (2 * t)) / (2 * k + 1) ** 5
+                 for k in range(terms))
+    return t**3 * w / 3 * (1 - 192 * t / (math.pi**5 * w) * series)
+
+
+def _disk_moment(r, a: int, b: int):
+    """int y^a z^b dA over a disk of radius r about its centre."""
+    if a % 2 or b % 2:
+        return 0.0 * r
+    value = 2 * math.gamma((a + 1) / 2) * math.gamma((b + 1) / 2) / (
+        (a + b + 2) * math.gamma((a + b + 2) / 2))
+    return value * r ** (a + b + 2)
+
+
+def _symmetric_moment(width, n: int):
+    """int_{-width/2}^{width/2} z^n dz."""
+    if n % 2:
+        return 0.0 * width
+    return 2 * (width / 2) ** (n + 1) / (n + 1)
+
+
+#: the (a, b) of the section moments int y^a z^b dA the spatial non-standard law needs
+MOMENT_ORDERS = tuple((a, n - a) for n in range(5) for a in range(n + 1))
+
+
+@dataclass(frozen=True)
+class SpatialSectionProperties:
+    """A, I_z = int y^2 dA (the planar I), I_y = int z^2 dA, the Saint-Venant torsion constant
+    J, the moments ``moments[(a, b)]`` = int y^a z^b dA about the centroid for a + b <= 4
+    (y along the h direction d2, z along the b direction d3; the planar I3 = -moments[(3, 0)],
+    I4 = moments[(4, 0)]), and the extents ``y_half``/``z_half`` (the largest |y|, |z|)."""
+
+    A: Any
+    Iz: Any
+    Iy: Any
+    J: Any
+    moments: dict
+    y_half: Any
+    z_half: Any
+
+
 SHAPES = {
     "rectangle": (_rectangle, ("b", "h")),
     "circle": (_circle, ("d",)),
@@ -75,7 +129,9 @@ SHAPES = {
     "t-section": (_t_section, ("b", "h", "tf", "tw")),
     "custom": (None, ("A", "I", "I3", "I4")),
 }
-OPTIONAL_CUSTOM = ("I3", "I4", "h")
+OPTIONAL_CUSTOM = ("I3", "I4", "h", "I_y", "J", "I4_z", "I22", "b")
+#: custom keys the spatial rod reads (the others are the planar ones)
+SPATIAL_CUSTOM = ("I_y", "J", "I4_z", "I22", "b")
 
 
 @dataclass(frozen=True)
@@ -141,6 +197,89 @@ class Section:
             return SectionProperties(at_s["A"], at_s["I"], i3, i4, height)
         function, names = SHAPES[self.shape]
         return SectionProperties(*function(*(at_s[n] for n in names)))
+
+    def spatial_properties(self, s=0.0, dims: dict | None = None,
+                           dims_tip: dict | None = None, tanh=math.tanh):
+        """`SpatialSectionProperties` at s = x / L (floats or UFL expressions, as
+        `properties`; ``tanh`` for the rectangle's torsion series, e.g. ufl.tanh).
+
+        J: rectangle by its series (`rectangle_torsion_constant`), circle and tube exactly
+        (the polar moment), T-section as the sum of its two rectangles' J (flange b x tf and
+        web tw x (h - tf): the thin-walled open-section value, which neglects the junction);
+        custom sections take ``I_y`` and ``J`` (required by the spatial rod) and the optional
+        fourth moments ``I4_z`` = int z^4 dA and ``I22`` = int y^2 z^2 dA (0 when not given,
+        like the planar I3 and I4)."""
+        base = self.dims if dims is None else dims
+        tip = self.dims_tip if dims_tip is None else dims_tip
+        at_s = {n: v + (tip[n] - v) * s if n in tip else v for n, v in base.items()}
+        moments = {}
+        if self.shape == "rectangle":
+            b, h = at_s["b"], at_s["h"]
+            for a, c in MOMENT_ORDERS:
+                moments[(a, c)] = _symmetric_moment(h, a) * _symmetric_moment(b, c)
+            thin_first = self._thinner_first("b", "h")
+            J = rectangle_torsion_constant(*((b, h) if thin_first else (h, b)), tanh=tanh)
+            y_half, z_half = h / 2, b / 2
+        elif self.shape in ("circle", "tube"):
+            d = at_s["d"]
+            for a, c in MOMENT_ORDERS:
+                moments[(a, c)] = _disk_moment(d / 2, a, c)
+                if self.shape == "tube":
+                    moments[(a, c)] = moments[(a, c)] - _disk_moment(d / 2 - at_s["t"], a, c)
+            J = moments[(2, 0)] + moments[(0, 2)]
+            y_half = z_half = d / 2
+        elif self.shape == "t-section":
+            b, h, tf, tw = (at_s[n] for n in ("b", "h", "tf", "tw"))
+            layers = [(tw, 0.0 * h, h - tf), (b, h - tf, h)]
+            area = sum(w * (top - bottom) for w, bottom, top in layers)
+            centroid = sum(w * (top**2 - bottom**2) / 2 for w, bottom, top in layers) / area
+            for a, c in MOMENT_ORDERS:
+                moments[(a, c)] = sum(
+                    ((top - centroid) ** (a + 1) - (bottom - centroid) ** (a + 1)) / (a + 1)
+                    * _symmetric_moment(w, c) for w, bottom, top in layers)
+            web = rectangle_torsion_constant(tw, h - tf, tanh=tanh) if self._thinner_first(
+                "tw", None, h - tf) else rectangle_torsion_constant(h - tf, tw, tanh=tanh)
+            flange = rectangle_torsion_constant(tf, b, tanh=tanh) if self._thinner_first(
+                "tf", "b") else rectangle_torsion_constant(b, tf, tanh=tanh)
+            J = web + flange
+            y_half = h - centroid if not isinstance(h, (int, float)) else max(
+                h - centroid, centroid)
+            z_half = b / 2
+        else:  # custom
+            planar = self.properties(s, dims, dims_tip)
+            for name in ("I_y", "J"):
+                if name not in at_s:
+                    raise ValueError(f"section.{name} is required by the spatial rod for a "
+                                     "custom section (I_y = int z^2 dA, J the torsion "
+                                     "constant)")
+            moments = {key: 0.0 for key in MOMENT_ORDERS}
+            moments[(0, 0)], moments[(2, 0)], moments[(0, 2)] = planar.A, planar.I, at_s["I_y"]
+            moments[(3, 0)] = -planar.I3
+            moments[(4, 0)] = planar.I4
+            moments[(0, 4)] = at_s.get("I4_z", 0.0)
+            moments[(2, 2)] = at_s.get("I22", 0.0)
+            J = at_s["J"]
+            y_half = planar.h / 2
+            z_half = at_s.get("b", math.sqrt(12 * self.dims["I_y"] / self.dims["A"])) / 2
+        return SpatialSectionProperties(moments[(0, 0)], moments[(2, 0)], moments[(0, 2)], J,
+                                        moments, y_half, z_half)
+
+    def _thinner_first(self, first: str, second: str | None, second_value=None) -> bool:
+        """Is dimension ``first`` the thinner one (on the float values at both ends)? A taper
+        whose thinner side changes along the rod is refused (its J series would switch)."""
+        answers = set()
+        for values in (self.dims, {**self.dims, **self.dims_tip}):
+            a = values[first]
+            if second is not None:
+                other = values[second]
+            else:
+                other = values["h"] - values["tf"]
+            answers.add(a <= other)
+        if len(answers) > 1:
+            raise ValueError(f"section: {first} and {second or 'h - tf'} swap which is the "
+                             "thinner along the taper; the torsion constant of such a taper is "
+                             "not supported")
+        return answers.pop()
 
     def y_extent(self, s: float) -> tuple[float, float] | None:
         """(lowest, highest) y of the section at s = x / L, about its centroid; None for a

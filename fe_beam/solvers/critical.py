@@ -103,7 +103,7 @@ def spectrum(run, with_mode: bool = False) -> Spectrum | None:
     pull_in = run.tendons is not None and any(
         t.controlled_by_pull_in for t in run.tendons.tendons)
     size = problem.global_dofs
-    if pull_in or run.config.model.loads.follower:
+    if pull_in or run.config.model.loads.follower or not getattr(problem, "conservative", True):
         return None
     if problem.comm.size > 1 or size > STABILITY_MAX_DOFS:
 
@@ -144,7 +144,7 @@ def spectrum(run, with_mode: bool = False) -> Spectrum | None:
         full = np.zeros(size)
         full[free] = vector / scale
         kinematic = np.zeros(size, dtype=bool)
-        for name in ("u", "v", "theta"):
+        for name in problem.components:
             kinematic[problem.component_dofs(name)] = True
         largest = np.abs(full[kinematic]).max()
         mode = full / largest if largest > 0 else full

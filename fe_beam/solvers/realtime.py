@@ -170,6 +170,10 @@ def acquire(config: StaticConfig, comm=MPI.COMM_WORLD, prefix: str = "fe_beam_st
     back with `release` (it is not shared while out). Collective (the same sequence of calls on
     every rank gives the same hits)."""
 
+    if getattr(config.model, "kinematics", "planar") == "spatial":  # not cached (yet)
+        run = StaticContinuation(config, comm, prefix=prefix)
+        run._cache_key = None
+        return run
     key = structure_key(config, comm) + (prefix,)
     entry = _CACHE.pop(key, None) if _enabled() else None
     if entry is not None and entry.comm is comm:

@@ -11,11 +11,19 @@ from mpi4py import MPI
 from fe_beam import runctl
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainWatch
+from fe_beam.fem.spatial_rod import SpatialRodProblem
 from fe_beam.fem.tendons import TendonSet
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.continuation import Continuation, NonlinearParameterProblem
 from fe_beam.solvers.critical import STABILITY_MAX_DOFS, STABILITY_ZERO, spectrum  # noqa: F401
-from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, StepResult, rotation_jump_check
+from fe_beam.solvers.newton import (
+    LoadSteppingFailed,
+    NonlinearProblem,
+    SNESSolver,
+    SolveFailed,
+    StepResult,
+    rotation_jump_check,
+)
 from fe_beam.solvers.pull_in import PullInSolver
 
 __all__ = ["STABILITY_MAX_DOFS", "STABILITY_ZERO", "StaticContinuation", "beam_dofs_estimate",
@@ -38,7 +46,7 @@ class StaticContinuation:
         self.config = config
         self.tendons = tendons or (TendonSet(config.tendons, config.model.length)
                                    if config.tendons else None)
-        self.problem = problem or BeamProblem(
+        self.problem = problem or build_problem(
             config.model,
             comm,
             breakpoints=self.tendons.breakpoints if self.tendons else (),
@@ -55,6 +63,25 @@ class StaticContinuation:
         # extremes of the strains over the converged states (notes when out of range)
         self.watch = StrainWatch()
         self._trial_range = None
+        #: notes of the run beyond the strain range (e.g. a spatial rotation near 2 pi)
+        self.notes: list[str] = []
+        if getattr(self.problem, "curved", False):
+            self._relax()
+
+    def _relax(self) -> None:
+        """An initially curved spatial rod: solve the load factor 0 state from the stress-free
+        shape's nodal values (the discrete stress-free state), the reference of displacements
+        and of the tendons' rest lengths."""
+        self._set_load_factor(0.0)
+        try:
+            self.solver.solve()
+        except SolveFailed as failure:
+            raise LoadSteppingFailed(f"the stress-free state of the curved rod: {failure}") \
+                from None
+        self.problem.relaxed()
+        if self.tendons:
+            self.tendons.rest_lengths = self.tendons.lengths()
+        self._relaxed_state = compat.local_array(self.problem.w).copy()
 
     def _set_load_factor(self, value: float) -> None:
         self.problem.set_load_factor(value)
@@ -121,7 +148,8 @@ class StaticContinuation:
         metric = compat.vector_of(self.problem.w).duplicate()
         weights = np.zeros(metric.getLocalSize())
         length = self.config.model.length
-        for name, weight in (("u", 1 / length**2), ("v", 1 / length**2), ("theta", 1.0)):
+        for name in self.problem.components:
+            weight = 1.0 if name.startswith("theta") else 1 / length**2
             dofs = self.problem.component_dofs(name)
             weights[dofs] = weight
         metric.getArray()[:] = weights
@@ -136,6 +164,9 @@ class StaticContinuation:
         def check(previous, current):
             reason = rotation(previous, current)
             self._trial_range = self.problem.strain_range()  # collective: on every rank
+            note = getattr(self.problem, "rotation_note", lambda: None)()
+            if note and note not in self.notes:
+                self.notes.append(note)
             return reason or self._trial_range.inadmissible()
 
         return check
@@ -158,16 +189,30 @@ class StaticContinuation:
 
     def restart(self) -> None:
         """Back to the unloaded reference state."""
-        compat.local_array(self.problem.w)[:] = 0.0
+        relaxed = getattr(self, "_relaxed_state", None)
+        compat.local_array(self.problem.w)[:] = 0.0 if relaxed is None else relaxed
         self.load_factor = 0.0
 
     def destroy(self) -> None:
         self.snes.destroy()
 
 
+def build_problem(model, comm, breakpoints=(), extra_energy=None):
+    """The finite-element problem of a rod model: `SpatialRodProblem` for a spatial model
+    (``[model] kinematics = "spatial"``), `BeamProblem` for a planar one."""
+    kind = SpatialRodProblem if getattr(model, "kinematics", "planar") == "spatial" \
+        else BeamProblem
+    return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy)
+
+
 def beam_dofs_estimate(config: StaticConfig) -> int:
-    """Unknowns of the rod model of ``config``: u, v, theta and one field per constraint."""
+    """Unknowns of the rod model of ``config``: the displacements and rotations and one field
+    per constrained strain."""
     mesh = config.model.mesh
+    if getattr(config.model, "kinematics", "planar") == "spatial":
+        fields = 6 + {"inextensible": 1, "unshearable": 2,
+                      "inextensible-unshearable": 3}.get(config.model.options.constraint, 0)
+        return int(fields * (mesh.elements * mesh.degree + 1))
     fields = 3 + {"inextensible": 1, "unshearable": 1,
                   "inextensible-unshearable": 2}.get(config.model.options.constraint, 0)
     return int(fields * (mesh.elements * mesh.degree + 1))

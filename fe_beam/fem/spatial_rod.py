@@ -1,0 +1,442 @@
+"""The spatial rod as a finite-element problem (docs/theory.md, Spatial rods): the mixed space
+of the centreline displacement d (3), the rotation vector theta (3) and the constraints'
+multipliers, supports, loads and the residual, all forms compiled once.
+
+Unknowns: d = r - X with X = (x, 0, 0) the straight reference axis, theta with R = exp(theta^)
+(`fe_beam.fem.rotations`). Strains v = R^T r', u = T(-theta) theta' - u0. The energy and the
+constraints use p Gauss points per element (as the planar rod: uniformly reduced integration,
+locking-free), the loads a full rule; multipliers are discontinuous of degree p - 1.
+
+An initially curved rod (u0 != 0) starts from its stress-free shape: r0' = R0 e1, R0' = R0 u0^,
+R0(0) = I, integrated at the nodes; the load factor 0 state is then solved exactly
+(`SpatialRodProblem.relax`), and reported displacements are measured from it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from fe_beam.fem import compat
+from fe_beam.fem.mpi import global_sum
+from fe_beam.fem.rod import BeamProblem, StrainRange, interval_mesh
+from fe_beam.fem.rotations import UFL_FUNCTIONS, curvature, rotation, spin_map
+from fe_beam.model.spatial import (
+    SPATIAL_COMPONENTS,
+    SPATIAL_CONSTRAINED,
+    SpatialNonStandard,
+    SpatialReissner,
+    SpatialRodModel,
+    SpatialStrains,
+    rotation_matrix,
+)
+
+__all__ = ["SpatialRodProblem", "rotation_vector_of", "stress_free_shape"]
+
+#: a note when the rotation vector's length passes this (its parametrisation is singular at 2 pi)
+ROTATION_NOTE = 1.8 * math.pi
+
+
+def rotation_vector_of(matrix: np.ndarray, near: np.ndarray | None = None) -> np.ndarray:
+    """The rotation vector of a rotation matrix, the one of the family theta + 2 pi k n
+    nearest ``near`` (continuity along the rod)."""
+    matrix = np.asarray(matrix, dtype=float)
+    cos_t = np.clip((np.trace(matrix) - 1) / 2, -1.0, 1.0)
+    t = math.acos(cos_t)
+    axial = np.array([matrix[2, 1] - matrix[1, 2], matrix[0, 2] - matrix[2, 0],
+                      matrix[1, 0] - matrix[0, 1]]) / 2
+    if t < 1e-8:
+        vector = axial
+    elif math.pi - t < 1e-6:
+        # near pi: the axis from the symmetric part
+        symmetric = (matrix + np.eye(3)) / 2
+        axis = symmetric[int(np.argmax(np.diag(symmetric)))]
+        axis = axis / np.linalg.norm(axis)
+        if np.dot(axis, axial) < 0:
+            axis = -axis
+        vector = t * axis
+    else:
+        vector = t / math.sin(t) * axial
+    if near is None:
+        return vector
+    norm = np.linalg.norm(vector)
+    axis = vector / norm if norm > 0 else (near / max(np.linalg.norm(near), 1e-300))
+    candidates = [vector + 2 * math.pi * k * axis for k in range(-3, 4)]
+    return min(candidates, key=lambda c: np.linalg.norm(c - near))
+
+
+def stress_free_shape(model: SpatialRodModel, xs: np.ndarray, substeps: int = 64):
+    """(r0, theta0) at the sorted stations ``xs`` of a rod of intrinsic curvature u0(s):
+    R0' = R0 u0^, r0' = R0 e1, R0(0) = I, r0(0) = 0 (RK4 on the rotation with re-projection;
+    exact for constant u0 to round-off)."""
+    profiles = model.initial_curvature
+
+    def u0(s):
+        return np.array([p(s) for p in profiles])
+
+    R = np.eye(3)
+    r = np.zeros(3)
+    positions, vectors = [], []
+    previous_x, previous_theta = 0.0, np.zeros(3)
+    for x in xs:
+        span = x - previous_x
+        if span > 0:
+            h = span / substeps
+            s = previous_x
+            for _ in range(substeps):
+                # the exact increment of a constant curvature over h, at the midpoint's u0
+                k = u0(s + h / 2)
+                step = np.array(rotation_matrix(h * k))
+                # r' = R0 e1 integrated exactly over the arc of constant curvature
+                r = r + R @ _arc_chord(h, k)
+                R = R @ step
+                s += h
+            u_, _, vt = np.linalg.svd(R)
+            R = u_ @ vt
+        previous_x = x
+        previous_theta = rotation_vector_of(R, previous_theta)
+        positions.append(r.copy())
+        vectors.append(previous_theta.copy())
+    return np.array(positions), np.array(vectors)
+
+
+def _arc_chord(h: float, k: np.ndarray) -> np.ndarray:
+    """int_0^h exp(s k^) e1 ds = h T(h k) e1 (the chord of an arc of constant curvature)."""
+    theta = h * k
+    t = float(np.linalg.norm(theta))
+    b = (1 - math.cos(t)) / t**2 if t > 1e-4 else 0.5 - t * t / 24
+    c = (t - math.sin(t)) / t**3 if t > 1e-3 else 1 / 6 - t * t / 120
+    K = np.array([[0, -theta[2], theta[1]], [theta[2], 0, -theta[0]], [-theta[1], theta[0], 0]])
+    T = np.eye(3) + b * K + c * K @ K
+    return h * T @ np.array([1.0, 0.0, 0.0])
+
+
+class SpatialRodProblem(BeamProblem):
+    """Finite-element set-up of a `fe_beam.model.spatial.SpatialRodModel`: space, unknown,
+    Dirichlet conditions, residual (the planar `BeamProblem`'s point location, ends, supports
+    and bookkeeping are shared; the physics is its own)."""
+
+    components = SPATIAL_COMPONENTS
+    spatial = True
+
+    def __init__(self, model: SpatialRodModel, comm, breakpoints=(), extra_energy=None):
+        self.model = model
+        breakpoints = tuple(breakpoints) + tuple(f[0] for f in model.loads.point_forces)
+        self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
+        self.comm = comm
+        degree = model.mesh.degree
+        self.multipliers = SPATIAL_CONSTRAINED[model.options.constraint]
+        elements = [compat.element(self.mesh, "Lagrange", degree)] * 6
+        elements += [compat.element(self.mesh, "DG", degree - 1)] * len(self.multipliers)
+        self.space = compat.function_space(self.mesh, compat.mixed_element(elements))
+        self.w = fem.Function(self.space, name="state")
+        self.load_factor = fem.Constant(self.mesh, 0.0)
+        self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
+        self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
+        self._make_constants()
+        self._mark_ends()
+        self._check_breakpoints(breakpoints)
+        self._point_force_measures()
+        self.reference_tip = np.zeros(3)
+        self.curved = model.curved
+        self.bcs, self._prescribed = self._dirichlet_conditions()
+        self.extra_energy = extra_energy
+        self.residual = self._residual()
+        if self.curved:
+            self._set_stress_free_guess()
+
+    # --- set-up ----------------------------------------------------------------------------
+    def _make_constants(self) -> None:
+        m, sec = self.model, self.model.section
+        const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
+        self.E = const(m.material.E)
+        self.G = const(m.material.shear_modulus)
+        self.rho = const(m.material.rho)
+        self.k_shear = const(m.options.shear_correction)
+        dims = {n: const(v) for n, v in sec.dims.items()}
+        dims_tip = {n: const(v) for n, v in sec.dims_tip.items()}
+        self.section_dims, self.section_dims_tip = dims, dims_tip
+        x = ufl.SpatialCoordinate(self.mesh)[0]
+        self.x = x
+        p = sec.spatial_properties(x / m.length, dims, dims_tip, tanh=ufl.tanh)
+        self.section_props = p
+        if m.options.law == "reissner":
+            self.law = SpatialReissner(self.E * p.A, self.k_shear * self.G * p.A, self.G * p.J,
+                                       self.E * p.Iy, self.E * p.Iz)
+        else:
+            self.law = SpatialNonStandard(self.E, self.G, p.moments, p.J)
+        self.intrinsic = ufl.as_vector([c.symbolic(x, UFL_FUNCTIONS) + 0 * x
+                                        for c in m.initial_curvature])
+        loads = m.loads
+        vector = lambda value: fem.Constant(self.mesh, np.array(value, dtype=float))  # noqa: E731
+        self.tip_force = vector(loads.tip_force)
+        self.tip_moment = vector(loads.tip_moment)
+        self.distributed = vector(loads.distributed)
+        self.gravity = vector(loads.gravity)
+
+    def _point_force_measures(self) -> None:
+        """As the planar rod's: one nodal force field per component (x, y, z)."""
+        self.point_forces = []
+        forces = self.model.loads.point_forces
+        if not forces:
+            return
+        space = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange", 1))
+        nodal = [fem.Function(space) for _ in range(3)]
+        interior, at = [], set()
+        for x, *force in forces:
+            dofs = compat.locate_dofs_geometrical(space, self.point_marker(x))
+            for function, value in zip(nodal, force, strict=True):
+                function.x.array[dofs] += value
+            if abs(x - self.model.length) <= self.point_tolerance:
+                at.add("tip")
+            else:
+                interior.append(compat.locate_entities(self.mesh, 0, self.point_marker(x)))
+        self.point_force_fields = nodal
+        force = ufl.as_vector(nodal)
+        if interior:
+            self.mesh.topology.create_connectivity(0, 1)
+            vertices = np.unique(np.concatenate(interior)).astype(np.int32)
+            tags = compat.meshtags(self.mesh, 0, vertices, np.ones(len(vertices), np.int32))
+            measure = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)(1)
+            self.point_forces.append((measure, force, False))
+        if "tip" in at:
+            self.point_forces.append((self.ds_tip, force, True))
+
+    def _dirichlet_conditions(self):
+        if self.curved:
+            for end in ("x0", "xL"):
+                values = getattr(self.model.supports, f"prescribed_{end}")
+                if any(values.values()):
+                    raise ValueError(
+                        "prescribed end values (loads.prescribed_*, end_displacement, "
+                        "end_rotation) of a rod with an initial_curvature are not supported "
+                        "yet: its stress-free end is not at the straight reference's")
+            if self.model.supports.fixed("x0") not in ((), SPATIAL_COMPONENTS):
+                raise ValueError("a rod with an initial_curvature needs supports.x0 = "
+                                 "\"clamped\" or \"free\" (its stress-free shape starts from "
+                                 "the frame at x = 0)")
+        held = {}
+        if self.curved and self.model.supports.fixed("xL"):
+            # the end x = L held where the stress-free rod has it
+            r0, theta0 = stress_free_shape(self.model, np.array([self.model.length]))
+            held = dict(zip(SPATIAL_COMPONENTS, np.concatenate(
+                [r0[0] - np.array([self.model.length, 0, 0]), theta0[0]]), strict=True))
+        bcs, prescribed = [], []
+        for end in ("x0", "xL"):
+            values = getattr(self.model.supports, f"prescribed_{end}")
+            for name in self.model.supports.fixed(end):
+                index = self.components.index(name)
+                sub, _ = compat.sub_space_collapsed(self.space, index)
+                dofs = compat.locate_dofs_geometrical(
+                    (self.space.sub(index), sub), self.end_markers[end])
+                self.point_dofs(name, self.end_x[end], f"support {end} at")  # exactly one
+                value = fem.Function(sub)
+                if end == "xL" and name in held:
+                    value.x.array[:] = held[name]
+                bcs.append(fem.dirichletbc(value, dofs, self.space.sub(index)))
+                if values.get(name, 0.0) != 0.0:
+                    prescribed.append((value, float(values[name])))
+        return bcs, prescribed
+
+    def _set_stress_free_guess(self) -> None:
+        """The state at the stress-free shape's nodal values (then `relax` solves it)."""
+        array = compat.local_array(self.w)
+        for index in range(len(SPATIAL_COMPONENTS)):
+            sub, parent = compat.sub_space_collapsed(self.space, index)
+            xs = sub.tabulate_dof_coordinates()[:, 0]
+            order = np.argsort(xs)
+            r0, theta0 = stress_free_shape(self.model, xs[order])
+            values = np.concatenate([r0 - np.outer(xs[order], [1, 0, 0]), theta0], axis=1)
+            column = np.empty(len(xs))
+            column[order] = values[:, index]
+            array[np.asarray(parent)] = column
+
+    def relaxed(self) -> None:
+        """The current state (solved at load factor 0) is the reference of the displacements."""
+        values = super().end_values("xL")
+        self.reference_tip = np.array([values[n] for n in ("u", "v", "w")])
+
+    # --- physics -----------------------------------------------------------------------------
+    def fields(self):
+        """(d, theta, multiplier dict) of the current state (UFL vectors)."""
+        parts = ufl.split(self.w)
+        d = ufl.as_vector(parts[0:3])
+        theta = ufl.as_vector(parts[3:6])
+        return d, theta, dict(zip(self.multipliers, parts[6:], strict=True))
+
+    def state_parts(self):
+        d, theta, _ = self.fields()
+        return d, theta
+
+    def strains(self, parts) -> SpatialStrains:
+        d, theta = parts
+        tangent = ufl.as_vector([1 + d[0].dx(0), d[1].dx(0), d[2].dx(0)])
+        R = rotation(theta)
+        v = ufl.dot(R.T, tangent)
+        u = curvature(theta) - self.intrinsic
+        return SpatialStrains(tuple(v[i] for i in range(3)), tuple(u[i] for i in range(3)))
+
+    def law_energy(self, s):
+        return self.law.energy(s)
+
+    def stored_energy(self, parts):
+        total = self.law_energy(self.strains(parts)) * self.dx_energy
+        if self.extra_energy is not None:
+            total += self.extra_energy(self, parts)
+        return total
+
+    def dead_load_work(self, parts):
+        """Work of the dead forces (the dead moment has no potential: `moment_virtual_work`)."""
+        d, _ = parts
+        lam = self.load_factor
+        body = self.distributed + self.rho * self.section_props.A * self.gravity
+        work = lam * ufl.dot(body, d) * self.dx_loads
+        if not self.model.loads.follower:
+            work += lam * ufl.dot(self.tip_force, d) * self.ds_tip
+        for measure, force, at_end in self.point_forces:
+            work += lam * (ufl.dot(force, d) if at_end else ufl.avg(ufl.dot(force, d))) * measure
+        return work
+
+    def constraint_term(self, parts, multipliers):
+        if not multipliers:
+            return 0
+        s = self.strains(parts)
+        return sum(value * s.constrained(n) for n, value in multipliers.items()) * self.dx_energy
+
+    def potential(self):
+        d, theta, multipliers = self.fields()
+        parts = (d, theta)
+        return (self.stored_energy(parts) + self.constraint_term(parts, multipliers)
+                - self.dead_load_work(parts))
+
+    def nonconservative_work(self, parts, test):
+        """Virtual work of the tip moment (dead: M . T(theta) dtheta, the spatial spin; follower:
+        (R M) . T(theta) dtheta) and of a follower tip force (R F) . dd."""
+        d, theta = parts
+        pieces = ufl.split(test)
+        dd, dtheta = ufl.as_vector(pieces[0:3]), ufl.as_vector(pieces[3:6])
+        spin = ufl.dot(spin_map(theta), dtheta)
+        follower = self.model.loads.follower
+        R = rotation(theta)
+        moment = ufl.dot(R, self.tip_moment) if follower else self.tip_moment
+        work = ufl.dot(moment, spin)
+        if follower:
+            work += ufl.dot(ufl.dot(R, self.tip_force), dd)
+        return self.load_factor * work * self.ds_tip
+
+    def _residual(self):
+        test = ufl.TestFunction(self.space)
+        residual = ufl.derivative(self.potential(), self.w, test)
+        loads = self.model.loads
+        if any(loads.tip_moment) or loads.follower:
+            residual -= self.nonconservative_work(self.state_parts(), test)
+        return residual
+
+    @property
+    def conservative(self) -> bool:
+        """The loads derive from a potential (a symmetric tangent): no tip moment, no
+        follower force."""
+        return not (any(self.model.loads.tip_moment) or self.model.loads.follower)
+
+    def multiplier_dofs(self) -> np.ndarray:
+        parts = [np.asarray(compat.sub_space_collapsed(self.space, 6 + i)[1])
+                 for i in range(len(self.multipliers))]
+        return np.concatenate(parts) if parts else np.empty(0, dtype=np.int32)
+
+    def rotation_dofs(self) -> np.ndarray:
+        return np.concatenate([self.component_dofs(n) for n in SPATIAL_COMPONENTS[3:]])
+
+    # --- quantities of interest ----------------------------------------------------------------
+    def end_values(self, end: str = "xL") -> dict:
+        """{u, v, w, R, rotation_vector, position} at an end: u, v, w the displacement from the
+        reference (the stress-free shape of a curved rod), R the end frame (rows of the matrix
+        whose columns are the directors d1, d2, d3 in world axes)."""
+        values = super().end_values(end)
+        displacement = np.array([values[n] for n in ("u", "v", "w")])
+        x = self.model.length if end == "xL" else 0.0
+        reference = self.reference_tip if end == "xL" else np.zeros(3)
+        vector = [values[n] for n in SPATIAL_COMPONENTS[3:]]
+        return {"u": float(displacement[0] - reference[0]),
+                "v": float(displacement[1] - reference[1]),
+                "w": float(displacement[2] - reference[2]),
+                "R": rotation_matrix(vector),
+                "rotation_vector": [float(c) for c in vector],
+                "position": [float(x + displacement[0]), float(displacement[1]),
+                             float(displacement[2])]}
+
+    def end_reaction(self, end: str = "xL") -> dict:
+        """The support's force and moment-like residual on the rod at an end, {Fx, Fy, Fz,
+        M_theta_x, M_theta_y, M_theta_z} (the residual at the end's dofs: forces in world axes;
+        the rotation rows are the work-conjugates of the rotation vector)."""
+        if not hasattr(self, "_residual_form"):
+            self._residual_form = fem.form(self.residual)
+        from petsc4py import PETSc
+
+        vector = compat.assemble_vector(self._residual_form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vector.getArray(readonly=True)
+        fixed = self.model.supports.fixed(end)
+        result = {}
+        for key, name in zip(("Fx", "Fy", "Fz", "M_theta_x", "M_theta_y", "M_theta_z"),
+                             SPATIAL_COMPONENTS, strict=True):
+            local = values[self.component_dofs(name, end)].sum() if name in fixed else 0.0
+            result[key] = float(global_sum(self.comm, local))
+        vector.destroy()
+        return result
+
+    def output_expressions(self) -> dict:
+        d, theta, _ = self.fields()
+        s = self.strains((d, theta))
+        return {"v1": s.v[0], "v2": s.v[1], "v3": s.v[2], "twist": s.u[0],
+                "curvature_y": s.u[1], "curvature_z": s.u[2]}
+
+    def directors(self):
+        """R's columns d1, d2, d3 (UFL 3-vectors) of the current state."""
+        _, theta, _ = self.fields()
+        R = rotation(theta)
+        return [ufl.as_vector([R[i, j] for i in range(3)]) for j in range(3)]
+
+    def strain_range(self) -> StrainRange:
+        """Extremes over the energy rule's Gauss points (collective): min v1 (the stretch along
+        the section normal: <= 0 is a rod turned inside out), max |eps|, the largest shear angle
+        atan(|(v2, v3)| / v1); the rotation vector's length beyond 1.8 pi gets a note
+        (`rotation_note`)."""
+        if not hasattr(self, "_strain_expression"):
+            d, theta, _ = self.fields()
+            s = self.strains((d, theta))
+            shear = ufl.sqrt(s.v[1] ** 2 + s.v[2] ** 2)
+            columns = [s.v[0], s.eps, compat.atan2(shear, s.v[0]), ufl.sqrt(ufl.dot(theta, theta))]
+            points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)
+            reference = ((points + 1) / 2).reshape(-1, 1)
+            self._strain_expression = compat.expression(ufl.as_vector(columns), reference)
+        cells = np.arange(self.mesh.topology.index_map(1).size_local, dtype=np.int32)
+        values = compat.evaluate_expression(self._strain_expression, self.mesh, cells)
+        values = values.reshape(-1, 4)
+        local = np.full(4, np.inf)
+        if len(values):
+            with np.errstate(invalid="ignore"):
+                local[0] = np.min(np.where(np.isfinite(values[:, 0]), values[:, 0], -np.inf))
+                local[1] = -np.max(np.abs(values[:, 1]))
+                local[2] = -np.max(np.abs(values[:, 2]))
+                local[3] = -np.max(values[:, 3])
+        from mpi4py import MPI
+
+        reduced = np.empty_like(local)
+        self.comm.Allreduce(local, reduced, op=MPI.MIN)
+        reduced = np.where(np.isnan(reduced), -np.inf, reduced)
+        self.largest_rotation = float(-reduced[3])
+        return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), None)
+
+    def rotation_note(self) -> str | None:
+        largest = getattr(self, "largest_rotation", 0.0)
+        if largest > ROTATION_NOTE:
+            return (f"the rotation vector reaches |theta| = {largest:.3g} rad, near 2 pi where "
+                    "its parametrisation is singular: out-of-plane stiffness is ill-conditioned "
+                    "there")
+        return None
+
+    def strain_energy_form(self) -> fem.Form:
+        return fem.form(self.law_energy(self.strains(self.state_parts())) * self.dx_energy)
