@@ -25,8 +25,8 @@ import math
 
 import ufl
 
-__all__ = ["SERIES_BELOW", "UFL_FUNCTIONS", "coefficients", "curvature", "rotation", "skew",
-           "spin_map"]
+__all__ = ["SERIES_BELOW", "UFL_FUNCTIONS", "coefficients", "curvature", "profile_expression",
+           "rotation", "skew", "spin_map"]
 
 #: t^2 below which the Taylor series of a, b, c are used (t < 0.1: truncation < 1e-17)
 SERIES_BELOW = 1e-2
@@ -39,6 +39,17 @@ UFL_FUNCTIONS = {
     "step": lambda x: ufl.conditional(ufl.ge(x, 0), 1.0, 0.0),
     "conditional": ufl.conditional, "lt": ufl.lt, "le": ufl.le, "gt": ufl.gt, "ge": ufl.ge,
 }
+
+
+def profile_expression(profile, mesh):
+    """A `fe_beam.timefunctions.Profile` of s as UFL on an interval mesh (s = x): the formula
+    itself (exact derivatives), or a Constant when it does not depend on s."""
+    from dolfinx import fem
+
+    value = profile.symbolic(ufl.SpatialCoordinate(mesh)[0], UFL_FUNCTIONS)
+    if isinstance(value, (int, float)):
+        return fem.Constant(mesh, float(value))
+    return value
 
 
 def skew(a):

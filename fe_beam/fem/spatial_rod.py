@@ -23,7 +23,7 @@ from dolfinx import fem
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
 from fe_beam.fem.rod import BeamProblem, StrainRange, interval_mesh
-from fe_beam.fem.rotations import UFL_FUNCTIONS, curvature, rotation, spin_map
+from fe_beam.fem.rotations import curvature, profile_expression, rotation, spin_map
 from fe_beam.model.spatial import (
     SPATIAL_COMPONENTS,
     SPATIAL_CONSTRAINED,
@@ -168,7 +168,7 @@ class SpatialRodProblem(BeamProblem):
                                        self.E * p.Iy, self.E * p.Iz)
         else:
             self.law = SpatialNonStandard(self.E, self.G, p.moments, p.J)
-        self.intrinsic = ufl.as_vector([c.symbolic(x, UFL_FUNCTIONS) + 0 * x
+        self.intrinsic = ufl.as_vector([profile_expression(c, self.mesh)
                                         for c in m.initial_curvature])
         loads = m.loads
         vector = lambda value: fem.Constant(self.mesh, np.array(value, dtype=float))  # noqa: E731
@@ -278,6 +278,22 @@ class SpatialRodProblem(BeamProblem):
         v = ufl.dot(R.T, tangent)
         u = curvature(theta) - self.intrinsic
         return SpatialStrains(tuple(v[i] for i in range(3)), tuple(u[i] for i in range(3)))
+
+    def frame_rates(self, parts):
+        """(v, u) = (R^T r', the total curvature T(-theta) theta') as UFL 3-vectors."""
+        d, theta = parts
+        tangent = ufl.as_vector([1 + d[0].dx(0), d[1].dx(0), d[2].dx(0)])
+        return ufl.dot(rotation(theta).T, tangent), curvature(theta)
+
+    def tendon_length_density(self, parts, offsets):
+        """|p'| of a tendon at body offset r_i = (0, y(x), z(x)): p = r + R r_i, so
+        R^T p' = v + u x r_i + r_i' (docs/theory.md, Tendons routed anywhere)."""
+        y, z = offsets
+        v, u = self.frame_rates(parts)
+        r_i = ufl.as_vector([0, y, z])
+        r_i_prime = ufl.as_vector([0, y.dx(0), z.dx(0)])
+        body = v + ufl.cross(u, r_i) + r_i_prime
+        return ufl.sqrt(ufl.dot(body, body))
 
     def law_energy(self, s):
         return self.law.energy(s)

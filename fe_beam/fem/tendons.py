@@ -24,6 +24,7 @@ from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar
+from fe_beam.fem.rotations import profile_expression
 from fe_beam.model.tendons import Path, Tendon, looped_tendon  # noqa: F401  (re-exported)
 
 __all__ = ["Tendon", "TendonSet", "looped_tendon", "strain_tendon_length_density",
@@ -78,6 +79,10 @@ class TendonSet:
 
     def _length(self, parts, index: int):
         inside, deltas = self._geometry[index]
+        if getattr(self._problem, "spatial", False):
+            density = sum((self._problem.tendon_length_density(parts, offsets)
+                           for offsets in deltas), ufl.zero())
+            return inside * density * self._problem.dx_energy
         density = sum(
             (tendon_length_density(parts, delta, delta.dx(0)) for delta in deltas), ufl.zero()
         )
@@ -96,17 +101,23 @@ class TendonSet:
             inside = fem.Function(indicator_space)
             inside.interpolate(lambda x, t=tendon: ((x[0] > t.entry) & (x[0] < t.anchor)) * 1.0)
             deltas = []
-            for path in tendon.paths:
+            routing = getattr(tendon, "routing", None)
+            if routing is not None and getattr(problem, "spatial", False):
+                # the formulas themselves: exact offsets and derivatives in the forms
+                deltas.append(tuple(profile_expression(profile, mesh) for profile in routing))
+            for path in tendon.paths if routing is None else ():
                 delta = fem.Function(offsets)
                 xs, ds = np.array([p[0] for p in path]), np.array([p[1] for p in path])
                 delta.interpolate(lambda x, xs=xs, ds=ds: np.interp(x[0], xs, ds))
-                deltas.append(delta)
+                deltas.append((delta, fem.Constant(mesh, 0.0)) if getattr(problem, "spatial", False)
+                              else delta)
             self._geometry.append((inside, deltas))
             self.tensions.append(fem.Constant(mesh, 0.0))
-        u, v, theta, _ = problem.fields()
+        parts = problem.state_parts() if getattr(problem, "spatial", False) \
+            else problem.fields()[:3]
         test = ufl.TestFunction(problem.space)
         for index in range(len(self.tendons)):
-            length = self._length((u, v, theta), index)
+            length = self._length(parts, index)
             self.length_ufl.append(length)
             self.length_forms.append(fem.form(length))
             self.gradient_forms.append(fem.form(ufl.derivative(length, problem.w, test)))
