@@ -135,6 +135,13 @@ def _hat(a) -> np.ndarray:
     return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
 
 
+def _cross(a, b) -> np.ndarray:
+    """``a x b`` for 3-vectors (much cheaper than ``np.cross`` on tiny arrays)."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def quaternion_to_matrix(q) -> np.ndarray:
     """Rotation matrix of the quaternion ``q = (w, x, y, z)`` (normalised first)."""
     w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
@@ -318,7 +325,7 @@ def _strains(rod: _Rod, R, n, m):
 
 def _tendon_w(v, u, prof_s):
     r_i, rp, _ = prof_s
-    w = v + np.cross(u, r_i) + rp
+    w = v + _cross(u, r_i) + rp
     nw = float(np.linalg.norm(w))
     if not nw > 0.0:
         raise RuntimeError("tendon path degenerates (|p_i'| = 0)")
@@ -340,7 +347,7 @@ def _rhs_factory(rod: _Rod, active: Sequence[int]):
         dy[3:7] = _quat_rate(q / np.linalg.norm(q), u)
         if not active:
             dy[7:10] = -rod.f
-            dy[10:13] = -R @ np.cross(v, n_b) - rod.l
+            dy[10:13] = -R @ _cross(v, n_b) - rod.l
             return dy
         # Rucker & Webster's linear system for (v', u')
         mat = np.zeros((6, 6))
@@ -355,18 +362,18 @@ def _rhs_factory(rod: _Rod, active: Sequence[int]):
             w, nw = _tendon_w(v, u, prof_s)
             what = w / nw
             A = rod.taus[k] * (eye3 - np.outer(what, what)) / nw
-            a = A @ (np.cross(u, w) + np.cross(u, rp) + rpp)
+            a = A @ (_cross(u, w) + _cross(u, rp) + rpp)
             rh = _hat(r_i)
             mat[0:3, 0:3] += A
             mat[0:3, 3:6] -= A @ rh
             mat[3:6, 0:3] += rh @ A
             mat[3:6, 3:6] -= rh @ A @ rh
             a_sum += a
-            b_sum += np.cross(r_i, a)
+            b_sum += _cross(r_i, a)
             terms.append((r_i, A, rh, a))
             dy[13 + k] = nw
-        rhs_v = -np.cross(u, n_b) - R.T @ rod.f - a_sum
-        rhs_u = -np.cross(u, m_b) - np.cross(v, n_b) - R.T @ rod.l - b_sum
+        rhs_v = -_cross(u, n_b) - R.T @ rod.f - a_sum
+        rhs_u = -_cross(u, m_b) - _cross(v, n_b) - R.T @ rod.l - b_sum
         vec = np.concatenate([rhs_v, rhs_u])
         for j in fixed:  # v_j = const: v_j' = 0
             mat[j, :] = 0.0
@@ -380,9 +387,9 @@ def _rhs_factory(rod: _Rod, active: Sequence[int]):
         for r_i, A, rh, a in terms:
             fi = a + A @ vp - A @ (rh @ up)
             f_t += fi
-            l_t += np.cross(r_i, fi)
+            l_t += _cross(r_i, fi)
         dy[7:10] = -rod.f - R @ f_t
-        dy[10:13] = -R @ (np.cross(v, n_b) + l_t) - rod.l
+        dy[10:13] = -R @ (_cross(v, n_b) + l_t) - rod.l
         return dy
 
     return rhs
@@ -444,7 +451,7 @@ def _integrate(rod: _Rod, base, rtol: float, dense: bool = False):
         jumps = [(k,) + _tendon_tangent(rod, k, b, y) for k in ending]
         for k, t_k, rr in jumps:
             y[7:10] += rod.taus[k] * t_k
-            y[10:13] += np.cross(rr, rod.taus[k] * t_k)
+            y[10:13] += _cross(rr, rod.taus[k] * t_k)
     return y, sols
 
 
@@ -457,8 +464,67 @@ def _tip_residual(rod: _Rod, y_tip) -> np.ndarray:
     return np.concatenate([(y_tip[7:10] - F) / fs, (y_tip[10:13] - M) / (fs * rod.L)])
 
 
-def _shoot(rod: _Rod, guess, rtol: float, tol: float):
-    """Solve the tip conditions for ``(n(0+), m(0+))``; ``None`` on failure."""
+class _Converged(Exception):
+    """Raised from inside the root finder's residual once the tip conditions hold."""
+
+    def __init__(self, z):
+        super().__init__()
+        self.z = z
+
+
+def _fd_jacobian(residual, z, r, h: float = 1e-7) -> np.ndarray:
+    """Forward-difference Jacobian of ``residual`` at ``z`` (``r = residual(z)``)."""
+    jac = np.empty((len(r), len(z)))
+    for j in range(len(z)):
+        dz = np.zeros(len(z))
+        dz[j] = h
+        jac[:, j] = (residual(z + dz) - r) / h
+    return jac
+
+
+def _newton(residual, z, jac, tol: float, max_iter: int = 15):
+    """Newton-Broyden iterations from ``z`` (``jac``: a Jacobian estimate or ``None``).
+
+    Returns ``(z, jac)`` or ``None``. The step is halved while it does not reduce the residual;
+    the Jacobian is recomputed by finite differences when convergence is slow.
+    """
+    r = residual(z)
+    if jac is None:
+        jac = _fd_jacobian(residual, z, r)
+    fresh = True
+    for _ in range(max_iter):
+        size = np.abs(r).max()
+        if size < tol:
+            return z, jac
+        try:
+            dz = np.linalg.solve(jac, -r)
+        except np.linalg.LinAlgError:
+            return None
+        lam = 1.0
+        while True:
+            z_new = z + lam * dz
+            r_new = residual(z_new)
+            if np.abs(r_new).max() < size or lam < 1.0 / 16:
+                break
+            lam *= 0.5
+        step = z_new - z
+        jac = jac + np.outer(r_new - r - jac @ step, step) / (step @ step)
+        slow = np.abs(r_new).max() > 0.1 * size
+        z, r = z_new, r_new
+        if slow and not fresh:
+            jac, fresh = _fd_jacobian(residual, z, r), True
+        else:
+            fresh = False
+    return (z, jac) if np.abs(r).max() < tol else None
+
+
+def _shoot(rod: _Rod, guess, rtol: float, tol: float, jac=None):
+    """Solve the tip conditions for ``(n(0+), m(0+))``; returns ``(base, jac)`` or ``None``.
+
+    Newton-Broyden iterations on the scaled residual (``jac``: the scaled Jacobian of a nearby
+    solve, re-used), with ``scipy.optimize.root`` (``hybr``) as the fallback. The residual is
+    accepted as soon as its largest component is below ``tol``.
+    """
     scale = np.array([rod.scale_f] * 3 + [rod.scale_f * rod.L] * 3)
 
     def residual(z):
@@ -468,11 +534,23 @@ def _shoot(rod: _Rod, guess, rtol: float, tol: float):
             return np.full(6, 1e6)
         return _tip_residual(rod, y_tip)
 
-    res = scipy.optimize.root(
-        residual, np.asarray(guess) / scale, method="hybr", options={"xtol": 1e-13}
-    )
+    z0 = np.asarray(guess, dtype=float) / scale
+    out = _newton(residual, z0, jac, tol)
+    if out is not None:
+        return out[0] * scale, out[1]
+
+    def stopping(z):
+        res = residual(z)
+        if np.abs(res).max() < tol:
+            raise _Converged(np.array(z, dtype=float))
+        return res
+
+    try:
+        res = scipy.optimize.root(stopping, z0, method="hybr", options={"xtol": 1e-14})
+    except _Converged as done:
+        return done.z * scale, None
     if np.all(np.isfinite(res.fun)) and np.abs(res.fun).max() < tol:
-        return res.x * scale
+        return res.x * scale, None
     return None
 
 
@@ -572,7 +650,7 @@ def _solution(rod: _Rod, base, rtol: float, n_points: int) -> CantileverSolution
     for k in range(len(rod.taus)):
         t_k, rr = _tendon_tangent(rod, k, 0.0, y0)
         bf = bf - rod.taus[k] * t_k
-        bm = bm - np.cross(rr, rod.taus[k] * t_k)
+        bm = bm - _cross(rr, rod.taus[k] * t_k)
     R_tip = quaternion_to_matrix(y_tip[3:7])
     F, M = (R_tip @ rod.F, R_tip @ rod.M) if rod.follower else (rod.F, rod.M)
     return CantileverSolution(
@@ -711,19 +789,23 @@ def solve_cantilever(
         guess = np.asarray(initial_guess, dtype=float)
         if guess.shape != (6,):
             raise ValueError(f"initial_guess must be (n(0+), m(0+)), got {initial_guess!r}")
-        base = _shoot(rod, guess, rtol, tol_final)
-        if base is not None:
-            return _solution(rod, base, rtol, n_points)
+        out = _shoot(rod, guess, rtol, tol_final)
+        if out is not None:
+            return _solution(rod, out[0], rtol, n_points)
     base = _continuation(rod, steps, rtol, tol_final)
     return _solution(rod, base, rtol, n_points)
 
 
 def _continuation(rod: _Rod, steps: int, rtol: float, tol_final: float) -> np.ndarray:
-    """Load-factor continuation from the unloaded rod; returns ``(n(0+), m(0+))`` at ``lam = 1``."""
+    """Load-factor continuation from the unloaded rod; returns ``(n(0+), m(0+))`` at ``lam = 1``.
+
+    Each substep starts from the secant prediction of the last two solutions and re-uses the
+    last Jacobian; a failed substep is retried with half the increment.
+    """
     rtol_mid = max(rtol, 1e-9)
     history = [(0.0, np.zeros(6))]
-    lam, dlam = 0.0, 1.0 / steps
-    for _ in range(60):
+    lam, dlam, jac = 0.0, 1.0 / steps, None
+    for _ in range(80):
         target = min(1.0, lam + dlam)
         last = target >= 1.0
         if len(history) >= 2:
@@ -731,15 +813,17 @@ def _continuation(rod: _Rod, steps: int, rtol: float, tol_final: float) -> np.nd
             guess = b1 + (b1 - b0) * (target - l1) / (l1 - l0)
         else:
             guess = history[-1][1]
-        base = _shoot(
-            rod.scaled(target), guess, rtol if last else rtol_mid, tol_final if last else 1e-8
+        out = _shoot(
+            rod.scaled(target), guess, rtol if last else rtol_mid, tol_final if last else 1e-8, jac
         )
-        if base is None:
+        if out is None:
             dlam *= 0.5
+            jac = None
             if dlam < 1e-4:
                 break
             continue
         lam = target
+        base, jac = out
         history.append((lam, base))
         if last:
             return base
