@@ -131,6 +131,26 @@ def test_planar_rod_refuses_an_out_of_plane_tendon():
         assert static.tendons[0].spatial and not static.tendons[0].out_of_plane
 
 
+def test_planar_rod_takes_an_in_plane_routing():
+    """offset_y as a formula on the planar rod: a linear one is offset_base/offset_tip (the
+    rod's P1 offset is then exact), a curved one the path through the same mesh vertices; no
+    mesh vertex is added for the routing's samples."""
+    import fe_beam
+
+    base = ROD | {"loads": {"steps": 3}, "output": {"plots": False, "xdmf": False}}
+    curve = "0.006 + 0.002*cos(pi*s/L)"
+    nodes = [[x, 0.006 + 0.002 * np.cos(np.pi * x / L)] for x in np.linspace(0, L, 21)]
+    pairs = [({"offset_base": 0.008, "offset_tip": 0.004}, {"offset_y": "0.008 - 0.004*s/L"}),
+             ({"path": nodes}, {"offset_y": curve, "offset_z": 0.0})]
+    for given, routed in pairs:
+        a, b = (fe_beam.run("finger", with_tendon(base, **t, tension=1.0)) for t in (given, routed))
+        assert a["status"] == b["status"] == "converged" and a["dofs"] == b["dofs"]
+        for key in ("u", "v", "theta"):
+            assert b["steps"][-1]["tip"][key] == pytest.approx(a["steps"][-1]["tip"][key],
+                                                               rel=1e-12)
+    assert b["tendons"][0]["routing"] == {"offset_y": curve, "offset_z": 0.0}
+
+
 def test_config_errors_exit_2_from_the_cli(tmp_path):
     cases = [
         ("finger", with_tendon(ROD, offset_y="0.004*cos(q*s)"), "offset_y"),

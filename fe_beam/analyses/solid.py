@@ -410,8 +410,9 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     for step in summary["steps"][-1:]:
         tip = step["tip"]
         report.out(f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
-                   f"stretch {step['max_principal_stretch']:.4g} "
+                   f"v = {tip['v']:.6g} m, w = {tip.get('w', 0.0):.6g} m, "
+                   f"theta = {tip['theta']:.6g} rad, max principal stretch "
+                   f"{step['max_principal_stretch']:.4g} "
                    f"({step['max_principal_stretch_bulk']:.4g} away from the tendon ends)")
     rod = summary.get("rod") or {}
     if rod.get("steps"):
