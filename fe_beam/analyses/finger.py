@@ -40,6 +40,11 @@ from fe_beam.solvers.pull_in import tension_for_target
 
 __all__ = ["DEFAULT_FINGER", "parse_finger", "run", "run_finger", "tension_for_tip_angle"]
 
+
+def _profile_value(profile):
+    """A routing profile as the configuration gave it: the number, or the formula's text."""
+    return profile.constant if profile.is_constant else profile.text
+
 def tension_for_tip_angle(
     config: StaticConfig,
     target: float,
@@ -183,6 +188,10 @@ def run_finger(
                 "anchor": t.anchor,
                 "tension": t.tension,
                 "pull_in": t.pull_in,
+                # a routed tendon (offset_y/offset_z): its profiles as given (paths: sampled)
+                **({"routing": {"offset_y": _profile_value(t.routing[0]),
+                                "offset_z": _profile_value(t.routing[1])}}
+                   if t.routing is not None else {}),
             }
             for t in config.tendons
         ]

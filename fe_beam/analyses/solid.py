@@ -48,7 +48,7 @@ def _import_gmsh() -> None:
 
 _import_gmsh()
 
-__all__ = ["run", "SolidRun", "check_solid_work", "run_solid"]
+__all__ = ["run", "SolidRun", "check_solid_work", "rotation_vector", "run_solid"]
 
 # --- the 3D run ---------------------------------------------------------------------------------
 
@@ -132,16 +132,24 @@ class SolidRun:
             ) from None
 
     def tip(self) -> dict:
-        """Tip-face centroid displacement (u, v) and rotation theta (continuous along the path)."""
+        """Tip-face centroid displacement (u, v, w), the in-plane rotation theta (continuous
+        along the path) and the tip frame: ``R`` (3 x 3, rows; its columns are the images of
+        e_x, e_y, e_z: the tip face's best-fit rotation, `SolidFingerProblem.tip_rotation`) and
+        its ``rotation_vector`` (axis times angle, |.| <= pi)."""
         d = self.problem.tip_displacement()
-        angle = self.problem.tip_rotation()["angle"]
+        rotation = self.problem.tip_rotation()
+        angle = rotation["angle"]
         self._theta += (angle - self._theta + math.pi) % (2 * math.pi) - math.pi
-        return {"u": float(d[0]), "v": float(d[1]), "theta": float(self._theta)}
+        R = np.asarray(rotation["matrix"], dtype=float)
+        return {"u": float(d[0]), "v": float(d[1]), "theta": float(self._theta),
+                "w": float(d[2]), "R": R.tolist(),
+                "rotation_vector": rotation_vector(R).tolist()}
 
     def backbone(self) -> dict:
         data = self.problem.backbone(self.config.stations)
         u = np.asarray(data["displacement"])
-        return {"x": list(data["x"]), "u": u[:, 0].tolist(), "v": u[:, 1].tolist()}
+        return {"x": list(data["x"]), "u": u[:, 0].tolist(), "v": u[:, 1].tolist(),
+                "w": u[:, 2].tolist()}
 
     def tendon_values(self) -> dict:
         owners = self.config.branch_owner
@@ -175,6 +183,13 @@ class SolidRun:
 
     def destroy(self) -> None:
         self.problem.snes_solver.destroy()
+
+
+def rotation_vector(R: np.ndarray) -> np.ndarray:
+    """The rotation vector (axis times angle in [0, pi]) of the rotation matrix ``R``."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(np.asarray(R, dtype=float)).as_rotvec()
 
 
 # --- the command -------------------------------------------------------------------------------
@@ -213,6 +228,7 @@ def solid_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = Tr
         "model": config.model_summary(),
         "rod": None,
         "notes": list(config.notes) + notes,
+        "tip": None,
     }
 
     def content() -> dict:
@@ -300,6 +316,7 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
 
     def on_step(record: dict) -> None:
         summary["steps"].append(record)
+        summary["tip"] = record["tip"]  # the last converged state's tip (and frame)
         if writer is not None:
             writer.write(record["load_factor"])
         files.on_step(record)
@@ -393,8 +410,9 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     for step in summary["steps"][-1:]:
         tip = step["tip"]
         report.out(f"load factor {step['load_factor']:.4g}: 3D tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad, max principal "
-                   f"stretch {step['max_principal_stretch']:.4g} "
+                   f"v = {tip['v']:.6g} m, w = {tip.get('w', 0.0):.6g} m, "
+                   f"theta = {tip['theta']:.6g} rad, max principal stretch "
+                   f"{step['max_principal_stretch']:.4g} "
                    f"({step['max_principal_stretch_bulk']:.4g} away from the tendon ends)")
     rod = summary.get("rod") or {}
     if rod.get("steps"):

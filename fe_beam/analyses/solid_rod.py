@@ -63,11 +63,13 @@ def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool 
 
 
 def backbone_distance(rod: dict, solid: dict) -> dict:
-    """max over the stations x of |r_rod(x) - r_solid(x)| (deformed centroid positions in the
-    x-y plane at the same reference x), with the x where it occurs."""
+    """max over the stations x of |r_rod(x) - r_solid(x)| (deformed centroid positions at the
+    same reference x, over the three components: a backbone without ``w`` lies in z = 0), with
+    the x where it occurs."""
     ur, vr = np.asarray(rod["u"]), np.asarray(rod["v"])
     us, vs = np.asarray(solid["u"]), np.asarray(solid["v"])
-    distance = np.hypot(ur - us, vr - vs)
+    wr, ws = (np.asarray(b.get("w", np.zeros_like(ur)), dtype=float) for b in (rod, solid))
+    distance = np.sqrt((ur - us) ** 2 + (vr - vs) ** 2 + (wr - ws) ** 2)
     k = int(np.argmax(distance))
     return {"max": float(distance[k]), "x": float(solid["x"][k])}
 

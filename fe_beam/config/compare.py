@@ -97,9 +97,12 @@ def parse_compare(raw: dict) -> CompareConfig:
             raise ConfigError(f"[compare] steps must be an integer >= 1; got {steps!r}")
         factors = tuple((k + 1) / steps for k in range(steps))
     solid = parse_solid(raw)
-    if solid.rod is None:
+    if solid.rod is None and solid.tip_force[2] != 0:
         raise ConfigError("[loads] tip_force must be planar ([Px, Py]) for fe-beam compare: "
                           f"the rod is planar; got {list(solid.tip_force)!r}")
+    if solid.rod is None:  # a tendon out of the x-y plane
+        raise ConfigError(f"fe-beam compare: {solid.rod_note.removeprefix('no rod comparison: ')}"
+                          " (the rod is planar)")
     tension_axis = tension_axis or (
         len(solid.rod.tendons) == 1 and not solid.rod.tendons[0].controlled_by_pull_in
     )

@@ -8,6 +8,8 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from fe_beam.config.schema import (
     NUMBER,
     ConfigError,
@@ -19,7 +21,8 @@ from fe_beam.config.schema import (
     parse_static,
     table,
 )
-from fe_beam.model.tendons import Tendon, check_tendon_inside
+from fe_beam.model.tendons import ROUTING_SAMPLES, Tendon, check_tendon_inside
+from fe_beam.timefunctions import Profile, TimeFunctionError, shown
 
 __all__ = [
     "DEFAULT_FINGER",
@@ -27,6 +30,7 @@ __all__ = [
     "TENDON_KEYS",
     "InverseTarget",
     "check_tendon_inside",
+    "check_tendons_planar",
     "parse_finger",
     "parse_tendon",
     "with_defaults",
@@ -47,6 +51,12 @@ TENDON_KEYS = {
     "offset_tip": Key(NUMBER, None, "offset at x = L [m]"),
     "path": Key((list,), None, "[[x, offset], ...] in metres, piecewise linear"),
     "paths": Key((list,), None, "several branches with one tension: [[[x, offset], ...], ...]"),
+    "offset_y": Key(NUMBER + (str,), None, "routing anywhere in the section: y offset [m], a "
+                    "number or a formula of s and L (e.g. \"0.004*cos(pi*s/(2*L))\"); "
+                    "instead of offset_base/offset_tip/path/paths (default 0 with offset_z)"),
+    "offset_z": Key(NUMBER + (str,), None, "routing: z offset [m] (along b), a number or a "
+                    "formula of s and L (nonzero: needs [model] kinematics = \"spatial\", "
+                    "or the 3D solid)"),
     "entry": Key(NUMBER, 0.0, "x where the tendon enters [m]"),
     "anchor": Key(NUMBER, None, "x where it is anchored [m] (default L)"),
     "tension": Key(NUMBER, None, "tension at load factor 1 [N]"),
@@ -93,10 +103,18 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
     name = values["name"] or f"tendon{index + 1}"
     where = f"[[tendons]] {name!r}"
     linear = values["offset_base"] is not None or values["offset_tip"] is not None
-    choices = [linear, values["path"] is not None, values["paths"] is not None]
+    routed = values["offset_y"] is not None or values["offset_z"] is not None
+    choices = [linear, values["path"] is not None, values["paths"] is not None, routed]
     if sum(choices) != 1:
-        raise ConfigError(f"{where}: give exactly one of offset_base/offset_tip, path or paths")
-    if linear:
+        raise ConfigError(f"{where}: give exactly one of offset_base/offset_tip, path, paths or "
+                          "offset_y/offset_z")
+    routing = None
+    if routed:
+        routing = _routing(index, name, values, length)
+        _check_routing_values(index, name, routing, values["entry"],
+                              length if values["anchor"] is None else values["anchor"])
+        paths = ()
+    elif linear:
         if values["offset_base"] is None or values["offset_tip"] is None:
             raise ConfigError(f"{where}: offset_base and offset_tip go together")
         paths = (((0.0, values["offset_base"]), (length, values["offset_tip"])),)
@@ -110,13 +128,60 @@ def parse_tendon(index: int, given: dict, length: float) -> tuple[Tendon, int | 
         tension=values["tension"],
         pull_in=values["pull_in"],
         name=name,
+        routing=routing,
     )
     _wrap(tendon.validate_for, length)
     return tendon, values["steps"]
 
 
-def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
-    """(static config with tendons, inverse target or None)."""
+def _routing(index: int, name: str, values: dict, length: float) -> tuple:
+    """(y, z) profiles of offset_y/offset_z (0 where not given), constants {"L": length}."""
+    profiles = []
+    for key in ("offset_y", "offset_z"):
+        value = values[key] if values[key] is not None else 0.0
+        try:
+            profiles.append(Profile(value, {"L": length}))
+        except TimeFunctionError as error:
+            raise ConfigError(f"[[tendons]] #{index + 1} {key} ({name!r}): {error}") from None
+    return tuple(profiles)
+
+
+def _check_routing_values(index: int, name: str, routing, entry: float, anchor: float) -> None:
+    """ConfigError unless both profiles evaluate to finite numbers at the ROUTING_SAMPLES + 1
+    stations from entry to anchor (those of `Tendon.stations`)."""
+    for key, profile in zip(("offset_y", "offset_z"), routing, strict=True):
+        if profile.is_constant:
+            continue
+        try:
+            for x in np.linspace(entry, anchor, ROUTING_SAMPLES + 1):
+                profile(x)
+        except TimeFunctionError as error:
+            raise ConfigError(
+                f"[[tendons]] #{index + 1} {key} ({name!r}): {error} (it must be finite from "
+                f"entry {entry:g} to anchor {anchor:g} m)") from None
+
+
+def check_tendons_planar(config: dict, tendons, start: int = 0) -> None:
+    """ConfigError for a tendon routed out of the plane z = 0 (`Tendon.out_of_plane`) on a
+    planar rod (``[model] kinematics`` absent or "planar"); ``tendons[0]`` is the ``[[tendons]]``
+    entry ``start`` (0-based)."""
+    model = config.get("model")
+    kinematics = model.get("kinematics", "planar") if isinstance(model, dict) else "planar"
+    if kinematics == "spatial":
+        return
+    for index, tendon in enumerate(tendons, start):
+        if tendon.out_of_plane:
+            raise ConfigError(
+                f"[[tendons]] #{index + 1} offset_z ({tendon.name!r}): a tendon routed out of "
+                f"the x-y plane needs [model] kinematics = \"spatial\" (the rod is "
+                f"{shown(kinematics)})")
+
+
+def parse_finger(config: dict, planar_check: bool = True
+                 ) -> tuple[StaticConfig, InverseTarget | None]:
+    """(static config with tendons, inverse target or None). ``planar_check`` False lets a
+    tendon routed out of the plane through onto a planar rod (the 3D solid parses its tendons
+    here and runs without the rod then: `fe_beam.config.solid`)."""
     config = with_defaults(config)
     tendons_given = config.pop("tendons")
     inverse = table(config, "inverse", INVERSE_KEYS) if "inverse" in config else {}
@@ -134,8 +199,10 @@ def parse_finger(config: dict) -> tuple[StaticConfig, InverseTarget | None]:
     tendons_given = [{k: v for k, v in t.items() if k not in timed} if isinstance(t, dict) else t
                      for t in tendons_given]
     parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
-    for tendon, _ in parsed:
-        check_tendon_inside(tendon, static.model.section, static.model.length)
+    for index, (tendon, _) in enumerate(parsed):
+        check_tendon_inside(tendon, static.model.section, static.model.length, index)
+    if planar_check:
+        check_tendons_planar(config, [t for t, _ in parsed])
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")

@@ -238,16 +238,31 @@ def _rod_static(raw: dict, law: HyperelasticLaw, section, tip_force) -> StaticCo
     b, h, h_tip = section
     rod["section"] = {"shape": "rectangle", "b": b, "h": h, "h_tip": h_tip}
     rod["loads"] = dict(rod.get("loads", {})) | {"tip_force": [tip_force[0], tip_force[1]]}
-    if "tendons" in rod:
-        static, _ = parse_finger(rod)
+    if "tendons" in rod:  # a tendon out of the x-y plane: parsed, the rod is left out below
+        static, _ = parse_finger(rod, planar_check=False)
         return static
     return parse_static(rod)
 
 
-def _cables(static: StaticConfig, width: float):
-    """3D cable paths, loads, owners and names from the rod's parsed tendons."""
+#: a routed tendon's polyline stays within this fraction of the tendon's element size of the
+#: routing's curve (`TendonPath.from_routing`); the cable then lies on the mesh edges along it
+ROUTING_TOLERANCE = 0.01
+
+
+def _cables(static: StaticConfig, width: float, element: float):
+    """3D cable paths, loads, owners and names from the rod's parsed tendons (``element``: the
+    element size near tendons)."""
     paths, loads, owners, names = [], [], [], []
     for index, tendon in enumerate(static.tendons):
+        if tendon.routing is not None:
+            paths.append(_wrap(TendonPath.from_routing, tendon.offsets, tendon.entry,
+                               tendon.anchor, ROUTING_TOLERANCE * element, name=tendon.name))
+            loads.append(TendonLoad(pull_in=float(tendon.pull_in))
+                         if tendon.controlled_by_pull_in
+                         else TendonLoad(tension=float(tendon.tension)))
+            owners.append(index)
+            names.append(tendon.name)
+            continue
         count = len(tendon.paths)
         if count > 1 and tendon.controlled_by_pull_in:
             raise ConfigError(
@@ -339,7 +354,7 @@ def parse_solid(raw: dict) -> SolidConfig:
         clamp=size / solid["clamp_refinement"], clamp_distance=distance, order=1,
     )
     rod = _rod_static(raw, law, section, tip_force)
-    paths, tendon_loads, owners, names = _cables(rod, b)
+    paths, tendon_loads, owners, names = _cables(rod, b, sizes.tendon)
     pulled = [name for name, load in zip(names, tendon_loads, strict=True)
               if load.controlled_by_pull_in]
     if pulled and solid["solver"] in ("gamg", "fieldsplit"):
@@ -356,7 +371,12 @@ def parse_solid(raw: dict) -> SolidConfig:
     settings = _wrap(
         replace, rod.solver, linear_solver=solid["solver"], petsc_options=solid["petsc_options"]
     )
-    planar = tip_force[2] == 0
+    spatial = [t.name for t in rod.tendons if t.out_of_plane]
+    planar = tip_force[2] == 0 and not spatial
+    rod_note = ("" if planar else "no rod comparison: the tip force has a z component"
+                if tip_force[2] != 0 else
+                f"no rod comparison: [[tendons]] {spatial[0]!r} is routed out of the x-y plane "
+                "(offset_z), which needs [model] kinematics = \"spatial\"")
     notes = []
     if formulation == "displacement" and law.poisson_ratio > NEARLY_INCOMPRESSIBLE_NU:
         notes.append(
@@ -380,7 +400,7 @@ def parse_solid(raw: dict) -> SolidConfig:
         stations=tuple(np.linspace(0.0, length, solid["backbone_points"]).tolist()),
         output=OutputOptions(**table(raw, "output")),
         rod=rod if planar else None,
-        rod_note="" if planar else "no rod comparison: the tip force has a z component",
+        rod_note=rod_note,
         raw=copy.deepcopy(raw),
         notes=tuple(notes),
         anchor=solid["anchor"],

@@ -9,7 +9,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from fe_beam.config.finger import TENDON_KEYS, check_tendon_inside, parse_tendon
+from fe_beam.config.finger import (
+    TENDON_KEYS,
+    check_tendon_inside,
+    check_tendons_planar,
+    parse_tendon,
+)
 from fe_beam.config.schema import (
     NUMBER,
     ConfigError,
@@ -224,7 +229,8 @@ def _parse_tendons(config: dict, static: StaticConfig, command: str, load_functi
                               f"{', '.join(allowed)}")
         timing = {key: entry.pop(key) for key in TENDON_TIME_KEYS if key in entry}
         tendon, tendon_steps = parse_tendon(index, entry, length)
-        check_tendon_inside(tendon, static.model.section, length)
+        check_tendon_inside(tendon, static.model.section, length, index)
+        check_tendons_planar(config, [tendon], index)
         where = f"[[tendons]] {tendon.name!r}"
         if tendon.controlled_by_pull_in and command != "dynamic":
             raise ConfigError(

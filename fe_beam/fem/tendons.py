@@ -68,7 +68,8 @@ class TendonSet:
         points = set()
         for tendon in self.tendons:
             points |= {tendon.entry, tendon.anchor}
-            points |= {x for path in tendon.paths for x, _ in path}
+            if tendon.routing is None:  # a routing is smooth: its samples are no kinks
+                points |= {x for path in tendon.paths for x, _ in path}
         return tuple(sorted(points))
 
     def energy(self, problem, parts):

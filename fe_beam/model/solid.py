@@ -18,6 +18,7 @@ __all__ = [
     "MeshSizes",
     "TendonLoad",
     "TendonPath",
+    "polyline_deviation",
 ]
 
 def _positive(owner: str, name: str, value) -> float:
@@ -26,6 +27,19 @@ def _positive(owner: str, name: str, value) -> float:
     if value <= 0:
         raise ValueError(f"{owner}.{name} must be > 0, got {value!r}")
     return float(value)
+
+
+def polyline_deviation(polyline, points) -> float:
+    """max over ``points`` (m, 3) of the distance to the nearest segment of ``polyline`` (n, 3):
+    how far a curve sampled at ``points`` strays from a polyline through it."""
+    polyline = np.asarray(polyline, dtype=float)
+    points = np.asarray(points, dtype=float)
+    best = np.full(len(points), np.inf)
+    for a, b in zip(polyline[:-1], polyline[1:], strict=True):
+        d = b - a
+        t = np.clip((points - a) @ d / (d @ d), 0.0, 1.0)
+        best = np.minimum(best, np.linalg.norm(points - (a + t[:, None] * d), axis=1))
+    return float(best.max(initial=0.0))
 
 
 @dataclass(frozen=True)
@@ -84,6 +98,34 @@ class TendonPath:
             return offset_base + (offset_tip - offset_base) * x / length
 
         return cls(((x_entry, delta(x_entry), z), (x_anchor, delta(x_anchor), z)), name=name)
+
+    @classmethod
+    def from_routing(
+        cls,
+        offsets,
+        x_entry: float,
+        x_anchor: float,
+        tolerance: float,
+        samples: int = 2000,
+        name: str = "tendon",
+    ) -> TendonPath:
+        """A polyline through the curve (x, y(x), z(x)), ``offsets(x) -> (y, z)`` (arrays), from
+        x_entry to x_anchor, on equally spaced stations in x: the fewest (a power of 2 of
+        segments) with which the curve, sampled at ``samples`` + 1 points, stays within
+        ``tolerance`` of the polyline (a straight routing: 2 points)."""
+        if not (x_anchor > x_entry):
+            raise ValueError(f"tendon {name!r}: need x_entry < x_anchor, got {x_entry!r}, "
+                             f"{x_anchor!r}")
+        tolerance = _positive("tendon", "tolerance", tolerance)
+        dense_x = np.linspace(x_entry, x_anchor, samples + 1)
+        dense = np.column_stack([dense_x, *offsets(dense_x)])
+        segments = 1
+        while True:
+            pick = np.linspace(0, samples, segments + 1).round().astype(int)
+            points = dense[pick]
+            if segments >= samples or polyline_deviation(points, dense) <= tolerance:
+                return cls(tuple(map(tuple, points)), name=name)
+            segments *= 2
 
     @property
     def array(self) -> np.ndarray:

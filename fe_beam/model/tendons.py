@@ -1,6 +1,11 @@
 """Tendon geometry as data (docs/theory.md, Tendons): offset paths, entry, anchor, and the
 tension or pull-in at load factor 1. Pure Python; the tendon energy and the pull-in solver are
 in `fe_beam.fem.tendons`.
+
+A tendon runs either along planar offset paths (piecewise linear y(x), z = 0: ``paths``) or
+along a routing anywhere in the section (``routing`` = (y, z), two
+`fe_beam.timefunctions.Profile` of the arclength s with the constant L: ``[[tendons]]
+offset_y``/``offset_z``). `Tendon.offsets` gives (y, z) for either.
 """
 
 from __future__ import annotations
@@ -12,9 +17,13 @@ import numpy as np
 
 from fe_beam.errors import ConfigError
 
-__all__ = ["Path", "Tendon", "looped_tendon"]
+__all__ = ["ROUTING_SAMPLES", "Path", "Tendon", "check_tendon_inside", "looped_tendon",
+           "section_margin"]
 
 Path = tuple[tuple[float, float], ...]
+#: intervals between entry and anchor on which a routing is sampled: for its checks (finite,
+#: inside the section) and for the planar path a planar rod reads (`Tendon.paths`)
+ROUTING_SAMPLES = 400
 
 
 def _path(points, name: str) -> Path:
@@ -30,19 +39,56 @@ def _path(points, name: str) -> Path:
     return path
 
 
+def _routing_length(routing, name: str) -> float:
+    try:
+        y, z = routing
+    except (TypeError, ValueError):
+        raise ValueError(f"tendon {name!r}: routing must be a pair (y, z) of profiles of s, "
+                         f"got {routing!r}") from None
+    if not (callable(y) and callable(z)):
+        raise ValueError(f"tendon {name!r}: routing must be a pair (y, z) of profiles of s, "
+                         f"got {routing!r}")
+    lengths = {float(p.constants["L"]) for p in (y, z) if "L" in getattr(p, "constants", {})}
+    if len(lengths) != 1 or not all(math.isfinite(v) and v > 0 for v in lengths):
+        raise ValueError(f"tendon {name!r}: the routing's profiles need one constant L > 0 "
+                         "(the rod's length), e.g. parse_profile(value, {'L': length})")
+    return lengths.pop()
+
+
 @dataclass(frozen=True)
 class Tendon:
     """One tendon: offset paths (one per branch, each [(x, delta), ...] in metres, piecewise
-    linear), entry and anchor x, and either a tension [N] or a pull-in [m] at load factor 1."""
+    linear), entry and anchor x, and either a tension [N] or a pull-in [m] at load factor 1.
 
-    paths: tuple[Path, ...]
+    ``routing`` = (y, z): a tendon routed anywhere in the section, its body offsets y(s), z(s)
+    two `fe_beam.timefunctions.Profile` with the constant ``L`` (the rod's length; anchor
+    default). ``paths`` is then derived when not given: y sampled at ROUTING_SAMPLES + 1 points
+    from entry to anchor (2 points when y is constant), which is what a planar rod reads; a
+    spatial rod, the 3D solid and `offsets` read the routing itself.
+    """
+
+    paths: tuple[Path, ...] = ()
     entry: float = 0.0
     anchor: float | None = None
     tension: float | None = None
     pull_in: float | None = None
     name: str = "tendon"
+    routing: tuple | None = None
 
     def __post_init__(self):
+        if self.routing is not None:
+            length = _routing_length(self.routing, self.name)
+            object.__setattr__(self, "routing", tuple(self.routing))
+            if not self.paths:
+                anchor = length if self.anchor is None else float(self.anchor)
+                if not (0 <= self.entry < anchor):
+                    raise ValueError(
+                        f"tendon {self.name!r}: need 0 <= entry < anchor, got entry "
+                        f"{self.entry!r}, anchor {anchor!r}")
+                y = self.routing[0]
+                count = 2 if getattr(y, "is_constant", False) else ROUTING_SAMPLES + 1
+                xs = np.linspace(float(self.entry), anchor, count)
+                object.__setattr__(self, "paths", (tuple((float(x), y(x)) for x in xs),))
         paths = tuple(_path(p, f"tendon {self.name!r} path") for p in self.paths)
         if not paths:
             raise ValueError(f"tendon {self.name!r} needs a path")
@@ -85,6 +131,40 @@ class Tendon:
     def controlled_by_pull_in(self) -> bool:
         return self.pull_in is not None
 
+    @property
+    def spatial(self) -> bool:
+        """True when the tendon is routed by (y, z) profiles (``routing``), whatever their
+        values; `out_of_plane` says whether z is nonzero somewhere."""
+        return self.routing is not None
+
+    def offsets(self, x, branch: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Body offsets (y, z) at the reference x (arrays like ``x``): the routing's profiles,
+        or the piecewise-linear path ``branch`` with z = 0 for a planar tendon."""
+        x = np.asarray(x, dtype=float)
+        if self.routing is not None:
+            y, z = self.routing
+            flat = x.reshape(-1)
+            ys = np.array([y(v) for v in flat]).reshape(x.shape)
+            zs = np.array([z(v) for v in flat]).reshape(x.shape)
+            return ys, zs
+        points = np.asarray(self.paths[branch], dtype=float)
+        return np.interp(x, points[:, 0], points[:, 1]), np.zeros_like(x)
+
+    def stations(self, samples: int = ROUTING_SAMPLES) -> np.ndarray:
+        """``samples`` + 1 equally spaced x from entry to anchor."""
+        return np.linspace(self.entry, self.anchor, samples + 1)
+
+    @property
+    def out_of_plane(self) -> bool:
+        """True when the tendon leaves the plane z = 0 somewhere between entry and anchor
+        (sampled at `stations`): a planar rod cannot carry it."""
+        if self.routing is None:
+            return False
+        z = self.routing[1]
+        if getattr(z, "is_constant", False):
+            return z(0.0) != 0.0
+        return bool(np.any(self.offsets(self.stations())[1] != 0.0))
+
     def validate_for(self, length: float) -> None:
         if self.anchor > length * (1 + 1e-12):
             raise ValueError(
@@ -108,9 +188,14 @@ def looped_tendon(
     )
 
 
-def check_tendon_inside(tendon: Tendon, section, length: float) -> None:
+def check_tendon_inside(tendon: Tendon, section, length: float, index: int | None = None) -> None:
     """ConfigError if the tendon's offset leaves the section anywhere between entry and anchor
-    (the offset is piecewise linear; the section's extent is sampled finely along x)."""
+    (the offset is piecewise linear; the section's extent is sampled finely along x). A routed
+    tendon (y, z) is sampled at ROUTING_SAMPLES + 1 stations against the whole section
+    (`section_margin`); ``index`` (0-based) names it as ``[[tendons]] #k``."""
+    if tendon.routing is not None:
+        _check_routing_inside(tendon, section, length, index)
+        return
     xs = np.linspace(tendon.entry, tendon.anchor, 201)
     for path in tendon.paths:
         points = np.array(path, dtype=float)
@@ -127,3 +212,42 @@ def check_tendon_inside(tendon: Tendon, section, length: float) -> None:
                     f"[[tendons]] {tendon.name!r}: offset {offset:.6g} m at x = {x:.6g} m lies "
                     f"outside the section (y from {low:.6g} to {high:.6g} m about its centroid)"
                 )
+
+
+def section_margin(section, s: float, y, z) -> np.ndarray | None:
+    """How far the points (y, z) about the centroid lie inside the section at s = x / L (>= 0:
+    inside or on the boundary; in metres, along the nearest bounding direction); None for a
+    custom section, whose shape is not known. Rectangles |y| <= h/2, |z| <= b/2; circles and
+    tubes y^2 + z^2 <= (d/2)^2; T-sections the web (|z| <= tw/2) and the flange (|z| <= b/2)."""
+    y, z = np.asarray(y, dtype=float), np.asarray(z, dtype=float)
+    at_s = {n: v + (section.dims_tip.get(n, v) - v) * s for n, v in section.dims.items()}
+    if section.shape == "rectangle":
+        return np.minimum(at_s["h"] / 2 - np.abs(y), at_s["b"] / 2 - np.abs(z))
+    if section.shape in ("circle", "tube"):
+        return at_s["d"] / 2 - np.hypot(y, z)
+    if section.shape == "t-section":
+        low, high = section.y_extent(s)
+        b, tf, tw = at_s["b"], at_s["tf"], at_s["tw"]
+        in_y = np.minimum(y - low, high - y)
+        width = np.where(y >= high - tf, b / 2, tw / 2)
+        return np.minimum(in_y, width - np.abs(z))
+    return None
+
+
+def _check_routing_inside(tendon: Tendon, section, length: float, index: int | None) -> None:
+    y_profile, z_profile = tendon.routing
+    keys = [key for key, p in (("offset_y", y_profile), ("offset_z", z_profile))
+            if not (getattr(p, "is_constant", False) and p(0.0) == 0.0)] or ["offset_y"]
+    label = (f"[[tendons]] #{index + 1} {'/'.join(keys)} ({tendon.name!r})" if index is not None
+             else f"[[tendons]] {tendon.name!r} {'/'.join(keys)}")
+    xs = tendon.stations()
+    ys, zs = tendon.offsets(xs)
+    scale = max(1e-300, float(np.max(np.abs(np.concatenate([ys, zs])), initial=0.0)))
+    for x, y, z in zip(xs, ys, zs, strict=True):
+        margin = section_margin(section, x / length, y, z)
+        if margin is None:
+            return
+        if margin < -1e-9 * scale:
+            raise ConfigError(
+                f"{label}: the routing (y, z) = ({y:.6g}, {z:.6g}) m at x = {x:.6g} m lies "
+                f"outside the {section.shape} section (by {-float(margin):.3g} m)")

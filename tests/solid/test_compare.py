@@ -112,7 +112,7 @@ def test_table_and_departures(sweep_run):
     rows = summary["table"]
     assert [r["tension"] for r in rows] == pytest.approx([1.0, 2.0])
     for row in rows:
-        assert set(row["solid"]["tip"]) == {"u", "v", "theta"}
+        assert set(row["solid"]["tip"]) == {"u", "v", "theta", "w", "R", "rotation_vector"}
         for law in ("nonstandard", "reissner"):
             rod = row["rod"][law]
             assert rod["status"] == "converged"

@@ -246,8 +246,8 @@ def test_summary_has_the_documented_keys(finger_run):
         assert set(step) >= {"load_factor", "tension", "tensions", "tip", "backbone",
                              "newton_iterations", "linear_iterations", "max_principal_stretch",
                              "max_principal_stretch_bulk"}
-        assert set(step["tip"]) == {"u", "v", "theta"}
-        assert set(step["backbone"]) == {"x", "u", "v"}
+        assert set(step["tip"]) == {"u", "v", "theta", "w", "R", "rotation_vector"}
+        assert set(step["backbone"]) == {"x", "u", "v", "w"}
         assert len(step["backbone"]["x"]) == 21
         assert step["newton_iterations"] >= 1 and step["linear_iterations"] >= 1
         assert 1.0 < step["max_principal_stretch_bulk"] <= step["max_principal_stretch"]
