@@ -33,6 +33,7 @@ from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
 from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import atomic_write_json, virtual_display
 from fe_beam.exports.plotting import legend_inside
+from fe_beam.exports.spatial import plot_spatial_load_displacement, plot_spatial_shapes
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers import realtime
 from fe_beam.solvers.newton import LoadSteppingFailed
@@ -197,7 +198,9 @@ def run_finger(
         ]
     }
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
-    sweep = ([exports.CSVExport(out / "tension_sweep.csv", sweep_columns(len(config.tendons)),
+    spatial = getattr(config.model, "kinematics", "planar") == "spatial"
+    sweep = ([exports.CSVExport(out / "tension_sweep.csv",
+                                sweep_columns(len(config.tendons), spatial),
                                 empty=False)] if out is not None else [])
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
                           record_shapes=out is not None, extra_exports=sweep,
@@ -223,17 +226,24 @@ def run_finger(
     return result, inverse
 
 
-def sweep_columns(tendons: int) -> list[exports.Column]:
-    """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip."""
+def sweep_columns(tendons: int, spatial: bool = False) -> list[exports.Column]:
+    """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip (spatial
+    rods: u, v, w and the rotation vector)."""
+    tip = [exports.Column(f"tip_{k}", lambda s, k=k: s["tip"][k]) for k in ("u", "v", "w")] + [
+        exports.Column(f"tip_rotation_{k}", lambda s, i=i: s["tip"]["rotation_vector"][i])
+        for i, k in enumerate("xyz")] if spatial else exports.tip_columns()
     return [exports.Column("load_factor", lambda s: s["load_factor"]),
             *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
             *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),
-            *exports.tip_columns()]
+            *tip]
 
 
 def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     """The chapter's Figures 3.8 (profiles along s) and 3.9 (backbone), and tension curves."""
 
+    if getattr(config.model, "kinematics", "planar") == "spatial":
+        plot_spatial_finger(out, result, config)
+        return
     final = result.shapes[-1][1]
     cells = final["cells"]
     profiles = out / "fig3_8_profiles.png"
@@ -288,6 +298,40 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         note = f"finger_3d.png was not made: {reason}"
         note_skipped_picture(out, note)
         result.notes.append(note)  # the summary of the run (rank 0, which draws) says it too
+
+
+def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
+    """A spatial finger: the chapter's Figure 3.8 with its three curvatures (torsion, about
+    d2, about d3) and the axial strain, the backbone in three views and a 3D view (Fig. 3.9),
+    and the tip against the tension."""
+    final = result.shapes[-1][1]
+    cells = final["cells"]
+    with exports.figure(out / "fig3_8_profiles.png", 2, 2, figsize=(9, 6), sharex=True) as (
+            drawn, axes):
+        panels = [("torsion [1/m]", cells["twist"], "(a) torsion u1"),
+                  ("curvature about d2 [1/m]", cells["curvature_y"], "(b) curvature about d2"),
+                  ("curvature about d3 [1/m]", cells["curvature_z"], "(c) curvature about d3"),
+                  ("axial strain v1 - 1", cells["v1"] - 1, "(d) axial strain")]
+        for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
+            axis.plot(cells["x"], values, lw=1.8)
+            axis.ticklabel_format(axis="y", useOffset=False)
+            axis.set_title(title, fontsize=9)
+            axis.set_ylabel(label)
+            axis.grid(alpha=0.3)
+        for axis in axes[1]:
+            axis.set_xlabel("s [m]")
+        tension = result.steps[-1]["tensions"]
+        drawn.suptitle(f"Profiles along the finger at tension "
+                       f"{', '.join(f'{t:.3g}' for t in tension)} N (cf. chapter Fig. 3.8)")
+    every = max(1, len(result.shapes) // 8)
+    shapes = [(f"tension {step['tensions'][0]:.3g} N", shape) for (_, shape), step in list(
+        zip(result.shapes, result.steps, strict=True))[every - 1:: every]]
+    plot_spatial_shapes(shapes, out / "fig3_9_backbone.png",
+                        "Backbone (cf. chapter Fig. 3.9)", config.model.length)
+    tensions = [s["tensions"][0] for s in result.steps]
+    tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w", "rotation_vector")}
+    plot_spatial_load_displacement(tensions, tips, out / "tension_tip.png",
+                                   "tip against the first tendon's tension [N]")
 
 
 def note_skipped_picture(out: Path, note: str) -> None:
@@ -376,8 +420,11 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
         tip = step["tip"]
         tensions = ", ".join(f"{t:.6g}" for t in step["tensions"])
         pulls = ", ".join(f"{p:.6g}" for p in step["pull_ins"])
+        where = (f"w = {tip['w']:.6g} m, rotation vector "
+                 f"[{', '.join(f'{c:.6g}' for c in tip['rotation_vector'])}] rad"
+                 if "w" in tip else f"theta = {tip['theta']:.6g} rad")
         report.out(f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
-                   f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+                   f"v = {tip['v']:.6g} m, {where}")
     if inverse:
         report.out(f"inverse: tension {inverse['tension']:.8g} N, pull-in "
                    f"{inverse['pull_in']:.6g} m give {inverse['target']} = "

@@ -221,6 +221,9 @@ def parse_finger(config: dict, planar_check: bool = True
                 f"[inverse] give exactly one of {', '.join(INVERSE_KEYS)}; got {', '.join(targets)}"
             )
         ((key, value),) = targets.items()
+        if getattr(static.model, "kinematics", "planar") == "spatial":
+            raise ConfigError("[inverse] targets the planar tip angle or position; it is not "
+                              "available for [model] kinematics = \"spatial\" yet")
         if len(parsed) != 1:
             raise ConfigError(f"[inverse] {key} needs exactly one tendon, got {len(parsed)}")
         target = InverseTarget(key, float(value))

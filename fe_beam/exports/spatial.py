@@ -81,8 +81,11 @@ class SpatialXDMFWriter:
                 xs = np.concatenate([g[0] for g in gathered])
                 frames[name] = np.concatenate([g[1] for g in gathered])[np.argsort(
                     xs, kind="stable")]
+        cellwise = gather_line(self.problem, {k: f for k, f in self.functions.items()
+                                              if k in self.problem.output_expressions()})
         if nodal is not None:
             nodal.update(frames)
+            nodal["cells"] = cellwise
         return nodal
 
     def close(self) -> None:
