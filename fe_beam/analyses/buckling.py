@@ -14,6 +14,7 @@ from fe_beam.analyses.static import StaticContinuation, check_beam_work
 from fe_beam.config.buckling import parse_buckling
 from fe_beam.exports.outputs import BeamXDMFWriter, atomic_write_json
 from fe_beam.exports.solid import DisplacementXDMF
+from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
 from fe_beam.solvers.buckling import (
     Buckling,
@@ -80,6 +81,8 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
             return _failed(failure, settings.prestress, problem.global_dofs, started,
                            {"load_factor": float(run.load_factor),
                             "tip": problem.end_values("xL")}, out, comm)
+        if problem.spatial and result.load_factors:
+            result = _on_the_path(run, result, settings, static, progress)
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
         if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
             result.notes.append(
@@ -104,8 +107,8 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
                 out.mkdir(parents=True, exist_ok=True)
             comm.barrier()
             state = compat.local_array(problem.w).copy()
-            writer = BeamXDMFWriter(problem, out / "buckling_modes.xdmf"
-                                    if static.output.xdmf else None)
+            writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
+                problem, out / "buckling_modes.xdmf" if static.output.xdmf else None)
             for index, shape in enumerate(result.shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
                 writer.write(float(index))
@@ -116,6 +119,50 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         return summary
     finally:
         run.destroy()
+
+
+#: spatial rods: the first factor is re-linearised about this fraction of its estimate ...
+PATH_FRACTION = 0.97
+#: ... until two estimates agree to this (relative), at most PATH_ITERATIONS times
+PATH_TOLERANCE = 1e-7
+PATH_ITERATIONS = 8
+
+
+def _on_the_path(run, first: Buckling, settings, static, progress) -> Buckling:
+    """A spatial rod's buckling factors from the state on the nonlinear path just below the
+    first critical load (docs/theory.md, Spatial rods: buckling).
+
+    The linear estimate about a state far below the critical load depends on how the rotations
+    are parametrised (its third derivatives do), which matters when the critical mode couples
+    bending and torsion: a cantilever's lateral-torsional buckling is estimated 12% low about the
+    undeformed state with the rotation vector. The critical load of the path does not depend on
+    it: the state is loaded to PATH_FRACTION of the estimate and linearised again, until two
+    estimates agree to PATH_TOLERANCE. The factors are then the path's (the pre-state steps
+    stay below the first critical load)."""
+    estimate = first
+    history = [first.load_factors[0]]
+    for _ in range(PATH_ITERATIONS):
+        target = PATH_FRACTION * estimate.load_factors[0]
+        if not target > settings.prestress:
+            break  # the given state is already close to the critical load
+        try:
+            estimate = rod_buckling(run, settings.count, target, static.stepping,
+                                    progress=progress)
+        except LoadSteppingFailed as failure:
+            estimate.notes.append(f"the pre-state toward the critical load failed ({failure}): "
+                                  "the factors are the estimate about the last state reached")
+            break
+        if not estimate.load_factors:
+            break
+        history.append(estimate.load_factors[0])
+        if abs(history[-1] - history[-2]) <= PATH_TOLERANCE * abs(history[-1]):
+            break
+    if len(history) > 1:
+        estimate.notes.append(
+            "spatial rod: the load factors are linearised about the state on the path at load "
+            f"factor {float(run.load_factor):.6g} (the linear estimate about the given state was "
+            f"{history[0]:.6g}; successive estimates {', '.join(f'{h:.8g}' for h in history)})")
+    return estimate
 
 
 def _run_solid(config, settings, out, comm, progress) -> dict:

@@ -40,13 +40,16 @@ Tendon ``i``: body offset ``r_i(s) = (0, y_i(s), z_i(s))``, tension ``tau_i``, f
 
 The tendon pulls the rod with the distributed force ``f_i = tau_i (p_i' / |p_i'|)'`` and moment
 ``(R r_i) x f_i``; at the anchor with the point force ``-tau_i t_i(L_i)``, ``t_i = p_i'/|p_i'|``,
-and its moment ``(R r_i) x (-tau_i t_i)``. ``f_i`` depends on ``u'`` and ``v'``; Rucker & Webster
-write it (body components) as ``f_i^b = a_i + A_i v' - A_i r_i^ u'`` with::
+and its moment ``(R r_i) x (-tau_i t_i)``; there the resultants, hence the strains, jump, so
+a tendon that continues past another's anchor is kinked and adds the point force
+``tau_j (t_j(L_i+) - t_j(L_i-))`` (solved by fixed-point iteration). ``f_i`` depends on
+``u'`` and ``v'``; Rucker & Webster write it (body components) as
+``f_i^b = a_i + A_i v' - A_i r_i^ u'`` with::
 
     A_i = -tau_i (w_i^)^2 / |w_i|^3 = tau_i (I - w w^T / |w|^2) / |w|
     a_i = A_i (u x w_i + u x r_i' + r_i'')
 
-and solve the explicit linear system (their eq. 13, with ``A = sum A_i``, ``G = -sum A_i r_i^``,
+and solve the explicit linear system (with ``A = sum A_i``, ``G = -sum A_i r_i^``,
 ``B = sum r_i^ A_i``, ``H = -sum r_i^ A_i r_i^``, ``a = sum a_i``, ``b = sum r_i^ a_i``)::
 
     [ K_se + A    G        ] [v']   [ -u x n_b - R^T f - a          ]
@@ -74,13 +77,15 @@ Method
 Shooting: the state ``y = (r, q, n, m, l_i)`` (``q`` the unit quaternion of ``R``, renormalised
 whenever ``R`` is formed; ``l_i`` the tendon lengths) is integrated from ``s = 0`` with the six
 unknown internal resultants ``n(0+), m(0+)`` (``scipy.integrate.solve_ivp``, DOP853), segment by
-segment between anchors (the anchor forces are jumps of ``n`` and ``m``), and
-``scipy.optimize.root`` (``hybr``) solves the six tip conditions. The strains follow from the
-resultants, ``u = u0 + K_bt^-1 R^T m``, ``v = e1 + K_se^-1 R^T n`` (free components). Large
-loads are reached by continuation in the load factor (all loads and tensions scaled together;
-``u0`` is not), each substep starting from a secant prediction of the previous two; substeps
-are halved on failure. Intermediate substeps use a looser tolerance (``<= 1e-9``), the last one
-the requested ``rtol``.
+segment between anchors (the anchor forces are jumps of ``n`` and ``m``), and the six tip
+conditions are solved by Newton-Broyden iterations on the scaled residual (finite-difference
+Jacobian, re-used between substeps and refreshed when convergence is slow), with
+``scipy.optimize.root`` (``hybr``) as the fallback. The strains follow from the resultants,
+``u = u0 + K_bt^-1 R^T m``, ``v = e1 + K_se^-1 R^T n`` (free components). Large loads are
+reached by continuation in the load factor (all loads and tensions scaled together; ``u0`` is
+not), each substep starting from a secant prediction of the previous two; substeps are halved
+on failure. Intermediate substeps use a looser tolerance (``rtol <= 1e-9``), the last one the
+requested ``rtol``; the final scaled tip residual is below ``max(1e-12, 10 rtol)``.
 """
 
 from __future__ import annotations
@@ -420,6 +425,39 @@ def _tendon_tangent(rod: _Rod, k: int, s: float, y):
     return R @ (w / nw), R @ prof_s[0]
 
 
+def _anchor_jump(rod: _Rod, b: float, y_minus, ending, continuing):
+    """Point loads at ``s = b`` where the tendons ``ending`` are anchored.
+
+    Each ending tendon pulls the rod with ``-tau_k t_k(b-)`` at ``p_k``; ``n(b+) = n(b-) +
+    tau_k t_k``, ``m(b+) = m(b-) + (R r_k) x tau_k t_k``. The resultants jump, so do the strains,
+    and the tendons that continue past ``b`` are kinked there: each adds the point force
+    ``tau_j (t_j(b+) - t_j(b-))`` at ``p_j``, which depends on the resultants at ``b+``
+    (fixed-point iteration).
+    """
+    y = np.array(y_minus, dtype=float)
+    for k in ending:
+        t_k, rr = _tendon_tangent(rod, k, b, y_minus)
+        y[7:10] += rod.taus[k] * t_k
+        y[10:13] += _cross(rr, rod.taus[k] * t_k)
+    if not continuing:
+        return y
+    fixed = y[7:13].copy()
+    before = {j: _tendon_tangent(rod, j, b, y_minus) for j in continuing}
+    scale = 1e-15 * (1.0 + np.abs(fixed).max())
+    for _ in range(200):
+        new = fixed.copy()
+        for j in continuing:
+            t_plus, rr = _tendon_tangent(rod, j, b, y)
+            kink = rod.taus[j] * (t_plus - before[j][0])
+            new[0:3] -= kink
+            new[3:6] -= _cross(rr, kink)
+        done = np.abs(new - y[7:13]).max() <= scale
+        y[7:13] = new
+        if done:
+            return y
+    raise RuntimeError(f"kink loads at s = {b:.6g}: fixed-point iteration did not converge")
+
+
 def _integrate(rod: _Rod, base, rtol: float, dense: bool = False):
     """Integrate from ``s = 0`` with ``base = (n(0+), m(0+))``; return ``y(L+)`` and the
     per-segment ``solve_ivp`` results."""
@@ -446,12 +484,11 @@ def _integrate(rod: _Rod, base, rtol: float, dense: bool = False):
             raise RuntimeError(f"solve_ivp failed on [{a:.6g}, {b:.6g}]: {sol.message}")
         sols.append((a, b, active, sol))
         y = sol.y[:, -1].copy()
-        # anchor point loads -tau t_k at p_k: n(b+) = n(b-) + tau t_k, m(b+) += (R r_k) x tau t_k
         ending = [k for k in active if abs(rod.anchors[k] - b) <= 1e-12 * L]
-        jumps = [(k,) + _tendon_tangent(rod, k, b, y) for k in ending]
-        for k, t_k, rr in jumps:
-            y[7:10] += rod.taus[k] * t_k
-            y[10:13] += _cross(rr, rod.taus[k] * t_k)
+        if ending and b < L * (1 - 1e-12):
+            y = _anchor_jump(rod, b, y, ending, [k for k in active if k not in ending])
+        elif ending:
+            y = _anchor_jump(rod, b, y, ending, [])
     return y, sols
 
 
@@ -784,7 +821,7 @@ def solve_cantilever(
         profiles=[_Profile(t, L) for t in tendons],
         scale_f=scale_f,
     )
-    tol_final = max(1e-10, 100 * rtol)
+    tol_final = max(1e-12, 10 * rtol)
     if initial_guess is not None:
         guess = np.asarray(initial_guess, dtype=float)
         if guess.shape != (6,):

@@ -81,8 +81,10 @@ def _loaded(static):
     otherwise: nothing to buckle under)."""
     model = static.model
     loads = model.loads
-    given = (any(loads.tip_force) or loads.tip_moment or any(loads.distributed)
-             or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
+    moment = loads.tip_moment
+    given = (any(loads.tip_force) or (any(moment) if isinstance(moment, tuple) else moment)
+             or any(loads.distributed)
+             or any(loads.gravity) or any(any(f[1:]) for f in loads.point_forces)
              or any(model.supports.prescribed_x0.values())
              or any(model.supports.prescribed_xL.values())
              or any(t.tension for t in static.tendons))

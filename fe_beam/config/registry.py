@@ -125,7 +125,7 @@ _SPECS = (
     CommandSpec("buckling", "linear buckling load factors and modes of the rod or the 3D solid "
                             "([buckling])",
                 ("tendons", "solid", "buckling"), lambda config, options: parse_buckling(config),
-                "buckling:run"),
+                "buckling:run", spatial=True),
     CommandSpec("path", "arc-length path following with limit and bifurcation points ([path])",
                 ("tendons", "solid", "path"), lambda config, options: parse_path(config),
                 "path:run"),

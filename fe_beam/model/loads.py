@@ -45,16 +45,16 @@ class LoadKind:
         if self.motion:
             return True  # a prescribed motion acts even where it holds a value 0
         if self.kind == "points":
-            return any(row[1] or row[2] for row in value)
-        if self.kind == "vector":
+            return any(any(row[1:]) for row in value)
+        if self.kind == "vector" or isinstance(value, (list, tuple)):  # spatial: vectors
             return any(value)
         return bool(value)
 
     def scaled(self, value, factor: float):
         """The value at load factor ``factor`` (point positions are not scaled)."""
         if self.kind == "points":
-            return [[row[0], factor * row[1], factor * row[2]] for row in value]
-        if self.kind == "vector":
+            return [[row[0], *(factor * c for c in row[1:])] for row in value]
+        if self.kind == "vector" or isinstance(value, (list, tuple)):  # spatial: vectors
             return [factor * c for c in value]
         return factor * value
 

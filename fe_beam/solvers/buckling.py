@@ -440,14 +440,16 @@ def _rod_linearised(run) -> LinearisedProblem:
     """The rod problem of a `fe_beam.analyses.static.StaticContinuation` at its current load
     factor."""
     problem = run.problem
-    dofs = np.concatenate([problem.component_dofs(name) for name in ("u", "v")])
+    dofs = np.concatenate([problem.component_dofs(name) for name in problem.components
+                           if not name.startswith("theta")])
+    conservative = not problem.model.loads.follower and getattr(problem, "conservative", True)
     return LinearisedProblem(
         space=problem.space, w=problem.w, residual=problem.residual, bcs=problem.bcs,
         set_load_factor=run._set_load_factor, set_prescribed_factor=problem.set_prescribed_factor,
         load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
         saddle_point=problem.saddle_point,
-        explicit=bool(problem.model.loads.follower or run.tendons),
-        conservative=not problem.model.loads.follower)
+        explicit=bool(not conservative or run.tendons),
+        conservative=conservative)
 
 
 def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
