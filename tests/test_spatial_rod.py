@@ -118,7 +118,7 @@ def test_nonstandard_law_torsion_and_biaxial_bending():
 
 
 def test_torsion_constant_of_a_rectangle():
-    """J of a rectangle: the square's 0.140577 a^4, and the thin strip's t^3 w / 3 (1 - 0.63 t/w)."""
+    """J of a rectangle: the square's 0.140577 a^4, the thin strip's t^3 w / 3 (1 - 0.63 t/w)."""
     assert Section("rectangle", {"b": 1.0, "h": 1.0}).spatial_properties().J == \
         pytest.approx(0.1405770, abs=1e-7)
     thin = Section("rectangle", {"b": 0.001, "h": 0.1}).spatial_properties().J

@@ -121,8 +121,9 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         run.destroy()
 
 
-#: spatial rods: the first factor is re-linearised about this fraction of its estimate ...
-PATH_FRACTION = 0.97
+#: spatial rods: the first factor is re-linearised about these fractions of its estimate (the
+#: last repeated; closer, K_T is too near singular for the inertia check of the factor) ...
+PATH_FRACTIONS = (0.97, 0.99, 0.995)
 #: ... until two estimates agree to this (relative), at most PATH_ITERATIONS times
 PATH_TOLERANCE = 1e-7
 PATH_ITERATIONS = 8
@@ -136,24 +137,29 @@ def _on_the_path(run, first: Buckling, settings, static, progress) -> Buckling:
     are parametrised (its third derivatives do), which matters when the critical mode couples
     bending and torsion: a cantilever's lateral-torsional buckling is estimated 12% low about the
     undeformed state with the rotation vector. The critical load of the path does not depend on
-    it: the state is loaded to PATH_FRACTION of the estimate and linearised again, until two
-    estimates agree to PATH_TOLERANCE. The factors are then the path's (the pre-state steps
-    stay below the first critical load)."""
+    it: the state is loaded to a fraction (PATH_FRACTIONS, toward 1) of the estimate and
+    linearised again, until two estimates agree to PATH_TOLERANCE. The factors are then the
+    path's (the pre-state steps approach the first critical load: the estimate's error is
+    quadratic in the distance)."""
     estimate = first
     history = [first.load_factors[0]]
-    for _ in range(PATH_ITERATIONS):
-        target = PATH_FRACTION * estimate.load_factors[0]
+    for iteration in range(PATH_ITERATIONS):
+        fraction = PATH_FRACTIONS[min(iteration, len(PATH_FRACTIONS) - 1)]
+        target = fraction * estimate.load_factors[0]
         if not target > settings.prestress:
             break  # the given state is already close to the critical load
         try:
-            estimate = rod_buckling(run, settings.count, target, static.stepping,
-                                    progress=progress)
+            trial = rod_buckling(run, settings.count, target, static.stepping,
+                                 progress=progress)
         except LoadSteppingFailed as failure:
             estimate.notes.append(f"the pre-state toward the critical load failed ({failure}): "
                                   "the factors are the estimate about the last state reached")
             break
-        if not estimate.load_factors:
-            break
+        passed = any(0 < f < target for f in trial.negative)
+        jumped = trial.load_factors and trial.load_factors[0] > 1.2 * estimate.load_factors[0]
+        if not trial.load_factors or passed or jumped or trial.load_factors[0] <= target:
+            break  # past the critical load, or its factor lost: keep the estimate from below
+        estimate = trial
         history.append(estimate.load_factors[0])
         if abs(history[-1] - history[-2]) <= PATH_TOLERANCE * abs(history[-1]):
             break

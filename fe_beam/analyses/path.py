@@ -19,6 +19,7 @@ from fe_beam.config.path import parse_path
 from fe_beam.errors import ConfigError
 from fe_beam.exports.outputs import BeamXDMFWriter, figure
 from fe_beam.exports.solid import DisplacementXDMF
+from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
 from fe_beam.model.loads import given
 from fe_beam.progress import ProgressBar
@@ -182,6 +183,17 @@ def point_force_control(run, static, progress: bool = False, prestate: bool = Tr
 # --- the command `fe-beam path` -----------------------------------------------------------------
 PATH_CSV = ("index", "branch", "load_factor", "tension", "tip_u", "tip_v", "tip_theta", "stable",
             "energy_decreasing_directions")
+#: path.csv of a spatial rod: w and the rotation vector where the planar rod has theta
+SPATIAL_PATH_CSV = ("index", "branch", "load_factor", "tension", "tip_u", "tip_v", "tip_w",
+                    "tip_rotation_x", "tip_rotation_y", "tip_rotation_z", "stable",
+                    "energy_decreasing_directions")
+
+
+def _tip_value(record: dict, name: str):
+    tip = record["tip"]
+    if name.startswith("rotation_"):
+        return tip["rotation_vector"]["xyz".index(name[-1])]
+    return tip[name]
 
 
 def _path_plot(out, summary: dict) -> None:
@@ -190,9 +202,11 @@ def _path_plot(out, summary: dict) -> None:
     points = summary.get("path") or []
     if not points:
         return
+    spatial = "w" in points[0]["tip"]
+    keys = ("u", "v", "w") if spatial else ("u", "v", "theta")
+    labels = ("tip u [m]", "tip v [m]", "tip w [m]" if spatial else "tip theta [rad]")
     with figure(out / "path.png", 1, 3, figsize=(11, 3.6)) as (_, axes):
-        for ax, key, label in zip(axes, ("u", "v", "theta"), ("tip u [m]", "tip v [m]",
-                                                              "tip theta [rad]"), strict=True):
+        for ax, key, label in zip(axes, keys, labels, strict=True):
             forks = [c for c in summary.get("critical_points", [])
                      if c["kind"] == "bifurcation"]
             for a, b in zip(points[:-1], points[1:], strict=True):
@@ -254,8 +268,10 @@ def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
     import time
 
 
+    spatial = getattr(writer, "problem", None) is not None and writer.problem.spatial
     columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
-                                     else r["tip"][n[4:]])) for name in PATH_CSV]
+                                     else _tip_value(r, n[4:])))
+               for name in (SPATIAL_PATH_CSV if spatial else PATH_CSV)]
 
     def content() -> dict:
         summary["wall_time_s"] = time.perf_counter() - started
@@ -325,7 +341,8 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
     xdmf = writing and static.output.xdmf
-    writer = BeamXDMFWriter(problem, out / "path.xdmf") if xdmf else None
+    writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
+        problem, out / "path.xdmf") if xdmf else None
     files, content = _path_files(out if writing else None, writer, summary, started,
                                  static.output.plots, comm)
     bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
@@ -398,7 +415,8 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         if result is not None and writing and static.output.xdmf:
             modes = [(i, c) for i, c in enumerate(result.critical_points) if c.mode is not None]
             state = compat.local_array(problem.w).copy()
-            modes_writer = BeamXDMFWriter(problem, out / "critical_modes.xdmf")
+            modes_writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
+                problem, out / "critical_modes.xdmf")
             for number, (index, point) in enumerate(modes, start=1):
                 compat.local_array(problem.w)[:] = point.mode
                 modes_writer.write(float(number))
@@ -478,8 +496,9 @@ def run(validated, out, comm=None, progress: bool = True, echo=None) -> Result:
         # a point-force path: where the force pushes (the path's "point"), not the tip
         tip, where = (point["point"], f"point x = {point['point']['x']:.6g} m") \
             if "point" in point else (point["tip"], "tip")
+        last = (f"w = {tip['w']:.6g} m" if "w" in tip else f"theta = {tip['theta']:.6g} rad")
         report.out(f"{point['kind']} point at load factor {point['load_factor']:.8g}: {where} "
-                   f"u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+                   f"u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, {last}")
     report.out(f"{len(summary['path'])} path points, {summary['dofs']} dofs, "
                f"{summary['wall_time_s']:.2f} s; results in {out}")
     code = exit_code(report, summary, "fe-beam path")

@@ -128,7 +128,7 @@ _SPECS = (
                 "buckling:run", spatial=True),
     CommandSpec("path", "arc-length path following with limit and bifurcation points ([path])",
                 ("tendons", "solid", "path"), lambda config, options: parse_path(config),
-                "path:run"),
+                "path:run", spatial=True),
 )
 
 #: The subcommands, in the order of ``fe-beam --help``.
