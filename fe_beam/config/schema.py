@@ -12,6 +12,7 @@ import stat
 import tomllib
 from pathlib import Path
 
+from fe_beam.config.contact import parse_contact
 from fe_beam.config.keys import (
     NUMBER,
     OTHER_TABLES,
@@ -316,7 +317,9 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
             "xL = \"roller\")"
         )
     output = OutputOptions(**table(config, "output"))
-    return StaticConfig(model, settings, stepping, jump, output, raw=config)
+    obstacles, contact = parse_contact(config, model)
+    return StaticConfig(model, settings, stepping, jump, output, raw=config,
+                        obstacles=obstacles, contact=contact)
 
 
 # --- checks over the whole configuration, before any command reads it ---------------------------
