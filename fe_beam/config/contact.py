@@ -43,10 +43,10 @@ SHAPE_KEYS = {
 CONTACT_KEYS = {
     "penetration_tolerance": Key(NUMBER, None, "largest penetration a converged load step may "
                                  "keep [m] (default 1e-3 x the smallest section height)"),
-    "penalty": Key(NUMBER, 100.0, "augmented-Lagrangian stiffness k relative to the element "
+    "penalty": Key(NUMBER, 1.0, "augmented-Lagrangian stiffness k relative to the element "
                    "bending stiffness: k = penalty EI / h_e^4 per unit length"),
-    "max_updates": Key((int,), 30, "augmented-Lagrangian (Uzawa) updates per load step before "
-                       "the step is cut back"),
+    "max_updates": Key((int,), 50, "augmented-Lagrangian (Uzawa) updates per load step before "
+                       "the step is cut back (active-set and multiplier updates)"),
     "quadrature_degree": Key((int,), None, "Gauss rule of the contact integral (default 4 x "
                              "the element degree: 2 degree + 1 points per element)"),
 }
@@ -56,7 +56,12 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
     """One obstacle of ``[[obstacles]]`` (#index + 1), checked clear of the undeformed rod."""
     if not isinstance(given, dict):
         raise ConfigError(f"[[obstacles]] #{index + 1} must be a table; got {shown(given)}")
-    values = table({"obstacles": given}, "obstacles", OBSTACLE_KEYS)
+    label = given.get("name") if isinstance(given.get("name"), str) else f"#{index + 1}"
+    unknown = [k for k in given if k not in OBSTACLE_KEYS]
+    if unknown:
+        raise ConfigError(f"[[obstacles]] {label}: unknown key {shown(unknown[0])}; allowed: "
+                          f"{', '.join(OBSTACLE_KEYS)}")
+    values = table({"[obstacles]": given}, "[obstacles]", OBSTACLE_KEYS)
     name = values["name"] or f"obstacle{index + 1}"
     where = f"[[obstacles]] {name!r}"
     shape = values["shape"]

@@ -19,17 +19,22 @@ Enforcement (augmented Lagrangian, Alart-Curnier / Rockafellar): per obstacle th
 with the multiplier lambda (a line pressure [N/m]) in a quadrature space of the contact rule
 and one multiplier lambda_e [N] per end (the end sections are corners that touch first: the
 elastica pushed on a floor touches with its tip's corner, which no interior Gauss point sees).
-Its variation is -p dg with p = <lambda - k g>_+ >= 0: the pressure pushes the rod out. At
-fixed lambda this is a penalty with an offset, which Newton solves; the Uzawa update
-lambda <- p (`ContactSet.update`) between Newton solves drives the penetration to zero, so the
-method is exact in the limit whatever k (`fe_beam.solvers.contact.ContactSolver`).
+Its variation is -p dg with p = <lambda - k g>_+ >= 0: the pressure pushes the rod out. The
+Uzawa update lambda <- p (`ContactSet.update`) between Newton solves drives the penetration to
+zero, so the method is exact in the limit whatever k (`fe_beam.solvers.contact.ContactSolver`).
+
+Newton never sees the kink of <.>_+: each Newton solve holds an active set chi (0/1 at every
+contact point and end) fixed and solves the smooth problem with the energy
+1/(2k) (chi (lambda - k g)^2 - lambda^2) (`active_set_density`); after it chi is set to
+[lambda - k g > 0] (a primal-dual active-set step) and the solve repeated until chi no longer
+changes, when p = chi (lambda - k g) = <lambda - k g>_+ exactly and the state solves the
+augmented-Lagrangian equations. (Plain Newton on the C1 residual cycled between active sets
+when a load step crossed the first touch: its first iterate overshoots deep into the obstacle.)
 
 Quadrature: the contact integral has its own Gauss-Legendre rule of degree ``q`` (default 4 p
 for elements of degree p: 2p + 1 points per element, e.g. 5 for P2), not the nodes alone: a P2
 centreline may pass through an obstacle between nodes; the gap is measured (and the multipliers
-live) at exactly these points and at the two ends. Smoothness: <.>_+ makes the residual C1
-only (its Hessian jumps where a point enters or leaves contact); Newton with the configured
-line search handles it and the load steps are cut back when it does not converge.
+live) at exactly these points and at the two ends.
 """
 
 from __future__ import annotations
@@ -52,7 +57,8 @@ from fe_beam.model.obstacles import (
     segment_distance,
 )
 
-__all__ = ["ContactSet", "augmented_lagrangian_density", "contact_pressure", "director",
+__all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
+           "contact_pressure", "director",
            "point_gap", "positive_part", "segment_gap"]
 
 
@@ -137,6 +143,13 @@ def augmented_lagrangian_density(multiplier, gap, k):
     return (contact_pressure(multiplier, gap, k) ** 2 - multiplier**2) / (2 * k)
 
 
+def active_set_density(multiplier, active, gap, k):
+    """1/(2k) (chi (lambda - k g)^2 - lambda^2) at a fixed active set chi (0 or 1): smooth; equal
+    to `augmented_lagrangian_density` where chi = [lambda - k g > 0], and its variation
+    -chi (lambda - k g) dg the same."""
+    return (active * (multiplier - k * gap) ** 2 - multiplier**2) / (2 * k)
+
+
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem`: multipliers, the energy hook
@@ -159,10 +172,11 @@ class ContactSet:
         total = 0
         for i, _ in enumerate(self.obstacles):
             gap = self._gap(i, u, v, theta)
-            total += augmented_lagrangian_density(self.multipliers[i], gap, self.k) * self.dx
+            total += active_set_density(self.multipliers[i], self.active[i], gap,
+                                        self.k) * self.dx
             for e, measure in enumerate(self._end_measures):
-                total += augmented_lagrangian_density(self.end_multipliers[i][e], gap,
-                                                      self.k_end) * measure
+                total += active_set_density(self.end_multipliers[i][e], self.end_active[i][e],
+                                            gap, self.k_end) * measure
         return total
 
     def _attach(self, problem) -> None:
@@ -194,6 +208,10 @@ class ContactSet:
                             for i in range(len(self.obstacles))]
         self.end_multipliers = [[fem.Constant(mesh, 0.0), fem.Constant(mesh, 0.0)]
                                 for _ in self.obstacles]
+        self.active = [fem.Function(self.space, name=f"contact_active_{i}")
+                       for i in range(len(self.obstacles))]
+        self.end_active = [[fem.Constant(mesh, 0.0), fem.Constant(mesh, 0.0)]
+                           for _ in self.obstacles]
         x = ufl.SpatialCoordinate(mesh)[0]
         self._s = x / model.length
         u, v, theta, _ = problem.fields()
@@ -225,13 +243,15 @@ class ContactSet:
             g_r, g_theta = ufl.diff(gap, r), ufl.diff(gap, angle)
             moment_density = r[0] * g_r[1] - r[1] * g_r[0] + g_theta
             densities = (g_r[0], g_r[1], moment_density)
-            pressure = contact_pressure(self.multipliers[i], gap, self.k)
+            # the pressure of the fixed-active-set energy: <lambda - k g>_+ once chi is
+            # consistent (converged steps)
+            pressure = self.active[i] * (self.multipliers[i] - self.k * gap)
             forms = []
             for density in densities:
                 form = pressure * density * self.dx
                 for e, measure in enumerate(self._end_measures):
-                    form += contact_pressure(self.end_multipliers[i][e], gap, self.k_end) \
-                        * density * measure
+                    form += self.end_active[i][e] * (self.end_multipliers[i][e]
+                                                     - self.k_end * gap) * density * measure
                 forms.append(fem.form(form))
             resultant_forms.append(forms)
             end_gap_forms.append([fem.form(gap * measure) for measure in self._end_measures])
@@ -249,13 +269,19 @@ class ContactSet:
                 [[float(c.value) for c in ends] for ends in self.end_multipliers])
 
     def _set(self, copy) -> None:
+        """Multipliers from a copy, and the active set they imply (lambda > 0)."""
         interior, ends = copy
-        for function, values in zip(self.multipliers, interior, strict=True):
+        for function, active, values in zip(self.multipliers, self.active, interior,
+                                            strict=True):
             function.x.array[:] = values
             function.x.scatter_forward()
-        for constants, values in zip(self.end_multipliers, ends, strict=True):
-            for constant, value in zip(constants, values, strict=True):
+            active.x.array[:] = values > 0
+            active.x.scatter_forward()
+        for constants, flags, values in zip(self.end_multipliers, self.end_active, ends,
+                                            strict=True):
+            for constant, flag, value in zip(constants, flags, values, strict=True):
                 constant.value = value
+                flag.value = 1.0 if value > 0 else 0.0
 
     def restore(self) -> None:
         """Multipliers back to those of the last accepted state (`commit`)."""
@@ -278,9 +304,9 @@ class ContactSet:
         """No contact: zero multipliers (the unloaded state)."""
         if self._problem is None:
             return
-        for function in self.multipliers:
+        for function in self.multipliers + self.active:
             function.x.array[:] = 0.0
-        for ends in self.end_multipliers:
+        for ends in self.end_multipliers + self.end_active:
             for constant in ends:
                 constant.value = 0.0
         self._committed = self._copy()
@@ -296,40 +322,69 @@ class ContactSet:
         values = np.asarray(values).reshape(-1, self._columns)
         k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
         gaps, pressures, end_gaps, end_pressures = [], [], [], []
+        changes = 0  # points whose active set disagrees with their pressure
+        tiny = 1e-6 * k * self.tolerance  # pressures below it are round-off
         for i, _ in enumerate(self.obstacles):
             gap = values[:, 7 + i]
-            lam = self.multipliers[i].x.array[self._dofs]
+            trial = self.multipliers[i].x.array[self._dofs] - k * gap
+            chi = self.active[i].x.array[self._dofs] > 0.5
+            changes += int(np.count_nonzero((chi & (trial < -tiny)) | (~chi & (trial > tiny))))
             gaps.append(gap)
-            pressures.append(np.maximum(lam - k * gap, 0.0))
-            ends = [global_sum(self._problem.comm, fem.assemble_scalar(form))
-                    for form in self._end_gap_forms[i]]
-            end_gaps.append(np.array(ends))
-            lam_end = np.array([float(c.value) for c in self.end_multipliers[i]])
-            end_pressures.append(np.maximum(lam_end - k_end * np.array(ends), 0.0))
+            pressures.append(np.maximum(trial, 0.0))
+            ends = np.array([global_sum(self._problem.comm, fem.assemble_scalar(form))
+                             for form in self._end_gap_forms[i]])
+            end_gaps.append(ends)
+            trial = np.array([float(c.value) for c in self.end_multipliers[i]]) - k_end * ends
+            chi = np.array([float(c.value) for c in self.end_active[i]]) > 0.5
+            if self._problem.comm.rank == 0:  # the ends are global numbers: counted once
+                changes += int(np.count_nonzero((chi & (trial < -tiny * float(
+                    self._problem.h_min))) | (~chi & (trial > tiny * float(self._problem.h_min)))))
+            end_pressures.append(np.maximum(trial, 0.0))
         local = {"x": values[:, 0], "r": values[:, 1:3], "d": values[:, 3:5],
                  "below": values[:, 5], "above": values[:, 6]}
+        changes = int(self._problem.comm.allreduce(changes, op=MPI.SUM))
         return {"gap": gaps, "pressure": pressures, "end_gap": end_gaps,
-                "end_pressure": end_pressures, "local": local}
+                "end_pressure": end_pressures, "local": local, "active_changes": changes}
 
     def max_penetration(self, state: dict | None = None) -> float:
         """max over all obstacles, contact points and ends of <-g>_+ (global) [m]."""
+        return self._largest(state, lambda gap, pressure: -gap)
+
+    def max_separation(self, state: dict | None = None) -> float:
+        """max of g over the pressed points (p > 0) (global) [m]: > 0 breaks the
+        complementarity p g = 0 (a point pushed while clear of the obstacle)."""
+        return self._largest(state, lambda gap, pressure: np.where(pressure > 0, gap, 0.0))
+
+    def _largest(self, state, measure) -> float:
         state = state or self.evaluate()
         local = 0.0
-        for gap, end in zip(state["gap"], state["end_gap"], strict=True):
+        for gap, pressure, end, end_pressure in zip(state["gap"], state["pressure"],
+                                                    state["end_gap"], state["end_pressure"],
+                                                    strict=True):
             if len(gap):
-                local = max(local, float(np.max(-gap)))
-            local = max(local, float(np.max(-end)))
+                local = max(local, float(np.max(measure(gap, pressure))))
+            local = max(local, float(np.max(measure(end, end_pressure))))
         return self._problem.comm.allreduce(max(local, 0.0), op=MPI.MAX)
 
-    def update(self, state: dict | None = None) -> None:
-        """Uzawa: lambda <- <lambda - k g>_+ at every contact point and end."""
+    def update(self, state: dict | None = None, multipliers: bool = True) -> None:
+        """The active set chi <- [lambda - k g > 0] at every contact point and end and, with
+        ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+."""
         state = state or self.evaluate()
+        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
         for i, function in enumerate(self.multipliers):
-            function.x.array[self._dofs] = state["pressure"][i]
-            function.x.scatter_forward()
-            for constant, value in zip(self.end_multipliers[i], state["end_pressure"][i],
-                                       strict=True):
-                constant.value = float(value)
+            lam = function.x.array[self._dofs]
+            trial = lam - k * state["gap"][i]
+            self.active[i].x.array[self._dofs] = trial > 0
+            self.active[i].x.scatter_forward()
+            if multipliers:
+                function.x.array[self._dofs] = state["pressure"][i]
+                function.x.scatter_forward()
+            for e, (constant, flag) in enumerate(zip(self.end_multipliers[i],
+                                                     self.end_active[i], strict=True)):
+                trial = float(constant.value) - k_end * float(state["end_gap"][i][e])
+                flag.value = 1.0 if trial > 0 else 0.0
+                if multipliers:
+                    constant.value = float(state["end_pressure"][i][e])
 
     def tunnelled(self, samples: int = 16) -> str | None:
         """Why the step from the last accepted state to the current one is rejected: a
@@ -369,8 +424,12 @@ class ContactSet:
             gap = np.concatenate(comm.allgather(state["gap"][i]))
             ends = state["end_pressure"][i]
             peak = float(np.max(pressure)) if len(pressure) else 0.0
-            active = _intervals(x_all[order], pressure[order] > 0.0, ends > 0.0,
-                                self.model.length)
+            end_gap = state["end_gap"][i]
+            active = _intervals(
+                np.concatenate([[0.0], x_all[order], [self.model.length]]),
+                np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
+                np.concatenate([[end_gap[0] <= self.tolerance], gap[order] <= self.tolerance,
+                                [end_gap[1] <= self.tolerance]]))
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
                               float(np.max(-state["end_gap"][i])))
             result.append({
@@ -385,27 +444,23 @@ class ContactSet:
         return result
 
 
-def _intervals(x: np.ndarray, active: np.ndarray, ends: np.ndarray, length: float) -> list:
-    """Runs of consecutive active contact points as [[x_first, x_last], ...]; an active end
-    extends the run that reaches its last point or is an interval [x_end, x_end] of its own."""
-    runs = []
-    start = None
-    for j, on in enumerate(active):
-        if on and start is None:
+def _intervals(x: np.ndarray, active: np.ndarray, touching: np.ndarray) -> list:
+    """Runs of consecutive active (pressed) points, sorted by x, as [[x_first, x_last], ...];
+    two runs are joined when every point between them touches (``touching``: gap within the
+    tolerance: unloaded points of one contact zone, to which the augmented-Lagrangian updates
+    have not spread the pressure). The callers put the rod's ends first and last."""
+    active = np.array(active, dtype=bool)
+    on = np.flatnonzero(active)
+    for first, last in zip(on[:-1], on[1:], strict=True):
+        if last > first + 1 and np.all(touching[first + 1:last]):
+            active[first + 1:last] = True
+    runs, start = [], None
+    for j, flag in enumerate(active):
+        if flag and start is None:
             start = j
-        if not on and start is not None:
-            runs.append([float(x[start]), float(x[j - 1]), start, j - 1])
+        if not flag and start is not None:
+            runs.append([float(x[start]), float(x[j - 1])])
             start = None
     if start is not None:
-        runs.append([float(x[start]), float(x[-1]), start, len(x) - 1])
-    if ends[0]:
-        if runs and runs[0][2] == 0:
-            runs[0][0] = 0.0
-        else:
-            runs.insert(0, [0.0, 0.0, -1, -1])
-    if ends[1]:
-        if runs and runs[-1][3] == len(x) - 1:
-            runs[-1][1] = float(length)
-        else:
-            runs.append([float(length), float(length), -1, -1])
-    return [[a, b] for a, b, _, _ in runs]
+        runs.append([float(x[start]), float(x[-1])])
+    return runs

@@ -195,8 +195,8 @@ class ContactSettings:
     4 p, p the element degree: 2p + 1 points per element)."""
 
     penetration_tolerance: float | None = None
-    penalty: float = 100.0
-    max_updates: int = 30
+    penalty: float = 1.0
+    max_updates: int = 50
     quadrature_degree: int | None = None
 
     def __post_init__(self):

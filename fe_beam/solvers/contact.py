@@ -1,6 +1,8 @@
-"""Contact with rigid obstacles as a solver wrapper: Newton at fixed multipliers, then Uzawa
+"""Contact with rigid obstacles as a solver wrapper: Newton at fixed multipliers and a fixed
+active set, then active-set updates until the set is consistent with the pressures, and Uzawa
 updates of the augmented-Lagrangian multipliers (`fe_beam.fem.contact.ContactSet.update`)
-until the largest penetration is below the tolerance. Same interface as
+until the largest penetration, and the largest gap of a pressed point (complementarity
+p g = 0), are below the tolerance. Same interface as
 `fe_beam.solvers.newton.SNESSolver`, so the one continuation engine
 (`fe_beam.solvers.continuation.Continuation`) still does the load stepping and the cut-backs: a
 step whose penetration stays above the tolerance after ``max_updates`` updates raises
@@ -63,17 +65,27 @@ class ContactSolver:
                 linear += self.solver.linear_iterations
                 state = contact.evaluate()
                 penetration = contact.max_penetration(state)
+                separation = contact.max_separation(state)
+                changes = state["active_changes"]
                 self.updates, self.penetration = update, penetration
-                if penetration <= tolerance:
+                if penetration <= tolerance and separation <= tolerance and changes == 0:
                     self.linear_iterations = linear
                     return iterations
                 if update == limit:
                     break
-                contact.update(state)
+                # a new active set first; the multipliers once the set is consistent
+                contact.update(state, multipliers=changes == 0)
         except SolveFailed as error:
             contact.restore()
             raise SolveFailed(f"{error} (contact: after {update} augmented-Lagrangian "
                               "updates)") from None
         contact.restore()
-        raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
-                          f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")
+        if changes:
+            raise SolveFailed(f"contact: the active set still changed at {changes} contact "
+                              f"points after {limit} updates")
+        if penetration > tolerance:
+            raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
+                              f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")
+        raise SolveFailed(f"contact: pressed points {separation:.3g} m clear of the obstacle "
+                          f"(above the tolerance {tolerance:.3g} m) after {limit} "
+                          "augmented-Lagrangian updates")
