@@ -68,12 +68,14 @@ def positive_part(value):
     return ufl.conditional(ufl.gt(value, 0), value, 0)
 
 
+# min and max through abs, not conditionals: their derivatives keep no conditional with a Zero
+# branch (FFCx 0.5 fails on those: a box face's gap does not depend on one coordinate)
 def _smaller(a, b):
-    return ufl.conditional(ufl.lt(a, b), a, b)
+    return (a + b - abs(a - b)) / 2
 
 
 def _larger(a, b):
-    return ufl.conditional(ufl.gt(a, b), a, b)
+    return (a + b + abs(a - b)) / 2
 
 
 def director(theta):
@@ -386,21 +388,34 @@ class ContactSet:
                 if multipliers:
                     constant.value = float(state["end_pressure"][i][e])
 
-    def tunnelled(self, samples: int = 16) -> str | None:
-        """Why the step from the last accepted state to the current one is rejected: a
-        contact point whose straight path between the two crossed an obstacle (a load step
-        that jumped through a thin one), else None. Local (the caller agrees over ranks)."""
-        if self._positions is None:
+    def tunnelled(self) -> str | None:
+        """Why the step from the last accepted state (the undeformed rod before the first) to
+        the current one is rejected: a contact point whose straight path between the two
+        passes deeper than a quarter of the section into an obstacle (a load step that jumped
+        through a thin one), sampled finer than half the thinnest section or box. Local (the
+        caller agrees over ranks); a false alarm (a path cutting a disc's chord) only cuts the
+        step back."""
+        after = self.evaluate()["local"]
+        before = self._positions
+        if before is None:  # the undeformed rod
+            r = np.column_stack([after["x"], np.zeros_like(after["x"])])
+            d = np.tile([0.0, 1.0], (len(r), 1))
+            before = {"r": r, "d": d}
+        if not len(after["x"]):
             return None
-        before, after = self._positions, self.evaluate()["local"]
+        thickness = float(np.min(after["below"] + after["above"]))
+        thinnest = min([thickness] + [min(np.array(o.max) - np.array(o.min))
+                                      for o in self.obstacles if isinstance(o, Box)])
+        moved = float(np.max(np.linalg.norm(after["r"] - before["r"], axis=1)))
+        samples = int(min(2000, max(8, np.ceil(2 * moved / thinnest))))
+        depth = max(10 * self.tolerance, 0.25 * thickness)
         for obstacle in self.obstacles:
             for t in np.linspace(0.0, 1.0, samples + 1)[1:-1]:
                 r = (1 - t) * before["r"] + t * after["r"]
                 d = (1 - t) * before["d"] + t * after["d"]
                 d = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
                 gap = segment_distance(obstacle, r, d, after["below"], after["above"])
-                if len(gap) and np.min(gap) < -max(10 * self.tolerance, 0.5 * float(
-                        np.min(after["below"] + after["above"]))):
+                if np.min(gap) < -depth:
                     j = int(np.argmin(gap))
                     return (f"contact: the load step moved the rod through obstacle "
                             f"{obstacle.name!r} (near x = {after['x'][j]:.4g} m)")
