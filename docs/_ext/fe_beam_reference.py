@@ -110,6 +110,7 @@ def tables() -> dict[str, dict[str, tuple]]:
     from fe_beam.config.buckling import BUCKLING_KEYS
     from fe_beam.config.calibrate import CALIBRATE_KEYS
     from fe_beam.config.compare import COMPARE_KEYS
+    from fe_beam.config.contact import CONTACT_KEYS, OBSTACLE_KEYS
     from fe_beam.config.design import DESIGN_KEYS
     from fe_beam.config.finger import INVERSE_KEYS, TENDON_KEYS
     from fe_beam.config.keys import NUMBER, SCHEMA
@@ -131,6 +132,8 @@ def tables() -> dict[str, dict[str, tuple]]:
             result["section"].setdefault(name, (_type_names(NUMBER), None, None))
     result["tendons"] = _from_keys(TENDON_KEYS) | _undocumented(TENDON_TIME_KEYS)
     result["inverse"] = _from_keys(INVERSE_KEYS)
+    result["obstacles"] = _from_keys(OBSTACLE_KEYS)
+    result["contact"] = _from_keys(CONTACT_KEYS)
     result["time"] = _from_keys(TIME_KEYS)
     result["initial"] = _from_keys(INITIAL_KEYS)
     result["damping"] = _from_keys(DAMPING_KEYS)

@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, closing_of_steps
-from fe_beam.analyses.static import StaticResult, solve_static
+from fe_beam.analyses.static import StaticResult, contact_line, solve_static
 from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     DEFAULT_FINGER,
     INVERSE_KEYS,
@@ -200,7 +200,8 @@ def run_finger(
     # without files nobody looks at the per-step shapes and profiles: skip them (2.5x faster)
     spatial = getattr(config.model, "kinematics", "planar") == "spatial"
     sweep = ([exports.CSVExport(out / "tension_sweep.csv",
-                                sweep_columns(len(config.tendons), spatial),
+                                sweep_columns(len(config.tendons), len(config.obstacles),
+                                              spatial),
                                 empty=False)] if out is not None else [])
     result = solve_static(config, out, comm, progress=progress, extra_summary=extra,
                           record_shapes=out is not None, extra_exports=sweep,
@@ -226,16 +227,28 @@ def run_finger(
     return result, inverse
 
 
-def sweep_columns(tendons: int, spatial: bool = False) -> list[exports.Column]:
+def sweep_columns(tendons: int, obstacles: int = 0, spatial: bool = False
+                  ) -> list[exports.Column]:
     """tension_sweep.csv: load factor, each tendon's tension and pull-in, the tip (spatial
-    rods: u, v, w and the rotation vector)."""
+    rods: u, v, w and the rotation vector); with obstacles the grasp: each obstacle's contact
+    force on the finger (magnitude and global components, `grasp_force`)."""
     tip = [exports.Column(f"tip_{k}", lambda s, k=k: s["tip"][k]) for k in ("u", "v", "w")] + [
         exports.Column(f"tip_rotation_{k}", lambda s, i=i: s["tip"]["rotation_vector"][i])
         for i, k in enumerate("xyz")] if spatial else exports.tip_columns()
+    grasp = []
+    for i in range(obstacles):
+        grasp += [exports.Column(f"grasp_force_{i}", lambda s, i=i: grasp_force(s)[i]),
+                  exports.Column(f"contact{i}_Fx", lambda s, i=i: s["contact"][i]["force"][0]),
+                  exports.Column(f"contact{i}_Fy", lambda s, i=i: s["contact"][i]["force"][1])]
     return [exports.Column("load_factor", lambda s: s["load_factor"]),
             *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
             *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),
-            *tip]
+            *tip, *grasp]
+
+
+def grasp_force(step: dict) -> list[float]:
+    """|force| [N] each obstacle exerts on the finger at a step (the grasp force)."""
+    return [math.hypot(*entry["force"]) for entry in step.get("contact", [])]
 
 
 def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
@@ -425,6 +438,8 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
                  if "w" in tip else f"theta = {tip['theta']:.6g} rad")
         report.out(f"tension [N] {tensions}; pull-in [m] {pulls}; tip u = {tip['u']:.6g} m, "
                    f"v = {tip['v']:.6g} m, {where}")
+        for entry in step.get("contact", []):
+            report.out(contact_line(entry))
     if inverse:
         report.out(f"inverse: tension {inverse['tension']:.8g} N, pull-in "
                    f"{inverse['pull_in']:.6g} m give {inverse['target']} = "

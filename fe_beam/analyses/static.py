@@ -32,7 +32,8 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
     check_beam_work,
 )
 
-__all__ = ["StaticContinuation", "StaticResult", "run", "solve_static"]
+__all__ = ["StaticContinuation", "StaticResult", "contact_columns", "contact_line", "run",
+           "solve_static"]
 
 
 @dataclass
@@ -64,6 +65,14 @@ class StaticResult:
         if self.strain_range is not None:
             data["strain_range"] = self.strain_range
         return data | (extra or {})
+
+
+def contact_line(entry: dict) -> str:
+    """One obstacle's contact state as a report line."""
+    fx, fy = entry["force"]
+    where = ", ".join(f"{a:.4g}..{b:.4g}" for a, b in entry["active"]) or "none"
+    return (f"obstacle '{entry['name']}': force on the rod ({fx:.6g}, {fy:.6g}) N, contact at "
+            f"x = {where} m, max penetration {entry['max_penetration']:.3g} m")
 
 
 def _step_record(problem: BeamProblem, step: StepResult) -> dict:
@@ -128,7 +137,8 @@ def solve_static(
     states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
     files = exports.Exports(states + ([
         exports.CSVExport(out / "load_displacement.csv",
-                          SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS),
+                          (SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS)
+                          + contact_columns(len(config.obstacles))),
         exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
         exports.PlotExport(lambda _: _write_plots(out, result, config)
                            if config.output.plots and result.shapes else None),
@@ -137,6 +147,9 @@ def solve_static(
 
     def record(step: StepResult) -> None:
         entry = _step_record(problem, step)
+        if run.contact is not None:
+            entry["contact"] = run.contact.summary()
+            entry["contact_updates"] = run.solver.updates
         if tendons:
             entry |= {
                 "tensions": tendons.tension_values().tolist(),
@@ -230,7 +243,20 @@ def _model_summary(config: StaticConfig) -> dict:
             **m.section.dims,
             **{f"{k}_tip": v for k, v in m.section.dims_tip.items()},
         },
-    } | law
+    } | law | ({"obstacles": [_obstacle_summary(o) for o in config.obstacles],
+                "contact_settings": {
+                    "penetration_tolerance": config.contact.tolerance(m.section),
+                    "penalty": config.contact.penalty,
+                    "max_updates": config.contact.max_updates,
+                    "quadrature_degree": config.contact.quadrature_degree or 4 * m.mesh.degree,
+                }} if config.obstacles else {})
+
+
+def _obstacle_summary(obstacle) -> dict:
+    import dataclasses
+
+    return {k: (list(v) if isinstance(v, tuple) else v)
+            for k, v in dataclasses.asdict(obstacle).items() if v is not None and k != "dim"}
 
 
 # load_displacement.csv
@@ -244,6 +270,25 @@ SPATIAL_CSV_COLUMNS = [
     *[exports.Column(f"tip_rotation_{k}", lambda s, i=i: s["tip"]["rotation_vector"][i])
       for i, k in enumerate("xyz")],
     exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
+
+
+def contact_columns(count: int) -> list:
+    """load_displacement.csv's columns of obstacle i (in the order of [[obstacles]]): the
+    force the obstacle exerts on the rod, its moment about the origin, the largest
+    penetration and line pressure."""
+    columns = []
+    for i in range(count):
+        def part(record, i=i):
+            return record["contact"][i]
+        columns += [
+            exports.Column(f"contact{i}_Fx", lambda r, p=part: p(r)["force"][0]),
+            exports.Column(f"contact{i}_Fy", lambda r, p=part: p(r)["force"][1]),
+            exports.Column(f"contact{i}_moment", lambda r, p=part: p(r)["moment"]),
+            exports.Column(f"contact{i}_max_penetration", lambda r, p=part:
+                           p(r)["max_penetration"]),
+            exports.Column(f"contact{i}_pressure_peak", lambda r, p=part: p(r)["pressure_peak"]),
+        ]
+    return columns
 
 
 def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
@@ -260,7 +305,8 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
                                                                   "rotation_vector")}
         plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
         return
-    plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length)
+    plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                         obstacles=config.obstacles)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)
@@ -281,5 +327,7 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
             continue
         report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
                    f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")
+        for entry in step.get("contact", []):
+            report.out(contact_line(entry))
     code = closing_of_steps(report, result, out)
     return Result("static", result.summary(), code, report.lines, result)

@@ -139,6 +139,8 @@ OTHER_TABLES = (
     "buckling",
     "validity",
     "path",
+    "obstacles",
+    "contact",
 )
 
 def _type_name(types: tuple) -> str:

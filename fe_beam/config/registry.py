@@ -86,10 +86,12 @@ CALIBRATE_ARGUMENTS = (
 
 _SPECS = (
     CommandSpec("static", "large-deflection statics of a planar beam (load stepping, SNES)",
-                (), lambda config, options: parse_static(config), "static:run", spatial=True),
+                ("obstacles", "contact"), lambda config, options: parse_static(config),
+                "static:run", spatial=True),
     CommandSpec("finger", "tendon-driven tapered soft finger (reduced Cosserat rod with "
                           "[[tendons]])",
-                ("tendons", "inverse"), lambda config, options: parse_finger(config),
+                ("tendons", "inverse", "obstacles", "contact"),
+                lambda config, options: parse_finger(config),
                 "finger:run", spatial=True),
     CommandSpec("design", "optimise section sizes, tendon offsets, tensions or loads for a "
                           "target ([design])",
@@ -143,7 +145,14 @@ COMMAND_TABLES = {name: spec.tables for name, spec in REGISTRY.items() if not sp
 READERS_ORDER = ("design", "static", "finger", "dynamic", "modes", "solid", "compare",
                  "calibrate", "buckling", "validity", "path", "refine")
 
-REFUSED_UNUSED = ("tendons", "inverse")
+REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
+#: how to run what a refused table asks for
+REFUSED_HINTS = {
+    "tendons": "fe-beam finger for a rod pulled by tendons",
+    "inverse": "fe-beam finger for the tension that reaches a target",
+    "obstacles": "fe-beam static or fe-beam finger for contact with rigid obstacles",
+    "contact": "fe-beam static or fe-beam finger for contact with rigid obstacles",
+}
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 
 
@@ -167,9 +176,8 @@ def check_command_tables(command: str, config: dict) -> list[str]:
         if name in SCHEMA or name in used or name not in OTHER_TABLES + ("inverse",):
             continue
         if name in REFUSED_UNUSED:
-            what = "[[tendons]]" if name == "tendons" else f"[{name}]"
-            hint = ("fe-beam finger for a rod pulled by tendons" if name == "tendons"
-                    else "fe-beam finger for the tension that reaches a target")
+            what = f"[[{name}]]" if name in ("tendons", "obstacles") else f"[{name}]"
+            hint = REFUSED_HINTS[name]
             raise ConfigError(
                 f"fe-beam {command} does not use {what}, which is read by {_readers(name)}: "
                 f"run {hint}, or remove {what}")

@@ -12,6 +12,7 @@ import stat
 import tomllib
 from pathlib import Path
 
+from fe_beam.config.contact import parse_contact
 from fe_beam.config.keys import (
     NUMBER,
     OTHER_TABLES,
@@ -364,7 +365,12 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
             "xL = \"roller\")"
         )
     output = OutputOptions(**table(config, "output"))
-    return StaticConfig(model, settings, stepping, jump, output, raw=config)
+    if getattr(model, "kinematics", "planar") == "spatial" and config.get("obstacles"):
+        raise ConfigError("[[obstacles]]: contact of spatial rods ([model] kinematics = "
+                          "\"spatial\") is not available yet; contact works for planar rods")
+    obstacles, contact = parse_contact(config, model)
+    return StaticConfig(model, settings, stepping, jump, output, raw=config,
+                        obstacles=obstacles, contact=contact)
 
 
 # --- checks over the whole configuration, before any command reads it ---------------------------

@@ -523,14 +523,18 @@ def plot_deformed_shapes(
     title: str,
     length: float,
     reference: list[tuple[str, float, float]] = (),
+    obstacles=(),
 ) -> None:
-    """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points."""
+    """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points;
+    ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey."""
 
     with figure(path, figsize=(7, 5), layout=False) as (_, axes):
         colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
         axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
         for (label, shape), colour in zip(shapes, colours, strict=False):
             axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
+        if obstacles:
+            draw_obstacles(axes, obstacles, shapes, length)
         for i, (label, x, y) in enumerate(reference):
             axes.plot(x, y, "kx", ms=7, label=label if i == 0 else None)
         # true shape (equal scales) in an axes that keeps its size: the legend fits inside it
@@ -551,3 +555,38 @@ def plot_load_displacement(load_factors, tips: dict, path: str | Path, title: st
         axes.set_title(title)
         axes.grid(alpha=0.3)
         axes.legend()
+
+
+def draw_obstacles(axes, obstacles, shapes, length: float) -> None:
+    """Planar obstacles as grey patches (a plane as a strip behind its line across the
+    drawn region), labelled with their names; the limits stay those of the rod's shapes."""
+    from matplotlib import patches
+
+    xs = [np.asarray(s["x"]) + np.asarray(s["u"]) for _, s in shapes] or [np.array([0, length])]
+    ys = [np.asarray(s["v"]) for _, s in shapes] or [np.array([0.0])]
+    low = np.array([min(x.min() for x in xs), min(y.min() for y in ys)])
+    high = np.array([max(x.max() for x in xs), max(y.max() for y in ys)])
+    span = max(float(np.max(high - low)), length)
+    low, high = low - 0.25 * span, high + 0.25 * span
+    for obstacle in obstacles:
+        style = {"facecolor": "0.8", "edgecolor": "0.4", "lw": 1, "zorder": 0}
+        shape = getattr(obstacle, "shape", "")
+        if shape == "plane":
+            point, normal = np.array(obstacle.point), np.array(obstacle.normal)
+            tangent = np.array([-normal[1], normal[0]])
+            reach = 2 * float(np.linalg.norm(high - low))
+            a, b = point - reach * tangent, point + reach * tangent
+            depth = 0.05 * span * normal
+            axes.add_patch(patches.Polygon([a, b, b - depth, a - depth], closed=True, **style))
+            anchor = point
+        elif shape in ("sphere", "cylinder"):
+            centre = obstacle.center if shape == "sphere" else obstacle.point
+            axes.add_patch(patches.Circle(centre, obstacle.radius, **style))
+            anchor = np.array(centre)
+        elif shape == "box":
+            size = np.array(obstacle.max) - np.array(obstacle.min)
+            axes.add_patch(patches.Rectangle(obstacle.min, size[0], size[1], **style))
+            anchor = np.array(obstacle.center)
+        else:
+            continue
+        axes.annotate(obstacle.name, anchor, fontsize=7, color="0.3")

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from fe_beam.model.beam import BeamModel
+from fe_beam.model.obstacles import ContactSettings
 from fe_beam.model.settings import LoadStepping, SolverSettings
 
 __all__ = ["OutputOptions", "StaticConfig"]
@@ -27,3 +28,6 @@ class StaticConfig:
     output: OutputOptions = field(default_factory=OutputOptions)
     tendons: tuple = ()
     raw: dict = field(default_factory=dict)
+    #: rigid obstacles ([[obstacles]], `fe_beam.model.obstacles`) and how contact is enforced
+    obstacles: tuple = ()
+    contact: ContactSettings | None = None

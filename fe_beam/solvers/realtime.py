@@ -96,6 +96,9 @@ def structure_key(config: StaticConfig, comm) -> tuple:
               if not kind.realtime),
         tuple(_tendon_geometry(t) for t in config.tendons), repr(config.solver),
         float(config.max_rotation_jump),
+        # obstacles are compiled into the contact forms (and the section's extents with them)
+        (repr(config.obstacles), repr(config.contact), repr(section)) if config.obstacles
+        else (),
     )
 
 
@@ -131,6 +134,8 @@ def apply_config(run, config: StaticConfig) -> None:
         del snes._last_fnorm
     if run.tendons is not None:
         run.solver.load_factor = 0.0
+    if getattr(run, "contact", None) is not None:
+        run.contact.reset()
 
 
 def _set_tendons(tendon_set, tendons) -> None:

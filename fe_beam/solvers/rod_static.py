@@ -10,10 +10,12 @@ from mpi4py import MPI
 
 from fe_beam import runctl
 from fe_beam.fem import compat
+from fe_beam.fem.contact import ContactSet
 from fe_beam.fem.rod import BeamProblem, StrainWatch
 from fe_beam.fem.spatial_rod import SpatialRodProblem
 from fe_beam.fem.tendons import TendonSet
 from fe_beam.model.studies import StaticConfig
+from fe_beam.solvers.contact import ContactSolver
 from fe_beam.solvers.continuation import Continuation, NonlinearParameterProblem
 from fe_beam.solvers.critical import STABILITY_MAX_DOFS, STABILITY_ZERO, spectrum  # noqa: F401
 from fe_beam.solvers.newton import (
@@ -43,14 +45,19 @@ class StaticContinuation:
         problem needs its `TendonSet` (``tendons``: the one whose energy it holds)."""
         if problem is not None and config.tendons and tendons is None:
             raise ValueError("StaticContinuation: a given problem with tendons needs its tendons")
+        if problem is not None and config.obstacles:
+            raise ValueError("StaticContinuation: contact with obstacles needs its own problem")
         self.config = config
         self.tendons = tendons or (TendonSet(config.tendons, config.model.length)
                                    if config.tendons else None)
+        self.contact = (ContactSet(config.obstacles, config.contact, config.model)
+                        if config.obstacles else None)
+        energies = [part.energy for part in (self.tendons, self.contact) if part is not None]
         self.problem = problem or build_problem(
             config.model,
             comm,
             breakpoints=self.tendons.breakpoints if self.tendons else (),
-            extra_energy=self.tendons.energy if self.tendons else None,
+            extra_energy=_summed(energies),
         )
         self.snes = SNESSolver(
             NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
@@ -59,6 +66,8 @@ class StaticContinuation:
             state_scale=config.model.length,
         )
         self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
+        if self.contact is not None:
+            self.solver = ContactSolver(self.solver, self.contact)
         self.load_factor = 0.0
         # extremes of the strains over the converged states (notes when out of range)
         self.watch = StrainWatch()
@@ -101,6 +110,8 @@ class StaticContinuation:
 
         def converged(step: StepResult) -> None:
             self.load_factor = step.load_factor
+            if self.contact is not None:
+                self.contact.commit()
             if self._trial_range is not None:
                 self.watch.observe(self._trial_range)
             if on_converged is not None:
@@ -135,7 +146,7 @@ class StaticContinuation:
         adapter = NonlinearParameterProblem(self.solver, setter, check_step=self._step_check(),
                                             metric=self._metric())
         adapter.arc_length_ready = not (self.tendons and any(
-            t.controlled_by_pull_in for t in self.tendons.tendons))
+            t.controlled_by_pull_in for t in self.tendons.tendons)) and self.contact is None
         return adapter
 
     def engine(self) -> Continuation:
@@ -167,7 +178,10 @@ class StaticContinuation:
             note = getattr(self.problem, "rotation_note", lambda: None)()
             if note and note not in self.notes:
                 self.notes.append(note)
-            return reason or self._trial_range.inadmissible()
+            reason = reason or self._trial_range.inadmissible()
+            if reason is None and self.contact is not None:
+                reason = self.contact.tunnelled()
+            return reason
 
         return check
 
@@ -192,6 +206,8 @@ class StaticContinuation:
         relaxed = getattr(self, "_relaxed_state", None)
         compat.local_array(self.problem.w)[:] = 0.0 if relaxed is None else relaxed
         self.load_factor = 0.0
+        if self.contact is not None:
+            self.contact.reset()
 
     def destroy(self) -> None:
         self.snes.destroy()
@@ -203,6 +219,15 @@ def build_problem(model, comm, breakpoints=(), extra_energy=None):
     kind = SpatialRodProblem if getattr(model, "kinematics", "planar") == "spatial" \
         else BeamProblem
     return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy)
+
+
+def _summed(energies):
+    """One extra_energy hook from several (tendons, contact); None without any."""
+    if not energies:
+        return None
+    if len(energies) == 1:
+        return energies[0]
+    return lambda problem, parts: sum(energy(problem, parts) for energy in energies)
 
 
 def beam_dofs_estimate(config: StaticConfig) -> int:

@@ -1,0 +1,303 @@
+"""Rigid obstacles the rod may touch (docs/theory.md, Contact with rigid obstacles): validated
+dataclasses in the rod's coordinates, their signed distance functions in numpy (the
+configuration checks; `fe_beam.fem.contact` writes the same formulas in UFL), and the contact
+settings. No finite-element imports.
+
+Every shape is dimension-agnostic: a planar rod gives 2 components (x, y), a spatial rod 3.
+In the plane a cylinder is a circle (axis z) and a sphere is a circle too; ``length`` of a
+cylinder and ``axis`` matter for spatial rods only.
+
+Signed distance convention: ``distance(p) >= 0`` outside the obstacle (admissible), < 0 inside.
+
+- plane (point P, unit normal n pointing out of the solid side): (p - P) . n, the solid being
+  the half-space behind the plane;
+- cylinder / sphere (centre C, radius R): |p - C| - R (a cylinder of ``axis`` a: the distance
+  from the axis line, |(p - C) - ((p - C) . a) a| - R; finite ``length`` is a spatial-rod key);
+- box (min corner, max corner; or center and size): max over its faces of the face planes'
+  distances, max_i (+-(p_i - c_i) - half_i). Exact inside and on the faces (its zero level set
+  is the box's boundary), an underestimate outside near the corners (there it is the distance
+  to the nearest face's plane, not to the corner): conservative.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fe_beam.errors import ConfigError
+
+__all__ = ["OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Obstacle", "Plane",
+           "Sphere", "check_clear_of_rod", "distance", "section_extents", "segment_distance"]
+
+
+def _vector(name: str, value, dim: int, where: str) -> tuple[float, ...]:
+    if (not isinstance(value, (list, tuple)) or len(value) != dim
+            or not all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)):
+        raise ValueError(f"{where} {name} must be a list of {dim} numbers (the rod's "
+                         f"{'x, y' if dim == 2 else 'x, y, z'} coordinates); got {value!r}")
+    if not all(math.isfinite(c) for c in value):
+        raise ValueError(f"{where} {name} must be finite; got {value!r}")
+    return tuple(float(c) for c in value)
+
+
+def _positive(name: str, value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            math.isfinite(value) and value > 0):
+        raise ValueError(f"{where} {name} must be a number > 0; got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """Base of the shapes: ``name`` (label in outputs), ``dim`` (2: planar rod, 3: spatial)."""
+
+    name: str = ""
+    dim: int = 2
+
+    @property
+    def where(self) -> str:
+        return f"[[obstacles]] {self.name!r}:" if self.name else "[[obstacles]]"
+
+    def __post_init__(self):
+        if self.dim not in (2, 3):
+            raise ValueError(f"{self.where} dimension must be 2 or 3; got {self.dim!r}")
+
+
+@dataclass(frozen=True)
+class Plane(Obstacle):
+    """The half-space behind the plane through ``point`` with outward ``normal`` (normalised
+    here; the rod lives on the side the normal points to)."""
+
+    point: tuple = (0.0, 0.0)
+    normal: tuple = (0.0, 1.0)
+    shape: str = field(default="plane", init=False)
+
+    def __post_init__(self):
+        super().__post_init__()
+        point = _vector("point", self.point, self.dim, self.where)
+        normal = np.array(_vector("normal", self.normal, self.dim, self.where))
+        size = float(np.linalg.norm(normal))
+        if not size > 0:
+            raise ValueError(f"{self.where} normal must not be the zero vector; got "
+                             f"{list(self.normal)!r}")
+        object.__setattr__(self, "point", point)
+        object.__setattr__(self, "normal", tuple(float(c) for c in normal / size))
+
+
+@dataclass(frozen=True)
+class Sphere(Obstacle):
+    """A ball of ``radius`` about ``center`` (a disc in the plane)."""
+
+    center: tuple = (0.0, 0.0)
+    radius: float = 1.0
+    shape: str = field(default="sphere", init=False)
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "center", _vector("center", self.center, self.dim, self.where))
+        object.__setattr__(self, "radius", _positive("radius", self.radius, self.where))
+
+
+@dataclass(frozen=True)
+class Cylinder(Obstacle):
+    """A cylinder of ``radius`` whose axis passes through ``point`` (planar rods: along z, a
+    disc in the plane; spatial rods: along ``axis``, infinite unless ``length`` is given)."""
+
+    point: tuple = (0.0, 0.0)
+    radius: float = 1.0
+    axis: tuple | None = None
+    length: float | None = None
+    shape: str = field(default="cylinder", init=False)
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "point", _vector("point", self.point, self.dim, self.where))
+        object.__setattr__(self, "radius", _positive("radius", self.radius, self.where))
+        if self.dim == 2:
+            if self.axis is not None and list(self.axis) not in ([0, 0, 1], [0, 0, -1]):
+                raise ValueError(f"{self.where} a planar rod's cylinder has its axis along z "
+                                 f"(leave axis out); got axis = {list(self.axis)!r}")
+            if self.length is not None:
+                raise ValueError(f"{self.where} length is for spatial rods only (a planar "
+                                 "rod's cylinder is an infinite one, a disc in the plane)")
+            object.__setattr__(self, "axis", None)
+            return
+        axis = np.array(_vector("axis", self.axis if self.axis is not None else (0, 0, 1), 3,
+                                self.where))
+        size = float(np.linalg.norm(axis))
+        if not size > 0:
+            raise ValueError(f"{self.where} axis must not be the zero vector")
+        object.__setattr__(self, "axis", tuple(float(c) for c in axis / size))
+        if self.length is not None:
+            object.__setattr__(self, "length", _positive("length", self.length, self.where))
+
+
+@dataclass(frozen=True)
+class Box(Obstacle):
+    """An axis-aligned box from ``min`` to ``max`` (corners; or give ``center`` and ``size``
+    to `Box.from_center`)."""
+
+    min: tuple = (0.0, 0.0)
+    max: tuple = (1.0, 1.0)
+    shape: str = field(default="box", init=False)
+
+    def __post_init__(self):
+        super().__post_init__()
+        low = _vector("min", self.min, self.dim, self.where)
+        high = _vector("max", self.max, self.dim, self.where)
+        if not all(h > lo for lo, h in zip(low, high, strict=True)):
+            raise ValueError(f"{self.where} max must exceed min in every component; got min = "
+                             f"{list(low)!r}, max = {list(high)!r}")
+        object.__setattr__(self, "min", low)
+        object.__setattr__(self, "max", high)
+
+    @classmethod
+    def from_center(cls, center, size, name: str = "", dim: int = 2) -> Box:
+        where = f"[[obstacles]] {name!r}:" if name else "[[obstacles]]"
+        c = np.array(_vector("center", center, dim, where))
+        s = np.array(_vector("size", size, dim, where))
+        if not np.all(s > 0):
+            raise ValueError(f"{where} size must be > 0 in every component; got {list(size)!r}")
+        return cls(name=name, dim=dim, min=tuple(c - s / 2), max=tuple(c + s / 2))
+
+    @property
+    def center(self) -> tuple:
+        return tuple((lo + h) / 2 for lo, h in zip(self.min, self.max, strict=True))
+
+    @property
+    def half(self) -> tuple:
+        return tuple((h - lo) / 2 for lo, h in zip(self.min, self.max, strict=True))
+
+    def faces(self) -> list[tuple[tuple, tuple]]:
+        """(point, outward normal) of each face plane."""
+        faces = []
+        for i in range(self.dim):
+            for sign, corner in ((-1.0, self.min), (1.0, self.max)):
+                normal = tuple(sign if j == i else 0.0 for j in range(self.dim))
+                faces.append((tuple(corner), normal))
+        return faces
+
+
+OBSTACLE_SHAPES = {"plane": Plane, "cylinder": Cylinder, "sphere": Sphere, "box": Box}
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """How contact is enforced (augmented Lagrangian with Uzawa updates: `fe_beam.fem.contact`).
+
+    ``penetration_tolerance`` [m]: the largest penetration a converged step may keep (None: 1e-3
+    x the smallest section height); ``penalty``: the augmentation stiffness k relative to the
+    rod's element bending stiffness, k = penalty * EI_min / h_e^4 per unit length (h_e the
+    smallest element); ``max_updates``: augmented-Lagrangian (Uzawa) updates per load step
+    before the step is rejected; ``quadrature_degree``: the contact integral's Gauss rule (None:
+    4 p, p the element degree: 2p + 1 points per element)."""
+
+    penetration_tolerance: float | None = None
+    penalty: float = 1.0
+    max_updates: int = 50
+    quadrature_degree: int | None = None
+
+    def __post_init__(self):
+        tol = self.penetration_tolerance
+        if tol is not None and (isinstance(tol, bool) or not math.isfinite(tol) or tol <= 0):
+            raise ValueError(f"[contact] penetration_tolerance must be a length > 0 [m]; got "
+                             f"{tol!r}")
+        if not (math.isfinite(self.penalty) and self.penalty > 0):
+            raise ValueError(f"[contact] penalty must be > 0; got {self.penalty!r}")
+        if not (isinstance(self.max_updates, int) and 1 <= self.max_updates <= 1000):
+            raise ValueError(f"[contact] max_updates must be an integer from 1 to 1000; got "
+                             f"{self.max_updates!r}")
+        degree = self.quadrature_degree
+        if degree is not None and not (isinstance(degree, int) and 1 <= degree <= 30):
+            raise ValueError(f"[contact] quadrature_degree must be an integer from 1 to 30; got "
+                             f"{degree!r}")
+
+    def tolerance(self, section) -> float:
+        """The penetration tolerance [m] for a rod of ``section``."""
+        if self.penetration_tolerance is not None:
+            return float(self.penetration_tolerance)
+        below, above = section_extents(section, np.array([0.0, 1.0]))
+        return 1e-3 * float(np.min(below + above))
+
+
+# --- geometry (numpy; the same formulas in UFL live in fe_beam.fem.contact) ---------------------
+def section_extents(section, s, dims: dict | None = None, dims_tip: dict | None = None):
+    """(below, above) >= 0: how far the section reaches from the centreline toward -d and +d
+    at s = x / L (floats, arrays or UFL: plain arithmetic). Rectangle, circle, tube: h/2 each
+    side; t-section: its centroid's distances to the web's foot and the flange's top; custom:
+    its ``h`` (or sqrt(12 I / A)) / 2 each side."""
+    base = section.dims if dims is None else dims
+    tip = section.dims_tip if dims_tip is None else dims_tip
+    at = {n: v + (tip[n] - v) * s if n in tip else v for n, v in base.items()}
+    if section.shape == "t-section":
+        b, h, tf, tw = (at[n] for n in ("b", "h", "tf", "tw"))
+        web, flange = tw * (h - tf), b * tf
+        centroid = (web * (h - tf) / 2 + flange * (h - tf / 2)) / (web + flange)
+        return centroid, h - centroid
+    half = section.properties(s, dims, dims_tip).h / 2
+    return half, half
+
+
+def distance(obstacle: Obstacle, points: np.ndarray) -> np.ndarray:
+    """Signed distance of points (n, dim) to the obstacle (>= 0 outside)."""
+    p = np.atleast_2d(np.asarray(points, dtype=float))
+    if isinstance(obstacle, Plane):
+        return (p - np.array(obstacle.point)) @ np.array(obstacle.normal)
+    if isinstance(obstacle, Sphere):
+        return np.linalg.norm(p - np.array(obstacle.center), axis=1) - obstacle.radius
+    if isinstance(obstacle, Cylinder):
+        rel = p - np.array(obstacle.point)
+        if obstacle.dim == 3:
+            axis = np.array(obstacle.axis)
+            rel = rel - np.outer(rel @ axis, axis)
+        return np.linalg.norm(rel, axis=1) - obstacle.radius
+    if isinstance(obstacle, Box):
+        rel = np.abs(p - np.array(obstacle.center)) - np.array(obstacle.half)
+        return rel.max(axis=1)
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def segment_distance(obstacle: Obstacle, r: np.ndarray, d: np.ndarray, below, above
+                     ) -> np.ndarray:
+    """Signed distance of the planar section, the segment r + eta d, eta in [-below, above],
+    to the obstacle (the centreline offset by the section's extent toward the obstacle).
+    Plane: exact (the nearer end); disc: exact (the segment's point nearest the centre);
+    box: the largest face-plane distance of the segment (see the module)."""
+    r, d = np.atleast_2d(r), np.atleast_2d(d)
+    below, above = np.broadcast_to(below, len(r)), np.broadcast_to(above, len(r))
+    if isinstance(obstacle, Plane):
+        n = np.array(obstacle.normal)
+        dn = d @ n
+        return (r - np.array(obstacle.point)) @ n + np.minimum(above * dn, -below * dn)
+    if isinstance(obstacle, (Sphere, Cylinder)):
+        centre = np.array(obstacle.center if isinstance(obstacle, Sphere) else obstacle.point)
+        eta = np.clip(np.sum((centre - r) * d, axis=1), -below, above)
+        return distance(obstacle, r + eta[:, None] * d)
+    if isinstance(obstacle, Box):
+        gaps = []
+        for point, normal in obstacle.faces():
+            face = Plane(point=point, normal=normal, dim=obstacle.dim)
+            gaps.append(segment_distance(face, r, d, below, above))
+        return np.max(gaps, axis=0)
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int = 2001) -> None:
+    """ConfigError when the obstacle touches or intersects the undeformed rod (the surface:
+    the straight centreline (x, 0) offset by the section's extent toward the obstacle,
+    sampled at ``samples`` stations along x)."""
+    x = np.linspace(0.0, length, samples)
+    r = np.column_stack([x, np.zeros_like(x)] + ([np.zeros_like(x)] if obstacle.dim == 3
+                                                  else []))
+    d = np.zeros_like(r)
+    d[:, 1] = 1.0
+    below, above = section_extents(section, x / length)
+    gap = segment_distance(obstacle, r, d, below, above)
+    worst = int(np.argmin(gap))
+    if not gap[worst] > 0:
+        raise ConfigError(
+            f"{obstacle.where} the {obstacle.shape} intersects the undeformed rod (its surface "
+            f"is {-gap[worst]:.4g} m inside the obstacle at x = {x[worst]:.4g} m); move it "
+            "clear of the rod (the rod starts straight along x with its section centred on y = 0)")

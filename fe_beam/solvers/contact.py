@@ -1,0 +1,91 @@
+"""Contact with rigid obstacles as a solver wrapper: Newton at fixed multipliers and a fixed
+active set, then active-set updates until the set is consistent with the pressures, and Uzawa
+updates of the augmented-Lagrangian multipliers (`fe_beam.fem.contact.ContactSet.update`)
+until the largest penetration, and the largest gap of a pressed point (complementarity
+p g = 0), are below the tolerance. Same interface as
+`fe_beam.solvers.newton.SNESSolver`, so the one continuation engine
+(`fe_beam.solvers.continuation.Continuation`) still does the load stepping and the cut-backs: a
+step whose penetration stays above the tolerance after ``max_updates`` updates raises
+`SolveFailed` (a rejected step, never a converged one). Writes no files."""
+
+from __future__ import annotations
+
+from fe_beam.fem.contact import ContactSet
+from fe_beam.solvers.newton import SolveFailed
+
+__all__ = ["ContactSolver"]
+
+
+class ContactSolver:
+    """Uzawa iterations around a fixed-multiplier solver (an `SNESSolver`, or a
+    `fe_beam.solvers.pull_in.PullInSolver` with tendons). Every solve starts from the
+    multipliers of the last accepted state (`ContactSet.commit`, called by the continuation
+    when a step is accepted), so a failed or vetoed try leaves nothing behind."""
+
+    def __init__(self, solver, contact: ContactSet):
+        self.solver = solver
+        self.problem = solver.problem
+        self.contact = contact
+        self.linear_iterations = 0
+        self.updates = 0  # Uzawa updates of the last solve
+        self.penetration = 0.0  # the largest penetration after the last solve [m]
+
+    @property
+    def load_factor(self):
+        return getattr(self.solver, "load_factor", 0.0)
+
+    @load_factor.setter
+    def load_factor(self, value) -> None:
+        if hasattr(self.solver, "load_factor"):
+            self.solver.load_factor = value
+
+    def residual_norm(self) -> float:
+        return self.solver.residual_norm()
+
+    def set_reference_residual(self, value: float | None) -> None:
+        self.solver.set_reference_residual(value)
+
+    def set_load_factor(self, value) -> None:
+        setter = getattr(self.solver, "set_load_factor", None)
+        if setter is not None:
+            setter(value)
+
+    def destroy(self) -> None:
+        self.solver.destroy()
+
+    def solve(self) -> int:
+        contact = self.contact
+        contact.restore()
+        iterations, linear = 0, 0
+        tolerance = contact.tolerance
+        limit = contact.settings.max_updates
+        try:
+            for update in range(limit + 1):
+                iterations += self.solver.solve()
+                linear += self.solver.linear_iterations
+                state = contact.evaluate()
+                penetration = contact.max_penetration(state)
+                separation = contact.max_separation(state)
+                changes = state["active_changes"]
+                self.updates, self.penetration = update, penetration
+                if penetration <= tolerance and separation <= tolerance and changes == 0:
+                    self.linear_iterations = linear
+                    return iterations
+                if update == limit:
+                    break
+                # a new active set first; the multipliers once the set is consistent
+                contact.update(state, multipliers=changes == 0)
+        except SolveFailed as error:
+            contact.restore()
+            raise SolveFailed(f"{error} (contact: after {update} augmented-Lagrangian "
+                              "updates)") from None
+        contact.restore()
+        if changes:
+            raise SolveFailed(f"contact: the active set still changed at {changes} contact "
+                              f"points after {limit} updates")
+        if penetration > tolerance:
+            raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
+                              f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")
+        raise SolveFailed(f"contact: pressed points {separation:.3g} m clear of the obstacle "
+                          f"(above the tolerance {tolerance:.3g} m) after {limit} "
+                          "augmented-Lagrangian updates")

@@ -1,0 +1,77 @@
+"""[[obstacles]] and [contact]: every mistake exits 2 with one sentence naming the key."""
+
+import pytest
+from test_config import BASE, run_cli, usage_error
+
+from fe_beam.config.registry import validate
+
+FLOOR = {"shape": "plane", "point": [0.0, -0.01], "normal": [0.0, 1.0]}
+
+
+def with_obstacles(*obstacles, **tables):
+    return {**BASE, "obstacles": list(obstacles), **tables}
+
+
+@pytest.mark.parametrize("obstacle, words", [
+    ({**FLOOR, "normal": [0.0, 0.0]}, ("normal", "zero vector")),
+    ({"shape": "sphere", "center": [0.5, 1.0], "radius": -0.1}, ("radius", "> 0")),
+    ({"shape": "cylinder", "point": [0.5, 1.0], "radius": 0.0}, ("radius", "> 0")),
+    ({"shape": "blob", "point": [0.0, 1.0]}, ("shape", "plane, cylinder, sphere, box")),
+    ({**FLOOR, "point": [0.0, -0.01, 0.0]}, ("point", "2 numbers")),
+    ({**FLOOR, "point": [0.0, -0.001]}, ("intersects the undeformed rod", "x = ")),
+    ({"shape": "sphere", "center": [0.5, 0.009], "radius": 0.004}, ("intersects",)),
+    ({"shape": "box", "min": [0.2, -0.1], "max": [0.3, 0.2]}, ("intersects",)),
+    ({"shape": "box", "min": [0.2, -0.1], "max": [0.3, -0.2]}, ("max must exceed min",)),
+    ({"shape": "box", "min": [0.2, -0.1]}, ("max", "go together")),
+    ({**FLOOR, "radius": 1.0}, ("radius", "does not apply")),
+    ({**FLOOR, "colour": "red"}, ("unknown key", "colour")),
+    ({"shape": "plane", "point": [0.0, -1.0]}, ("needs normal",)),
+])
+def test_bad_obstacle_exits_2(tmp_path, capsys, obstacle, words):
+    code, err, out, path = run_cli(tmp_path, with_obstacles(obstacle), capsys=capsys)
+    message = usage_error(code, err, path)
+    assert "[[obstacles]]" in message, message
+    for word in words:
+        assert word in message, message
+    assert not (out / "summary.json").exists()
+
+
+@pytest.mark.parametrize("contact, key", [
+    ({"penetration_tolerance": -1.0}, "penetration_tolerance"),
+    ({"penalty": 0.0}, "penalty"),
+    ({"max_updates": 0}, "max_updates"),
+    ({"typo": 1}, "typo"),
+])
+def test_bad_contact_settings_exit_2(tmp_path, capsys, contact, key):
+    code, err, _, path = run_cli(tmp_path, with_obstacles(FLOOR, contact=contact),
+                                 capsys=capsys)
+    assert key in usage_error(code, err, path)
+
+
+def test_contact_without_obstacles_and_obstacles_as_one_table(tmp_path, capsys):
+    code, err, _, path = run_cli(tmp_path, {**BASE, "contact": {"penalty": 1.0}}, capsys=capsys)
+    assert "no [[obstacles]]" in usage_error(code, err, path)
+    code, err, _, path = run_cli(tmp_path, {**BASE, "obstacles": FLOOR}, capsys=capsys)
+    assert "double brackets" in usage_error(code, err, path)
+
+
+def test_obstacles_parsed_in_order_with_defaults():
+    parsed = validate("static", with_obstacles(
+        FLOOR, {"shape": "box", "name": "plate", "center": [0.5, 0.5], "size": [0.2, 0.1]},
+        {"shape": "cylinder", "point": [0.5, 1.0], "radius": 0.2})).parsed
+    names = [o.name for o in parsed.obstacles]
+    assert names == ["obstacle1", "plate", "obstacle3"]
+    plate = parsed.obstacles[1]
+    assert plate.min == pytest.approx((0.4, 0.45)) and plate.max == pytest.approx((0.6, 0.55))
+    assert parsed.contact.penalty == 1.0
+    # default tolerance: 1e-3 of the section height
+    assert parsed.contact.tolerance(parsed.model.section) == pytest.approx(1e-5)
+
+
+def test_a_command_that_ignores_obstacles_refuses_them():
+    from fe_beam.config.registry import check_command_tables
+    from fe_beam.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"does not use \[\[obstacles\]\]"):
+        check_command_tables("dynamic", with_obstacles(FLOOR))
+    assert check_command_tables("static", with_obstacles(FLOOR)) == []
