@@ -103,7 +103,9 @@ class TendonSet:
             inside.interpolate(lambda x, t=tendon: ((x[0] > t.entry) & (x[0] < t.anchor)) * 1.0)
             deltas = []
             routing = getattr(tendon, "routing", None)
-            if routing is not None and getattr(problem, "spatial", False):
+            if not getattr(problem, "spatial", False):
+                routing = None  # the planar rod reads the sampled paths of a routing
+            if routing is not None:
                 # the formulas themselves: exact offsets and derivatives in the forms
                 deltas.append(tuple(profile_expression(profile, mesh) for profile in routing))
             for path in tendon.paths if routing is None else ():
