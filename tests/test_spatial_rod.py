@@ -135,7 +135,8 @@ def helix_tip(M, EI, length):
     def chord(n):
         s = np.linspace(0, length, n)
         values = np.array([expm_skew(si * np.asarray(M) / EI)[:, 0] for si in s])
-        return np.trapz(values, s, axis=0)
+        trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed it
+        return trapezoid(values, s, axis=0)
 
     coarse, fine = chord(2001), chord(4001)
     return fine + (fine - coarse) / 3, expm_skew(length * np.asarray(M) / EI)[:, 0]
