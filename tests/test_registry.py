@@ -37,6 +37,9 @@ EXAMPLE_COMMANDS = {
     "column_buckling.toml": {"buckling": tuple},
     "elastica_path.toml": {"path": tuple},
     "snap_through.toml": {"path": tuple},
+    "spatial_finger.toml": {"finger": tuple},
+    "bathe_bolourchi.toml": {"static": StaticConfig},
+    "lateral_torsional.toml": {"buckling": tuple, "path": tuple},
     "section_laws/finger_dragon_skin_30.toml": {"solid": SolidConfig, "compare": CompareConfig},
     "section_laws/finger_neo_hookean.toml": {"solid": SolidConfig, "compare": CompareConfig},
 }

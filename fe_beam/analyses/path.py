@@ -268,7 +268,7 @@ def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
     import time
 
 
-    spatial = getattr(writer, "problem", None) is not None and writer.problem.spatial
+    spatial = getattr(getattr(writer, "problem", None), "spatial", False)  # the solid: planar CSV
     columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
                                      else _tip_value(r, n[4:])))
                for name in (SPATIAL_PATH_CSV if spatial else PATH_CSV)]
