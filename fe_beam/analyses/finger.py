@@ -268,18 +268,7 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
             ("curvature about b [1/m]", cells["kappa"], "(c) curvature about b"),
             ("compression [N]", -cells["axial_force"], "(d) compression (-axial force)"),
         ]
-        for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
-            axis.plot(cells["x"], values, lw=1.8)
-            axis.set_title(title, fontsize=9)
-            axis.set_ylabel(label)
-            axis.grid(alpha=0.3)
-        for axis in axes[1]:
-            axis.set_xlabel("s [m]")
-        tension = result.steps[-1]["tensions"]
-        drawn.suptitle(
-            f"Profiles along the finger at tension {', '.join(f'{t:.3g}' for t in tension)}"
-            " N (cf. chapter Fig. 3.8)"
-        )
+        _profile_panels(drawn, axes, cells["x"], panels, result.steps[-1]["tensions"])
 
     with exports.figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
         every = max(1, len(result.shapes) // 8)
@@ -313,6 +302,20 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         result.notes.append(note)  # the summary of the run (rank 0, which draws) says it too
 
 
+def _profile_panels(drawn, axes, x, panels, tension) -> None:
+    """The four profiles along s of the chapter's Figure 3.8 (label, values, title each)."""
+    for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
+        axis.plot(x, values, lw=1.8)
+        axis.ticklabel_format(axis="y", useOffset=False)
+        axis.set_title(title, fontsize=9)
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    for axis in axes[1]:
+        axis.set_xlabel("s [m]")
+    drawn.suptitle(f"Profiles along the finger at tension "
+                   f"{', '.join(f'{t:.3g}' for t in tension)} N (cf. chapter Fig. 3.8)")
+
+
 def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     """A spatial finger: the chapter's Figure 3.8 with its three curvatures (torsion, about
     d2, about d3) and the axial strain, the backbone in three views and a 3D view (Fig. 3.9),
@@ -325,17 +328,7 @@ def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -
                   ("curvature about d2 [1/m]", cells["curvature_y"], "(b) curvature about d2"),
                   ("curvature about d3 [1/m]", cells["curvature_z"], "(c) curvature about d3"),
                   ("axial strain v1 - 1", cells["v1"] - 1, "(d) axial strain")]
-        for axis, (label, values, title) in zip(axes.flat, panels, strict=True):
-            axis.plot(cells["x"], values, lw=1.8)
-            axis.ticklabel_format(axis="y", useOffset=False)
-            axis.set_title(title, fontsize=9)
-            axis.set_ylabel(label)
-            axis.grid(alpha=0.3)
-        for axis in axes[1]:
-            axis.set_xlabel("s [m]")
-        tension = result.steps[-1]["tensions"]
-        drawn.suptitle(f"Profiles along the finger at tension "
-                       f"{', '.join(f'{t:.3g}' for t in tension)} N (cf. chapter Fig. 3.8)")
+        _profile_panels(drawn, axes, cells["x"], panels, result.steps[-1]["tensions"])
     every = max(1, len(result.shapes) // 8)
     shapes = [(f"tension {step['tensions'][0]:.3g} N", shape) for (_, shape), step in list(
         zip(result.shapes, result.steps, strict=True))[every - 1:: every]]

@@ -193,79 +193,40 @@ def parse_model(config: dict) -> BeamModel | SpatialRodModel:
         raise ConfigError(f"[model] kinematics must be \"planar\" or \"spatial\"; got "
                           f"{shown(kinematics)}")
     material, law_options = _rod_material(config, model)
-    if kinematics == "spatial":
-        return _parse_spatial_model(config, beam, model, material, law_options)
-    if beam["initial_curvature"] is not None:
-        raise ConfigError("[beam] initial_curvature needs [model] kinematics = \"spatial\" (the "
-                          "planar rod is straight)")
-    mesh = table(config, "mesh")
-    supports = table(config, "supports")
-    loads = table(config, "loads")
-    section = parse_section(config)
-    return _wrap(
-        BeamModel,
-        length=beam["length"],
-        section=section,
-        material=material,
-        options=_wrap(ModelOptions, **model, **law_options),
-        mesh=_wrap(Discretisation, **mesh),
-        supports=_wrap(
-            Supports,
-            x0=_support(supports["x0"]),
-            xL=_support(supports["xL"]),
-            prescribed_x0=loads["prescribed_x0"],
-            prescribed_xL=loads["prescribed_xL"],
-        ),
-        loads=_wrap(
-            Loads,
-            tip_force=loads["tip_force"],
-            tip_moment=loads["tip_moment"],
-            follower=loads["follower"],
-            distributed=loads["distributed"],
-            gravity=loads["gravity"],
-            point_forces=loads["point_forces"],
-            end_displacement=loads["end_displacement"],
-            end_rotation=loads["end_rotation"],
-        ),
-    )
-
-
-def _parse_spatial_model(config, beam, model, material, law_options) -> SpatialRodModel:
-    """The `SpatialRodModel` of a configuration with ``[model] kinematics = "spatial"``."""
-    mesh = table(config, "mesh")
-    supports = table(config, "supports")
-    loads = table(config, "loads")
-    section = parse_section(config)
-    if model["law"] == "hyperelastic":
+    spatial = kinematics == "spatial"
+    if spatial and model["law"] == "hyperelastic":
         raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
                           "\"spatial\" yet (use \"nonstandard\" or \"reissner\")")
+    if not spatial and beam["initial_curvature"] is not None:
+        raise ConfigError("[beam] initial_curvature needs [model] kinematics = \"spatial\" (the "
+                          "planar rod is straight)")
+    supports = table(config, "supports")
+    loads = table(config, "loads")
+    model_kind, supports_kind, loads_kind = ((SpatialRodModel, SpatialSupports, SpatialLoads)
+                                             if spatial else (BeamModel, Supports, Loads))
+    extra = {"initial_curvature": beam["initial_curvature"]} if spatial else {}
     return _wrap(
-        SpatialRodModel,
+        model_kind,
         length=beam["length"],
-        section=section,
+        section=parse_section(config),
         material=material,
         options=_wrap(ModelOptions, **model, **law_options),
-        mesh=_wrap(Discretisation, **mesh),
+        mesh=_wrap(Discretisation, **table(config, "mesh")),
         supports=_wrap(
-            SpatialSupports,
+            supports_kind,
             x0=_support(supports["x0"]),
             xL=_support(supports["xL"]),
             prescribed_x0=loads["prescribed_x0"],
             prescribed_xL=loads["prescribed_xL"],
         ),
-        loads=_wrap(
-            SpatialLoads,
-            tip_force=loads["tip_force"],
-            tip_moment=loads["tip_moment"],
-            follower=loads["follower"],
-            distributed=loads["distributed"],
-            gravity=loads["gravity"],
-            point_forces=loads["point_forces"],
-            end_displacement=loads["end_displacement"],
-            end_rotation=loads["end_rotation"],
-        ),
-        initial_curvature=beam["initial_curvature"],
+        loads=_wrap(loads_kind, **{key: loads[key] for key in LOAD_KEYS}),
+        **extra,
     )
+
+
+#: the [loads] keys the model's loads take (planar `Loads` and `SpatialLoads` alike)
+LOAD_KEYS = ("tip_force", "tip_moment", "follower", "distributed", "gravity", "point_forces",
+             "end_displacement", "end_rotation")
 
 
 def _support(spec):

@@ -383,6 +383,19 @@ class BeamXDMFWriter:
     def __init__(self, problem, path: str | Path | None):
         self.problem = problem
         mesh = problem.mesh
+        self.functions = {}
+        self._expressions = []
+        for name, expr, space in self._plan(problem):
+            function = fem.Function(space, name=name)
+            self.functions[name] = function
+            self._expressions.append((function, compat.interpolation_expression(
+                ufl.as_ufl(expr), space)))
+        self._file = XDMFSeries(mesh, path) if path is not None else None
+
+    @staticmethod
+    def _plan(problem) -> list:
+        """(name, UFL expression, output space) of every field written."""
+        mesh = problem.mesh
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=2))
         cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
@@ -393,14 +406,8 @@ class BeamXDMFWriter:
             ("theta", theta, scalar),
             ("displacement", ufl.as_vector([u, v]), vector),
         ]
-        plan += [(name, expr, cellwise) for name, expr in problem.output_expressions().items()]
-        self.functions = {}
-        self._expressions = []
-        for name, expr, space in plan:
-            function = fem.Function(space, name=name)
-            self.functions[name] = function
-            self._expressions.append((function, compat.interpolation_expression(expr, space)))
-        self._file = XDMFSeries(mesh, path) if path is not None else None
+        return plan + [(name, expr, cellwise)
+                       for name, expr in problem.output_expressions().items()]
 
     def update(self) -> None:
         for function, expression in self._expressions:

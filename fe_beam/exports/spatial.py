@@ -11,10 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import ufl
-from dolfinx import fem
 
-from fe_beam.exports.outputs import XDMFSeries, _pyplot, figure, gather_line
+from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, figure, gather_line
 from fe_beam.exports.plotting import legend_inside
 from fe_beam.fem import compat
 
@@ -23,14 +21,14 @@ __all__ = ["SpatialXDMFWriter", "plot_spatial_load_displacement", "plot_spatial_
 NODAL = ("u", "v", "w", "theta_x", "theta_y", "theta_z")
 
 
-class SpatialXDMFWriter:
+class SpatialXDMFWriter(BeamXDMFWriter):
     """XDMF time series of a `fe_beam.fem.spatial_rod.SpatialRodProblem`: the displacement
     (a 3-vector, P1 at the vertices: "Warp By Vector"), the rotation vector, the directors
     d1, d2, d3 (3-vectors: "Glyph" shows the section frames) and the strains v1, v2, v3 and
     curvatures twist, curvature_y, curvature_z (DG0, at element midpoints)."""
 
-    def __init__(self, problem, path: str | Path | None):
-        self.problem = problem
+    @staticmethod
+    def _plan(problem) -> list:
         mesh = problem.mesh
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=3))
@@ -41,28 +39,8 @@ class SpatialXDMFWriter:
         plan += [("displacement", d, vector), ("rotation_vector", theta, vector)]
         plan += [(f"d{i + 1}", director, vector)
                  for i, director in enumerate(problem.directors())]
-        plan += [(name, expr, cellwise) for name, expr in problem.output_expressions().items()]
-        self.functions = {}
-        self._expressions = []
-        for name, expr, space in plan:
-            function = fem.Function(space, name=name)
-            self.functions[name] = function
-            self._expressions.append((function, compat.interpolation_expression(
-                ufl.as_ufl(expr), space)))
-        self._file = XDMFSeries(mesh, path) if path is not None else None
-
-    def update(self) -> None:
-        for function, expression in self._expressions:
-            function.interpolate(expression)
-
-    def write(self, time: float, flush: bool | None = None) -> None:
-        self.update()
-        if self._file is not None:
-            self._file.write(time, self.functions, flush)
-
-    def flush(self) -> None:
-        if self._file is not None:
-            self._file.flush()
+        return plan + [(name, expr, cellwise)
+                       for name, expr in problem.output_expressions().items()]
 
     def vertex_values(self, update: bool = True) -> dict | None:
         """Nodal u, v, w, the rotation vector and x, and the directors d2, d3 (arrays of
@@ -87,11 +65,6 @@ class SpatialXDMFWriter:
             nodal.update(frames)
             nodal["cells"] = cellwise
         return nodal
-
-    def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
 
 
 def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title: str,

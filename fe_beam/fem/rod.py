@@ -253,12 +253,12 @@ class BeamProblem:
         added to the stored energy (e.g. tendons)."""
         self.model = model
         # every point force sits on a mesh vertex (its work is a vertex integral)
-        breakpoints = tuple(breakpoints) + tuple(x for x, _, _ in model.loads.point_forces)
+        breakpoints = tuple(breakpoints) + tuple(f[0] for f in model.loads.point_forces)
         self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
         degree = model.mesh.degree
-        self.multipliers = constrained_strains(model.options.constraint)
-        elements = [compat.element(self.mesh, "Lagrange", degree)] * 3
+        self.multipliers = self._constrained_strains()
+        elements = [compat.element(self.mesh, "Lagrange", degree)] * len(self.components)
         elements += [compat.element(self.mesh, "DG", degree - 1)] * len(self.multipliers)
         self.space = compat.function_space(self.mesh, compat.mixed_element(elements))
         self.w = fem.Function(self.space, name="state")
@@ -274,7 +274,13 @@ class BeamProblem:
         self.residual = self._residual()
 
     # --- set-up pipeline -------------------------------------------------------------------
-    def _make_constants(self) -> None:
+    def _constrained_strains(self) -> tuple:
+        """The strains the constraint holds at zero (a multiplier field each)."""
+        return constrained_strains(self.model.options.constraint)
+
+    def _material_constants(self):
+        """E, G, rho, the shear correction and the section's dimensions as fem.Constant (the
+        sensitivities differentiate the forms by them); returns (dims, dims_tip, x)."""
         m, sec = self.model, self.model.section
         const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
         self.E = const(m.material.E)
@@ -283,9 +289,13 @@ class BeamProblem:
         self.k_shear = const(m.options.shear_correction)
         dims = {n: const(v) for n, v in sec.dims.items()}
         dims_tip = {n: const(v) for n, v in sec.dims_tip.items()}
-        # the section's dimension constants (sensitivities differentiate the forms by them)
         self.section_dims, self.section_dims_tip = dims, dims_tip
-        x = ufl.SpatialCoordinate(self.mesh)[0]
+        return dims, dims_tip, ufl.SpatialCoordinate(self.mesh)[0]
+
+    def _make_constants(self) -> None:
+        m, sec = self.model, self.model.section
+        const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
+        dims, dims_tip, x = self._material_constants()
         self.section_props = sec.properties(x / m.length, dims, dims_tip)
         p = self.section_props
         self.stiffness = Stiffness(
@@ -366,11 +376,11 @@ class BeamProblem:
         # the work is one vertex integral per kind of vertex (interior, x = L, x = 0) however
         # many forces there are (a Constant and an integral each took ~2 min for 1000 forces)
         space = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange", 1))
-        nodal = [fem.Function(space), fem.Function(space)]
+        nodal = [fem.Function(space) for _ in forces[0][1:]]  # a field per force component
         interior, at = [], set()
-        for x, px, py in forces:
+        for x, *force in forces:
             dofs = compat.locate_dofs_geometrical(space, self.point_marker(x))
-            for function, value in zip(nodal, (px, py), strict=True):
+            for function, value in zip(nodal, force, strict=True):
                 function.x.array[dofs] += value
             if abs(x - self.model.length) <= self.point_tolerance:
                 at.add("tip")

@@ -22,7 +22,7 @@ from dolfinx import fem
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
-from fe_beam.fem.rod import BeamProblem, StrainRange, interval_mesh
+from fe_beam.fem.rod import BeamProblem, StrainRange
 from fe_beam.fem.rotations import curvature, profile_expression, rotation, spin_map
 from fe_beam.model.spatial import (
     SPATIAL_COMPONENTS,
@@ -123,43 +123,23 @@ class SpatialRodProblem(BeamProblem):
     spatial = True
 
     def __init__(self, model: SpatialRodModel, comm, breakpoints=(), extra_energy=None):
-        self.model = model
-        breakpoints = tuple(breakpoints) + tuple(f[0] for f in model.loads.point_forces)
-        self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
-        self.comm = comm
-        degree = model.mesh.degree
-        self.multipliers = SPATIAL_CONSTRAINED[model.options.constraint]
-        elements = [compat.element(self.mesh, "Lagrange", degree)] * 6
-        elements += [compat.element(self.mesh, "DG", degree - 1)] * len(self.multipliers)
-        self.space = compat.function_space(self.mesh, compat.mixed_element(elements))
-        self.w = fem.Function(self.space, name="state")
-        self.load_factor = fem.Constant(self.mesh, 0.0)
-        self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
-        self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
-        self._make_constants()
-        self._mark_ends()
-        self._check_breakpoints(breakpoints)
-        self._point_force_measures()
         self.reference_tip = np.zeros(3)
-        self.curved = model.curved
-        self.bcs, self._prescribed = self._dirichlet_conditions()
-        self.extra_energy = extra_energy
-        self.residual = self._residual()
+        super().__init__(model, comm, breakpoints, extra_energy)
         if self.curved:
             self._set_stress_free_guess()
 
+    @property
+    def curved(self) -> bool:
+        """An initial curvature: the stress-free shape is not the straight reference."""
+        return self.model.curved
+
     # --- set-up ----------------------------------------------------------------------------
+    def _constrained_strains(self) -> tuple:
+        return SPATIAL_CONSTRAINED[self.model.options.constraint]
+
     def _make_constants(self) -> None:
         m, sec = self.model, self.model.section
-        const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
-        self.E = const(m.material.E)
-        self.G = const(m.material.shear_modulus)
-        self.rho = const(m.material.rho)
-        self.k_shear = const(m.options.shear_correction)
-        dims = {n: const(v) for n, v in sec.dims.items()}
-        dims_tip = {n: const(v) for n, v in sec.dims_tip.items()}
-        self.section_dims, self.section_dims_tip = dims, dims_tip
-        x = ufl.SpatialCoordinate(self.mesh)[0]
+        dims, dims_tip, x = self._material_constants()
         self.x = x
         p = sec.spatial_properties(x / m.length, dims, dims_tip, tanh=ufl.tanh)
         self.section_props = p
@@ -176,34 +156,6 @@ class SpatialRodProblem(BeamProblem):
         self.tip_moment = vector(loads.tip_moment)
         self.distributed = vector(loads.distributed)
         self.gravity = vector(loads.gravity)
-
-    def _point_force_measures(self) -> None:
-        """As the planar rod's: one nodal force field per component (x, y, z)."""
-        self.point_forces = []
-        forces = self.model.loads.point_forces
-        if not forces:
-            return
-        space = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange", 1))
-        nodal = [fem.Function(space) for _ in range(3)]
-        interior, at = [], set()
-        for x, *force in forces:
-            dofs = compat.locate_dofs_geometrical(space, self.point_marker(x))
-            for function, value in zip(nodal, force, strict=True):
-                function.x.array[dofs] += value
-            if abs(x - self.model.length) <= self.point_tolerance:
-                at.add("tip")
-            else:
-                interior.append(compat.locate_entities(self.mesh, 0, self.point_marker(x)))
-        self.point_force_fields = nodal
-        force = ufl.as_vector(nodal)
-        if interior:
-            self.mesh.topology.create_connectivity(0, 1)
-            vertices = np.unique(np.concatenate(interior)).astype(np.int32)
-            tags = compat.meshtags(self.mesh, 0, vertices, np.ones(len(vertices), np.int32))
-            measure = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)(1)
-            self.point_forces.append((measure, force, False))
-        if "tip" in at:
-            self.point_forces.append((self.ds_tip, force, True))
 
     def _dirichlet_conditions(self):
         if self.curved:

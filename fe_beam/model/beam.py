@@ -303,6 +303,20 @@ def _point_forces(value) -> tuple:
     return tuple(forces)
 
 
+def check_rod(length, material: Material, loads) -> None:
+    """What every rod model checks: a length > 0, gravity with a density, point forces on the
+    rod (0 < x <= L); ValueError naming the key otherwise."""
+    ok = isinstance(length, (int, float)) and not isinstance(length, bool)
+    if not ok or not _finite(length) or length <= 0:
+        raise ValueError(f"beam.length must be a number > 0, got {length!r}")
+    if material.rho == 0 and any(loads.gravity):
+        raise ValueError("loads.gravity needs material.rho > 0")
+    for index, force in enumerate(loads.point_forces):
+        if not 0 < force[0] <= length:
+            raise ValueError(f"loads.point_forces[{index}]: x = {force[0]!r} is outside the beam "
+                             f"(0 < x <= L = {length!r})")
+
+
 @dataclass(frozen=True)
 class BeamModel:
     """Everything that defines a planar beam problem."""
@@ -316,15 +330,7 @@ class BeamModel:
     loads: Loads = field(default_factory=Loads)
 
     def __post_init__(self):
-        ok = isinstance(self.length, (int, float)) and not isinstance(self.length, bool)
-        if not ok or not _finite(self.length) or self.length <= 0:
-            raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
-        if self.material.rho == 0 and any(self.loads.gravity):
-            raise ValueError("loads.gravity needs material.rho > 0")
-        for index, (x, _, _) in enumerate(self.loads.point_forces):
-            if not 0 < x <= self.length:
-                raise ValueError(f"loads.point_forces[{index}]: x = {x!r} is outside the beam "
-                                 f"(0 < x <= L = {self.length!r})")
+        check_rod(self.length, self.material, self.loads)
         for index, (x, px, py) in enumerate(self.loads.point_forces):
             # as loads.tip_force: at the prescribed end the support would take the force
             if self.loads.end_displacement is not None and self.length - x <= 1e-9 * \

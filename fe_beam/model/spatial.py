@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fe_beam.model.beam import Discretisation, ModelOptions, _finite, _rank
+from fe_beam.model.beam import Discretisation, ModelOptions, _finite, _rank, check_rod
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import MOMENT_ORDERS, Section
 from fe_beam.timefunctions import Profile, TimeFunctionError, parse_profile
@@ -340,18 +340,10 @@ class SpatialRodModel:
     kinematics = "spatial"
 
     def __post_init__(self):
-        ok = isinstance(self.length, (int, float)) and not isinstance(self.length, bool)
-        if not ok or not _finite(self.length) or self.length <= 0:
-            raise ValueError(f"beam.length must be a number > 0, got {self.length!r}")
+        check_rod(self.length, self.material, self.loads)
         if self.options.law not in SPATIAL_LAWS:
             raise ValueError(f"[model] law = {self.options.law!r} is not available for "
                              f"kinematics = \"spatial\" yet (use {' or '.join(SPATIAL_LAWS)})")
-        if self.material.rho == 0 and any(self.loads.gravity):
-            raise ValueError("loads.gravity needs material.rho > 0")
-        for index, force in enumerate(self.loads.point_forces):
-            if not 0 < force[0] <= self.length:
-                raise ValueError(f"loads.point_forces[{index}]: x = {force[0]!r} is outside the "
-                                 f"rod (0 < x <= L = {self.length!r})")
         object.__setattr__(self, "initial_curvature",
                            _curvatures(self.initial_curvature, self.length))
         motion = self.loads.end_motion()
