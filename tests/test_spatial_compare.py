@@ -229,7 +229,7 @@ def test_in_plane_tendon_through_the_spatial_rod_gives_the_planar_compare():
             runs["spatial"]["departures"][law]["max_distance_over_L"], rel=1e-8, abs=1e-12)
 
 
-# --- (c) 2 ranks = serial ---------------------------------------------------------------------------
+# --- (c) 2 ranks = serial ------------------------------------------------------------------------
 @pytest.mark.mpi
 def test_spatial_compare_two_ranks_equal_serial():
     if MPI.COMM_WORLD.size == 1:
@@ -268,14 +268,17 @@ MISTAKES = [
     ("compare", edited(FINGER, model=None, tendons=[{"offset_y": 0.004, "tension": 1.0}],
                        compare={}, loads={"tip_force": [0.0, 0.0, 0.01]}),
      '[loads] tip_force must be planar'),
-    ("refine", FINGER, "fe-beam refine does not run spatial rods yet"),
+    ("refine --levels 3 --quantity tip.theta", edited(FINGER, solid=None, compare=None),
+     "--quantity: tip.theta is not a quantity of a spatial rod; choose from tip.u, tip.v, "
+     "tip.w, tip.r"),
 ]
 
 
 @pytest.mark.parametrize(("command", "config", "fragment"), MISTAKES,
-                         ids=[f"{c}-{i}" for i, (c, _, _) in enumerate(MISTAKES)])
+                         ids=[f"{c.split()[0]}-{i}" for i, (c, _, _) in enumerate(MISTAKES)])
 def test_mistakes_exit_2_with_one_sentence(tmp_path, command, config, fragment):
-    code, _, stderr, out = run_cli(command, tmp_path, config)
+    command, *extra = command.split()
+    code, _, stderr, out = run_cli(command, tmp_path, config, *extra)
     assert code == 2, stderr
     if MPI.COMM_WORLD.rank == 0:
         lines = stderr.strip().splitlines()
@@ -298,3 +301,29 @@ def test_the_spatial_rod_takes_the_tip_force_along_z():
     assert mapped.kinematics == "spatial" and mapped.laws == LAWS
     assert all(p.parsed.spatial and p.parsed.laws == LAWS for p in mapped.points)
     assert math.isclose(mapped.points[1].parsed.solid.tendon_loads[0].tension, 1.0)
+
+
+# --- fe-beam refine on a spatial rod --------------------------------------------------------------
+def test_refine_a_spatial_cantilever_observed_order(tmp_path):
+    """A cantilever under a tip force with y and z components (large deflection): degree 2 rod
+    elements converge at the nodes with order 4 (as the planar rod's), for the tip's w and |r|."""
+    config = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.01},
+              "material": {"E": 2.0e11, "nu": 0.3},
+              "model": {"kinematics": "spatial", "law": "reissner"},
+              "mesh": {"elements": 3, "degree": 2},
+              "loads": {"tip_force": [0.0, -3000.0, 2000.0], "steps": 5},
+              "output": {"xdmf": False, "plots": False}}
+    code, stdout, stderr, out = run_cli("refine", tmp_path, config, "--levels", "4")
+    assert code == 0, stderr
+    summary = json.loads((out / "refinement.json").read_text())
+    assert summary["quantities"] == ["tip.u", "tip.v", "tip.w", "tip.r"]
+    assert [r["elements"] for r in summary["levels"]] == [3, 6, 12, 24]
+    for quantity in ("tip.w", "tip.r"):
+        result = summary["analysis"][quantity]
+        print(f"spatial cantilever {quantity}: observed order {result['order']:.3f}, "
+              f"extrapolated {result['extrapolated']:.10g} m")
+        assert result["order"] == pytest.approx(4.0, abs=0.3)
+    last = summary["levels"][-1]["values"]
+    assert last["tip.w"] > 0.25 and last["tip.v"] < -0.7  # out of both planes, large
+    u, v, w = (last[f"tip.{k}"] for k in "uvw")
+    assert last["tip.r"] == pytest.approx(math.sqrt((1 + u) ** 2 + v**2 + w**2), rel=1e-12)

@@ -119,7 +119,7 @@ _SPECS = (
     CommandSpec("refine", "mesh-refinement study: observed order and Richardson extrapolation of "
                           "the tip",
                 ("tendons", "solid", "refine"), _parse_refine, "refine:run",
-                arguments=REFINE_ARGUMENTS, sorts_tables=True),
+                arguments=REFINE_ARGUMENTS, sorts_tables=True, spatial=True),
     CommandSpec("calibrate", "fit rod/finger parameters ([calibrate]) to measured tip poses and "
                              "backbone points (--data DATA.csv), with standard errors",
                 ("tendons", "inverse", "calibrate"), _parse_calibrate,
