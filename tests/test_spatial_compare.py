@@ -202,6 +202,37 @@ def test_solid_command_runs_the_spatial_rod_alongside(tmp_path, helix_run):
         assert values.reshape(-1, 3)[-1, 2] == pytest.approx(rod["steps"][-1]["tip"]["w"])
 
 
+def test_validity_maps_the_spatial_rod(tmp_path, helix_run):
+    """One point of ``fe-beam validity`` on the helical finger: compare's numbers at full load,
+    the tip error over u, v, w, the tip frame angle and the w columns of validity.csv."""
+    _, compared, *_ = helix_run
+    config = edited(FINGER, compare=None, validity={"x": "tendons.0.tension", "x_values": [1.0]})
+    code, _, stderr, out = run_cli("validity", tmp_path, config)
+    assert code == 0, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["kinematics"] == "spatial" and summary["laws"] == list(LAWS)
+    point = summary["points"][0]
+    reference = compared["table"][-1]["rod"]
+    for law in LAWS:
+        rod = point["rod"][law]
+        assert rod["backbone_distance"] == pytest.approx(reference[law]["distance_over_L"],
+                                                         rel=1e-3)
+        assert rod["tip_frame_angle"] == pytest.approx(reference[law]["tip_frame_angle"],
+                                                       rel=1e-3)
+        assert rod["tip_error"]["frame_angle"] == rod["tip_frame_angle"]
+        assert rod["tip_error"]["distance_over_L"] == pytest.approx(
+            reference[law]["tip_distance_over_L"], rel=1e-3)
+    if MPI.COMM_WORLD.rank == 0:
+        with (out / "validity.csv").open(newline="") as stream:
+            row = next(csv.DictReader(stream))
+        assert float(row["solid_tip_w"]) == pytest.approx(point["solid"]["tip"]["w"])
+        for law in LAWS:
+            assert float(row[f"{law}_tip_w"]) == pytest.approx(point["rod"][law]["tip"]["w"])
+            assert float(row[f"{law}_tip_frame_angle"]) == pytest.approx(
+                point["rod"][law]["tip_frame_angle"])
+            assert float(row[f"{law}_backbone_distance"]) < 0.01
+
+
 # --- (b) a planar case through the spatial rod: the planar compare's numbers ---------------------
 def test_in_plane_tendon_through_the_spatial_rod_gives_the_planar_compare():
     from fe_beam.analyses.compare import run_compare
