@@ -21,6 +21,7 @@ from fe_beam.model import (
 )
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section, SectionProperties
+from fe_beam.model.spatial import SpatialLoads, SpatialRodModel, SpatialSupports
 
 # the finite-element names load dolfinx and PETSc: imported when first used (PEP 562), so that
 # `import fe_beam.config.schema` (validation, `fe-beam --help`) does not load the FE stack
@@ -45,6 +46,7 @@ _LAZY = {
     "RealtimeSolver": "fe_beam.solvers.realtime",
     "RodSensitivity": "fe_beam.analyses.sensitivity",
     "BeamProblem": "fe_beam.fem.rod",
+    "SpatialRodProblem": "fe_beam.fem.spatial_rod",
     "LoadSteppingFailed": "fe_beam.solvers.newton",
     "NonlinearProblem": "fe_beam.solvers.newton",
     "SNESSolver": "fe_beam.solvers.newton",
@@ -92,5 +94,9 @@ __all__ = [
     "SolveFailed",
     "SolverSettings",
     "Supports",
+    "SpatialLoads",
+    "SpatialRodModel",
+    "SpatialRodProblem",
+    "SpatialSupports",
     "run_load_stepping",
 ]

@@ -218,6 +218,9 @@ def test_unused_tables_are_noted_not_silently_ignored():
     ("finger_dynamics.toml", ("dynamic", "modes")),
     ("flying_spaghetti.toml", ("dynamic",)),
     ("finger_solid.toml", ("solid", "compare")),
+    ("spatial_finger.toml", ("finger",)),
+    ("bathe_bolourchi.toml", ("static",)),
+    ("lateral_torsional.toml", ("buckling",)),
 ])
 def test_examples_pass_the_new_checks_silently(example, commands):
     config = load_config(EXAMPLES / example)

@@ -24,6 +24,9 @@ EXAMPLES = {
     "flying_spaghetti.toml": ("dynamic",),
     "release.toml": ("dynamic", "modes"),
     "spin_up.toml": ("dynamic",),
+    "spatial_finger.toml": ("finger",),
+    "bathe_bolourchi.toml": ("static",),
+    "lateral_torsional.toml": ("buckling", "path"),
     "section_laws/finger_dragon_skin_30.toml": ("solid", "compare"),
     "section_laws/finger_neo_hookean.toml": ("solid", "compare"),
 }

@@ -447,11 +447,12 @@ class SpatialRodProblem(BeamProblem):
         return StrainRange(float(reduced[0]), float(-reduced[1]), float(-reduced[2]), None)
 
     def rotation_note(self) -> str | None:
-        largest = getattr(self, "largest_rotation", 0.0)
-        if largest > ROTATION_NOTE:
-            return (f"the rotation vector reaches |theta| = {largest:.3g} rad, near 2 pi where "
-                    "its parametrisation is singular: out-of-plane stiffness is ill-conditioned "
-                    "there")
+        """A note (always the same sentence: said once per run) when the last strain range's
+        largest rotation vector passed ROTATION_NOTE."""
+        if getattr(self, "largest_rotation", 0.0) > ROTATION_NOTE:
+            return (f"the rotation vector's length passes {ROTATION_NOTE:.3g} rad (1.8 pi), near "
+                    "2 pi where its parametrisation is singular: a state out of a single plane "
+                    "is ill-conditioned there (a planar roll-up is not)")
         return None
 
     def strain_energy_form(self) -> fem.Form:
