@@ -11,8 +11,12 @@ loads at load factor 1 are then those at the largest tension), ``load_factors`` 
 ``steps`` = n (load factors k / n). The rod's E and G are the small-strain limit of the 3D law.
 
 The 3D solid is ramped once through the sweep; the rod is solved from the unloaded state for each
-sweep point and law (`fe_beam.analyses.static.solve_static`). The departure of a rod from the solid
-is
+sweep point and law (`fe_beam.analyses.static.solve_static`). With ``[model] kinematics =
+"spatial"`` the rod is the spatial one (`fe_beam.fem.spatial_rod`: tendons routed anywhere, tip
+forces with a z component; laws nonstandard and reissner, the hyperelastic section law being
+planar only for now: left out of the default laws with a note, refused when asked for); a tendon
+out of the x-y plane or a tip force along z with the planar rod is a configuration error. The
+departure of a rod from the solid is
 
     d = max over x of |r_rod(x) - r_solid(x)| / L,
 
@@ -20,6 +24,13 @@ the largest distance between the deformed centroids of the same reference sectio
 axis point r = (x + u, v); solid: the area centroid of the deformed section X = x) over the
 ``[solid] backbone_points`` stations, relative to the length L. The summary states where along the
 sweep d first exceeds 1 % and 5 % (linear interpolation between sweep points, from d = 0 unloaded).
+
+Beside it, per law and sweep point: ``tip_distance_over_L`` = |r_rod(L) - r_solid(L)| / L and the
+tip frame, ``tip_frame_angle`` = the angle of R_rod^T R_solid (its ``tip_frame_rotation_vector``,
+through a quaternion: exact near 0), R_rod the rod's tip frame (planar rod: the rotation by theta
+about z) and R_solid the best-fit rotation of the solid's tip face. A spatial rod's ``tip`` is
+{u, v, w, R, rotation_vector, position} plus ``theta`` (the in-plane angle of its tangent, as the
+solid's), and compare.csv adds ``solid_tip_w`` and ``<law>_tip_w``.
 """
 
 from __future__ import annotations
@@ -33,7 +44,7 @@ from mpi4py import MPI
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid import SolidRun
-from fe_beam.analyses.solid_rod import backbone_distance, run_rod
+from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_distance, tip_frame
 from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
     COMPARE_KEYS,
     MEASURE,
@@ -49,6 +60,13 @@ from fe_beam.exports.outputs import _pyplot
 from fe_beam.solvers.newton import LoadSteppingFailed
 
 __all__ = ["run", "COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
+
+TIP_FRAME_MEASURE = (
+    "tip_frame_angle = |rotation vector of R_rod^T R_solid| [rad], R_rod the rod's tip frame "
+    "(planar rod: the rotation by theta about z), R_solid the best-fit rotation of the solid's "
+    "tip face; tip_distance_over_L = |r_rod(L) - r_solid(L)| / L"
+)
+
 
 def crossing(factors, distances, threshold: float) -> dict | None:
     """First load factor at which ``distances`` exceed ``threshold`` (linear interpolation
@@ -102,7 +120,10 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
             "rod": {"E": solid.rod.model.material.E, "G": solid.rod.model.material.shear_modulus,
                     "constraint": solid.rod.model.options.constraint,
                     "elements": solid.rod.model.mesh.elements,
-                    "degree": solid.rod.model.mesh.degree}},
+                    "degree": solid.rod.model.mesh.degree,
+                    "kinematics": "spatial" if config.spatial else "planar"}},
+        "notes": list(config.notes),
+        "tip_frame_measure": TIP_FRAME_MEASURE,
     }
     if "hyperelastic" in config.laws:
         law = matched_law(solid)
@@ -150,11 +171,16 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
                 reached = rod["status"] == "converged" and rod["backbone"] is not None
                 if reached:
                     distance = backbone_distance(rod["backbone"], last["backbone"])
+                    tip = rod["steps"][-1]["tip"]
+                    frame = tip_frame(tip, last["tip"])
                     entry |= {
-                        "tip": rod["steps"][-1]["tip"],
+                        "tip": tip,
                         "backbone": rod["backbone"],
                         "distance_over_L": distance["max"] / solid.length,
                         "distance_x": distance["x"],
+                        "tip_distance_over_L": tip_distance(tip, last["tip"]) / solid.length,
+                        "tip_frame_angle": frame["angle"],
+                        "tip_frame_rotation_vector": frame["rotation_vector"],
                     }
                 row["rod"][law] = entry
             summary["table"].append(row)
@@ -217,9 +243,9 @@ def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
             f"point above: {found['first_sweep_point_above']:.4g})")
 
 
-def _columns(first: dict | None, laws) -> list[exports.Column]:
-    """compare.csv: the sweep point, the solid's tip, each rod's tip and distance (empty cells
-    where the rod did not converge)."""
+def _columns(first: dict | None, laws, spatial: bool = False) -> list[exports.Column]:
+    """compare.csv: the sweep point, the solid's tip, each rod's tip, distance and tip frame
+    angle (empty cells where the rod did not converge); a spatial rod adds the tips' w."""
     count = len(first.get("tensions", [])) if first else 0
 
     def rod_tip(row: dict, law: str) -> dict:
@@ -228,19 +254,27 @@ def _columns(first: dict | None, laws) -> list[exports.Column]:
     columns = [exports.Column("load_factor", lambda r: r["load_factor"]),
                *exports.indexed_columns("tension", count, lambda r: r["tensions"]),
                *exports.tip_columns("solid_tip_", lambda r: r["solid"]["tip"])]
+    if spatial:  # the solid's and the rods' w after the planar columns
+        columns.append(exports.Column("solid_tip_w", lambda r: r["solid"]["tip"]["w"]))
     for law in laws:
         columns += [exports.Column(f"{law}_tip_{k}",
                                    lambda r, law=law, k=k: rod_tip(r, law).get(k, ""))
                     for k in ("u", "v", "theta")]
         columns.append(exports.Column(f"{law}_distance_over_L",
                                       lambda r, law=law: r["rod"][law].get("distance_over_L", "")))
+        if spatial:
+            columns.append(exports.Column(f"{law}_tip_w",
+                                          lambda r, law=law: rod_tip(r, law).get("w", "")))
+        columns.append(exports.Column(
+            f"{law}_tip_frame_angle", lambda r, law=law: r["rod"][law].get("tip_frame_angle", "")))
     return columns
 
 
 def _exports(out: Path, config: CompareConfig, content, every_step: bool = True) -> list:
     """summary.json, compare.csv and the pictures (``every_step``: redrawn after each point)."""
     return [exports.SummaryExport(out / "summary.json", content),
-            exports.CSVExport(out / "compare.csv", lambda first: _columns(first, config.laws)),
+            exports.CSVExport(out / "compare.csv",
+                              lambda first: _columns(first, config.laws, config.spatial)),
             exports.PlotExport(lambda summary: _plot(out, summary, config)
                                if summary["table"] and config.solid.output.plots else None,
                                content, every_step)]
@@ -275,23 +309,30 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                    for r in rows]
     length = config.solid.length
 
-    with exports.figure(out / "backbones.png", figsize=(9, 5)) as (_, axis):
+    views = (("v", "y + v [m]"), ("w", "z + w [m]")) if config.spatial else (("v", "y + v [m]"),)
+    with exports.figure(out / "backbones.png", 1, len(views), figsize=(9 + 5 * (len(views) - 1),
+                                                                       5),
+                        squeeze=False) as (_, axes):
         colours = plt.cm.viridis(np.linspace(0, 0.9, len(rows)))
-        axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
-        for row, value, colour in zip(rows, axis_values, colours, strict=True):
-            models = [("solid", row["solid"].get("backbone"))]
-            models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
-            for name, backbone in models:
-                if backbone is None:
-                    continue
-                style, text = STYLES[name]
-                axis.plot(np.add(backbone["x"], backbone["u"]), backbone["v"], style, color=colour,
-                          lw=1.6, label=f"{text}, {sweep_label(value, bool(tensions))}")
-        axis.set_xlabel("x + u [m]")
-        axis.set_ylabel("y + v [m]")
-        axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)")
-        axis.grid(alpha=0.3)
-        axis.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        for axis, (key, text_y) in zip(axes[0], views, strict=True):
+            axis.plot([0, length], [0, 0], color="0.7", lw=1, label="undeformed")
+            for row, value, colour in zip(rows, axis_values, colours, strict=True):
+                models = [("solid", row["solid"].get("backbone"))]
+                models += [(law, row["rod"][law].get("backbone")) for law in config.laws]
+                for name, backbone in models:
+                    if backbone is None:
+                        continue
+                    style, text = STYLES[name]
+                    axis.plot(np.add(backbone["x"], backbone["u"]),
+                              backbone.get(key, np.zeros(len(backbone["x"]))), style,
+                              color=colour, lw=1.6,
+                              label=f"{text}, {sweep_label(value, bool(tensions))}")
+            axis.set_xlabel("x + u [m]")
+            axis.set_ylabel(text_y)
+            axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)"
+                           + (f" ({text_y[0]} view)" if config.spatial else ""), fontsize=9)
+            axis.grid(alpha=0.3)
+        axes[0][-1].legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
     with exports.figure(out / "tip_vs_tension.png", 1, 4, figsize=(15, 3.6)) as (_, axes):
         names = [("solid", None)] + [(law, law) for law in config.laws]
@@ -329,15 +370,22 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
         echo=None) -> Result:
     """``fe-beam compare`` (the driver contract, `fe_beam.analyses.result`)."""
     summary = compare_run(validated.parsed, out, comm, progress)
+    config_spatial = validated.parsed.spatial
     report = Report(echo)
+    for note in summary.get("notes", []):
+        report.err(f"fe-beam compare: note: {note}")
     for row in summary["table"]:
         where = f"tension {row['tension']:.4g} N" if "tension" in row else (
             f"load factor {row['load_factor']:.4g}")
-        parts = [f"3D theta {row['solid']['tip']['theta']:.4g}"]
+        solid_tip = row["solid"]["tip"]
+        parts = [f"3D theta {solid_tip['theta']:.4g}" + (
+            f", w {solid_tip['w']:.4g} m" if config_spatial else "")]
         for law, rod in row["rod"].items():
             if "distance_over_L" in rod:
                 parts.append(f"{law} theta {rod['tip']['theta']:.4g}, "
-                             f"d/L {rod['distance_over_L']:.3g}")
+                             + (f"w {rod['tip']['w']:.4g} m, " if config_spatial else "")
+                             + f"d/L {rod['distance_over_L']:.3g}, tip frame angle "
+                             f"{rod['tip_frame_angle']:.3g} rad")
             else:
                 parts.append(f"{law} {rod['status']}")
         report.out(f"{where}: " + "; ".join(parts))

@@ -2,7 +2,8 @@
 
 A configuration is solved on ``N`` meshes, each ``ratio`` times finer than the one before: rods
 and fingers multiply ``[mesh] elements`` by ``ratio**k``, solids divide ``[solid] mesh_size`` by
-it. For each quantity of interest q (final-step tip u, v, theta) and level k:
+it. For each quantity of interest q (final-step tip u, v, theta; a spatial rod's u, v, w and
+|r(L)|, ``tip.r``; a solid's any of them) and level k:
 
     d_k   = q_k - q_{k-1}                                      successive difference
     p_k   = log(|d_{k-1}| / |d_k|) / log(ratio)                observed order (k >= 2)
@@ -52,7 +53,7 @@ __all__ = [
     "write_outputs",
 ]
 
-UNITS = {"tip.u": "m", "tip.v": "m", "tip.theta": "rad"}
+UNITS = {"tip.u": "m", "tip.v": "m", "tip.theta": "rad", "tip.w": "m", "tip.r": "m"}
 SOLID_DRIVER = "fe_beam.analyses.solid_driver"  # the solid configurations' driver
 NOISE_RTOL = 1e-10  # |d_k| below this fraction of max |q| is round-off / solver noise
 MIN_ORDER = 0.5  # below it 1 / (r^p - 1) amplifies noise: coarse meshes, no extrapolation
@@ -244,6 +245,18 @@ def _solve_solid(plan: RefinementPlan, level: int, comm) -> dict:
     }
 
 
+def tip_value(tip: dict, quantity: str, plan: RefinementPlan) -> float:
+    """The value of ``quantity`` ("tip.u" ...) in a tip dict; "tip.r" is |r(L)|, r = (L + u, v,
+    w) (a spatial rod's ``position``)."""
+    name = quantity.split(".")[1]
+    if name != "r":
+        return float(tip[name])
+    if "position" in tip:
+        return float(math.sqrt(sum(c * c for c in tip["position"])))
+    length = plan.length if plan.length is not None else float(plan.raw["beam"]["length"])
+    return float(math.sqrt((length + tip["u"]) ** 2 + tip["v"] ** 2 + tip.get("w", 0.0) ** 2))
+
+
 def _level_record(plan: RefinementPlan, level: int, solved: dict) -> dict:
     record = {"level": level, "h": plan.h(level)}
     record["mesh_size" if plan.kind == "solid" else "elements"] = plan.size(level)
@@ -253,7 +266,7 @@ def _level_record(plan: RefinementPlan, level: int, solved: dict) -> dict:
         "dofs": solved["dofs"],
         "wall_time_s": solved["wall_time_s"],
         "status": solved["status"],
-        "values": {q: float(solved["tip"][q.split(".")[1]]) for q in plan.quantities}
+        "values": {q: tip_value(solved["tip"], q, plan) for q in plan.quantities}
         if solved["tip"] is not None and solved["status"] == "converged"
         else {},
     }

@@ -17,7 +17,7 @@ from mpi4py import MPI
 from fe_beam import runctl
 from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid_modes import modes_table, run_solid_modes
-from fe_beam.analyses.solid_rod import backbone_distance, run_rod, write_rod_xdmf
+from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_frame, write_rod_xdmf
 from fe_beam.analyses.static import beam_dofs_estimate
 from fe_beam.config.solid import SolidConfig, parse_solid, solid_dofs_estimate
 from fe_beam.exports import (
@@ -338,11 +338,14 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
         last = summary["steps"][-1]
         if abs(last_rod - last["load_factor"]) < 1e-12:
             distance = backbone_distance(rod["backbone"], last["backbone"])
+            frame = tip_frame(rod["steps"][-1]["tip"], last["tip"])
             summary["rod"]["distance_to_solid"] = {
                 "load_factor": last["load_factor"],
                 "max_over_L": distance["max"] / config.length,
                 "x": distance["x"],
                 "measure": "max over x of |r_rod(x) - r_solid(x)| / L (deformed centroids)",
+                "tip_frame_angle": frame["angle"],
+                "tip_frame_rotation_vector": frame["rotation_vector"],
             }
     return summary
 
@@ -417,11 +420,14 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     rod = summary.get("rod") or {}
     if rod.get("steps"):
         tip = rod["steps"][-1]["tip"]
+        w = f"w = {tip['w']:.6g} m, " if "w" in tip else ""
         report.out(f"rod ({rod['law']}), load factor {rod['steps'][-1]['load_factor']:.4g}: "
-                   f"tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, theta = {tip['theta']:.6g}")
+                   f"tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, {w}"
+                   f"theta = {tip['theta']:.6g}")
     if "distance_to_solid" in rod:
         report.out(f"rod vs 3D: max_x |r_rod - r_solid| / L = "
-                   f"{rod['distance_to_solid']['max_over_L']:.3g}")
+                   f"{rod['distance_to_solid']['max_over_L']:.3g}, tip frame angle "
+                   f"{rod['distance_to_solid']['tip_frame_angle']:.3g} rad")
     for line in modes_table(summary.get("modes")):  # [modes]: solid vs rod
         report.out(line)
     report.out(f"{len(summary['steps'])} load steps, {summary['dofs']} dofs, "

@@ -88,7 +88,12 @@ def run_solid_modes(run, config, out, comm) -> dict:
     if about == "loaded" and any(t.controlled_by_pull_in for t in config.tendon_loads):
         entry["notes"].append("tendons under pull-in control: the modes hold their converged "
                               "tensions constant (a motor holding the force, not the length)")
-    if config.rod is not None:
+    spatial = config.rod is not None and getattr(config.rod.model, "kinematics",
+                                                 "planar") == "spatial"
+    if spatial:
+        entry["notes"].append("no rod frequencies: the modes of the spatial rod ([model] "
+                              "kinematics = \"spatial\") are not beside the solid's yet")
+    elif config.rod is not None:
         # more rod modes than asked: the planar rod has no out-of-plane bending or torsion, so
         # its bending and axial modes that match the solid's lie further up its list
         rod = rod_frequencies(config.rod, 2 * count + 2, about == "loaded", comm)

@@ -7,6 +7,7 @@ coordinates.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -17,23 +18,59 @@ from fe_beam.exports.outputs import atomic_write_text
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.solid import evaluate_at_points
 
-__all__ = ["backbone_distance", "rod_backbone", "run_rod", "write_rod_xdmf"]
+__all__ = ["backbone_distance", "planar_angle", "rod_backbone", "run_rod", "tip_distance",
+           "tip_frame", "write_rod_xdmf"]
 
 
 def rod_backbone(problem, stations) -> dict:
-    """Rod displacement (u, v) at the stations x (exact finite-element values, collective)."""
+    """Rod displacement (u, v; a spatial rod's also w) at the stations x (exact finite-element
+    values, collective)."""
     points = np.zeros((len(stations), 3))
     points[:, 0] = stations
-    u = evaluate_at_points(problem.w.sub(0).collapse(), points).ravel()
-    v = evaluate_at_points(problem.w.sub(1).collapse(), points).ravel()
-    return {"x": [float(x) for x in stations], "u": u.tolist(), "v": v.tolist()}
+    names = ("u", "v", "w") if getattr(problem, "spatial", False) else ("u", "v")
+    data = {"x": [float(x) for x in stations]}
+    for index, name in enumerate(names):
+        values = evaluate_at_points(problem.w.sub(index).collapse(), points).ravel()
+        data[name] = values.tolist()
+    return data
+
+
+def planar_angle(R) -> float:
+    """The in-plane angle of a tip frame, atan2(R[1][0], R[0][0]): the angle of its tangent's
+    projection on the x-y plane, as the 3D solid's tip ``theta`` (`SolidRun.tip`)."""
+    return float(math.atan2(R[1][0], R[0][0]))
+
+
+def tip_frame(rod_tip: dict, solid_tip: dict) -> dict:
+    """The relative rotation R_rod^T R_solid of the solid's tip face against the rod's tip
+    frame: its ``rotation_vector`` (in the rod's tip frame; its length is the angle, computed
+    through a quaternion, so exact near 0, not arccos((tr - 1) / 2)) and ``angle`` [rad]. A
+    planar rod's frame is the rotation by theta about z."""
+    from scipy.spatial.transform import Rotation
+
+    if "R" in rod_tip:
+        rod = np.asarray(rod_tip["R"], dtype=float)
+    else:
+        c, s = math.cos(rod_tip["theta"]), math.sin(rod_tip["theta"])
+        rod = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    relative = rod.T @ np.asarray(solid_tip["R"], dtype=float)
+    vector = Rotation.from_matrix(relative).as_rotvec()
+    return {"angle": float(np.linalg.norm(vector)), "rotation_vector": vector.tolist()}
+
+
+def tip_distance(rod_tip: dict, solid_tip: dict) -> float:
+    """|r_rod(L) - r_solid(L)| over the three components (a planar rod's w is 0)."""
+    return float(math.sqrt(sum((rod_tip.get(k, 0.0) - solid_tip.get(k, 0.0)) ** 2
+                               for k in ("u", "v", "w"))))
 
 
 def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool = False) -> dict:
     """Run the 1D rod (`fe_beam.analyses.static.solve_static`, nothing written) and return plain
     data:
     status, steps (load factor, tip, tensions), the final backbone at ``stations`` and, on rank
-    0, the nodal shapes of every step (``frames``, for the rod XDMF)."""
+    0, the nodal shapes of every step (``frames``, for the rod XDMF). A spatial rod's tip is
+    {u, v, w, R, rotation_vector, position} plus ``theta``, the in-plane angle of its frame
+    (`planar_angle`: the solid's ``theta``, so that the planar columns stay filled)."""
 
     holder = {}
 
@@ -53,6 +90,8 @@ def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool 
         "wall_time_s": result.wall_time_s,
         "steps": [
             {k: s[k] for k in ("load_factor", "tip", "tensions", "pull_ins") if k in s}
+            | ({"tip": s["tip"] | {"theta": planar_angle(s["tip"]["R"])}} if "R" in s["tip"]
+               else {})
             for s in result.steps
         ],
         "backbone": rod_backbone(holder["problem"], stations) if "problem" in holder else None,
@@ -75,8 +114,9 @@ def backbone_distance(rod: dict, solid: dict) -> dict:
 
 
 def write_rod_xdmf(path: Path, frames: list) -> None:
-    """The rod as a polyline in 3D (x, 0, 0) with nodal ``displacement`` (u, v, 0) and ``theta``,
-    one time per load factor: an XDMF file with inline data (no HDF5), written atomically."""
+    """The rod as a polyline in 3D (x, 0, 0) with nodal ``displacement`` (u, v, 0) and ``theta``
+    (a spatial rod: (u, v, w) and its ``rotation_vector``), one time per load factor: an XDMF
+    file with inline data (no HDF5), written atomically."""
     if not frames:
         return
     x = np.asarray(frames[0][1]["x"], dtype=float)
@@ -84,10 +124,21 @@ def write_rod_xdmf(path: Path, frames: list) -> None:
     geometry = " ".join(f"{xi:.17g} 0 0" for xi in x)
     topology = " ".join(f"{i} {i + 1}" for i in range(n - 1))
 
+    spatial = "theta_x" in frames[0][1]
+
     def grid(t, shape):
-        u, v, theta = (np.asarray(shape[k], dtype=float) for k in ("u", "v", "theta"))
-        displacement = " ".join(f"{a:.17g} {b:.17g} 0" for a, b in zip(u, v, strict=True))
-        rotation = " ".join(f"{a:.17g}" for a in theta)
+        u, v = (np.asarray(shape[k], dtype=float) for k in ("u", "v"))
+        w = np.asarray(shape["w"], dtype=float) if spatial else np.zeros(n)
+        displacement = " ".join(f"{a:.17g} {b:.17g} {c:.17g}" for a, b, c in zip(u, v, w,
+                                                                                   strict=True))
+        if spatial:  # the rotation vector
+            vectors = np.column_stack([np.asarray(shape[k], dtype=float)
+                                       for k in ("theta_x", "theta_y", "theta_z")])
+            rotation = " ".join(f"{a:.17g}" for a in vectors.ravel())
+            kind, size, name = "Vector", f"{n} 3", "rotation_vector"
+        else:
+            rotation = " ".join(f"{a:.17g}" for a in np.asarray(shape["theta"], dtype=float))
+            kind, size, name = "Scalar", f"{n}", "theta"
         return (
             f'      <Grid Name="rod" GridType="Uniform">\n'
             f'        <Time Value="{t:.17g}"/>\n'
@@ -101,12 +152,13 @@ def write_rod_xdmf(path: Path, frames: list) -> None:
             f'        <Attribute Name="displacement" AttributeType="Vector" Center="Node">\n'
             f'          <DataItem Dimensions="{n} 3" Format="XML">{displacement}</DataItem>\n'
             f"        </Attribute>\n"
-            f'        <Attribute Name="theta" AttributeType="Scalar" Center="Node">\n'
-            f'          <DataItem Dimensions="{n}" Format="XML">{rotation}</DataItem>\n'
+            f'        <Attribute Name="{name}" AttributeType="{kind}" Center="Node">\n'
+            f'          <DataItem Dimensions="{size}" Format="XML">{rotation}</DataItem>\n'
             f"        </Attribute>\n      </Grid>\n"
         )
 
-    zero = {"x": x, "u": np.zeros(n), "v": np.zeros(n), "theta": np.zeros(n)}
+    zero = {k: np.zeros(n) for k in (("u", "v", "w", "theta_x", "theta_y", "theta_z")
+                                     if spatial else ("u", "v", "theta"))}
     grids = [grid(0.0, zero)] + [grid(t, shape) for t, shape in frames]
     text = (
         '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n  <Domain>\n'

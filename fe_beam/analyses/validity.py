@@ -13,7 +13,10 @@ Per point, with L the length of that point's finger:
 
 - ``backbone_distance`` = max over the stations x of |r_rod(x) - r_solid(x)| / L (as compare),
 - ``tip_error`` = {``distance_over_L``: |r_rod(L) - r_solid(L)| / L, ``rotation``: |theta_rod -
-  theta_solid| [rad]},
+  theta_solid| [rad], ``frame_angle``: the angle of R_rod^T R_solid [rad], the tip frames'
+  relative rotation}, and ``tip_frame_angle`` (the same, as ``fe-beam compare`` names it),
+- with ``[model] kinematics = "spatial"`` the rod is the spatial one (``fe-beam compare``): the
+  distances are over the three components, the CSV adds ``solid_tip_w`` and ``<law>_tip_w``,
 - the solid's ``discretisation_error`` = {``tip``, ``backbone`` (distances / L), ``rotation``
   [rad]} of the configured mesh, or None without a second mesh.
 
@@ -37,6 +40,7 @@ from mpi4py import MPI
 
 from fe_beam import analyses, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
+from fe_beam.analyses.solid_rod import tip_distance, tip_frame
 from fe_beam.analyses.validity_workers import worker_point, worker_start
 from fe_beam.config.compare import parse_compare
 from fe_beam.config.validity import (  # noqa: F401  (their home; re-exported)
@@ -87,9 +91,15 @@ def _finished(out: Path, point: GridPoint) -> dict | None:
 
 
 def _tip_error(rod_tip: dict, solid_tip: dict, length: float) -> dict:
-    return {"distance_over_L": math.hypot(rod_tip["u"] - solid_tip["u"],
-                                          rod_tip["v"] - solid_tip["v"]) / length,
-            "rotation": abs(rod_tip["theta"] - solid_tip["theta"])}
+    """The tip's distance / L (a spatial rod: over u, v, w; a planar one: u, v), the in-plane
+    ``rotation`` |theta_rod - theta_solid| and the tip frame's angle (`tip_frame`)."""
+    if "w" in rod_tip:
+        distance = tip_distance(rod_tip, solid_tip)
+    else:
+        distance = math.hypot(rod_tip["u"] - solid_tip["u"], rod_tip["v"] - solid_tip["v"])
+    return {"distance_over_L": distance / length,
+            "rotation": abs(rod_tip["theta"] - solid_tip["theta"]),
+            "frame_angle": tip_frame(rod_tip, solid_tip)["angle"]}
 
 
 def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig, comm) -> dict:
@@ -106,16 +116,18 @@ def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig,
         run.destroy()
     length = parsed.length
     tip, other = solid["tip"], last["tip"]
-    keys = ("u", "v", "theta")
+    # the planar map's estimate over (u, v); a spatial rod's over (u, v, w)
+    keys = ("u", "v", "theta", "w") if point.parsed.spatial else ("u", "v", "theta")
     error, extrapolated = richardson_error([tip[k] for k in keys], [other[k] for k in keys],
                                            ratio, order)
     a, b = solid["backbone"], last["backbone"]
     du, _ = richardson_error(a["u"], b["u"], ratio, order)
     dv, _ = richardson_error(a["v"], b["v"], ratio, order)
+    dw = richardson_error(a["w"], b["w"], ratio, order)[0] if point.parsed.spatial else 0.0
     return {
-        "tip": math.hypot(error[0], error[1]) / length,
+        "tip": float(np.linalg.norm([error[0], error[1]] + list(error[3:]))) / length,
         "rotation": abs(float(error[2])),
-        "backbone": float(np.max(np.hypot(du, dv))) / length,
+        "backbone": float(np.max(np.sqrt(du**2 + dv**2 + dw**2))) / length,
         "second_mesh_size": parsed.sizes.size,
         "second_dofs": dofs,
         "second_tip": other,
@@ -146,7 +158,8 @@ def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
                     entry |= {"tip": rod["tip"],
                               "tip_error": _tip_error(rod["tip"], row["solid"]["tip"], length),
                               "backbone_distance": rod["distance_over_L"],
-                              "backbone_distance_x": rod["distance_x"]}
+                              "backbone_distance_x": rod["distance_x"],
+                              "tip_frame_angle": rod["tip_frame_angle"]}
                 elif record["status"] == "converged":
                     record |= {"status": "failed",
                                "message": f"rod ({law}): {rod['message'] or rod['status']}"}
@@ -376,7 +389,9 @@ def _write(out: Path, config: ValidityConfig, started: float, status: str | None
         "laws": list(config.laws),
         "measure": "backbone_distance = max over the backbone stations x of |r_rod(x) - "
                    "r_solid(x)| / L; tip_error = |r_rod(L) - r_solid(L)| / L and |theta_rod - "
-                   "theta_solid| [rad]",
+                   "theta_solid| [rad]; tip_frame_angle = |rotation vector of R_rod^T R_solid| "
+                   "[rad] (the tip frames)",
+        "kinematics": config.kinematics,
         "thresholds": list(THRESHOLDS),
         "second_mesh_ratio": config.second_mesh_ratio,
         "order": config.order,
@@ -400,9 +415,14 @@ def _write_csv(path: Path, points: list[dict], config: ValidityConfig) -> None:
     header = ["i", "j", "x", "y", "status", "solid_tip_u", "solid_tip_v", "solid_tip_theta",
               "solid_dofs", "solid_mesh_size", "solid_error_tip", "solid_error_rotation",
               "solid_error_backbone"]
+    spatial = config.kinematics == "spatial"
+    if spatial:
+        header.append("solid_tip_w")
     for law in config.laws:
         header += [f"{law}_tip_u", f"{law}_tip_v", f"{law}_tip_theta", f"{law}_tip_error",
                    f"{law}_rotation_error", f"{law}_backbone_distance"]
+        header += [f"{law}_tip_w"] if spatial else []
+        header.append(f"{law}_tip_frame_angle")
     header.append("message")
     rows = []
     for p in points:
@@ -413,6 +433,8 @@ def _write_csv(path: Path, points: list[dict], config: ValidityConfig) -> None:
                tip.get("u", ""), tip.get("v", ""), tip.get("theta", ""), solid.get("dofs", ""),
                solid.get("mesh_size", ""), error.get("tip", ""), error.get("rotation", ""),
                error.get("backbone", "")]
+        if spatial:
+            row.append(tip.get("w", ""))
         for law in config.laws:
             rod = p["rod"].get(law, {})
             rod_tip = rod.get("tip") or {}
@@ -420,6 +442,8 @@ def _write_csv(path: Path, points: list[dict], config: ValidityConfig) -> None:
             row += [rod_tip.get("u", ""), rod_tip.get("v", ""), rod_tip.get("theta", ""),
                     tip_error.get("distance_over_L", ""), tip_error.get("rotation", ""),
                     rod.get("backbone_distance", "")]
+            row += [rod_tip.get("w", "")] if spatial else []
+            row.append(tip_error.get("frame_angle", ""))
         row.append(p["message"])
         rows.append(row)
     write_csv(path, header, rows)

@@ -10,12 +10,14 @@ import math
 from dataclasses import dataclass, replace
 
 from fe_beam.config.schema import NUMBER, ConfigError, Key, StaticConfig, table
-from fe_beam.config.solid import SolidConfig, parse_solid
+from fe_beam.config.solid import SolidConfig, parse_solid, spatial_rod
+from fe_beam.model.spatial import SPATIAL_LAWS
 
 __all__ = [
     "COMPARE_KEYS",
     "MEASURE",
     "RODS",
+    "SPATIAL_RODS",
     "THRESHOLDS",
     "CompareConfig",
     "matched_law",
@@ -24,6 +26,8 @@ __all__ = [
 ]
 
 RODS = ("hyperelastic", "nonstandard", "reissner")
+#: the laws of the spatial rod (`fe_beam.model.spatial.SPATIAL_LAWS`)
+SPATIAL_RODS = SPATIAL_LAWS
 COMPARE_KEYS = {
     "tensions": Key((list,), None, "increasing tensions [N] of the one tension-controlled tendon"),
     "load_factors": Key((list,), None, "increasing load factors in (0, 1]"),
@@ -46,6 +50,13 @@ class CompareConfig:
     load_factors: tuple[float, ...]
     laws: tuple[str, ...]
     tension_axis: bool  # True when the sweep is over the tension of a single tendon
+    #: set-up notes (the summary's ``notes``): e.g. the laws a spatial rod leaves out
+    notes: tuple[str, ...] = ()
+
+    @property
+    def spatial(self) -> bool:
+        """The rod is the spatial one (``[model] kinematics = "spatial"``)."""
+        return getattr(self.solid.rod.model, "kinematics", "planar") == "spatial"
 
 
 def _increasing(key: str, values, upper: float | None = None) -> tuple[float, ...]:
@@ -76,6 +87,16 @@ def parse_compare(raw: dict) -> CompareConfig:
         raise ConfigError(
             f"[compare] laws must be a list of distinct names from {', '.join(RODS)}; got {laws!r}"
         )
+    notes = []
+    if spatial_rod(raw) and "hyperelastic" in laws:
+        if "laws" in (raw.get("compare") or {}):
+            raise ConfigError(
+                "[compare] laws: the hyperelastic section law is planar only for now, so the "
+                "spatial rod ([model] kinematics = \"spatial\") compares with "
+                f"{' and '.join(SPATIAL_RODS)}; got {laws!r}")
+        laws = [law for law in laws if law in SPATIAL_RODS]
+        notes.append("[compare] laws: the spatial rod is compared with the non-standard and "
+                     "Reissner laws (the hyperelastic section law is planar only for now)")
     raw = copy.deepcopy(raw)
     tension_axis = False
     if compare["tensions"] is not None:
@@ -98,15 +119,16 @@ def parse_compare(raw: dict) -> CompareConfig:
         factors = tuple((k + 1) / steps for k in range(steps))
     solid = parse_solid(raw)
     if solid.rod is None and solid.tip_force[2] != 0:
-        raise ConfigError("[loads] tip_force must be planar ([Px, Py]) for fe-beam compare: "
-                          f"the rod is planar; got {list(solid.tip_force)!r}")
+        raise ConfigError("[loads] tip_force must be planar ([Px, Py]) for fe-beam compare with "
+                          "the planar rod (or set [model] kinematics = \"spatial\"); got "
+                          f"{list(solid.tip_force)!r}")
     if solid.rod is None:  # a tendon out of the x-y plane
         raise ConfigError(f"fe-beam compare: {solid.rod_note.removeprefix('no rod comparison: ')}"
                           " (the rod is planar)")
     tension_axis = tension_axis or (
         len(solid.rod.tendons) == 1 and not solid.rod.tendons[0].controlled_by_pull_in
     )
-    return CompareConfig(solid, factors, tuple(laws), tension_axis)
+    return CompareConfig(solid, factors, tuple(laws), tension_axis, tuple(notes))
 
 
 def matched_law(solid: SolidConfig):

@@ -13,10 +13,16 @@ from fe_beam.config.schema import parse_static
 from fe_beam.config.solid import parse_solid
 from fe_beam.errors import ConfigError
 
-__all__ = ["MAX_LEVELS", "QUANTITIES", "REFINE_ARGUMENTS", "RefinementPlan",
+__all__ = ["ALL_QUANTITIES", "MAX_LEVELS", "QUANTITIES", "REFINE_ARGUMENTS", "RefinementPlan",
+           "SPATIAL_QUANTITIES",
            "add_refine_arguments", "plan_refinement"]
 
 QUANTITIES = ("tip.u", "tip.v", "tip.theta")
+#: a spatial rod's quantities (its default): the tip displacement and the distance |r(L)| of the
+#: tip from the clamp (r = (L + u, v, w)); a spatial rod has no single tip angle
+SPATIAL_QUANTITIES = ("tip.u", "tip.v", "tip.w", "tip.r")
+#: every quantity a study may name (the 3D solid reports all of them)
+ALL_QUANTITIES = tuple(dict.fromkeys(QUANTITIES + SPATIAL_QUANTITIES))
 MAX_LEVELS = 8
 MAX_RATIO = 4.0
 MAX_ROD_ELEMENTS = 20_000  # finest rod mesh: ~1e5 dofs per load step is already minutes
@@ -87,18 +93,24 @@ def _parse_ratio(text, source: str) -> float:
     return float(value)
 
 
-def _parse_quantities(given, source: str) -> tuple[str, ...]:
+def _parse_quantities(given, source: str, allowed=QUANTITIES, default=QUANTITIES,
+                      what: str = "") -> tuple[str, ...]:
+    """The quantities named by ``given`` (None: ``default``) among ``allowed``; ``what``
+    names the model when a known quantity is not one of ``allowed``."""
     if given is None:
-        return QUANTITIES
+        return default
     items = [given] if isinstance(given, str) else given
     if not isinstance(items, list) or not all(isinstance(i, str) for i in items):
-        raise ConfigError(f"{source} must be one of {', '.join(QUANTITIES)}; got {given!r}")
+        raise ConfigError(f"{source} must be one of {', '.join(allowed)}; got {given!r}")
     names = [n.strip() for item in items for n in item.split(",") if n.strip()]
-    unknown = [n for n in names if n not in QUANTITIES]
+    unknown = [n for n in names if n not in allowed]
     if unknown or not names:
         bad = unknown[0] if unknown else given
+        if bad in ALL_QUANTITIES and what:
+            raise ConfigError(f"{source}: {bad} is not a quantity of {what}; choose from "
+                              f"{', '.join(allowed)}")
         raise ConfigError(
-            f"{source}: unknown quantity {bad!r}; choose from {', '.join(QUANTITIES)}"
+            f"{source}: unknown quantity {bad!r}; choose from {', '.join(allowed)}"
         )
     return tuple(dict.fromkeys(names))
 
@@ -128,11 +140,18 @@ def plan_refinement(config: dict, levels=None, ratio=None, quantities=None,
     ratio_source = "--ratio" if ratio is not None else "[refine] ratio"
     ratio = _parse_ratio(ratio if ratio is not None else settings.get("ratio", 2), ratio_source)
     quantity_source = "--quantity" if quantities is not None else "[refine] quantity"
-    quantities = _parse_quantities(
-        quantities if quantities is not None else settings.get("quantity"), quantity_source
-    )
+    given = quantities if quantities is not None else settings.get("quantity")
+    quantities = _parse_quantities(given, quantity_source, ALL_QUANTITIES)  # the syntax first
     if "solid" in config:
         return _plan_solid(config, levels, ratio, quantities, solid_parser)
+    model = config.get("model")
+    if isinstance(model, dict) and model.get("kinematics") == "spatial":
+        quantities = _parse_quantities(given, quantity_source, SPATIAL_QUANTITIES,
+                                       SPATIAL_QUANTITIES, "a spatial rod")
+    else:
+        quantities = _parse_quantities(given, quantity_source, QUANTITIES, QUANTITIES,
+                                       "a planar rod (tip.w and tip.r need [model] kinematics "
+                                       "= \"spatial\")")
     present = [name for name in ROD_TABLES_REJECTED if name in config]
     if present:
         raise ConfigError(
@@ -220,8 +239,9 @@ REFINE_ARGUMENTS = (
                     "help": "refinement ratio between levels (default 2): elements * R**k or "
                             "mesh_size / R**k"}),
     (("--quantity",), {"action": "append", "default": None, "metavar": "KEY",
-                       "help": f"quantity of interest, one of {', '.join(QUANTITIES)} (default: "
-                               "all three)"}),
+                       "help": f"quantity of interest, one of {', '.join(ALL_QUANTITIES)} "
+                               f"(default: {', '.join(QUANTITIES)}; a spatial rod: "
+                               f"{', '.join(SPATIAL_QUANTITIES)}; tip.r = |r(L)|)"}),
 )
 
 

@@ -107,19 +107,19 @@ _SPECS = (
     CommandSpec("solid", "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod "
                          "alongside",
                 ("tendons", "solid", "compare", "modes"),
-                lambda config, options: parse_solid(config), "solid:run"),
+                lambda config, options: parse_solid(config), "solid:run", spatial=True),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",
                 ("tendons", "solid", "compare"), lambda config, options: parse_compare(config),
-                "compare:run"),
+                "compare:run", spatial=True),
     CommandSpec("validity", "map of where the rod agrees with the 3D solid over two config keys "
                             "([validity])",
                 ("tendons", "solid", "compare", "validity"),
-                lambda config, options: parse_validity(config), "validity:run"),
+                lambda config, options: parse_validity(config), "validity:run", spatial=True),
     CommandSpec("refine", "mesh-refinement study: observed order and Richardson extrapolation of "
                           "the tip",
                 ("tendons", "solid", "refine"), _parse_refine, "refine:run",
-                arguments=REFINE_ARGUMENTS, sorts_tables=True),
+                arguments=REFINE_ARGUMENTS, sorts_tables=True, spatial=True),
     CommandSpec("calibrate", "fit rod/finger parameters ([calibrate]) to measured tip poses and "
                              "backbone points (--data DATA.csv), with standard errors",
                 ("tendons", "inverse", "calibrate"), _parse_calibrate,

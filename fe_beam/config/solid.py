@@ -54,6 +54,7 @@ __all__ = [
     "parse_solid",
     "solid_dofs_estimate",
     "solid_law",
+    "spatial_rod",
 ]
 
 FORMULATIONS = {"displacement": "displacement", "mixed-up": "mixed"}
@@ -106,8 +107,10 @@ NEARLY_INCOMPRESSIBLE_NU = 0.49  # above it, the displacement formulation gets a
 class SolidConfig:
     """A validated ``fe-beam solid`` configuration.
 
-    ``rod`` is the 1D companion (rod's E, G = the 3D law's small-strain limit; planar tip force);
-    ``rod_note`` says why it is None (a tip force with a z component). ``branch_owner[i]`` is the
+    ``rod`` is the 1D companion (rod's E, G = the 3D law's small-strain limit): the spatial rod
+    with ``[model] kinematics = "spatial"`` (any tip force and tendon routing), else the planar
+    rod, None when the load leaves the x-y plane; ``rod_note`` says why it is None (a tip force
+    with a z component, a tendon routed out of the plane). ``branch_owner[i]`` is the
     index of the ``[[tendons]]`` entry that 3D cable i belongs to.
     """
 
@@ -230,14 +233,22 @@ def _check_rod_only_settings(raw: dict, loads: dict) -> None:
         )
 
 
+def spatial_rod(raw: dict) -> bool:
+    """The configuration asks for the spatial rod (``[model] kinematics = "spatial"``)."""
+    model = raw.get("model")
+    return isinstance(model, dict) and model.get("kinematics") == "spatial"
+
+
 def _rod_static(raw: dict, law: HyperelasticLaw, section, tip_force) -> StaticConfig:
-    """The rod's StaticConfig: the same tables, E and G from the 3D law's small-strain limit."""
+    """The rod's StaticConfig: the same tables, E and G from the 3D law's small-strain limit
+    (the spatial rod, ``[model] kinematics = "spatial"``, takes the tip force's z component)."""
     rod = {k: copy.deepcopy(v) for k, v in raw.items() if k not in SOLID_ONLY_TABLES}
     rho = table(raw, "material", MATERIAL_KEYS)["rho"]
     rod["material"] = {"E": law.young_modulus, "G": law.shear_modulus, "rho": rho}
     b, h, h_tip = section
     rod["section"] = {"shape": "rectangle", "b": b, "h": h, "h_tip": h_tip}
-    rod["loads"] = dict(rod.get("loads", {})) | {"tip_force": [tip_force[0], tip_force[1]]}
+    force = list(tip_force) if spatial_rod(raw) else [tip_force[0], tip_force[1]]
+    rod["loads"] = dict(rod.get("loads", {})) | {"tip_force": force}
     if "tendons" in rod:  # a tendon out of the x-y plane: parsed, the rod is left out below
         static, _ = parse_finger(rod, planar_check=False)
         return static
@@ -372,8 +383,10 @@ def parse_solid(raw: dict) -> SolidConfig:
         replace, rod.solver, linear_solver=solid["solver"], petsc_options=solid["petsc_options"]
     )
     spatial = [t.name for t in rod.tendons if t.out_of_plane]
-    planar = tip_force[2] == 0 and not spatial
-    rod_note = ("" if planar else "no rod comparison: the tip force has a z component"
+    # the spatial rod runs beside any solid; the planar one only in the x-y plane
+    planar = spatial_rod(raw) or (tip_force[2] == 0 and not spatial)
+    rod_note = ("" if planar else ("no rod comparison: the tip force has a z component, which "
+                                   "needs [model] kinematics = \"spatial\"")
                 if tip_force[2] != 0 else
                 f"no rod comparison: [[tendons]] {spatial[0]!r} is routed out of the x-y plane "
                 "(offset_z), which needs [model] kinematics = \"spatial\"")

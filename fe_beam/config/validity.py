@@ -23,10 +23,10 @@ import json
 import math
 from dataclasses import dataclass
 
-from fe_beam.config.compare import RODS, CompareConfig, parse_compare
+from fe_beam.config.compare import RODS, SPATIAL_RODS, CompareConfig, parse_compare
 from fe_beam.config.finger import TENDON_KEYS
 from fe_beam.config.schema import NUMBER, SCHEMA, ConfigError, Key, check_values, table
-from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS
+from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS, spatial_rod
 
 __all__ = [
     "DEFAULT_LAWS",
@@ -93,6 +93,11 @@ class ValidityConfig:
     order: float
     points: tuple[GridPoint, ...]
     workers: int = 1
+
+    @property
+    def kinematics(self) -> str:
+        """The rod's kinematics: "spatial" (``[model] kinematics = "spatial"``) or "planar"."""
+        return "spatial" if self.points and self.points[0].parsed.spatial else "planar"
 
     @property
     def solid(self):
@@ -267,6 +272,10 @@ def parse_validity(raw: dict) -> ValidityConfig:
             or len(set(laws)) != len(laws)):
         raise ConfigError(f"[validity] laws must be a list of distinct names from "
                           f"{', '.join(RODS)}; got {laws!r}")
+    if spatial_rod(raw) and any(law not in SPATIAL_RODS for law in laws):
+        raise ConfigError("[validity] laws: the hyperelastic section law is planar only for now, "
+                          "so the spatial rod ([model] kinematics = \"spatial\") is mapped with "
+                          f"{' and '.join(SPATIAL_RODS)}; got {laws!r}")
     ratio = given["second_mesh_ratio"]
     if ratio is not None and not (0.25 <= ratio <= 4 and abs(ratio - 1) > 1e-3):
         raise ConfigError(f"[validity] second_mesh_ratio must be in [0.25, 4] and not 1 "

@@ -266,7 +266,8 @@ class Section:
 
     def _thinner_first(self, first: str, second: str | None, second_value=None) -> bool:
         """Is dimension ``first`` the thinner one (on the float values at both ends)? A taper
-        whose thinner side changes along the rod is refused (its J series would switch)."""
+        whose thinner side changes along the rod is refused (its J series would switch); an
+        end where both are equal (e.g. a square base tapering to a flat tip) goes either way."""
         answers = set()
         for values in (self.dims, {**self.dims, **self.dims_tip}):
             a = values[first]
@@ -274,7 +275,10 @@ class Section:
                 other = values[second]
             else:
                 other = values["h"] - values["tf"]
-            answers.add(a <= other)
+            if a != other:
+                answers.add(a < other)
+        if not answers:
+            return True
         if len(answers) > 1:
             raise ValueError(f"section: {first} and {second or 'h - tf'} swap which is the "
                              "thinner along the taper; the torsion constant of such a taper is "
