@@ -309,7 +309,8 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                    for r in rows]
     length = config.solid.length
 
-    views = (("v", "y + v [m]"), ("w", "z + w [m]")) if config.spatial else (("v", "y + v [m]"),)
+    views = ((("v", "y + v [m]"), ("w", "z + w [m]")) if getattr(config, "spatial", False)
+             else (("v", "y + v [m]"),))
     with exports.figure(out / "backbones.png", 1, len(views), figsize=(9 + 5 * (len(views) - 1),
                                                                        5),
                         squeeze=False) as (_, axes):
