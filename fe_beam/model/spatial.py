@@ -311,6 +311,9 @@ def _curvatures(value, length: float) -> tuple[Profile, Profile, Profile]:
                          f"or formulas of s and L); got {value!r}")
     profiles = []
     for name, item in zip(("k_twist", "k_y", "k_z"), value, strict=True):
+        if isinstance(item, Profile):  # already parsed (dataclasses.replace of a model)
+            profiles.append(item)
+            continue
         if isinstance(item, bool) or not isinstance(item, (int, float, str)):
             raise ValueError(f"beam.initial_curvature {name} must be a number or a formula of s "
                              f"and L; got {item!r}")
