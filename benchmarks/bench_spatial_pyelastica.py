@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import copy
 import io
 import json
 import math
@@ -279,11 +280,308 @@ def finger_benchmark(updates: int, repeats: int) -> dict:
     return out
 
 
+# --- b. the finger in PyElastica: the tendon as forces ----------------------------------------
+# The same rod in all three codes: inextensible and shearable with PyElastica's shear
+# constant (GA = 27/28 G A, EI, GJ = G 2I), rho = 1000 kg/m^3 for PyElastica's dynamics.
+# PyElastica's rod is extensible, with couples divided by the cube of the stretch (its law is
+# not the reference's linear one once the tendon compresses the rod: with EA = E A the 1.1 %
+# compression at 2 N puts its converged tip 5e-3 L away); its EA is raised by AXIAL_FACTOR
+# (shear_matrix[2, 2]) so that it approximates the inextensible rod (a rod ~1e-4 L away).
+AXIAL_FACTOR = 50.0
+F_L, F_D, F_E, F_NU, F_RHO, F_TENSION = 0.1, 0.015, 1e6, 0.45, 1000.0, 2.0
+F_G = F_E / (2 * (1 + F_NU))
+ALPHA_C = 27.0 / 28.0
+F_W = math.pi / (2 * F_L)
+
+
+def helix(s):
+    return 0.004 * np.cos(F_W * s), 0.004 * np.sin(F_W * s)
+
+
+def finger_model_reference(tension: float = F_TENSION) -> np.ndarray:
+    """r(L) of the inextensible, shearable finger (shooting, rtol 1e-12)."""
+    A, inertia = math.pi * F_D**2 / 4, math.pi * F_D**4 / 64
+    tendon = ShootingTendon(
+        tension, helix,
+        d_offset=lambda s: (-0.004 * F_W * math.sin(F_W * s), 0.004 * F_W * math.cos(F_W * s)),
+        dd_offset=lambda s: (-0.004 * F_W**2 * math.cos(F_W * s),
+                             -0.004 * F_W**2 * math.sin(F_W * s)))
+    solution = solve_cantilever(F_L, F_E * A, ALPHA_C * F_G * A, F_G * 2 * inertia,
+                                F_E * inertia, F_E * inertia, tendons=(tendon,),
+                                extensible=False, rtol=1e-12)
+    return np.asarray(solution.tip_position)
+
+
+def fe_finger_config(elements: int, tension: float = F_TENSION):
+    config = copy.deepcopy(FINGER)
+    config["material"] = {"E": F_E, "nu": F_NU}
+    config["model"] = {"kinematics": "spatial", "law": "reissner", "constraint": "inextensible",
+                       "shear_correction": ALPHA_C}
+    config["mesh"] = {"elements": elements, "degree": 2}
+    config["loads"] = {"steps": FE_STEPS}
+    config["tendons"][0]["tension"] = tension
+    return parse_finger(config)[0]
+
+
+def fe_finger_cheapest(tol: float, exact: np.ndarray) -> tuple[int, float]:
+    for n in range(1, 65):
+        run = StaticContinuation(fe_finger_config(n), MPI.COMM_WORLD)
+        try:
+            run.advance(1.0, LoadStepping(steps=FE_STEPS))
+            error = float(np.linalg.norm(fe_tip(run) - exact) / F_L)
+        finally:
+            run.destroy()
+        if error < tol:
+            return n, error
+    raise RuntimeError(f"fe_beam finger: no mesh up to 64 elements reached {tol:g} L")
+
+
+def _tendon_kernel():
+    import numba
+
+    @numba.njit(cache=False)
+    def tendon_loads(tau, positions, directors, offsets, forces, torques):
+        """Rucker-Webster loads of a frictionless tendon on the current shape, as the
+        gradient of tau * l, l the length of the polyline through the tendon's points at the
+        element centres (body offsets ``offsets[k]`` in the directors' frame, k < n) and at
+        the tip node (offsets[n], the last element's frame): each point force
+        F_k = tau (t_k - t_(k-1)) goes half to each node of its element (half to none at the
+        tip), its moment (Q^T r) x F to the element's torque (in the material frame)."""
+        n = directors.shape[2]
+        points = np.empty((3, n + 1))
+        arms = np.empty((3, n + 1))
+        for k in range(n + 1):
+            e = k if k < n else n - 1
+            for i in range(3):
+                arm = 0.0
+                for j in range(3):
+                    arm += directors[j, i, e] * offsets[k, j]
+                arms[i, k] = arm
+                base = 0.5 * (positions[i, k] + positions[i, k + 1]) if k < n \
+                    else positions[i, n]
+                points[i, k] = base + arm
+        previous = np.zeros(3)
+        for k in range(n + 1):
+            current = np.zeros(3)
+            if k < n:
+                segment = points[:, k + 1] - points[:, k]
+                current = segment / np.sqrt(np.sum(segment * segment))
+            force = tau * (current - previous)
+            previous = current
+            if k < n:
+                forces[:, k] += 0.5 * force
+                forces[:, k + 1] += 0.5 * force
+            else:
+                forces[:, n] += force
+            e = k if k < n else n - 1
+            arm = arms[:, k]
+            moment = np.array([arm[1] * force[2] - arm[2] * force[1],
+                               arm[2] * force[0] - arm[0] * force[2],
+                               arm[0] * force[1] - arm[1] * force[0]])
+            for i in range(3):
+                local = 0.0
+                for j in range(3):
+                    local += directors[i, j, e] * moment[j]
+                torques[i, e] += local
+
+    return tendon_loads
+
+
+def finger_rod_settings(elements: int, damping: float = 2.5, ramp: float = 0.02,
+                        final_time: float = 2.0):
+    return RodSettings(elements=elements, slenderness=F_L / (F_D / 2), shear_ratio=F_G / F_E,
+                       cfl=0.5, damping=damping, ramp=ramp, final_time=final_time)
+
+
+def build_finger_rod(s, kernel):
+    """The finger as a PyElastica rod (bench_pyelastica's clamp half an element behind x = 0,
+    so that element 0's centre is at s = 0, the tendon's entry), the tendon as forces."""
+
+    class Simulator(ea.BaseSystemCollection, ea.Constraints, ea.Forcing, ea.Damping):
+        pass
+
+    class TendonForces(ea.NoForces):
+        """The tendon's loads on the current shape, recomputed at every step (tension ramped
+        over ``ramp``)."""
+
+        def __init__(self, tension, offsets, ramp):
+            super().__init__()
+            self.tension, self.offsets, self.ramp = tension, offsets, ramp
+
+        def apply_forces(self, system, time=0.0):
+            factor = min(1.0, float(time) / self.ramp) if self.ramp > 0 else 1.0
+            kernel(self.tension * factor, system.position_collection,
+                   system.director_collection, self.offsets, system.external_forces,
+                   system.external_torques)
+
+        def apply_torques(self, system, time=0.0):
+            pass  # added with the forces
+
+    dl = F_L / (s.elements - 0.5)
+    rho, E = F_RHO, F_E
+    simulator = Simulator()
+    # directors: d1 = e_y (fe_beam's h direction), d2 = e_z, d3 = e_x (the tangent)
+    rod = ea.CosseratRod.straight_rod(
+        s.elements, np.array([-0.5 * dl, 0.0, 0.0]), np.array([1.0, 0.0, 0.0]),
+        np.array([0.0, 1.0, 0.0]), F_L + 0.5 * dl, F_D / 2, rho, youngs_modulus=E,
+        shear_modulus=F_G)
+    rod.shear_matrix[2, 2, :] *= AXIAL_FACTOR  # nearly inextensible
+    simulator.append(rod)
+    simulator.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,),
+                                   constrained_director_idx=(0,))
+    stations = np.append(np.arange(s.elements) * dl, F_L)
+    y, z = helix(stations)
+    offsets = np.ascontiguousarray(np.stack([y, z, np.zeros_like(y)], axis=1))
+    A, inertia = math.pi * F_D**2 / 4, math.pi * F_D**4 / 64
+    omega1 = 1.875**2 * math.sqrt(E * inertia / (rho * A * F_L**4))
+    period = 2 * math.pi / omega1
+    dt = s.cfl * min(dl, F_D * math.sqrt(F_E / (2 * F_G))) / math.sqrt(AXIAL_FACTOR * E / rho)
+    steps = math.ceil(s.final_time * period / dt)
+    dt = s.final_time * period / steps
+    simulator.add_forcing_to(rod).using(TendonForces, F_TENSION, offsets, s.ramp * period)
+    simulator.dampen(rod).using(ea.AnalyticalLinearDamper,
+                                uniform_damping_constant=s.damping * omega1, time_step=dt)
+    simulator.finalize()
+    return simulator, rod, period, dt, steps
+
+
+def settle_finger(s, kernel, exact, tol, check=0.02) -> dict:
+    simulator, rod, period, dt, steps = build_finger_rod(s, kernel)
+    stepper, t = ea.PositionVerlet(), np.float64(0.0)
+    per_check = max(1, round(check * period / dt))
+    settled, done, error = None, 0, math.inf
+    while done < steps:
+        for _ in range(per_check):
+            t = stepper.step(simulator, t, np.float64(dt))
+        done += per_check
+        error = float(np.linalg.norm(rod.position_collection[:, -1] - exact) / F_L)
+        if not error < 1.0:
+            return {"settle_time": None, "error": math.inf}
+        settled = (settled or done) if error < tol else None
+    return {"settle_time": settled * dt / period if settled else None, "error": error}
+
+
+def run_finger_rod(s, kernel) -> dict:
+    started = time.perf_counter()
+    simulator, rod, period, dt, steps = build_finger_rod(s, kernel)
+    built = time.perf_counter()
+    with contextlib.redirect_stdout(io.StringIO()):
+        ea.integrate(ea.PositionVerlet(), simulator, s.final_time * period, steps,
+                     progress_bar=False)
+    done = time.perf_counter()
+    return {"tip": rod.position_collection[:, -1].copy(), "wall_s": done - started,
+            "integrate_s": done - built, "steps": steps}
+
+
+def pyelastica_finger_settings(tol, kernel, exact, log) -> object:
+    """The fewest elements (of a short list) whose rod settles within ``tol`` and whose rod
+    with twice the elements does too (bench_pyelastica's guard), then the best of a few
+    dampings; final time = the settling time."""
+    for n in (6, 8, 12, 16, 24, 32, 48, 64):
+        result = settle_finger(finger_rod_settings(n), kernel, exact, tol)
+        log.append({"elements": n, "damping": 2.5} | result)
+        if result["settle_time"] is None:
+            continue
+        guard = settle_finger(finger_rod_settings(2 * n), kernel, exact, tol)
+        log.append({"elements": 2 * n, "guard_of": n} | guard)
+        if guard["settle_time"] is None:
+            continue
+        best = (result["settle_time"], 2.5)
+        for damping in (1.5, 2.0, 3.0, 3.5):
+            trial = settle_finger(finger_rod_settings(n, damping=damping), kernel, exact, tol)
+            log.append({"elements": n, "damping": damping} | trial)
+            if trial["settle_time"] is not None and trial["settle_time"] < best[0]:
+                best = (trial["settle_time"], damping)
+        return finger_rod_settings(n, damping=best[1],
+                                   final_time=math.ceil(best[0] * 100) / 100)
+    return None
+
+
+class FeFingerFromRest:
+    """A built `RealtimeSolver` of the finger moved from tension 0 to the tension."""
+
+    def __init__(self, n: int):
+        self.solver = RealtimeSolver(fe_finger_config(n, tension=0.0))
+
+    def __call__(self) -> float:
+        self.solver.update(tensions=[0.0])
+        return timed(lambda: self.solver.update(tensions=[F_TENSION]))[0]
+
+
+def finger_versus_pyelastica(tol: float, repeats: int) -> dict:
+    exact = finger_model_reference()
+    n, fe_error = fe_finger_cheapest(tol, exact)
+    entry = {"tolerance": tol, "tension": F_TENSION, "reference_tip": exact.tolist(),
+             "fe_beam": {"elements": n, "degree": 2, "tip_error_over_L": fe_error}}
+    print(f"\nfinger vs PyElastica, {tol:g} L (tension {F_TENSION:g} N; reference tip "
+          f"{exact.round(6)}): fe_beam {n} degree-2 elements, tip error {fe_error:.2e} L")
+    kernel = _tendon_kernel()
+    run_finger_rod(finger_rod_settings(8, final_time=0.01), kernel)  # numba JIT
+    log = []
+    settings = pyelastica_finger_settings(tol, kernel, exact, log)
+    entry["pyelastica_search"] = log
+    if settings is None:
+        entry["pyelastica"] = {"status": "no setting of the list reached the tolerance"}
+        return entry
+    solve_only = StaticContinuation(fe_finger_config(n), MPI.COMM_WORLD)
+
+    def fe_solve() -> float:
+        solve_only.restart()
+        return timed(lambda: solve_only.advance(1.0, LoadStepping(steps=FE_STEPS)))[0]
+
+    def fe_build() -> float:
+        def run():
+            continuation = StaticContinuation(fe_finger_config(n), MPI.COMM_WORLD)
+            continuation.advance(1.0, LoadStepping(steps=FE_STEPS))
+            continuation.destroy()
+        return timed(run)[0]
+
+    from_rest = FeFingerFromRest(n)
+    fe_runs = {"fe_beam solve (built problem)": fe_solve,
+               "fe_beam RealtimeSolver from rest": from_rest, "fe_beam build + solve": fe_build}
+    for run in fe_runs.values():
+        run()
+    times = {"PyElastica build + integrate": [], "PyElastica integrate only": []}
+    times |= {name: [] for name in fe_runs}
+    for _ in range(repeats):
+        rod = run_finger_rod(settings, kernel)
+        times["PyElastica build + integrate"].append(rod["wall_s"])
+        times["PyElastica integrate only"].append(rod["integrate_s"])
+        for name, run in fe_runs.items():
+            times[name].append(run())
+    rod_error = float(np.linalg.norm(rod["tip"] - exact) / F_L)
+    solve_only.destroy()
+    rest_tip = np.array(from_rest.solver.problem.end_values()["position"])
+    entry["fe_beam"]["from_rest_tip_error_over_L"] = float(
+        np.linalg.norm(rest_tip - exact) / F_L)
+    entry["fe_beam"]["from_rest_statistics"] = dict(from_rest.solver.statistics)
+    from_rest.solver.close()
+    reference_times = times["PyElastica build + integrate"]
+    entry["pyelastica"] = {"settings": asdict(settings), "steps": rod["steps"],
+                           "tip_error_over_L": rod_error, "within_tolerance": rod_error < tol}
+    entry["times"] = {name: stats(t) for name, t in times.items()}
+    entry["speedup_vs_pyelastica"] = {
+        name: statistics.median(p / f for p, f in zip(reference_times, times[name], strict=True))
+        for name in fe_runs}
+    rows = [[name, rod_error if name.startswith("PyElastica build") else
+             fe_error if name.startswith("fe_beam solve (") else
+             entry["fe_beam"]["from_rest_tip_error_over_L"] if "rest" in name else "",
+             statistics.median(t),
+             min(t), f"{entry['speedup_vs_pyelastica'][name]:.1f}x"
+             if name in entry["speedup_vs_pyelastica"] else ""] for name, t in times.items()]
+    print(f"PyElastica: {settings.elements} elements, damping {settings.damping:g} omega_1, "
+          f"{settings.final_time:g} T1, {rod['steps']} steps")
+    print(table(["code", "tip error / L", "median s", "min s", "PyElastica / this"], rows))
+    return entry
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--updates", type=int, default=500)
     parser.add_argument("--tolerance", type=float, nargs="+", default=[1e-3, 1e-4])
+    parser.add_argument("--finger-tolerance", type=float, nargs="+", default=[1e-3])
+    parser.add_argument("--no-finger-pyelastica", action="store_true")
     args = parser.parse_args(argv)
     exact = reference()
     print(f"reference (shooting, inextensible-unshearable): tip r(L) = {exact.round(6)}; "
@@ -364,8 +662,9 @@ def main(argv=None) -> int:
               f"{run['newton_per_update']:.2f} Newton/update, {run['fallbacks']} fallbacks")
     print(f"  tip vs shooting / L: {finger['tip_error_vs_shooting_over_L']}")
     data["finger_realtime"] = finger
-    data["finger_pyelastica"] = ("not run: see benchmarks/README.md (spatial PyElastica "
-                                 "benchmark, b)")
+    if ea is not None and not args.no_finger_pyelastica:
+        data["finger_pyelastica"] = {tolerance_label(tol): finger_versus_pyelastica(
+            tol, args.repeats) for tol in args.finger_tolerance}
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / "spatial_pyelastica.json"
     path.write_text(json.dumps(data, indent=1, default=float) + "\n")
