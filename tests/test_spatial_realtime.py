@@ -168,7 +168,8 @@ def test_structure_key_sees_every_compiled_difference():
 
 
 @pytest.mark.parametrize("name", ["tip moment nonzero", "follower", "initial curvature formula",
-                                  "point force", "supports", "section shape", "planar"])
+                                  "point force", "supports", "law", "constraint", "degree",
+                                  "section shape", "planar"])
 def test_a_cache_hit_is_never_another_structure(name, monkeypatch):
     """Solve A, then B (another structure) in the same process: B equals B solved with the
     cache off to 1e-10 (a hit on A's problem would give A's forms with B's numbers)."""

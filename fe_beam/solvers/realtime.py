@@ -21,6 +21,11 @@ Every number of a `fe_beam.fem.rod.BeamProblem` that may change between solves i
   the constants: the load stepping then starts exactly as on a new problem (same iterates, same
   numbers) without the ~0.02-0.2 s of building forms, spaces and the SNES.
 
+Both work on spatial rods (``kinematics = "spatial"``): the key then also holds the initial
+curvature's and a routed tendon's formulas, whether the tip-moment term is in the residual and
+the thinner side of a rectangle (`_spatial_key`); the tip is {u, v, w, rotation_vector}. Newton
+systems beyond BANDED_MIN_DOFS dofs are factorised in their band (`DenseLU`).
+
 Nothing here writes files.
 """
 
