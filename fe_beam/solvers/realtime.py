@@ -531,6 +531,7 @@ class RealtimeSolver:
         (dense only; default on there)."""
         self.comm = comm
         self._config, self._tensions = config, None
+        self._structure_key = structure_key(config, comm)  # every update keeps it
         self._tip_dofs = None
         self.check = check
         self.run = acquire(config, comm, prefix="fe_beam_realtime_")
@@ -633,7 +634,7 @@ class RealtimeSolver:
                                f"and {updatable[-1]}")
             model = config.model
             config = replace(config, model=replace(model, loads=replace(model.loads, **loads)))
-        if structure_key(config, self.comm) != structure_key(self.config, self.comm):
+        if structure_key(config, self.comm) != self._structure_key:
             raise ValueError("the update changes the structure of the model (mesh, law, "
                              "supports, tendon path points): build a new solver")
         if parameters and any(k.startswith(("tendons.", "section.")) for k in parameters):
