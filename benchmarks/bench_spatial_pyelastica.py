@@ -28,11 +28,16 @@ b. The spatial finger (L = 0.1 m, circle d = 15 mm, E = 1 MPa, nu = 0.45, Reissn
    tests/test_spatial_realtime.py): `RealtimeSolver` warm re-solves along
    tau(t) = 1.5 + 0.5 sin(2 pi t) N sampled at 1 kHz (``--updates``), with the step check
    (rotation jump + admissibility) and without; the tip against the shooting solver's
-   (extensible, shearable, same stiffnesses) at 1 and 2 N. PyElastica's tendon-as-forces
-   workaround is not run (see benchmarks/README.md).
+   (extensible, unshearable, same stiffnesses) at 1 and 2 N. Then the finger against
+   PyElastica (``--finger-tolerance``, default 1e-3 L): PyElastica with the tendon as forces
+   (`_tendon_kernel`: the discrete Rucker-Webster loads of the tendon on the current shape,
+   recomputed at every step), all codes on the inextensible, shearable rod with PyElastica's
+   shear constant (`finger_versus_pyelastica`; PyElastica's EA raised by AXIAL_FACTOR).
 
     python benchmarks/bench_spatial_pyelastica.py [--repeats 5] [--updates 500]
                                                   [--tolerance 1e-3 1e-4]
+                                                  [--finger-tolerance 1e-3]
+                                                  [--no-finger-pyelastica]
 
 Writes benchmarks/results/spatial_pyelastica.json. Without PyElastica the script says why
 and times fe_beam alone (``"pyelastica": {"status": "unavailable", ...}``).
