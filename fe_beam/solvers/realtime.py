@@ -21,6 +21,11 @@ Every number of a `fe_beam.fem.rod.BeamProblem` that may change between solves i
   the constants: the load stepping then starts exactly as on a new problem (same iterates, same
   numbers) without the ~0.02-0.2 s of building forms, spaces and the SNES.
 
+Both work on spatial rods (``kinematics = "spatial"``): the key then also holds the initial
+curvature's and a routed tendon's formulas, whether the tip-moment term is in the residual and
+the thinner side of a rectangle (`_spatial_key`); the tip is {u, v, w, rotation_vector}. Newton
+systems beyond BANDED_MIN_DOFS dofs are factorised in their band (`DenseLU`).
+
 Nothing here writes files.
 """
 
@@ -38,6 +43,7 @@ from mpi4py import MPI
 from fe_beam.errors import UpdateFailed  # noqa: F401  (its home; re-exported)
 from fe_beam.fem import compat
 from fe_beam.fem.kinematics import strains
+from fe_beam.fem.rod import BeamProblem
 from fe_beam.model.laws import LAW_KINDS
 from fe_beam.model.loads import LOADS
 from fe_beam.model.studies import StaticConfig
@@ -65,12 +71,39 @@ CACHE_SIZE = 8
 
 
 # --- what shapes the forms -----------------------------------------------------------------------
+def _profile_key(profile) -> tuple:
+    """A `fe_beam.timefunctions.Profile` as compiled into a form: its formula's text and
+    constants (a formula is UFL, its constants numbers in it), or its value (a Constant made
+    with it, never updated)."""
+    return (getattr(profile, "text", None), getattr(profile, "constant", None),
+            tuple(sorted(getattr(profile, "constants", {}).items())), repr(profile))
+
+
 def _tendon_geometry(tendon) -> tuple:
     """The part of a tendon that shapes the mesh and forms: entry, anchor, the x of its path
     points per branch and its kind of control (the offsets are Functions, the tension a
-    Constant)."""
+    Constant); a routed tendon's formulas (compiled into the forms of a spatial rod)."""
+    routing = getattr(tendon, "routing", None)
     return (tendon.entry, tendon.anchor, tuple(tuple(x for x, _ in p) for p in tendon.paths),
-            tendon.controlled_by_pull_in)
+            tendon.controlled_by_pull_in,
+            None if routing is None else tuple(_profile_key(p) for p in routing))
+
+
+def _spatial_key(model) -> tuple:
+    """What a spatial rod compiles beyond a planar one: the initial curvature's formulas (and
+    whether the rod is curved: the relaxed reference state), whether the residual has the tip
+    moment's virtual work (only when the moment is nonzero, or with follower loads), and
+    which side of a rectangle (T-section part) is the thinner (the torsion series' form)."""
+    if getattr(model, "kinematics", "planar") != "spatial":
+        return ("planar",)
+    section = model.section
+    thinner = ()
+    if section.shape == "rectangle":
+        thinner = (section._thinner_first("b", "h"),)
+    elif section.shape == "t-section":
+        thinner = (section._thinner_first("tw", None), section._thinner_first("tf", "b"))
+    return ("spatial", tuple(_profile_key(p) for p in model.initial_curvature),
+            bool(model.curved), bool(any(model.loads.tip_moment)), thinner)
 
 
 def structure_key(config: StaticConfig, comm) -> tuple:
@@ -87,7 +120,8 @@ def structure_key(config: StaticConfig, comm) -> tuple:
                          tuple(sorted(section.dims_tip))))
     options = model.options
     return (
-        id(comm), comm.size, float(model.length), model.mesh.elements, model.mesh.degree,
+        id(comm), comm.size, _spatial_key(model), float(model.length), model.mesh.elements,
+        model.mesh.degree,
         options.law, options.constraint, repr(options.hyperelastic), options.section_points,
         section_key, repr(model.supports), bool(model.loads.follower),
         # the loads the problem does not hold as constants (point forces: mesh vertices and
@@ -136,6 +170,11 @@ def apply_config(run, config: StaticConfig) -> None:
         run.solver.load_factor = 0.0
     if getattr(run, "contact", None) is not None:
         run.contact.reset()
+    if getattr(problem, "curved", False):
+        # a curved spatial rod: its reference is the relaxed stress-free state, solved again
+        # with the new numbers (as a newly built problem does)
+        problem._set_stress_free_guess()
+        run._relax()
 
 
 def _set_tendons(tendon_set, tendons) -> None:
@@ -143,8 +182,13 @@ def _set_tendons(tendon_set, tendons) -> None:
     offsets re-interpolated into its offset Functions; tension constants and rest lengths as
     for a new set (the state must be the unloaded one)."""
     tendons = tuple(tendons)
+    spatial = getattr(tendon_set._problem, "spatial", False)
     for tendon, (_, deltas) in zip(tendons, tendon_set._geometry, strict=True):
+        if spatial and tendon.routing is not None:
+            continue  # its formulas are in the forms (and in the structure key)
         for path, delta in zip(tendon.paths, deltas, strict=True):
+            if spatial:
+                delta = delta[0]  # (y offset Function, z = 0)
             xs, ds = np.array([p[0] for p in path]), np.array([p[1] for p in path])
             delta.interpolate(lambda x, xs=xs, ds=ds: np.interp(x[0], xs, ds))
     tendon_set.tendons = tendons
@@ -175,10 +219,6 @@ def acquire(config: StaticConfig, comm=MPI.COMM_WORLD, prefix: str = "fe_beam_st
     back with `release` (it is not shared while out). Collective (the same sequence of calls on
     every rank gives the same hits)."""
 
-    if getattr(config.model, "kinematics", "planar") == "spatial":  # not cached (yet)
-        run = StaticContinuation(config, comm, prefix=prefix)
-        run._cache_key = None
-        return run
     key = structure_key(config, comm) + (prefix,)
     entry = _CACHE.pop(key, None) if _enabled() else None
     if entry is not None and entry.comm is comm:
@@ -282,7 +322,7 @@ def set_parameters(config: StaticConfig, values: Mapping[str, float]) -> StaticC
         elif head == "loads" and key == "loads.tip_moment":
             loads = replace(loads, tip_moment=value)
         elif head == "loads" and len(parts) == 3 and parts[1] in ("tip_force", "distributed") \
-                and parts[2] in ("0", "1"):
+                and parts[2] in ("0", "1", "2")[:len(getattr(loads, parts[1]))]:
             pair = list(getattr(loads, parts[1]))
             pair[int(parts[2])] = value
             loads = replace(loads, **{parts[1]: tuple(pair)})
@@ -295,6 +335,10 @@ def set_parameters(config: StaticConfig, values: Mapping[str, float]) -> StaticC
                     raise KeyError(f"{key}: tendon {index} is controlled by "
                                    f"{'pull_in' if what == 'tension' else 'tension'}")
                 tendons[index] = replace(tendon, **{what: value})
+            elif what in ("offset_base", "offset_tip", "path") and tendon.routing is not None:
+                raise KeyError(f"{key}: tendon {index} is routed by formulas (offset_y, "
+                               "offset_z), which are compiled into the forms: build a new "
+                               "solver for other ones")
             elif what in ("offset_base", "offset_tip") and len(parts) == 3:
                 point = 0 if what == "offset_base" else -1
                 tendons[index] = replace(tendon, paths=tuple(
@@ -312,6 +356,16 @@ def set_parameters(config: StaticConfig, values: Mapping[str, float]) -> StaticC
     return replace(config, model=model, tendons=tuple(tendons))
 
 
+def _with_tension(tendon, value: float):
+    """``tendon`` with another tension (finite, >= 0: checked by the caller), without
+    re-validating its paths (a routed tendon's 401 sampled points cost ~0.5 ms)."""
+    import copy
+
+    changed = copy.copy(tendon)
+    object.__setattr__(changed, "tension", float(value))
+    return changed
+
+
 def _with_offset(path, index: int, value: float):
     points = [list(p) for p in path]
     points[index][1] = value
@@ -325,9 +379,20 @@ def _with_offset(path, index: int, value: float):
 DENSE_MAX_DOFS = 400
 
 
+# Above this many dofs `DenseLU` factorises the band of the matrix (reverse Cuthill-McKee
+# ordering, LAPACK gbtrf with partial pivoting within the band) instead of the whole of it: a
+# rod's tangent is banded (bandwidth ~ 2-4 nodes' dofs), and a dense LU of the 326 dofs of a
+# 20-element P2 spatial rod costs ~4.5 ms against ~0.2 ms for its band.
+BANDED_MIN_DOFS = 80
+
+
 class DenseLU:
-    """PETSc python preconditioner: dense LU of the (small, serial) operator; with KSP
-    "preonly" an exact direct solve."""
+    """PETSc python preconditioner: direct LU of the (small, serial) operator with partial
+    pivoting (which also handles the zero diagonal of multiplier rows): dense (LAPACK getrf)
+    up to BANDED_MIN_DOFS dofs, banded (gbtrf, after a reverse Cuthill-McKee ordering) beyond;
+    with KSP "preonly" an exact direct solve. ``solve(rhs)`` applies the last factors."""
+
+    factors = None
 
     def setUp(self, pc) -> None:
         from scipy.linalg import lapack
@@ -336,27 +401,67 @@ class DenseLU:
         size = operator.getSize()[0]
         rows, columns, values = operator.getValuesCSR()
         # the operator keeps its sparsity pattern (assembled into the same Mat): the dense
-        # positions of its entries are computed once per operator and size
+        # (or band) positions of its entries are computed once per operator and size
         pattern = getattr(self, "_pattern", None)
         if pattern is None or pattern[0] != (id(operator), size, columns.size):
-            flat = np.repeat(np.arange(size), np.diff(rows)) * size + columns
-            pattern = self._pattern = ((id(operator), size, columns.size), flat)
-        dense = np.zeros(size * size)
-        dense[pattern[1]] = values
-        # LAPACK getrf (partial pivoting) straight away: scipy's wrappers cost more than the
-        # factorisation of these small matrices
-        lu, pivots, info = lapack.dgetrf(dense.reshape(size, size))
+            pattern = self._pattern = ((id(operator), size, columns.size),
+                                       _lu_layout(size, rows, columns))
+        layout = pattern[1]
+        if layout[0] == "dense":
+            dense = np.zeros(size * size)
+            dense[layout[1]] = values
+            # LAPACK getrf (partial pivoting) straight away: scipy's wrappers cost more than
+            # the factorisation of these small matrices
+            lu, pivots, info = lapack.dgetrf(dense.reshape(size, size))
+            factors = ("dense", lu, pivots)
+        else:
+            _, flat, shape, kl, ku, order = layout
+            band = np.zeros(shape[0] * shape[1])
+            band[flat] = values
+            lu, pivots, info = lapack.dgbtrf(band.reshape(shape), kl, ku)
+            factors = ("band", lu, pivots, kl, ku, order)
         if info != 0 or not np.all(np.isfinite(lu)):
             from petsc4py import PETSc
 
             raise PETSc.Error(71)  # a zero pivot: the Newton step fails like a failed LU
-        self.factors = (lu, pivots)
+        self.factors = factors
 
-    def apply(self, pc, x, y) -> None:
+    def solve(self, rhs):
+        """(A^-1 rhs, LAPACK info) with the last factors."""
         from scipy.linalg import lapack
 
-        solution, _ = lapack.dgetrs(*self.factors, x.array_r)
+        factors = self.factors
+        if factors[0] == "dense":
+            return lapack.dgetrs(factors[1], factors[2], rhs)
+        _, lu, pivots, kl, ku, order = factors
+        permuted, info = lapack.dgbtrs(lu, kl, ku, rhs[order], pivots)
+        solution = np.empty_like(permuted)
+        solution[order] = permuted
+        return solution, info
+
+    def apply(self, pc, x, y) -> None:
+        solution, _ = self.solve(x.array_r)
         y.array[:] = solution
+
+
+def _lu_layout(size: int, rows, columns) -> tuple:
+    """Where the CSR entries go: ("dense", flat positions in the size x size array), or
+    ("band", flat positions in gbtrf's band storage, its shape, kl, ku, the ordering)."""
+    row_of = np.repeat(np.arange(size), np.diff(rows))
+    if size < BANDED_MIN_DOFS:
+        return ("dense", row_of * size + columns)
+    import scipy.sparse as sparse
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    graph = sparse.csr_matrix((np.ones(columns.size), columns, rows), shape=(size, size))
+    order = np.asarray(reverse_cuthill_mckee(graph + graph.T, symmetric_mode=True))
+    position = np.empty(size, dtype=np.int64)
+    position[order] = np.arange(size)
+    i, j = position[row_of], position[columns]
+    kl, ku = int(np.max(i - j, initial=0)), int(np.max(j - i, initial=0))
+    shape = (2 * kl + ku + 1, size)
+    # gbtrf's storage: A[i, j] at ab[kl + ku + i - j, j] (the first kl rows: room for fill-in)
+    return ("band", (kl + ku + i - j) * size + j, shape, kl, ku, order)
 
 
 class _OperatorPC:
@@ -426,6 +531,7 @@ class RealtimeSolver:
         (dense only; default on there)."""
         self.comm = comm
         self._config, self._tensions = config, None
+        self._structure_key = structure_key(config, comm)  # every update keeps it
         self._tip_dofs = None
         self.check = check
         self.run = acquire(config, comm, prefix="fe_beam_realtime_")
@@ -478,16 +584,28 @@ class RealtimeSolver:
         return self.run.tendons
 
     def tip(self) -> dict:
-        """{u, v, theta} at x = L (every rank)."""
+        """{u, v, theta} at x = L (every rank); a spatial rod: {u, v, w, rotation_vector}
+        (the displacement from its reference, the tip's rotation vector; the tip frame R and
+        position: ``problem.end_values()``)."""
         problem = self.problem
+        spatial = getattr(problem, "spatial", False)
         if self.comm.size > 1:
-            return problem.end_values("xL")
+            values = problem.end_values("xL")
+            if spatial:
+                return {key: values[key] for key in ("u", "v", "w", "rotation_vector")}
+            return values
         dofs = self._tip_dofs
         if dofs is None:
-            problem.end_values("xL")
+            BeamProblem.end_values(problem, "xL") if spatial else problem.end_values("xL")
             dofs = self._tip_dofs = problem._end_dofs["xL"]
         values = compat.local_array(problem.w)
-        return {name: float(values[d].sum()) for name, d in dofs.items()}
+        tip = {name: float(values[d].sum()) for name, d in dofs.items()}
+        if not spatial:
+            return tip
+        reference = problem.reference_tip
+        return {"u": tip["u"] - float(reference[0]), "v": tip["v"] - float(reference[1]),
+                "w": tip["w"] - float(reference[2]),
+                "rotation_vector": [tip["theta_x"], tip["theta_y"], tip["theta_z"]]}
 
     def state(self) -> np.ndarray:
         """A copy of the local dof array (ghosts included)."""
@@ -516,7 +634,7 @@ class RealtimeSolver:
                                f"and {updatable[-1]}")
             model = config.model
             config = replace(config, model=replace(model, loads=replace(model.loads, **loads)))
-        if structure_key(config, self.comm) != structure_key(self.config, self.comm):
+        if structure_key(config, self.comm) != self._structure_key:
             raise ValueError("the update changes the structure of the model (mesh, law, "
                              "supports, tendon path points): build a new solver")
         if parameters and any(k.startswith(("tendons.", "section.")) for k in parameters):
@@ -596,7 +714,7 @@ class RealtimeSolver:
                 # (`TendonSet.set_tension_controlled`) must see the current ones
                 tendon_set = self.tendons
                 tendon_set.tendons = tuple(
-                    replace(t, tension=tensions[i]) if i in tensions else t
+                    _with_tension(t, tensions[i]) if i in tensions else t
                     for i, t in enumerate(tendon_set.tendons))
             else:
                 self.config = config
@@ -642,7 +760,6 @@ class RealtimeSolver:
         dense serial case: the same iterates without PETSc's SNES/KSP/PC dispatch. Raises
         SolveFailed like SNESSolver.solve; the state is only changed on success."""
         from petsc4py import PETSc
-        from scipy.linalg import lapack
 
         solver = self.run.snes
         nonlinear, snes = solver.problem, solver.snes
@@ -659,7 +776,7 @@ class RealtimeSolver:
             while reason == 0:
                 nonlinear.jacobian(snes, x, matrix, matrix)
                 context.setUp(_OperatorPC(matrix))
-                step, info = lapack.dgetrs(*context.factors, f.array)
+                step, info = context.solve(f.array)
                 if info != 0:
                     raise SolveFailed("dense LU solve failed")
                 x.array[:] -= step
@@ -692,12 +809,11 @@ class RealtimeSolver:
         context = self._dense_context
         if getattr(context, "factors", None) is None:
             return
-        from scipy.linalg import lapack
 
         x = self._work_x
         x.array[:] = state
         self.run.snes.snes.computeFunction(x, self._work_f)
-        step, info = lapack.dgetrs(*context.factors, self._work_f.array)
+        step, info = context.solve(self._work_f.array)
         if info == 0 and np.all(np.isfinite(step)):
             state -= step
 
@@ -749,7 +865,8 @@ class RealtimeSolver:
             # new offsets: new interpolants and rest lengths (of the reference state)
             w = compat.local_array(problem.w)
             saved = w.copy()
-            w[:] = 0.0
+            relaxed = getattr(self.run, "_relaxed_state", None)  # a curved rod's reference
+            w[:] = 0.0 if relaxed is None else relaxed
             tensions = tendons.tension_values()
             _set_tendons(tendons, mixed)
             for constant, value in zip(tendons.tensions, tensions, strict=True):
