@@ -60,6 +60,7 @@ from fe_beam.solvers.modes import natural_frequencies
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
+from fe_beam.solvers.rod_static import build_problem
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
 
@@ -82,9 +83,9 @@ def _tendon_problem(static: StaticConfig, comm):
     vertices and their potential is part of the stored energy."""
 
     tendons = TendonSet(static.tendons, static.model.length) if static.tendons else None
-    problem = BeamProblem(static.model, comm,
-                          breakpoints=tendons.breakpoints if tendons else (),
-                          extra_energy=tendons.energy if tendons else None)
+    problem = build_problem(static.model, comm,
+                            breakpoints=tendons.breakpoints if tendons else (),
+                            extra_energy=tendons.energy if tendons else None)
     return problem, tendons
 
 
