@@ -47,7 +47,13 @@ from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     parse_modes,
 )
 from fe_beam.errors import ConfigError
-from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.exports.outputs import (
+    BeamXDMFWriter,
+    _pyplot,
+    atomic_write_json,
+    atomic_write_text,
+)
+from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
 from fe_beam.fem.tendons import TendonSet
@@ -190,7 +196,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                    dofs=problem.global_dofs, notes=notes + watch.notes(),
                                    strain_range=watch.summary())
             result.prestate = _prestate_record(problem, failure)
-            writer = BeamXDMFWriter(problem, xdmf)
+            writer = _writer(problem, xdmf)
             files = exports.Exports(_history_exports(out, config, writer), comm)
             writer.write(0.0)
             result.info["wall_time_s"] = time.perf_counter() - started
@@ -215,7 +221,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    writer = BeamXDMFWriter(problem, xdmf)
+    writer = _writer(problem, xdmf)
     shapes = []
     files = exports.Exports(_history_exports(
         out, config, writer,
@@ -395,6 +401,33 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
+def _writer(problem, path):
+    """The XDMF writer of a rod problem (the spatial rod's has the directors)."""
+    return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(problem, path)
+
+
+SPATIAL_MOMENTA = tuple(f"momentum_{k}" for k in "xyz") + tuple(
+    f"angular_momentum_{k}" for k in "xyz")
+
+
+def spatial_history_columns(tendons: int) -> list[exports.Column]:
+    """history.csv of a spatial rod: t, the tip's u, v, w, rotation vector and frame R (rows
+    R11 ... R33), the energies and their sum kinetic + strain, the linear and angular momenta
+    (world axes, about the origin), then each tendon's tension and pull-in."""
+    return [exports.Column("t", lambda h: h["t"]),
+            *[exports.Column(f"tip_{k}", lambda h, k=k: h["tip"][k]) for k in ("u", "v", "w")],
+            *[exports.Column(f"tip_rotation_{k}", lambda h, i=i: h["tip"]["rotation_vector"][i])
+              for i, k in enumerate("xyz")],
+            *[exports.Column(f"tip_R{i + 1}{j + 1}", lambda h, i=i, j=j: h["tip"]["R"][i][j])
+              for i in range(3) for j in range(3)],
+            *(exports.Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            exports.Column("total_energy", lambda h: h["energies"]["kinetic"]
+                           + h["energies"]["strain"]),
+            *(exports.Column(k, lambda h, k=k: h["momenta"][k]) for k in SPATIAL_MOMENTA),
+            *exports.indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
+
+
 def history_columns(tendons: int) -> list[exports.Column]:
     """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
     return [exports.Column("t", lambda h: h["t"]), *exports.tip_columns(),
@@ -412,7 +445,9 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
     summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
     files = [exports.XDMFExport(writer, "t")] if writer is not None else []
     if out is not None:
-        columns = history_columns(len(config.static.tendons))
+        spatial = getattr(config.static.model, "kinematics", "planar") == "spatial"
+        columns = (spatial_history_columns if spatial else history_columns)(
+            len(config.static.tendons))
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -554,15 +589,50 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                              ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
             if name == "unstable_modes.xdmf" and not shapes:
                 continue
-            writer = BeamXDMFWriter(problem, out / name if static.output.xdmf else None)
+            writer = _writer(problem, out / name if static.output.xdmf else None)
+            family = _family_field(problem, writer) if name == "modes.xdmf" else None
             for index, shape in enumerate(shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
+                if family is not None:  # the mode's family, as a code (summary mode_families)
+                    family.x.array[:] = MODE_FAMILY_CODES.get(result.kinds[index - 1], -1)
                 writer.write(float(index))
             writer.close()
         compat.local_array(problem.w)[:] = state
         if comm.rank == 0:
             atomic_write_json(out / "summary.json", summary)
+            _write_modes_csv(out / "modes.csv", summary)
     return summary
+
+
+#: the code of each mode's family in modes.xdmf's "family" field
+MODE_FAMILY_CODES = {"rigid": 0, "axial": 1, "bending": 2, "torsion": 3, "bending about y": 4,
+                     "bending about z": 5}
+
+
+def _family_field(problem, writer):
+    """A constant field "family" added to the spatial rod's mode series (None for planar
+    rods, whose kinds are named in summary.json and modes.csv)."""
+    if not problem.spatial:
+        return None
+    from dolfinx import fem
+
+    space = compat.function_space(problem.mesh, compat.element(problem.mesh, "DG", 0))
+    function = fem.Function(space, name="family")
+    writer.functions["family"] = function
+    return function
+
+
+def _write_modes_csv(path: Path, summary: dict) -> None:
+    """modes.csv: one row per mode, its frequency, kind and the shares by family."""
+    shares = summary.get("mode_shares") or [{} for _ in summary["frequencies_hz"]]
+    keys = sorted({k for share in shares for k in share})
+    lines = [",".join(["mode", "frequency_hz", "kind", *[k.replace(" ", "_") + "_share"
+                                                        for k in keys]])]
+    for index, (frequency, kind, share) in enumerate(zip(
+            summary["frequencies_hz"], summary["mode_kinds"], shares, strict=True), start=1):
+        lines.append(",".join([str(index), repr(float(frequency)), kind,
+                               *[repr(float(share.get(k, 0.0))) for k in keys]]))
+    atomic_write_text(path, "\n".join(lines) + "\n")
 
 
 def _modes_summary(result) -> dict:
@@ -590,6 +660,8 @@ def _modes_summary(result) -> dict:
         notes.append(f"{result.rigid_body_modes} rigid-body mode(s) (0 Hz): the supports leave "
                      "the beam free to move as a rigid body")
     return {"eigenvalues": result.eigenvalues, "mode_kinds": result.kinds,
+            "mode_shares": result.shares,
+            "mode_family_codes": MODE_FAMILY_CODES,
             "rigid_body_modes": result.rigid_body_modes, "unstable_modes": unstable,
             "unstable_count": result.unstable_count, "stable": result.unstable_count == 0,
             "notes": notes}
