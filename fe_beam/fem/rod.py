@@ -672,7 +672,7 @@ class BeamProblem:
     def rotation_dofs(self) -> np.ndarray:
         return self.component_dofs("theta")
 
-    # --- inertia: what dynamics and modes need of a rod (the spatial rod has its own) --------------
+    # --- inertia: what dynamics and modes need of a rod (the spatial rod has its own) ----------
     #: the motion components (before the multipliers) and the translations among them
     motion_count = 3
     translations = 2
