@@ -88,7 +88,8 @@ def test_release_oscillates_with_the_first_modes_of_both_planes():
     """A cantilever (b = 0.02 along z, h = 0.03 along y) released from a small static tip load
     (Fy, Fz: tip 1e-3 L in each plane) vibrates in v with the first period of bending about z
     and in w with that of bending about y (different: I_y < I_z). Measured at dt = T_z / 100,
-    rho_inf = 0.9: both within 3e-4 of the modal periods."""
+    rho_inf = 0.9 over 4 periods of bending about y: 8e-4 (v) and 1.2e-4 (w) from the modal
+    periods."""
     config = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.03},
               "material": {"E": 1e7, "nu": NU, "rho": RHO},
               "model": {"kinematics": "spatial", "law": "reissner", "constraint": "none"},
@@ -104,7 +105,7 @@ def test_release_oscillates_with_the_first_modes_of_both_planes():
     assert period["bending about y"] > 1.3 * period["bending about z"]
     dynamic = copy.deepcopy(config)
     dynamic["initial"] = {"from_static": True}
-    dynamic["time"] = {"t_end": 3.2 * period["bending about y"],
+    dynamic["time"] = {"t_end": 4 * period["bending about y"],
                        "dt": period["bending about z"] / 100, "output_every": 1}
     result = run_dynamic(parse_dynamic(dynamic), None, MPI.COMM_SELF, progress=False)
     assert result.status == "completed"
@@ -125,23 +126,23 @@ def planar_cantilever(kinematics, law="reissner"):
               "model": {"kinematics": kinematics, "law": law, "constraint": "none"},
               "mesh": {"elements": 8, "degree": 2},
               "loads": {"tip_force": [0.0, 0.5], "time_function": "min(t / 0.1, 1)"},
-              "time": {"t_end": 0.3, "dt": 5e-3, "rho_inf": 0.8, "output_every": 5},
+              "time": {"t_end": 0.2, "dt": 5e-3, "rho_inf": 0.8, "output_every": 2},
               "damping": {"c": 0.2}}
     return config
 
 
 @pytest.mark.parametrize("law", ["reissner", "nonstandard"])
 def test_planar_motion_embedded_in_3d_is_the_planar_rods(law):
-    """A large planar motion (tip force ramped to 0.5 N: a tip rotation of ~1 rad) with viscous
+    """A large planar motion (tip force ramped to 0.5 N: a tip rotation of 0.43 rad) with viscous
     damping: the spatial rod's tip (u, v, rotation vector (0, 0, theta)) equals the planar
-    rod's (u, v, theta) to 1e-8 L at every output (measured ~1e-12), and its energies
+    rod's (u, v, theta) to 1e-8 L at every output (measured < 2e-15), and its energies
     too; w and the out-of-plane rotations stay zero."""
     planar = run_dynamic(parse_dynamic(planar_cantilever("planar", law)), None, MPI.COMM_SELF,
                          progress=False)
     spatial = run_dynamic(parse_dynamic(planar_cantilever("spatial", law)), None, MPI.COMM_SELF,
                           progress=False)
     assert len(planar.history) == len(spatial.history) > 10
-    assert max(abs(h["tip"]["theta"]) for h in planar.history) > 0.5
+    assert max(abs(h["tip"]["theta"]) for h in planar.history) > 0.3
     for p, s in zip(planar.history, spatial.history, strict=True):
         assert s["t"] == pytest.approx(p["t"])
         tip_p, tip_s = p["tip"], s["tip"]
