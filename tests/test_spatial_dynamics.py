@@ -52,7 +52,7 @@ def drifts(result):
             np.max(np.linalg.norm(angular - angular[0], axis=1)) / np.linalg.norm(angular[0]))
 
 
-# --- (a) free flight ----------------------------------------------------------------------------
+# --- (a) free flight ----
 def test_free_flight_conserves_energy_to_second_order_and_both_momenta():
     """rho_inf = 1, no load, no support. Measured (8 P2 elements, t_end = 0.2 s, kinetic
     energy 0.035 J, strain energy up to 0.0015 J): the total energy error max|E - E0|/E0 is
@@ -83,7 +83,7 @@ def test_free_flight_has_strain_energy_and_moves_in_3d():
     assert abs(last["tip"]["w"]) > 0.003
 
 
-# --- (b) release of a cantilever: periods of both planes -----------------------------------------
+# --- (b) release of a cantilever: periods of both planes ----
 def test_release_oscillates_with_the_first_modes_of_both_planes():
     """A cantilever (b = 0.02 along z, h = 0.03 along y) released from a small static tip load
     (Fy, Fz: tip 1e-3 L in each plane) vibrates in v with the first period of bending about z
@@ -119,7 +119,7 @@ def test_release_oscillates_with_the_first_modes_of_both_planes():
     assert measured_y == pytest.approx(period["bending about y"], rel=2e-3)
 
 
-# --- (c) the plane ---------------------------------------------------------------------------------
+# --- (c) the plane ----
 def planar_cantilever(kinematics, law="reissner"):
     config = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.03},
               "material": {"E": E, "nu": NU, "rho": RHO},
@@ -156,7 +156,7 @@ def test_planar_motion_embedded_in_3d_is_the_planar_rods(law):
             p["momenta"]["angular_momentum"], rel=1e-7, abs=1e-12)
 
 
-# --- the CLI contract -------------------------------------------------------------------------------
+# --- the CLI contract ----
 def test_dynamic_command_writes_tip_frame_energies_and_momenta(tmp_path, capsys):
     config = free_flight(8e-3, t_end=0.04)
     path = tmp_path / "c.toml"
@@ -225,7 +225,7 @@ def test_rigid_spin_vector():
     assert linear == pytest.approx(RHO * A * np.cross(omega, [L**2 / 2, 0, 0]), rel=1e-10)
 
 
-# --- (d) 2 ranks = serial ---------------------------------------------------------------------------
+# --- (d) 2 ranks = serial ----
 @pytest.mark.mpi
 def test_two_ranks_match_serial():
     if MPI.COMM_WORLD.size == 1:

@@ -53,7 +53,7 @@ def rectangle_torsion_constant(t, w, terms=200):
     return t**3 * w / 3 * (1 - 192 * t / (math.pi**5 * w) * series)
 
 
-# --- torsion --------------------------------------------------------------------------------------
+# --- torsion ----
 @pytest.mark.parametrize("supports, orders", [(("clamped", "free"), (1, 3, 5)),
                                               (("free", "free"), (2, 4, 6))])
 def test_torsional_frequencies(supports, orders):
@@ -76,7 +76,7 @@ def test_torsional_frequencies(supports, orders):
     assert all(f == 0.0 for f in summary["frequencies_hz"][:rigid])
 
 
-# --- bending: both families -------------------------------------------------------------------
+# --- bending: both families ----
 def test_both_bending_families_of_a_slender_cantilever_are_euler_bernoulli():
     """b != h: bending about y (w, I_y = h b^3/12) and about z (v, I_z = b h^3/12) differ;
     each is f = beta_n^2 sqrt(E I / rho A) / (2 pi L^2) to the rotary-inertia and shear effect
@@ -122,7 +122,7 @@ def test_stocky_rod_bending_is_timoshenko_in_both_planes():
         assert abs(found[1] / euler - 1) > 0.02  # the stocky case is not Euler-Bernoulli
 
 
-# --- the plane ----------------------------------------------------------------------------------
+# --- the plane ----
 @pytest.mark.parametrize("law", ["reissner", "nonstandard"])
 def test_in_plane_family_is_the_planar_rods_spectrum(law):
     """The planar rod's frequencies (bending and axial) are the spatial rod's in-plane ones
@@ -139,7 +139,7 @@ def test_in_plane_family_is_the_planar_rods_spectrum(law):
     assert kinds == ["bending about z" if k == "bending" else k for k in planar["mode_kinds"]]
 
 
-# --- outputs --------------------------------------------------------------------------------------
+# --- outputs ----
 def test_modes_command_names_each_family(tmp_path, capsys):
     """fe-beam modes on a spatial rod: exit 0, stdout, summary.json (mode_kinds,
     mode_shares), modes.csv (frequency, kind, shares) and modes.xdmf (the directors and a
