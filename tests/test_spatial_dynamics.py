@@ -156,6 +156,40 @@ def test_planar_motion_embedded_in_3d_is_the_planar_rods(law):
             p["momenta"]["angular_momentum"], rel=1e-7, abs=1e-12)
 
 
+# --- tendons ---------------------------------------------------------------------------------
+def tendon_finger(kinematics, offsets):
+    tendon = {"name": "a", "tension": 2.0, "time_function": "min(t / 0.01, 1)"}
+    tendon.update(offsets)
+    return {"beam": {"length": 0.1}, "section": {"shape": "rectangle", "b": 0.02, "h": 0.02},
+            "material": {"E": 1e6, "nu": 0.45, "rho": 1100.0},
+            "model": {"kinematics": kinematics, "law": "reissner", "constraint": "none"},
+            "mesh": {"elements": 8, "degree": 2}, "tendons": [tendon],
+            "time": {"t_end": 0.02, "dt": 5e-4, "rho_inf": 0.9, "output_every": 8}}
+
+
+def test_tendon_routed_off_axis_moves_as_the_planar_finger_rotated():
+    """A straight tendon at (y, z) = r (cos phi, sin phi) on a square section, its tension
+    ramped in time: the spatial rod's tip (v, w) is the planar finger's v (tendon at y = r)
+    turned by phi, u the same, to 1e-8 L (measured < 1e-16 L); the tensions and the tendon
+    work are the planar run's."""
+    r, phi = 0.0064, math.atan2(4, 5)
+    planar = run_dynamic(parse_dynamic(tendon_finger("planar", {"offset_y": r})), None,
+                         MPI.COMM_SELF, progress=False)
+    spatial = run_dynamic(parse_dynamic(tendon_finger(
+        "spatial", {"offset_y": r * math.cos(phi), "offset_z": r * math.sin(phi)})), None,
+        MPI.COMM_SELF, progress=False)
+    assert spatial.status == "completed" and len(spatial.history) == len(planar.history) > 4
+    assert max(abs(h["tip"]["v"]) for h in planar.history) > 2e-3
+    for p, s in zip(planar.history, spatial.history, strict=True):
+        tip_p, tip_s = p["tip"], s["tip"]
+        assert abs(tip_s["u"] - tip_p["u"]) < 1e-8 * 0.1
+        assert abs(tip_s["v"] - tip_p["v"] * math.cos(phi)) < 1e-8 * 0.1
+        assert abs(tip_s["w"] - tip_p["v"] * math.sin(phi)) < 1e-8 * 0.1
+        assert s["tendons"]["tensions"] == pytest.approx(p["tendons"]["tensions"])
+        assert s["energies"]["tendon_work"] == pytest.approx(p["energies"]["tendon_work"],
+                                                             rel=1e-6, abs=1e-14)
+
+
 # --- the CLI contract ----
 def test_dynamic_command_writes_tip_frame_energies_and_momenta(tmp_path, capsys):
     config = free_flight(8e-3, t_end=0.04)
