@@ -139,6 +139,23 @@ def test_in_plane_family_is_the_planar_rods_spectrum(law):
     assert kinds == ["bending about z" if k == "bending" else k for k in planar["mode_kinds"]]
 
 
+def test_prestressed_in_plane_family_is_the_planar_rods():
+    """Linearised about a static pre-state (`[modes] prestress = true`: a cantilever bent by
+    a tip force, P L^2 / E I_z = 10, theta_0 = theta_0(x) e3): the in-plane modes of
+    the spatial rod are the planar rod's about the same state, to 1e-8 relative."""
+    b, h = 0.03, 0.02
+    changes = {"loads": {"tip_force": [0.0, 2.0], "steps": 8}}
+    planar_cfg = config(b, h, kinematics="planar", count=5) | changes
+    spatial_cfg = config(b, h, count=12) | changes
+    planar_cfg["modes"]["prestress"] = spatial_cfg["modes"]["prestress"] = True
+    _, planar = modes_of(planar_cfg)
+    _, spatial = modes_of(spatial_cfg)
+    assert planar["status"] == spatial["status"] == "completed"
+    in_plane = [f for f, k in zip(spatial["frequencies_hz"], spatial["mode_kinds"], strict=True)
+                if k in ("bending about z", "axial")]
+    assert in_plane[:5] == pytest.approx(planar["frequencies_hz"], rel=1e-8)
+
+
 # --- outputs ----
 def test_modes_command_names_each_family(tmp_path, capsys):
     """fe-beam modes on a spatial rod: exit 0, stdout, summary.json (mode_kinds,
