@@ -156,6 +156,18 @@ def test_prestressed_in_plane_family_is_the_planar_rods():
     assert in_plane[:5] == pytest.approx(planar["frequencies_hz"], rel=1e-8)
 
 
+def test_curved_free_rod_has_six_rigid_modes():
+    """An initially curved rod (a ring arc of curvature 2/m, free-free) starts from its relaxed
+    stress-free state: its rigid motions about the curved state (d = e_i x r,
+    theta_t = T(theta)^-1 e_i) are the 6 zero modes, the elastic ones positive."""
+    cfg = config(0.02, 0.03, "free", "free", count=9)
+    cfg["beam"]["initial_curvature"] = [0.0, 0.0, 2.0]
+    _, summary = modes_of(cfg)
+    assert summary["rigid_body_modes"] == 6
+    assert summary["mode_kinds"][:6] == ["rigid"] * 6
+    assert min(summary["frequencies_hz"][6:]) > 0.1
+
+
 # --- outputs ----
 def test_modes_command_names_each_family(tmp_path, capsys):
     """fe-beam modes on a spatial rod: exit 0, stdout, summary.json (mode_kinds,

@@ -122,6 +122,20 @@ def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
         run.destroy()
 
 
+def _relax_curved(problem, static: StaticConfig, tendons=None) -> None:
+    """An initially curved spatial rod starts from its discrete stress-free state, solved at
+    load factor 0 (`fe_beam.solvers.rod_static.StaticContinuation`): the reference of the
+    displacements and of the tendons' rest lengths (nothing for a straight rod)."""
+    if not getattr(problem, "curved", False):
+        return
+    try:
+        run = StaticContinuation(static, problem=problem, prefix="fe_beam_relax_",
+                                 tendons=tendons)
+    except LoadSteppingFailed as failure:
+        raise PrestateFailed(str(failure), 0.0) from None
+    run.destroy()
+
+
 class PrestateFailed(DynamicsFailed):
     """The static pre-state of a dynamic or modal run could not be reached (no equilibrium,
     or only inadmissible ones, beyond ``load_factor``, whose state the problem keeps)."""
@@ -183,25 +197,27 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     problem, tendons = _tendon_problem(config.static, comm)
     xdmf = out / "beam.xdmf" if out is not None and config.static.output.xdmf else None
     watch = StrainWatch()
-    if config.from_static:
-        try:
+    try:
+        if config.from_static:
             _static_prestate(problem, config.static, progress, watch, tendons)
-        except runctl.Interrupted as stop:
-            stop.where = "the static pre-state (before the time stepping)"
-            raise
-        except PrestateFailed as failure:
-            # no time stepping: the run failed (exit 3) with the last converged pre-state
-            # written (summary "prestate", beam.xdmf at t = 0)
-            result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
-                                   dofs=problem.global_dofs, notes=notes + watch.notes(),
-                                   strain_range=watch.summary())
-            result.prestate = _prestate_record(problem, failure)
-            writer = _writer(problem, xdmf)
-            files = exports.Exports(_history_exports(out, config, writer), comm)
-            writer.write(0.0)
-            result.info["wall_time_s"] = time.perf_counter() - started
-            files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
-            return result
+        else:
+            _relax_curved(problem, config.static, tendons)
+    except runctl.Interrupted as stop:
+        stop.where = "the static pre-state (before the time stepping)"
+        raise
+    except PrestateFailed as failure:
+        # no time stepping: the run failed (exit 3) with the last converged pre-state
+        # written (summary "prestate", beam.xdmf at t = 0)
+        result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
+                               dofs=problem.global_dofs, notes=notes + watch.notes(),
+                               strain_range=watch.summary())
+        result.prestate = _prestate_record(problem, failure)
+        writer = _writer(problem, xdmf)
+        files = exports.Exports(_history_exports(out, config, writer), comm)
+        writer.write(0.0)
+        result.info["wall_time_s"] = time.perf_counter() - started
+        files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
+        return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
     if config.time.scheme == "energy-conserving":
@@ -565,6 +581,16 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
             raise
     else:
         problem.set_load_factor(0.0)
+        try:
+            _relax_curved(problem, static, tendons)
+        except PrestateFailed as failure:
+            summary = {"status": "failed", "message": str(failure), "frequencies_hz": [],
+                       "transverse_fraction": [], "prestress": False,
+                       "dofs": problem.global_dofs, "notes": [],
+                       "wall_time_s": time.perf_counter() - started}
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+            return summary
     result = natural_frequencies(problem, modes["count"])
     summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
                "transverse_fraction": result.transverse_fraction,

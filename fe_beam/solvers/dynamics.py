@@ -12,6 +12,13 @@ f_ext(t_{n+1-alpha_f}) with x_{n+1-alpha} = (1 - alpha) x_{n+1} + alpha x_n. The
 are the derivative of the same stored energy as in statics, evaluated at q_{n+1-alpha_f};
 constraints (multiplier fields) are enforced at t_{n+1}. rho_inf = 1 is the implicit midpoint
 rule: energy-conserving for linear problems and exactly momentum-conserving.
+
+The problem supplies the inertia (`BeamProblem.mass_work`, `velocity_inertia_work`,
+`kinetic_energy`, `momentum_densities`): constant for the planar rod; for the spatial rod
+(`fe_beam.fem.spatial_rod.SpatialRodProblem`, q = (d, theta) with theta the rotation vector,
+treated as a vector of R^3) the Lagrangian inertia M(theta) a + g(theta, v) of the exact
+kinetic energy, at q_{n+1-alpha_f}, v_{n+1-alpha_f}, a_{n+1-alpha_m} (docs/theory.md, Spatial
+rods: inertia, modes and generalised-alpha on the rotation vector).
 """
 
 from __future__ import annotations
