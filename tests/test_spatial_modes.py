@@ -10,6 +10,7 @@ import csv
 import json
 import math
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 from tomlio import dump_toml
@@ -202,3 +203,17 @@ def test_other_commands_still_refuse_spatial_rods(tmp_path, capsys):
     assert main(["solid", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "dynamic" in err and "modes" in err and err.count("\n") == 1
+
+
+@pytest.mark.mpi
+def test_two_ranks_match_serial():
+    if MPI.COMM_WORLD.size == 1:
+        pytest.skip("run under mpirun -n 2 to compare a serial and a parallel solve")
+    cfg = config(0.02, 0.05, "free", "free", elements=12, count=14)
+    static, modes = parse_modes(cfg)
+    parallel = run_modes(static, modes, None, MPI.COMM_WORLD, progress=False)
+    serial = run_modes(static, modes, None, MPI.COMM_SELF, progress=False)
+    assert parallel["mode_kinds"] == serial["mode_kinds"]
+    assert parallel["rigid_body_modes"] == serial["rigid_body_modes"] == 6
+    assert np.allclose(parallel["frequencies_hz"][6:], serial["frequencies_hz"][6:], rtol=1e-8)
+
