@@ -21,8 +21,13 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     if result.history:
         last = result.history[-1]
         tip = last["tip"]
-        report.out(f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} m, "
-                   f"theta = {tip['theta']:.6g} rad")
+        if "theta" in tip:
+            report.out(f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} "
+                       f"m, theta = {tip['theta']:.6g} rad")
+        else:  # a spatial rod: the displacement and the rotation vector
+            vector = ", ".join(f"{c:.6g}" for c in tip["rotation_vector"])
+            report.out(f"t = {last['t']:.6g} s: tip u = {tip['u']:.6g} m, v = {tip['v']:.6g} "
+                       f"m, w = {tip['w']:.6g} m, rotation vector ({vector}) rad")
     report.warn_notes(getattr(result, "notes", None))
     report.out(f"{result.info.get('steps', len(result.history))} time steps, {result.dofs} "
                f"dofs, {result.info.get('wall_time_s', 0.0):.2f} s; results in {out}")

@@ -47,7 +47,13 @@ from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     parse_modes,
 )
 from fe_beam.errors import ConfigError
-from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.exports.outputs import (
+    BeamXDMFWriter,
+    _pyplot,
+    atomic_write_json,
+    atomic_write_text,
+)
+from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
 from fe_beam.fem.tendons import TendonSet
@@ -60,6 +66,7 @@ from fe_beam.solvers.modes import natural_frequencies
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
+from fe_beam.solvers.rod_static import build_problem
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
 
@@ -82,9 +89,9 @@ def _tendon_problem(static: StaticConfig, comm):
     vertices and their potential is part of the stored energy."""
 
     tendons = TendonSet(static.tendons, static.model.length) if static.tendons else None
-    problem = BeamProblem(static.model, comm,
-                          breakpoints=tendons.breakpoints if tendons else (),
-                          extra_energy=tendons.energy if tendons else None)
+    problem = build_problem(static.model, comm,
+                            breakpoints=tendons.breakpoints if tendons else (),
+                            extra_energy=tendons.energy if tendons else None)
     return problem, tendons
 
 
@@ -113,6 +120,20 @@ def _static_prestate(problem: BeamProblem, static: StaticConfig, progress: bool,
         raise PrestateFailed(f"static pre-state: {failure}", failure.last_load_factor) from None
     finally:
         run.destroy()
+
+
+def _relax_curved(problem, static: StaticConfig, tendons=None) -> None:
+    """An initially curved spatial rod starts from its discrete stress-free state, solved at
+    load factor 0 (`fe_beam.solvers.rod_static.StaticContinuation`): the reference of the
+    displacements and of the tendons' rest lengths (nothing for a straight rod)."""
+    if not getattr(problem, "curved", False):
+        return
+    try:
+        run = StaticContinuation(static, problem=problem, prefix="fe_beam_relax_",
+                                 tendons=tendons)
+    except LoadSteppingFailed as failure:
+        raise PrestateFailed(str(failure), 0.0) from None
+    run.destroy()
 
 
 class PrestateFailed(DynamicsFailed):
@@ -176,25 +197,27 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
     problem, tendons = _tendon_problem(config.static, comm)
     xdmf = out / "beam.xdmf" if out is not None and config.static.output.xdmf else None
     watch = StrainWatch()
-    if config.from_static:
-        try:
+    try:
+        if config.from_static:
             _static_prestate(problem, config.static, progress, watch, tendons)
-        except runctl.Interrupted as stop:
-            stop.where = "the static pre-state (before the time stepping)"
-            raise
-        except PrestateFailed as failure:
-            # no time stepping: the run failed (exit 3) with the last converged pre-state
-            # written (summary "prestate", beam.xdmf at t = 0)
-            result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
-                                   dofs=problem.global_dofs, notes=notes + watch.notes(),
-                                   strain_range=watch.summary())
-            result.prestate = _prestate_record(problem, failure)
-            writer = BeamXDMFWriter(problem, xdmf)
-            files = exports.Exports(_history_exports(out, config, writer), comm)
-            writer.write(0.0)
-            result.info["wall_time_s"] = time.perf_counter() - started
-            files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
-            return result
+        else:
+            _relax_curved(problem, config.static, tendons)
+    except runctl.Interrupted as stop:
+        stop.where = "the static pre-state (before the time stepping)"
+        raise
+    except PrestateFailed as failure:
+        # no time stepping: the run failed (exit 3) with the last converged pre-state
+        # written (summary "prestate", beam.xdmf at t = 0)
+        result = DynamicResult([], {"steps": 0}, status="failed", message=str(failure),
+                               dofs=problem.global_dofs, notes=notes + watch.notes(),
+                               strain_range=watch.summary())
+        result.prestate = _prestate_record(problem, failure)
+        writer = _writer(problem, xdmf)
+        files = exports.Exports(_history_exports(out, config, writer), comm)
+        writer.write(0.0)
+        result.info["wall_time_s"] = time.perf_counter() - started
+        files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
+        return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
     if config.time.scheme == "energy-conserving":
@@ -214,7 +237,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    writer = BeamXDMFWriter(problem, xdmf)
+    writer = _writer(problem, xdmf)
     shapes = []
     files = exports.Exports(_history_exports(
         out, config, writer,
@@ -394,6 +417,33 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
+def _writer(problem, path):
+    """The XDMF writer of a rod problem (the spatial rod's has the directors)."""
+    return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(problem, path)
+
+
+SPATIAL_MOMENTA = tuple(f"momentum_{k}" for k in "xyz") + tuple(
+    f"angular_momentum_{k}" for k in "xyz")
+
+
+def spatial_history_columns(tendons: int) -> list[exports.Column]:
+    """history.csv of a spatial rod: t, the tip's u, v, w, rotation vector and frame R (rows
+    R11 ... R33), the energies and their sum kinetic + strain, the linear and angular momenta
+    (world axes, about the origin), then each tendon's tension and pull-in."""
+    return [exports.Column("t", lambda h: h["t"]),
+            *[exports.Column(f"tip_{k}", lambda h, k=k: h["tip"][k]) for k in ("u", "v", "w")],
+            *[exports.Column(f"tip_rotation_{k}", lambda h, i=i: h["tip"]["rotation_vector"][i])
+              for i, k in enumerate("xyz")],
+            *[exports.Column(f"tip_R{i + 1}{j + 1}", lambda h, i=i, j=j: h["tip"]["R"][i][j])
+              for i in range(3) for j in range(3)],
+            *(exports.Column(k, lambda h, k=k: h["energies"][k]) for k in ENERGIES),
+            exports.Column("total_energy", lambda h: h["energies"]["kinetic"]
+                           + h["energies"]["strain"]),
+            *(exports.Column(k, lambda h, k=k: h["momenta"][k]) for k in SPATIAL_MOMENTA),
+            *exports.indexed_columns("tension", tendons, lambda h: h["tendons"]["tensions"]),
+            *exports.indexed_columns("pull_in", tendons, lambda h: h["tendons"]["pull_ins"])]
+
+
 def history_columns(tendons: int) -> list[exports.Column]:
     """history.csv: t, the tip, the energies, then tension_i and pull_in_i of each tendon."""
     return [exports.Column("t", lambda h: h["t"]), *exports.tip_columns(),
@@ -411,7 +461,9 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
     summary.json (``content()`` as the run goes) and the pictures (``draw``)."""
     files = [exports.XDMFExport(writer, "t")] if writer is not None else []
     if out is not None:
-        columns = history_columns(len(config.static.tendons))
+        spatial = getattr(config.static.model, "kinematics", "planar") == "spatial"
+        columns = (spatial_history_columns if spatial else history_columns)(
+            len(config.static.tendons))
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -529,6 +581,16 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
             raise
     else:
         problem.set_load_factor(0.0)
+        try:
+            _relax_curved(problem, static, tendons)
+        except PrestateFailed as failure:
+            summary = {"status": "failed", "message": str(failure), "frequencies_hz": [],
+                       "transverse_fraction": [], "prestress": False,
+                       "dofs": problem.global_dofs, "notes": [],
+                       "wall_time_s": time.perf_counter() - started}
+            if out is not None and comm.rank == 0:
+                atomic_write_json(out / "summary.json", summary)
+            return summary
     result = natural_frequencies(problem, modes["count"])
     summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
                "transverse_fraction": result.transverse_fraction,
@@ -553,15 +615,50 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                              ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
             if name == "unstable_modes.xdmf" and not shapes:
                 continue
-            writer = BeamXDMFWriter(problem, out / name if static.output.xdmf else None)
+            writer = _writer(problem, out / name if static.output.xdmf else None)
+            family = _family_field(problem, writer) if name == "modes.xdmf" else None
             for index, shape in enumerate(shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
+                if family is not None:  # the mode's family, as a code (summary mode_families)
+                    family.x.array[:] = MODE_FAMILY_CODES.get(result.kinds[index - 1], -1)
                 writer.write(float(index))
             writer.close()
         compat.local_array(problem.w)[:] = state
         if comm.rank == 0:
             atomic_write_json(out / "summary.json", summary)
+            _write_modes_csv(out / "modes.csv", summary)
     return summary
+
+
+#: the code of each mode's family in modes.xdmf's "family" field
+MODE_FAMILY_CODES = {"rigid": 0, "axial": 1, "bending": 2, "torsion": 3, "bending about y": 4,
+                     "bending about z": 5}
+
+
+def _family_field(problem, writer):
+    """A constant field "family" added to the spatial rod's mode series (None for planar
+    rods, whose kinds are named in summary.json and modes.csv)."""
+    if not problem.spatial:
+        return None
+    from dolfinx import fem
+
+    space = compat.function_space(problem.mesh, compat.element(problem.mesh, "DG", 0))
+    function = fem.Function(space, name="family")
+    writer.functions["family"] = function
+    return function
+
+
+def _write_modes_csv(path: Path, summary: dict) -> None:
+    """modes.csv: one row per mode, its frequency, kind and the shares by family."""
+    shares = summary.get("mode_shares") or [{} for _ in summary["frequencies_hz"]]
+    keys = sorted({k for share in shares for k in share})
+    lines = [",".join(["mode", "frequency_hz", "kind", *[k.replace(" ", "_") + "_share"
+                                                        for k in keys]])]
+    for index, (frequency, kind, share) in enumerate(zip(
+            summary["frequencies_hz"], summary["mode_kinds"], shares, strict=True), start=1):
+        lines.append(",".join([str(index), repr(float(frequency)), kind,
+                               *[repr(float(share.get(k, 0.0))) for k in keys]]))
+    atomic_write_text(path, "\n".join(lines) + "\n")
 
 
 def _modes_summary(result) -> dict:
@@ -589,6 +686,8 @@ def _modes_summary(result) -> dict:
         notes.append(f"{result.rigid_body_modes} rigid-body mode(s) (0 Hz): the supports leave "
                      "the beam free to move as a rigid body")
     return {"eigenvalues": result.eigenvalues, "mode_kinds": result.kinds,
+            "mode_shares": result.shares,
+            "mode_family_codes": MODE_FAMILY_CODES,
             "rigid_body_modes": result.rigid_body_modes, "unstable_modes": unstable,
             "unstable_count": result.unstable_count, "stable": result.unstable_count == 0,
             "notes": notes}

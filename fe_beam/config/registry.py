@@ -99,11 +99,11 @@ _SPECS = (
     CommandSpec("dynamic", "nonlinear dynamics (generalised-alpha, or the paper's FD + "
                            "Runge-Kutta)",
                 ("time", "initial", "damping", "modes", "tendons"),
-                lambda config, options: parse_dynamic(config), "dynamic:run"),
+                lambda config, options: parse_dynamic(config), "dynamic:run", spatial=True),
     CommandSpec("modes", "natural frequencies and mode shapes (about the undeformed or a static "
                          "state)",
                 ("time", "initial", "damping", "modes", "tendons"),
-                lambda config, options: parse_modes(config), "modes:run"),
+                lambda config, options: parse_modes(config), "modes:run", spatial=True),
     CommandSpec("solid", "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod "
                          "alongside",
                 ("tendons", "solid", "compare", "modes"),

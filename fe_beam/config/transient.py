@@ -52,8 +52,12 @@ TIME_KEYS = {
 }
 INITIAL_KEYS = {
     "from_static": Key((bool,), False, "start from the static solution under [loads]"),
-    "velocity": Key((list,), None, "[u_t, v_t, theta_t] as numbers or formulas in x"),
-    "angular_velocity": Key(NUMBER, None, "rigid spin about x = 0 [rad/s]"),
+    "velocity": Key((list,), None, "[u_t, v_t, theta_t] as numbers or formulas in x (spatial "
+                    "rods: [u_t, v_t, w_t, omega_x, omega_y, omega_z], omega the sections' "
+                    "angular velocity in world axes)"),
+    "angular_velocity": Key(NUMBER + (list,), None, "rigid spin about x = 0 [rad/s] (spatial "
+                            "rods: a vector [omega_x, omega_y, omega_z] about the origin, or "
+                            "a number: about z)"),
 }
 DAMPING_KEYS = {
     "c": Key(NUMBER, 0.0, "viscous damping per unit length [N s/m^2]"),
@@ -100,17 +104,32 @@ def _functions(timing: dict):
         raise ConfigError(f"[loads] {error}") from None
 
 
-def _velocity(initial: dict):
+def _velocity(initial: dict, spatial: bool = False):
     spin = initial["angular_velocity"]
     given = initial["velocity"]
     if spin is not None and given is not None:
         raise ConfigError("[initial] give velocity or angular_velocity, not both")
+    if isinstance(spin, list):
+        ok = (spatial and len(spin) == 3 and all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) for c in spin))
+        if not ok:
+            what = ("a number or a vector [omega_x, omega_y, omega_z] of numbers" if spatial
+                    else "a number (a vector needs [model] kinematics = \"spatial\")")
+            raise ConfigError(f"[initial] angular_velocity must be {what}, got {spin!r}")
+    if spin is not None and spatial:
+        # a rigid spin about the origin of the reference rod: r_t = omega x (x, 0, 0)
+        wx, wy, wz = (float(c) for c in spin) if isinstance(spin, list) else (0.0, 0.0,
+                                                                              float(spin))
+        return lambda x: (0.0 * x[0], wz * x[0], -wy * x[0], wx + 0.0 * x[0],
+                          wy + 0.0 * x[0], wz + 0.0 * x[0])
     if spin is not None:
         return lambda x: (0.0 * x[0], spin * x[0], spin + 0.0 * x[0])
     if given is None:
         return None
-    if len(given) != 3:
-        raise ConfigError(f"[initial] velocity must list [u_t, v_t, theta_t], got {given!r}")
+    names = ("[u_t, v_t, w_t, omega_x, omega_y, omega_z]" if spatial
+             else "[u_t, v_t, theta_t]")
+    if len(given) != (6 if spatial else 3):
+        raise ConfigError(f"[initial] velocity must list {names}, got {given!r}")
     parts = []
     for value in given:
         if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -139,6 +158,9 @@ def parse_dynamic(config: dict) -> DynamicConfig:
     static = parse_static(config, rigid_motion_allowed=not initial["from_static"])
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for dynamics")
+    spatial = getattr(static.model, "kinematics", "planar") == "spatial"
+    if spatial:
+        _check_spatial_dynamics(settings, damping)
     load, motion = _functions(timing)
     static, tendon_functions = _parse_tendons(config, static, "dynamic", load)
     if static.tendons and settings.scheme.startswith("fd-"):
@@ -161,8 +183,20 @@ def parse_dynamic(config: dict) -> DynamicConfig:
             "fe-beam dynamic with scheme = \"generalized-alpha\" (its constraints hold at "
             "t_{n+1} but the tendon pulls at t_{n+1-alpha_f}: first-order errors); use "
             "constraint = \"none\", or rho_inf = 0 (alpha_f = 0: both at t_{n+1})")
-    return DynamicConfig(static, settings, damping, initial["from_static"], _velocity(initial),
+    return DynamicConfig(static, settings, damping, initial["from_static"],
+                         _velocity(initial, spatial),
                          load, motion, tendon_functions, _unused_time_keys(config, settings))
+
+
+def _check_spatial_dynamics(settings: TimeSettings, damping: Damping) -> None:
+    """What fe-beam dynamic does not do for spatial rods yet: ConfigError."""
+    if settings.scheme != "generalized-alpha":
+        raise ConfigError(f"[time] scheme = \"{settings.scheme}\" is not available for spatial "
+                          "rods ([model] kinematics = \"spatial\") yet; use scheme = "
+                          "\"generalized-alpha\"")
+    if damping.kelvin_voigt:
+        raise ConfigError("[damping] kelvin_voigt is not available for spatial rods ([model] "
+                          "kinematics = \"spatial\") yet; use the viscous [damping] c")
 
 
 def _unused_time_keys(config: dict, settings: TimeSettings) -> tuple:

@@ -31,7 +31,7 @@ from fe_beam.fem.kinematics import (
     strains_from_angles,
     strains_from_gradient,
 )
-from fe_beam.fem.mpi import global_sum
+from fe_beam.fem.mpi import assemble_scalar, global_sum
 from fe_beam.fem.section_laws import (
     RESOLVED_STRETCHES,
     FibreLaw,
@@ -681,3 +681,101 @@ class BeamProblem:
 
     def rotation_dofs(self) -> np.ndarray:
         return self.component_dofs("theta")
+
+    # --- inertia: what dynamics and modes need of a rod (the spatial rod has its own) ----------
+    #: the motion components (before the multipliers) and the translations among them
+    motion_count = 3
+    translations = 2
+
+    def motion_parts(self, pieces):
+        """The state ``parts`` of the first `motion_count` scalar pieces of a mixed function."""
+        return tuple(pieces[:3])
+
+    @property
+    def dx_mass(self):
+        return ufl.dx(metadata={"quadrature_degree": 2 * self.model.mesh.degree + 2})
+
+    def mass_work(self, parts, acceleration, test):
+        """The inertia's virtual work linear in the acceleration (pieces): rho A on u, v, rho I
+        on theta (constant: ``parts`` unused)."""
+        rho_area, rho_inertia = self.rho * self.section_props.A, self.rho * self.section_props.I
+        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
+        return (rho_area * (acceleration[0] * t[0] + acceleration[1] * t[1])
+                + rho_inertia * acceleration[2] * t[2]) * self.dx_mass
+
+    def velocity_inertia_work(self, parts, rates, test):
+        """The inertia's part quadratic in the velocities (none: the planar mass is
+        constant)."""
+        return None
+
+    def kinetic_energy(self, parts, rates):
+        rho_area, rho_inertia = self.rho * self.section_props.A, self.rho * self.section_props.I
+        return 0.5 * (rho_area * (rates[0] ** 2 + rates[1] ** 2)
+                      + rho_inertia * rates[2] ** 2) * self.dx_mass
+
+    def momentum_densities(self, parts, rates) -> dict:
+        """Linear momentum (x, y) and the angular momentum about the origin (z), per length."""
+        rho_area, rho_inertia = self.rho * self.section_props.A, self.rho * self.section_props.I
+        x = ufl.SpatialCoordinate(self.mesh)[0]
+        u, v, _ = parts
+        return {"momentum_x": rho_area * rates[0], "momentum_y": rho_area * rates[1],
+                "angular_momentum": rho_area * ((x + u) * rates[1] - v * rates[0])
+                + rho_inertia * rates[2]}
+
+    def mass_form(self):
+        """The mass bilinear form (modes)."""
+        trial, test = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
+        return self.mass_work(None, ufl.split(trial), test)
+
+    @property
+    def nonpotential_loads(self) -> bool:
+        """Loads without a potential (a follower force): their virtual work is separate."""
+        return bool(self.model.loads.follower)
+
+    def nonconservative_work(self, parts, test):
+        return self.follower_virtual_work(parts, test)
+
+    def bending_stiffness(self):
+        """EI (UFL): the scale of the bending eigenvalues (modes)."""
+        return self.stiffness.EI
+
+    def rigid_motion_candidates(self) -> list:
+        """Infinitesimal rigid motions of the current state (Functions): translations
+        (1, 0, 0), (0, 1, 0) and the rotation about the origin (-v, x + u, 1)."""
+        u_space, u_dofs = compat.sub_space_collapsed(self.space, 0)
+        v_space, v_dofs = compat.sub_space_collapsed(self.space, 1)
+        _, theta_dofs = compat.sub_space_collapsed(self.space, 2)
+        u_dofs, v_dofs, theta_dofs = (np.asarray(d) for d in (u_dofs, v_dofs, theta_dofs))
+        x = v_space.tabulate_dof_coordinates()[:, 0]
+        same_points = np.allclose(u_space.tabulate_dof_coordinates()[:, 0], x)
+        state = compat.local_array(self.w)
+        candidates = []
+        for k in range(3):
+            function = fem.Function(self.space)
+            array = compat.local_array(function)
+            if k == 0:
+                array[u_dofs] = 1.0
+            elif k == 1:
+                array[v_dofs] = 1.0
+            elif same_points:  # u and v share one element: their dofs sit at the same points
+                array[u_dofs] = -state[v_dofs]
+                array[v_dofs] = x + state[u_dofs]
+                array[theta_dofs] = 1.0
+            candidates.append(function)
+        return candidates
+
+    def mode_shares(self, shape) -> dict:
+        """{"transverse": the share of the shape's translational energy that is transverse}."""
+        u, v = ufl.split(shape)[0], ufl.split(shape)[1]
+        axial = assemble_scalar(fem.form(self.section_props.A * u**2 * ufl.dx))
+        transverse = assemble_scalar(fem.form(self.section_props.A * v**2 * ufl.dx))
+        total = axial + transverse
+        return {"transverse": transverse / total if total > 0 else 0.0}
+
+    def mode_kind(self, shares: dict) -> str:
+        return "bending" if shares["transverse"] > 0.5 else "axial"
+
+    def velocity_to_rates(self, values: list) -> list:
+        """Initial velocities (the config's components at the dofs) as rates of the unknowns:
+        the planar theta_t is the angular velocity itself."""
+        return values

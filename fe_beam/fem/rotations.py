@@ -25,8 +25,9 @@ import math
 
 import ufl
 
-__all__ = ["SERIES_BELOW", "UFL_FUNCTIONS", "coefficients", "curvature", "profile_expression",
-           "rotation", "skew", "spin_map"]
+__all__ = ["SERIES_BELOW", "UFL_FUNCTIONS", "angular_velocity", "coefficients", "curvature",
+           "lagrangian_inertia", "profile_expression", "rotation", "rotational_kinetic_energy",
+           "rotational_mass", "skew", "spin_map"]
 
 #: t^2 below which the Taylor series of a, b, c are used (t < 0.1: truncation < 1e-17)
 SERIES_BELOW = 1e-2
@@ -92,3 +93,34 @@ def spin_map(theta, sign: float = 1.0):
 def curvature(theta):
     """u with R^T R' = u^ (body frame): T(-theta) theta'."""
     return ufl.dot(spin_map(theta, -1.0), theta.dx(0))
+
+
+# --- rotational inertia (docs/theory.md, Spatial rods: dynamics) -------------------------------
+def angular_velocity(theta, rate):
+    """The body angular velocity omega (R^T R_t = omega^) of a rotation vector ``theta``
+    moving at ``rate`` = theta_t: T(-theta) theta_t (the curvature's map, in time)."""
+    return ufl.dot(spin_map(theta, -1.0), rate)
+
+
+def rotational_kinetic_energy(theta, rate, inertia):
+    """1/2 omega . J omega per unit length, J = ``inertia`` (3 x 3, body frame)."""
+    omega = angular_velocity(theta, rate)
+    return 0.5 * ufl.dot(omega, ufl.dot(inertia, omega))
+
+
+def rotational_mass(theta, inertia):
+    """The mass matrix of the rotation vector, M(theta) = T(-theta)^T J T(-theta): the
+    kinetic energy is 1/2 theta_t . M(theta) theta_t."""
+    T = spin_map(theta, -1.0)
+    return ufl.dot(T.T, ufl.dot(inertia, T))
+
+
+def lagrangian_inertia(theta, rate, inertia):
+    """(M(theta), g(theta, theta_t)) with d/dt dT/dtheta_t - dT/dtheta = M theta_tt + g: the
+    inertia force of the exact rotational kinetic energy T in the rotation-vector chart,
+    differentiated by UFL (g: the gyroscopic and chart terms, quadratic in theta_t)."""
+    th, rt = ufl.variable(theta), ufl.variable(rate)
+    energy = rotational_kinetic_energy(th, rt, inertia)
+    momentum = ufl.diff(energy, rt)
+    g = ufl.dot(ufl.diff(momentum, th), rt) - ufl.diff(energy, th)
+    return rotational_mass(theta, inertia), g

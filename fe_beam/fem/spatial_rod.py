@@ -21,9 +21,18 @@ import ufl
 from dolfinx import fem
 
 from fe_beam.fem import compat
-from fe_beam.fem.mpi import global_sum
+from fe_beam.fem.mpi import assemble_scalar, global_sum
 from fe_beam.fem.rod import BeamProblem, StrainRange
-from fe_beam.fem.rotations import curvature, profile_expression, rotation, spin_map
+from fe_beam.fem.rotations import (
+    angular_velocity,
+    curvature,
+    lagrangian_inertia,
+    profile_expression,
+    rotation,
+    rotational_kinetic_energy,
+    rotational_mass,
+    spin_map,
+)
 from fe_beam.model.spatial import (
     SPATIAL_COMPONENTS,
     SPATIAL_CONSTRAINED,
@@ -34,7 +43,11 @@ from fe_beam.model.spatial import (
     rotation_matrix,
 )
 
-__all__ = ["SpatialRodProblem", "rotation_vector_of", "stress_free_shape"]
+__all__ = ["MODE_FAMILIES", "SpatialRodProblem", "rotation_vector_of", "spin_matrix",
+           "stress_free_shape"]
+
+#: the families of the spatial rod's modes (`SpatialRodProblem.mode_shares`)
+MODE_FAMILIES = ("axial", "torsion", "bending about y", "bending about z")
 
 #: a note when the rotation vector's length passes this (its parametrisation is singular at 2 pi)
 ROTATION_NOTE = 1.8 * math.pi
@@ -66,6 +79,16 @@ def rotation_vector_of(matrix: np.ndarray, near: np.ndarray | None = None) -> np
     axis = vector / norm if norm > 0 else (near / max(np.linalg.norm(near), 1e-300))
     candidates = [vector + 2 * math.pi * k * axis for k in range(-3, 4)]
     return min(candidates, key=lambda c: np.linalg.norm(c - near))
+
+
+def spin_matrix(vector, sign: float = 1.0) -> np.ndarray:
+    """T(sign theta) = I + sign b Theta + c Theta^2 of a rotation vector (floats)."""
+    theta = np.asarray(vector, dtype=float)
+    t = float(np.linalg.norm(theta))
+    b = (1 - math.cos(t)) / t**2 if t > 1e-4 else 0.5 - t * t / 24
+    c = (t - math.sin(t)) / t**3 if t > 1e-3 else 1 / 6 - t * t / 120
+    K = np.array([[0, -theta[2], theta[1]], [theta[2], 0, -theta[0]], [-theta[1], theta[0], 0]])
+    return np.eye(3) + sign * b * K + c * K @ K
 
 
 def stress_free_shape(model: SpatialRodModel, xs: np.ndarray, substeps: int = 64):
@@ -409,3 +432,151 @@ class SpatialRodProblem(BeamProblem):
 
     def strain_energy_form(self) -> fem.Form:
         return fem.form(self.law_energy(self.strains(self.state_parts())) * self.dx_energy)
+
+    # --- inertia (docs/theory.md, Spatial rods: dynamics and modes) ------------------------------
+    motion_count = 6
+    translations = 3
+
+    def motion_parts(self, pieces):
+        """(d, theta) of the first six scalar pieces of a mixed function."""
+        return ufl.as_vector(pieces[0:3]), ufl.as_vector(pieces[3:6])
+
+    def body_inertia(self):
+        """rho J, J = diag(I_p, I_y, I_z) in the body frame (I_p = I_y + I_z: the polar moment
+        of the section's area about the centroid; the torsional stiffness uses the Saint-Venant
+        J instead)."""
+        p = self.section_props
+        return self.rho * ufl.as_matrix([[p.Iy + p.Iz, 0, 0], [0, p.Iy, 0], [0, 0, p.Iz]])
+
+    def _pieces(self, test):
+        if isinstance(test, (list, tuple)):
+            return test
+        return ufl.split(test)
+
+    def mass_work(self, parts, acceleration, test):
+        """rho A d_tt . dd + M(theta) theta_tt . dtheta, M = T(-theta)^T rho J T(-theta)
+        (``parts`` = (d, theta); ``acceleration``, ``test``: pieces or a test function)."""
+        t = self._pieces(test)
+        a = acceleration
+        _, theta = parts
+        rho_area = self.rho * self.section_props.A
+        dd, dtheta = ufl.as_vector(t[0:3]), ufl.as_vector(t[3:6])
+        a_d, a_theta = ufl.as_vector(a[0:3]), ufl.as_vector(a[3:6])
+        mass = rotational_mass(theta, self.body_inertia())
+        return (rho_area * ufl.dot(a_d, dd)
+                + ufl.dot(ufl.dot(mass, a_theta), dtheta)) * self.dx_mass
+
+    def velocity_inertia_work(self, parts, rates, test):
+        """g(theta, theta_t) . dtheta: the part of d/dt dT/dtheta_t - dT/dtheta quadratic in
+        theta_t (`fe_beam.fem.rotations.lagrangian_inertia`)."""
+        t = self._pieces(test)
+        _, theta = parts
+        _, g = lagrangian_inertia(theta, ufl.as_vector(rates[3:6]), self.body_inertia())
+        return ufl.dot(g, ufl.as_vector(t[3:6])) * self.dx_mass
+
+    def kinetic_energy(self, parts, rates):
+        """int 1/2 rho A |d_t|^2 + 1/2 omega . rho J omega, omega = T(-theta) theta_t."""
+        _, theta = parts
+        d_t, theta_t = ufl.as_vector(rates[0:3]), ufl.as_vector(rates[3:6])
+        rho_area = self.rho * self.section_props.A
+        return (0.5 * rho_area * ufl.dot(d_t, d_t)
+                + rotational_kinetic_energy(theta, theta_t, self.body_inertia())) * self.dx_mass
+
+    def momentum_densities(self, parts, rates) -> dict:
+        """Linear momentum rho A r_t and the angular momentum about the origin
+        r x rho A r_t + R rho J omega (world components), per unit length."""
+        d, theta = parts
+        d_t, theta_t = ufl.as_vector(rates[0:3]), ufl.as_vector(rates[3:6])
+        rho_area = self.rho * self.section_props.A
+        r = ufl.as_vector([self.x + d[0], d[1], d[2]])
+        linear = rho_area * d_t
+        spin = ufl.dot(rotation(theta), ufl.dot(self.body_inertia(),
+                                                angular_velocity(theta, theta_t)))
+        angular = ufl.cross(r, linear) + spin
+        values = {f"momentum_{k}": linear[i] for i, k in enumerate("xyz")}
+        values.update({f"angular_momentum_{k}": angular[i] for i, k in enumerate("xyz")})
+        return values
+
+    def mass_form(self):
+        """The mass about the current state (the undeformed or a static pre-state): the second
+        derivative of the kinetic energy in the velocities at zero velocity."""
+        trial, test = ufl.TrialFunction(self.space), ufl.TestFunction(self.space)
+        d, theta, _ = self.fields()
+        return self.mass_work((d, theta), ufl.split(trial), test)
+
+    @property
+    def nonpotential_loads(self) -> bool:
+        return not self.conservative
+
+    def bending_stiffness(self):
+        p = self.section_props
+        return self.E * ufl.min_value(p.Iy, p.Iz)
+
+    def rigid_motion_candidates(self) -> list:
+        """Translations e_i and rotations about the origin about e_i of the current state:
+        dd = e_i x r, dtheta = T(theta)^-1 e_i (the spatial spin e_i), multipliers unchanged."""
+        subs = [compat.sub_space_collapsed(self.space, i) for i in range(6)]
+        dofs = [np.asarray(parent) for _, parent in subs]
+        x = subs[0][0].tabulate_dof_coordinates()[:, 0]
+        state = compat.local_array(self.w)
+        position = np.stack([x + state[dofs[0]], state[dofs[1]], state[dofs[2]]], axis=1)
+        theta = np.stack([state[dofs[3 + i]] for i in range(3)], axis=1)
+        inverse = np.array([np.linalg.inv(spin_matrix(t)) for t in theta]).reshape(-1, 3, 3)
+        candidates = []
+        for k in range(6):
+            function = fem.Function(self.space)
+            array = compat.local_array(function)
+            if k < 3:
+                array[dofs[k]] = 1.0
+            else:
+                axis = np.eye(3)[k - 3]
+                moved = np.cross(axis, position)
+                rates = inverse @ axis
+                for i in range(3):
+                    array[dofs[i]] = moved[:, i]
+                    array[dofs[3 + i]] = rates[:, i]
+            candidates.append(function)
+        return candidates
+
+    def mode_shares(self, shape) -> dict:
+        """The shares of a mode's kinetic energy (its mass norm) by family: axial (rho A u^2),
+        torsion (rho I_p omega_1^2), bending about y (rho A w^2 + rho I_y omega_2^2), bending
+        about z (rho A v^2 + rho I_z omega_3^2), omega = T(-theta) dtheta the body rotation
+        about the current state; and "transverse", the share of v, w in the translational
+        part."""
+        pieces = ufl.split(shape)
+        _, theta, _ = self.fields()
+        omega = angular_velocity(theta, ufl.as_vector(pieces[3:6]))
+        p, rho = self.section_props, self.rho
+        rho_area = rho * p.A
+        integrands = {
+            "axial": rho_area * pieces[0] ** 2,
+            "torsion": rho * (p.Iy + p.Iz) * omega[0] ** 2,
+            "bending about y": rho_area * pieces[2] ** 2 + rho * p.Iy * omega[1] ** 2,
+            "bending about z": rho_area * pieces[1] ** 2 + rho * p.Iz * omega[2] ** 2,
+            "transverse": p.A * (pieces[1] ** 2 + pieces[2] ** 2),
+            "translation": p.A * (pieces[0] ** 2 + pieces[1] ** 2 + pieces[2] ** 2),
+        }
+        values = {k: assemble_scalar(fem.form(v * self.dx_mass)) for k, v in integrands.items()}
+        total = sum(values[k] for k in MODE_FAMILIES)
+        shares = {k: values[k] / total if total > 0 else 0.0 for k in MODE_FAMILIES}
+        shares["transverse"] = (values["transverse"] / values["translation"]
+                                if values["translation"] > 0 else 0.0)
+        return shares
+
+    def mode_kind(self, shares: dict) -> str:
+        """The family with the largest share."""
+        return max(MODE_FAMILIES, key=lambda k: shares[k])
+
+    def velocity_to_rates(self, values: list) -> list:
+        """Initial velocities [u_t, v_t, w_t, w_x, w_y, w_z] at the dofs, (w_x, w_y, w_z) the
+        sections' angular velocity in world axes: theta_t = T(theta)^-1 w (the identity at
+        theta = 0)."""
+        subs = [np.asarray(compat.sub_space_collapsed(self.space, 3 + i)[1]) for i in range(3)]
+        state = compat.local_array(self.w)
+        theta = np.stack([state[d] for d in subs], axis=1)
+        spin = np.stack([np.asarray(values[3 + i], dtype=float) for i in range(3)], axis=1)
+        rates = np.array([np.linalg.solve(spin_matrix(t), w) for t, w in zip(theta, spin,
+                                                                             strict=True)])
+        rates = rates.reshape(-1, 3)
+        return list(values[:3]) + [rates[:, i] for i in range(3)]

@@ -12,6 +12,13 @@ f_ext(t_{n+1-alpha_f}) with x_{n+1-alpha} = (1 - alpha) x_{n+1} + alpha x_n. The
 are the derivative of the same stored energy as in statics, evaluated at q_{n+1-alpha_f};
 constraints (multiplier fields) are enforced at t_{n+1}. rho_inf = 1 is the implicit midpoint
 rule: energy-conserving for linear problems and exactly momentum-conserving.
+
+The problem supplies the inertia (`BeamProblem.mass_work`, `velocity_inertia_work`,
+`kinetic_energy`, `momentum_densities`): constant for the planar rod; for the spatial rod
+(`fe_beam.fem.spatial_rod.SpatialRodProblem`, q = (d, theta) with theta the rotation vector,
+treated as a vector of R^3) the Lagrangian inertia M(theta) a + g(theta, v) of the exact
+kinetic energy, at q_{n+1-alpha_f}, v_{n+1-alpha_f}, a_{n+1-alpha_m} (docs/theory.md, Spatial
+rods: inertia, modes and generalised-alpha on the rotation vector).
 """
 
 from __future__ import annotations
@@ -78,9 +85,11 @@ class StepDriver:
 
 
     def momenta(self) -> dict:
-        """Linear and angular momentum of the current state (the schemes' ``forms``)."""
-        return {name: assemble_scalar(self.forms[name])
-                for name in ("momentum_x", "momentum_y", "angular_momentum")}
+        """Linear and angular momentum of the current state (the schemes' ``forms``: planar
+        momentum_x, momentum_y, angular_momentum; spatial momentum_x, _y, _z and
+        angular_momentum_x, _y, _z, about the origin)."""
+        names = getattr(self, "momentum_names", ("momentum_x", "momentum_y", "angular_momentum"))
+        return {name: assemble_scalar(self.forms[name]) for name in names}
 
     def _unit_load_energy(self) -> float:
         """Dead-load work at load factor 1 on the last accepted state (the
@@ -94,15 +103,18 @@ class StepDriver:
     def _theta_dofs(self) -> np.ndarray:
         """Local dofs (ghosts included) of theta in the state."""
         if not hasattr(self, "_theta"):
-            _, dofs = compat.sub_space_collapsed(self.problem.space, 2)
-            self._theta = np.asarray(dofs)
+            indices = [i for i, name in enumerate(self.problem.components)
+                       if name.startswith("theta")]
+            self._theta = np.concatenate([
+                np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
+                for i in indices])
         return self._theta
 
     def _motion_dofs(self) -> np.ndarray:
-        """Local dofs of u, v and theta (not the multipliers)."""
+        """Local dofs of the displacements and rotations (not the multipliers)."""
         if not hasattr(self, "_motion"):
             dofs = [np.asarray(compat.sub_space_collapsed(self.problem.space, i)[1])
-                    for i in range(3)]
+                    for i in range(self.problem.motion_count)]
             self._motion = np.concatenate(dofs)
         return self._motion
     def run(self, on_output: Callable[[float, int], None] | None = None,
@@ -194,23 +206,27 @@ class GeneralizedAlpha(StepDriver):
         w_parts = ufl.split(problem.w)
         q, v, a = (ufl.split(f) for f in (self.q_old, self.v_old, self.a_old))
         dt = self.dt
+        n = problem.motion_count
         a_new = [(w_parts[i] - q[i] - dt * v[i]) / (beta * dt**2) - (1 - 2 * beta) / (2 * beta)
-                 * a[i] for i in range(3)]
-        v_new = [v[i] + dt * ((1 - gamma) * a[i] + gamma * a_new[i]) for i in range(3)]
-        q_mid = tuple((1 - alpha_f) * w_parts[i] + alpha_f * q[i] for i in range(3))
-        v_mid = tuple((1 - alpha_f) * v_new[i] + alpha_f * v[i] for i in range(3))
-        a_mid = tuple((1 - alpha_m) * a_new[i] + alpha_m * a[i] for i in range(3))
+                 * a[i] for i in range(n)]
+        v_new = [v[i] + dt * ((1 - gamma) * a[i] + gamma * a_new[i]) for i in range(n)]
+        q_mid = problem.motion_parts([(1 - alpha_f) * w_parts[i] + alpha_f * q[i]
+                                      for i in range(n)])
+        v_mid = tuple((1 - alpha_f) * v_new[i] + alpha_f * v[i] for i in range(n))
+        a_mid = tuple((1 - alpha_m) * a_new[i] + alpha_m * a[i] for i in range(n))
         test = ufl.TestFunction(space)
+        # the inertia at the alpha-weighted state, velocity and acceleration: constant mass
+        # (planar), or the spatial rod's M(theta) theta_tt + g(theta, theta_t)
         self.residual = (
-            self.inertia(a_mid, test)
+            self.inertia(a_mid, test, q_mid, v_mid)
             + self.dissipation(q_mid, v_mid, test)
             # d/dw of Pi(q_mid) is (1 - alpha_f) Pi'(q_mid): divide it out (rho_inf is fixed).
             + (1 / (1 - params["alpha_f"])) * ufl.derivative(
                 problem.stored_energy(q_mid) - problem.dead_load_work(q_mid), problem.w, test)
             + self._constraints(test)
         )
-        if problem.model.loads.follower:
-            self.residual -= problem.follower_virtual_work(q_mid, test)
+        if problem.nonpotential_loads:
+            self.residual -= problem.nonconservative_work(q_mid, test)
         self.solver = SNESSolver(NonlinearProblem(self.residual, problem.w, problem.bcs),
                                  (solver_settings or SolverSettings()).for_problem(
                                      problem.saddle_point, problem.comm),
@@ -225,19 +241,24 @@ class GeneralizedAlpha(StepDriver):
     # --- forms -----------------------------------------------------------------------------------
     @property
     def dx_mass(self):
-        return ufl.dx(metadata={"quadrature_degree": 2 * self.problem.model.mesh.degree + 2})
+        return self.problem.dx_mass
 
-    def inertia(self, acceleration, test):
+    def inertia(self, acceleration, test, state=None, velocity=None):
+        """The inertia's virtual work (`BeamProblem.mass_work` + `velocity_inertia_work`)."""
         p = self.problem
-        rho_area, rho_inertia = p.rho * p.section_props.A, p.rho * p.section_props.I
-        t = ufl.split(test)
-        return (rho_area * (acceleration[0] * t[0] + acceleration[1] * t[1])
-                + rho_inertia * acceleration[2] * t[2]) * self.dx_mass
+        work = p.mass_work(state, acceleration, test)
+        if velocity is not None:
+            quadratic = p.velocity_inertia_work(state, velocity, test)
+            if quadratic is not None:
+                work += quadratic
+        return work
 
     def dissipation(self, state, velocity, test):
-        """Virtual work of viscous (c) and Kelvin-Voigt (eta) damping."""
-        t = ufl.split(test)
-        work = self.c * (velocity[0] * t[0] + velocity[1] * t[1]) * self.dx_mass
+        """Virtual work of viscous (c, on the translations) and Kelvin-Voigt (eta, planar)
+        damping."""
+        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
+        work = self.c * sum(velocity[i] * t[i] for i in range(self.problem.translations)) \
+            * self.dx_mass
         if self.damping.kelvin_voigt > 0:
             k = self.problem.stiffness
             rates = strain_rates(state, velocity)
@@ -249,53 +270,57 @@ class GeneralizedAlpha(StepDriver):
 
     def _constraints(self, test):
         p = self.problem
-        u, v, theta, multipliers = p.fields()
-        term = p.constraint_term((u, v, theta), multipliers)
+        *parts, multipliers = p.fields()
+        term = p.constraint_term(tuple(parts), multipliers)
         return ufl.derivative(term, p.w, test) if multipliers else 0
 
     def _energy_forms(self) -> None:
         p = self.problem
+        n = p.motion_count
         # The damping work of a step is exactly what the scheme applies: the force at the
         # alpha-weighted state and velocity times the displacement increment.
         self._step_state, self._step_velocity, self._step_increment = (
             fem.Function(p.space) for _ in range(3))
-        q, v = ufl.split(self.q_old)[:3], ufl.split(self.v_old)[:3]
-        rho_area, rho_inertia = p.rho * p.section_props.A, p.rho * p.section_props.I
-        x = ufl.SpatialCoordinate(p.mesh)[0]
+        q, v = p.motion_parts(ufl.split(self.q_old)), ufl.split(self.v_old)[:n]
         dx = self.dx_mass
         self.forms = {
-            "kinetic": fem.form(0.5 * (rho_area * (v[0] ** 2 + v[1] ** 2)
-                                       + rho_inertia * v[2] ** 2) * dx),
+            "kinetic": fem.form(p.kinetic_energy(q, v)),
             "strain": fem.form(p.stored_energy(q)),
             "load_potential": fem.form(p.dead_load_work(q)),
             "damping_work": fem.form(self.dissipation(
-                ufl.split(self._step_state)[:3], ufl.split(self._step_velocity)[:3],
+                p.motion_parts(ufl.split(self._step_state)), ufl.split(self._step_velocity)[:n],
                 self._step_increment)),
-            "momentum_x": fem.form(rho_area * v[0] * dx),
-            "momentum_y": fem.form(rho_area * v[1] * dx),
-            "angular_momentum": fem.form((rho_area * ((x + q[0]) * v[1] - q[1] * v[0])
-                                          + rho_inertia * v[2]) * dx),
         }
-        if p.model.loads.follower:  # the follower force the step applied times the increment
-            self.forms["follower_work"] = fem.form(p.follower_virtual_work(
-                tuple(ufl.split(self._step_state)[:3]), self._step_increment))
+        momenta = p.momentum_densities(q, v)
+        self.momentum_names = tuple(momenta)
+        self.forms.update({name: fem.form(density * dx) for name, density in momenta.items()})
+        if p.nonpotential_loads:  # the nonconservative load the step applied times the increment
+            self.forms["follower_work"] = fem.form(p.nonconservative_work(
+                p.motion_parts(ufl.split(self._step_state)), self._step_increment))
 
     # --- state --------------------------------------------------------------------------------
     def initialise(self, velocity: Callable | None = None) -> None:
         """Start from the current ``problem.w`` (e.g. a static solution) at t = 0, with initial
-        velocities ``velocity(x) -> (u_t, v_t, theta_t)`` arrays, and the consistent initial
-        acceleration M a0 = f_ext - f_int - C v0."""
+        velocities ``velocity(x) -> (u_t, v_t, theta_t)`` arrays (spatial rods: (u_t, v_t, w_t,
+        omega_x, omega_y, omega_z), omega the sections' angular velocity in world axes:
+        `SpatialRodProblem.velocity_to_rates`), and the consistent initial acceleration
+        M a0 = f_ext - f_int - C v0 (- g(q0, v0), the spatial rod's velocity terms)."""
         self.time = 0.0
         self._set_time_values(0.0, 0.0)
         compat.local_array(self.q_old)[:] = compat.local_array(self.problem.w)
         compat.local_array(self.v_old)[:] = 0.0
         if velocity is not None:
-            for index in range(3):
+            values, places = [], []
+            for index in range(self.problem.motion_count):
                 sub, dofs = compat.sub_space_collapsed(self.problem.space, index)
-                values = fem.Function(sub)
-                values.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
-                                   * np.ones(x.shape[1]))
-                compat.local_array(self.v_old)[np.asarray(dofs)] = values.x.array
+                function = fem.Function(sub)
+                function.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
+                                     * np.ones(x.shape[1]))
+                values.append(function.x.array.copy())
+                places.append(np.asarray(dofs))
+            rates = self.problem.velocity_to_rates(values)
+            for dofs, rate in zip(places, rates, strict=True):
+                compat.local_array(self.v_old)[dofs] = rate
         self._initial_acceleration()
         self._work = 0.0
         self._dissipated = 0.0
@@ -306,18 +331,22 @@ class GeneralizedAlpha(StepDriver):
 
     def _initial_acceleration(self) -> None:
         p = self.problem
+        n = p.motion_count
         trial, test = ufl.TrialFunction(p.space), ufl.TestFunction(p.space)
         a_parts, t = ufl.split(trial), ufl.split(test)
-        mass = self.inertia(a_parts[:3], test)
-        for index in range(3, len(a_parts)):  # multipliers: identity, their "acceleration" is 0
+        *parts, _ = p.fields()
+        state = tuple(parts)
+        mass = self.inertia(a_parts[:n], test, state)
+        for index in range(n, len(a_parts)):  # multipliers: identity, their "acceleration" is 0
             mass += a_parts[index] * t[index] * ufl.dx
-        u, v, theta, _ = p.fields()
-        state = (u, v, theta)
-        velocity = tuple(ufl.split(self.v_old)[:3])
+        velocity = tuple(ufl.split(self.v_old)[:n])
         force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
         force += self.dissipation(state, velocity, test)
-        if p.model.loads.follower:
-            force -= p.follower_virtual_work(state, test)
+        quadratic = p.velocity_inertia_work(state, velocity, test)
+        if quadratic is not None:
+            force += quadratic
+        if p.nonpotential_loads:
+            force -= p.nonconservative_work(state, test)
         # Fixed dofs have zero acceleration: solve with all prescribed values set to zero.
         p.set_prescribed_factor(0.0)
         compat.solve_linear(mass, -force, p.bcs, self.a_old)

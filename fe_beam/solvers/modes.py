@@ -91,27 +91,27 @@ class Modes:
     unstable: list[UnstableMode] = field(default_factory=list)
     unstable_count: int = 0
     notes: list[str] = field(default_factory=list)
+    #: per mode, the shares of its mass norm by family (`BeamProblem.mode_shares`; spatial
+    #: rods: axial, torsion, bending about y, bending about z, and "transverse")
+    shares: list[dict] = field(default_factory=list)
 
     def bending(self) -> list[float]:
         """Frequencies of the elastic modes that are mainly transverse (bending)."""
         kinds = self.kinds or ["elastic"] * len(self.frequencies_hz)
         return [f for f, share, kind in zip(self.frequencies_hz, self.transverse_fraction, kinds,
                                             strict=True)
-                if share > 0.5 and kind != "rigid"]
+                if share > 0.5 and kind != "rigid" and kind != "torsion"]
 
 
 def mass_form(problem: BeamProblem):
-    trial, test = ufl.TrialFunction(problem.space), ufl.TestFunction(problem.space)
-    a, t = ufl.split(trial), ufl.split(test)
-    rho_area = problem.rho * problem.section_props.A
-    rho_inertia = problem.rho * problem.section_props.I
-    dx = ufl.dx(metadata={"quadrature_degree": 2 * problem.model.mesh.degree + 2})
-    return (rho_area * (a[0] * t[0] + a[1] * t[1]) + rho_inertia * a[2] * t[2]) * dx
+    """The problem's mass about its current state (`BeamProblem.mass_form`: rho A on u, v,
+    rho I on theta; the spatial rod's: rho A and T(-theta)^T rho J T(-theta))."""
+    return problem.mass_form()
 
 
 def bending_eigenvalue_unit(problem: BeamProblem) -> float:
     """lambda_ref = int EI dx / (int rho A dx L^4) [1/s^2]: Omega^2 = omega^2 / lambda_ref."""
-    EI = assemble_scalar(fem.form(problem.stiffness.EI * ufl.dx))
+    EI = assemble_scalar(fem.form(problem.bending_stiffness() * ufl.dx))
     rho_area = assemble_scalar(fem.form(problem.rho * problem.section_props.A * ufl.dx))
     return EI / (rho_area * problem.model.length**4)
 
@@ -133,7 +133,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     scale = bending_eigenvalue_unit(problem)
     zero = ZERO_TOLERANCE * scale
     rigid = _rigid_motions(problem, K, M)
-    symmetric = not problem.model.loads.follower and _is_symmetric(K)
+    symmetric = not problem.nonpotential_loads and _is_symmetric(K)
     unstable_count, sigma = None, -scale
     if symmetric:
         counter = _EigenvalueCounter(problem, K, M)
@@ -232,14 +232,15 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     for index, (_, shape) in enumerate(chosen, start=1):
         shape.name = f"mode_{index}"
     kinds = []
-    transverse = [_transverse_share(problem, shape) for _, shape in chosen]
-    for (_value, shape), share in zip(chosen, transverse, strict=True):
-        kinds.append("rigid" if id(shape) in is_rigid else ("bending" if share > 0.5 else "axial"))
+    family_shares = [problem.mode_shares(shape) for _, shape in chosen]
+    transverse = [share["transverse"] for share in family_shares]
+    for (_value, shape), share in zip(chosen, family_shares, strict=True):
+        kinds.append("rigid" if id(shape) in is_rigid else problem.mode_kind(share))
     frequencies = [math.sqrt(value) / (2 * math.pi) for value, _ in chosen]
     return Modes(frequencies, [s for _, s in chosen], transverse,
                  eigenvalues=[value for value, _ in chosen], kinds=kinds,
                  rigid_body_modes=len(rigid_pairs), unstable=unstable,
-                 unstable_count=int(unstable_count), notes=notes)
+                 unstable_count=int(unstable_count), notes=notes, shares=family_shares)
 
 
 def _solve(SLEPc, K, M, sigma, nev, fixed, problem, symmetric=False):
@@ -335,41 +336,22 @@ def _is_symmetric(K: PETSc.Mat) -> bool:
 
 def _rigid_motions(problem: BeamProblem, K: PETSc.Mat, M: PETSc.Mat) -> list[PETSc.Vec]:
     """M-orthonormal basis of the infinitesimal rigid motions of the current state that the
-    supports leave free and that cost no energy: translations (1, 0, 0), (0, 1, 0) and the
-    rotation about the origin (-v, x + u, 1) (multipliers unchanged)."""
-    u_dofs = compat.sub_space_collapsed(problem.space, 0)[1]
-    v_space, v_dofs = compat.sub_space_collapsed(problem.space, 1)
-    _, theta_dofs = compat.sub_space_collapsed(problem.space, 2)
-    u_dofs, v_dofs, theta_dofs = (np.asarray(d) for d in (u_dofs, v_dofs, theta_dofs))
-    u_space = compat.sub_space_collapsed(problem.space, 0)[0]
-    x = v_space.tabulate_dof_coordinates()[:, 0]
-    same_points = np.allclose(u_space.tabulate_dof_coordinates()[:, 0], x)
-    state = compat.local_array(problem.w)
-    candidates = []
-    for k in range(3):
-        function = fem.Function(problem.space)
-        array = compat.local_array(function)
-        if k == 0:
-            array[u_dofs] = 1.0
-        elif k == 1:
-            array[v_dofs] = 1.0
-        elif same_points:  # u and v share one element: their dofs sit at the same points
-            array[u_dofs] = -state[v_dofs]
-            array[v_dofs] = x + state[u_dofs]
-            array[theta_dofs] = 1.0
-        candidates.append(compat.vector_of(function).copy())
+    supports leave free and that cost no energy (`BeamProblem.rigid_motion_candidates`: planar
+    translations (1, 0, 0), (0, 1, 0) and the rotation about the origin (-v, x + u, 1);
+    the spatial rod's three translations and three rotations; multipliers unchanged)."""
+    candidates = [compat.vector_of(f).copy() for f in problem.rigid_motion_candidates()]
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
     # combinations that vanish on the fixed dofs: null space of the (gathered) fixed values
     rows = np.array([c.getArray(readonly=True)[fixed] for c in candidates]).T
     gathered = problem.comm.allgather(rows)
     rows = np.vstack([r for r in gathered if r.size]) if any(r.size for r in gathered) \
-        else np.zeros((0, 3))
+        else np.zeros((0, len(candidates)))
     if rows.shape[0]:
         import scipy.linalg
 
         combinations = scipy.linalg.null_space(rows, rcond=1e-10)
     else:
-        combinations = np.eye(3)
+        combinations = np.eye(len(candidates))
     basis = []
     work, image = K.createVecRight(), K.createVecRight()
     diagonal = K.getDiagonal()
@@ -432,7 +414,4 @@ def _lives_on_fixed_dofs(vector: PETSc.Vec, fixed: np.ndarray) -> bool:
 
 
 def _transverse_share(problem: BeamProblem, shape: fem.Function) -> float:
-    u, v = ufl.split(shape)[0], ufl.split(shape)[1]
-    axial = assemble_scalar(fem.form(problem.section_props.A * u**2 * ufl.dx))
-    transverse = assemble_scalar(fem.form(problem.section_props.A * v**2 * ufl.dx))
-    return transverse / (axial + transverse) if axial + transverse > 0 else 0.0
+    return problem.mode_shares(shape)["transverse"]
