@@ -26,6 +26,8 @@ def with_obstacles(*obstacles, **tables):
     ({**FLOOR, "radius": 1.0}, ("radius", "does not apply")),
     ({**FLOOR, "colour": "red"}, ("unknown key", "colour")),
     ({"shape": "plane", "point": [0.0, -1.0]}, ("needs normal",)),
+    ({**FLOOR, "friction": -0.1}, ("friction", ">= 0")),
+    ({**FLOOR, "friction": "high"}, ("friction",)),
 ])
 def test_bad_obstacle_exits_2(tmp_path, capsys, obstacle, words):
     code, err, out, path = run_cli(tmp_path, with_obstacles(obstacle), capsys=capsys)
