@@ -60,9 +60,9 @@ from fe_beam.model.obstacles import (
 )
 
 __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
-           "contact_point", "contact_pressure", "director", "friction_density",
+           "contact_point", "contact_pressure", "director", "coulomb_state",
            "friction_return_map", "outward_normal", "point_gap", "positive_part",
-           "segment_gap", "tangential_slip", "tube_gap"]
+           "segment_gap", "slip_traction", "stick_density", "tangential_slip", "tube_gap"]
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -259,14 +259,20 @@ def tangential_slip(obstacle: Obstacle, p, p_reference):
     return ufl.dot(p - p_reference, ufl.as_vector([-n[1], n[0]]))
 
 
-def friction_density(multiplier, stick, traction, slip, k):
-    """The tangential augmented-Lagrangian energy at a fixed stick/slip state (Simo-Laursen,
-    statics): stuck (stick = 1) 1/(2k) ((lambda_t - k s)^2 - lambda_t^2), its variation
-    -(lambda_t - k s) ds; slipping (stick = 0) -tau s with the slip traction tau = +-mu p_n
-    held fixed during the Newton solve (then updated from the pressures: a fixed point on
-    the friction bound). The friction force on the rod is p_t grad s, p_t its traction."""
-    return (stick * ((multiplier - k * slip) ** 2 - multiplier**2) / (2 * k)
-            - (1 - stick) * traction * slip)
+def stick_density(multiplier, stick, slip, k):
+    """The tangential augmented-Lagrangian energy of a stuck point (stick = 1; 0 where the
+    point slips or is clear): stick/(2k) ((lambda_t - k s)^2 - lambda_t^2), its variation
+    -stick (lambda_t - k s) ds: the Uzawa updates lambda_t <- lambda_t - k s drive the slip of
+    a stuck point to zero."""
+    return stick * ((multiplier - k * slip) ** 2 - multiplier**2) / (2 * k)
+
+
+def slip_traction(direction, mu, pressure):
+    """The tangential traction of a slipping point (UFL): direction mu p_n, direction = +-1
+    (the sign of the trial traction when the point began to slip: against the slip), p_n the
+    current normal pressure. Not a potential: its virtual work p_t ds enters the residual
+    (`ContactSet.work`), so that Newton sees the bound |p_t| = mu p_n exactly."""
+    return direction * mu * pressure
 
 
 def friction_return_map(trial: np.ndarray, bound: np.ndarray):
@@ -275,6 +281,27 @@ def friction_return_map(trial: np.ndarray, bound: np.ndarray):
     trial, bound = np.asarray(trial, dtype=float), np.asarray(bound, dtype=float)
     stuck = (np.abs(trial) <= bound) & (bound > 0)
     return np.where(stuck, trial, np.sign(trial) * bound), stuck
+
+
+def coulomb_state(trial, slip, pressure, mu, stick, direction):
+    """The next stick/slip state of contact points (numpy; the primal-dual active-set step
+    of friction): (stuck, direction, traction). A point that slipped in the last solve
+    (stick 0, direction +-1) keeps slipping while it slides against its traction (slip
+    direction <= 0), else sticks; any other pressed point sticks while its trial traction
+    lambda_t - k s is within mu p_n, else slips along sign(trial). Clear points (p_n = 0):
+    neither. traction: the stuck points' trial, the slipping ones' direction mu p_n."""
+    trial, slip, pressure = (np.asarray(a, dtype=float) for a in (trial, slip, pressure))
+    bound = mu * pressure
+    pressed = pressure > 0
+    was_slipping = (np.asarray(stick) < 0.5) & (np.asarray(direction) != 0)
+    keeps = was_slipping & (slip * np.asarray(direction) <= 0)
+    mapped, stuck_map = friction_return_map(trial, bound)
+    stuck = pressed & np.where(was_slipping, ~keeps, stuck_map)
+    new_direction = np.where(was_slipping & keeps, np.asarray(direction),
+                             np.where(stuck, 0.0, np.sign(trial)))
+    new_direction = np.where(pressed & ~stuck, new_direction, 0.0)
+    traction = np.where(stuck, np.clip(trial, -bound, bound), new_direction * bound)
+    return stuck, new_direction, traction
 
 
 # --- the obstacles of one problem ----------------------------------------------------------------
@@ -321,13 +348,38 @@ class ContactSet:
                 f = self._friction[i]
                 point = self._point_of(obstacle, geometry)
                 slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
-                total += friction_density(f["multiplier"], f["stick"], f["traction"], slip,
-                                          self.k) * self.dx
+                total += stick_density(f["multiplier"], f["stick"], slip, self.k) * self.dx
                 for e, measure in enumerate(self._end_measures):
                     end = f["ends"][e]
                     slip = tangential_slip(obstacle, point, end["reference"])
-                    total += friction_density(end["multiplier"], end["stick"], end["traction"],
-                                              slip, self.k_end) * measure
+                    total += stick_density(end["multiplier"], end["stick"], slip,
+                                           self.k_end) * measure
+        return total
+
+    def work(self, problem, parts, test):
+        """The virtual work of the slipping points' friction, int p_t ds with p_t = direction
+        mu p_n (`slip_traction`), p_n the fixed-active-set pressure chi (lambda - k g):
+        subtracted from the residual (a non-potential force: the tangent is not symmetric)."""
+        if self._problem is not problem:
+            self._attach(problem)
+        geometry = self._geometry(parts)
+        total = 0
+        for i, f in self._friction.items():
+            obstacle = self.obstacles[i]
+            gap = self._gap_of(obstacle, geometry)
+            point = self._point_of(obstacle, geometry)
+            pressure = self.active[i] * (self.multipliers[i] - self.k * gap)
+            slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
+            total += (1 - f["stick"]) * slip_traction(f["direction"], f["mu"], pressure) \
+                * ufl.derivative(slip, problem.w, test) * self.dx
+            for e, measure in enumerate(self._end_measures):
+                end = f["ends"][e]
+                pressure = self.end_active[i][e] * (self.end_multipliers[i][e]
+                                                    - self.k_end * gap)
+                slip = tangential_slip(obstacle, point, end["reference"])
+                total += (1 - end["stick"]) * slip_traction(end["direction"], f["mu"],
+                                                            pressure) \
+                    * ufl.derivative(slip, problem.w, test) * measure
         return total
 
     def _geometry(self, parts, variables: bool = False) -> dict:
@@ -403,13 +455,13 @@ class ContactSet:
             self._friction[i] = {
                 "multiplier": fem.Function(self.space, name=f"friction_multiplier_{i}"),
                 "stick": fem.Function(self.space, name=f"friction_stick_{i}"),
-                "traction": fem.Function(self.space, name=f"friction_traction_{i}"),
+                "direction": fem.Function(self.space, name=f"friction_direction_{i}"),
                 "reference": [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
                               for c in range(self.dim)],
                 "mu": self.friction[i],
                 "ends": [{"multiplier": fem.Constant(mesh, 0.0),
                           "stick": fem.Constant(mesh, 0.0),
-                          "traction": fem.Constant(mesh, 0.0),
+                          "direction": fem.Constant(mesh, 0.0),
                           "reference": fem.Constant(mesh, np.zeros(self.dim))}
                          for _ in range(2)]}
         x = ufl.SpatialCoordinate(mesh)[0]
@@ -461,7 +513,8 @@ class ContactSet:
                 where["point"] = len(columns)
                 columns += [point[c] for c in range(self.dim)]
                 traction = (f["stick"] * (f["multiplier"] - self.k * slip)
-                            + (1 - f["stick"]) * f["traction"])
+                            + (1 - f["stick"]) * slip_traction(f["direction"], f["mu"],
+                                                               pressure))
                 end_tractions, end_slips = [], []
                 for e in range(2):
                     end = f["ends"][e]
@@ -469,7 +522,8 @@ class ContactSet:
                     end_slips.append(end_slip)
                     end_tractions.append(end["stick"] * (end["multiplier"]
                                                         - self.k_end * end_slip)
-                                         + (1 - end["stick"]) * end["traction"])
+                                         + (1 - end["stick"]) * slip_traction(
+                                             end["direction"], f["mu"], end_pressures[e]))
                 parts_of.append((traction, end_tractions, (slip, end_slips), "friction"))
                 ends_of["slip"] = [fem.form(s * m) for s, m in zip(end_slips,
                                                                   self._end_measures,
@@ -514,9 +568,9 @@ class ContactSet:
         """The multipliers and flags (the state a solve starts from)."""
         friction = {i: {"multiplier": f["multiplier"].x.array.copy(),
                         "stick": f["stick"].x.array.copy(),
-                        "traction": f["traction"].x.array.copy(),
+                        "direction": f["direction"].x.array.copy(),
                         "ends": [{n: float(end[n].value) for n in ("multiplier", "stick",
-                                                                   "traction")}
+                                                                   "direction")}
                                  for end in f["ends"]]}
                     for i, f in self._friction.items()}
         return ([m.x.array.copy() for m in self.multipliers],
@@ -537,11 +591,11 @@ class ContactSet:
                 constant.value = value
                 flag.value = 1.0 if value > 0 else 0.0
         for i, f in self._friction.items():
-            for name in ("multiplier", "stick", "traction"):
+            for name in ("multiplier", "stick", "direction"):
                 f[name].x.array[:] = friction[i][name]
                 f[name].x.scatter_forward()
             for end, values in zip(f["ends"], friction[i]["ends"], strict=True):
-                for name in ("multiplier", "stick", "traction"):
+                for name in ("multiplier", "stick", "direction"):
                     end[name].value = values[name]
 
     def _set_references(self, state: dict | None) -> None:
@@ -591,13 +645,14 @@ class ContactSet:
             copies = {}
             for name, values in (("multiplier", entry["traction"]),
                                  ("stick", entry["stuck"].astype(float)),
-                                 ("traction", entry["traction"])):
+                                 ("direction", entry["direction"])):
                 array = f[name].x.array.copy()
                 array[self._dofs] = values
                 copies[name] = array
             copies["ends"] = [{"multiplier": float(entry["end_traction"][e]),
                                "stick": float(entry["end_stuck"][e]),
-                               "traction": float(entry["end_traction"][e])} for e in range(2)]
+                               "direction": float(entry["end_direction"][e])}
+                              for e in range(2)]
             friction[i] = copies
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
         self._set_references(state)
@@ -613,10 +668,10 @@ class ContactSet:
             for constant in ends:
                 constant.value = 0.0
         for f in self._friction.values():
-            for name in ("multiplier", "stick", "traction"):
+            for name in ("multiplier", "stick", "direction"):
                 f[name].x.array[:] = 0.0
             for end in f["ends"]:
-                for name in ("multiplier", "stick", "traction"):
+                for name in ("multiplier", "stick", "direction"):
                     end[name].value = 0.0
         self._set_references(None)
         self._committed = self._copy()
@@ -678,35 +733,43 @@ class ContactSet:
             mu, where = f["mu"], self._obstacle_columns[i]
             slip = values[:, where["slip"]]
             points = values[:, where["point"]:where["point"] + self.dim]
+            stick = f["stick"].x.array[self._dofs]
+            direction = f["direction"].x.array[self._dofs]
             trial = f["multiplier"].x.array[self._dofs] - k * slip
-            traction, stuck = friction_return_map(trial, mu * state["pressure"][i])
-            used_stick = f["stick"].x.array[self._dofs] > 0.5
-            used = np.where(used_stick, trial, f["traction"].x.array[self._dofs])
-            slack = mu * k * tolerance + 1e-12 * np.max(np.abs(traction), initial=0.0)
-            bad = ((used_stick != stuck) & (state["pressure"][i] > 0)) \
-                | (np.abs(used - traction) > slack) | (stuck & (np.abs(slip) > tolerance))
-            changes += int(np.count_nonzero(bad))
+            stuck, new_direction, traction = coulomb_state(
+                trial, slip, state["pressure"][i], mu, stick, direction)
+            changes += self._friction_changes(stick, direction, stuck, new_direction, slip,
+                                              state["pressure"][i], tolerance)
             end_slip = np.array([global_sum(comm, fem.assemble_scalar(form))
                                  for form in self._end_forms[i]["slip"]])
             end_point = [self._assemble_end_point(i, e) for e in range(2)]
             ends = f["ends"]
+            end_stick = np.array([float(e["stick"].value) for e in ends])
+            end_direction = np.array([float(e["direction"].value) for e in ends])
             end_trial = np.array([float(e["multiplier"].value) for e in ends]) - k_end * end_slip
-            end_traction, end_stuck = friction_return_map(end_trial,
-                                                          mu * state["end_pressure"][i])
-            end_used_stick = np.array([float(e["stick"].value) for e in ends]) > 0.5
-            end_used = np.where(end_used_stick, end_trial,
-                                [float(e["traction"].value) for e in ends])
-            end_slack = mu * k_end * tolerance + 1e-12 * np.max(np.abs(end_traction))
-            end_bad = ((end_used_stick != end_stuck) & (state["end_pressure"][i] > 0)) \
-                | (np.abs(end_used - end_traction) > end_slack) \
-                | (end_stuck & (np.abs(end_slip) > tolerance))
-            if comm.rank == 0:
-                changes += int(np.count_nonzero(end_bad))
+            end_stuck, end_new_direction, end_traction = coulomb_state(
+                end_trial, end_slip, state["end_pressure"][i], mu, end_stick, end_direction)
+            if comm.rank == 0:  # the ends are global numbers: counted once
+                changes += self._friction_changes(end_stick, end_direction, end_stuck,
+                                                  end_new_direction, end_slip,
+                                                  state["end_pressure"][i], tolerance)
             state["friction"][i] = {"slip": slip, "point": points, "traction": traction,
-                                    "stuck": stuck, "end_slip": end_slip,
-                                    "end_point": end_point, "end_traction": end_traction,
-                                    "end_stuck": end_stuck}
+                                    "stuck": stuck, "direction": new_direction,
+                                    "end_slip": end_slip, "end_point": end_point,
+                                    "end_traction": end_traction, "end_stuck": end_stuck,
+                                    "end_direction": end_new_direction}
         state["friction_changes"] = int(comm.allreduce(changes, op=MPI.SUM))
+
+    @staticmethod
+    def _friction_changes(stick, direction, stuck, new_direction, slip, pressure,
+                          tolerance) -> int:
+        """Points whose stick/slip state must change, or stuck points that slipped more than
+        the tolerance (their multiplier needs an Uzawa update)."""
+        used_stuck = np.asarray(stick) > 0.5
+        bad = (used_stuck != stuck) | ((~stuck) & (np.asarray(direction) != new_direction)
+                                       & (pressure > 0))
+        bad |= stuck & (np.abs(slip) > tolerance)
+        return int(np.count_nonzero(bad))
 
     def max_penetration(self, state: dict | None = None) -> float:
         """max over all obstacles, contact points and ends of <-g>_+ (global) [m]."""
@@ -731,8 +794,7 @@ class ContactSet:
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
         """The active set chi <- [lambda - k g > 0] at every contact point and end and, with
         ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+; with friction the
-        stick/slip state and slip traction from the return map (tau <- +-mu p_n) and, with
-        ``multipliers``, lambda_t <- p_t."""
+        stick/slip state (`coulomb_state`) and, with ``multipliers``, lambda_t <- p_t."""
         state = state or self.evaluate()
         k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
         for i, function in enumerate(self.multipliers):
@@ -751,7 +813,7 @@ class ContactSet:
                     constant.value = float(state["end_pressure"][i][e])
         for i, f in self._friction.items():
             entry = state["friction"][i]
-            names = [("stick", entry["stuck"].astype(float)), ("traction", entry["traction"])]
+            names = [("stick", entry["stuck"].astype(float)), ("direction", entry["direction"])]
             if multipliers:
                 names.append(("multiplier", entry["traction"]))
             for name, values in names:
@@ -759,7 +821,7 @@ class ContactSet:
                 f[name].x.scatter_forward()
             for e, end in enumerate(f["ends"]):
                 end["stick"].value = float(entry["end_stuck"][e])
-                end["traction"].value = float(entry["end_traction"][e])
+                end["direction"].value = float(entry["end_direction"][e])
                 if multipliers:
                     end["multiplier"].value = float(entry["end_traction"][e])
 

@@ -58,6 +58,8 @@ class StaticContinuation:
             comm,
             breakpoints=self.tendons.breakpoints if self.tendons else (),
             extra_energy=_summed(energies),
+            extra_work=self.contact.work if self.contact is not None and
+            self.contact.frictional else None,
         )
         self.snes = SNESSolver(
             NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
@@ -238,12 +240,13 @@ class StaticContinuation:
         self.snes.destroy()
 
 
-def build_problem(model, comm, breakpoints=(), extra_energy=None):
+def build_problem(model, comm, breakpoints=(), extra_energy=None, extra_work=None):
     """The finite-element problem of a rod model: `SpatialRodProblem` for a spatial model
     (``[model] kinematics = "spatial"``), `BeamProblem` for a planar one."""
     kind = SpatialRodProblem if getattr(model, "kinematics", "planar") == "spatial" \
         else BeamProblem
-    return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy)
+    return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy,
+                extra_work=extra_work)
 
 
 def _summed(energies):
