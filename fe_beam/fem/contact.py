@@ -283,18 +283,20 @@ def friction_return_map(trial: np.ndarray, bound: np.ndarray):
     return np.where(stuck, trial, np.sign(trial) * bound), stuck
 
 
-def coulomb_state(trial, slip, pressure, mu, stick, direction):
+def coulomb_state(trial, slip, pressure, mu, stick, direction, slack: float = 0.0):
     """The next stick/slip state of contact points (numpy; the primal-dual active-set step
     of friction): (stuck, direction, traction). A point that slipped in the last solve
     (stick 0, direction +-1) keeps slipping while it slides against its traction (slip
     direction <= 0), else sticks; any other pressed point sticks while its trial traction
     lambda_t - k s is within mu p_n, else slips along sign(trial). Clear points (p_n = 0):
-    neither. traction: the stuck points' trial, the slipping ones' direction mu p_n."""
+    neither. traction: the stuck points' trial, the slipping ones' direction mu p_n.
+    ``slack`` [m]: a slip this small along the traction still counts as sliding against it
+    (round-off of a point that stopped at the verge)."""
     trial, slip, pressure = (np.asarray(a, dtype=float) for a in (trial, slip, pressure))
     bound = mu * pressure
     pressed = pressure > 0
     was_slipping = (np.asarray(stick) < 0.5) & (np.asarray(direction) != 0)
-    keeps = was_slipping & (slip * np.asarray(direction) <= 0)
+    keeps = was_slipping & (slip * np.asarray(direction) <= slack)
     mapped, stuck_map = friction_return_map(trial, bound)
     stuck = pressed & np.where(was_slipping, ~keeps, stuck_map)
     new_direction = np.where(was_slipping & keeps, np.asarray(direction),
@@ -458,7 +460,7 @@ class ContactSet:
                 "direction": fem.Function(self.space, name=f"friction_direction_{i}"),
                 "reference": [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
                               for c in range(self.dim)],
-                "mu": self.friction[i],
+                "mu": fem.Constant(mesh, self.friction[i]),
                 "ends": [{"multiplier": fem.Constant(mesh, 0.0),
                           "stick": fem.Constant(mesh, 0.0),
                           "direction": fem.Constant(mesh, 0.0),
@@ -473,6 +475,16 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+
+    def set_friction(self, index: int, mu: float) -> None:
+        """Change the friction coefficient of obstacle ``index`` (one built with friction > 0)
+        along the load path, e.g. a frictionless approach, then friction: mu >= 0."""
+        if index not in self._friction:
+            raise ValueError(f"contact: obstacle {index} was built without friction")
+        if not mu >= 0:
+            raise ValueError(f"contact: friction must be >= 0; got {mu!r}")
+        self._friction[index]["mu"].value = float(mu)
+        self.friction[index] = float(mu)
 
     def _extents(self):
         problem = self._problem
@@ -730,14 +742,14 @@ class ContactSet:
         tolerance = self.tolerance
         changes = 0
         for i, f in self._friction.items():
-            mu, where = f["mu"], self._obstacle_columns[i]
+            mu, where = float(f["mu"].value), self._obstacle_columns[i]
             slip = values[:, where["slip"]]
             points = values[:, where["point"]:where["point"] + self.dim]
             stick = f["stick"].x.array[self._dofs]
             direction = f["direction"].x.array[self._dofs]
             trial = f["multiplier"].x.array[self._dofs] - k * slip
             stuck, new_direction, traction = coulomb_state(
-                trial, slip, state["pressure"][i], mu, stick, direction)
+                trial, slip, state["pressure"][i], mu, stick, direction, 1e-3 * tolerance)
             changes += self._friction_changes(stick, direction, stuck, new_direction, slip,
                                               state["pressure"][i], tolerance)
             end_slip = np.array([global_sum(comm, fem.assemble_scalar(form))
@@ -748,7 +760,8 @@ class ContactSet:
             end_direction = np.array([float(e["direction"].value) for e in ends])
             end_trial = np.array([float(e["multiplier"].value) for e in ends]) - k_end * end_slip
             end_stuck, end_new_direction, end_traction = coulomb_state(
-                end_trial, end_slip, state["end_pressure"][i], mu, end_stick, end_direction)
+                end_trial, end_slip, state["end_pressure"][i], mu, end_stick, end_direction,
+                1e-3 * tolerance)
             if comm.rank == 0:  # the ends are global numbers: counted once
                 changes += self._friction_changes(end_stick, end_direction, end_stuck,
                                                   end_new_direction, end_slip,
@@ -910,10 +923,14 @@ class ContactSet:
                 "end_forces": [float(e) for e in ends],
             }
             if friction is not None:
-                f = state["friction"][i]
-                stuck = np.concatenate(comm.allgather(f["stuck"]))
-                slipping = (pressure > 0) & ~stuck
-                end_slipping = (np.asarray(ends) > 0) & ~np.asarray(f["end_stuck"])
+                f, flags = state["friction"][i], self._friction[i]
+                # the stick/slip state of the last solve (committed with an accepted step)
+                used = (flags["stick"].x.array[self._dofs] < 0.5) \
+                    & (flags["direction"].x.array[self._dofs] != 0)
+                slipping = (pressure > 0) & np.concatenate(comm.allgather(used))
+                end_slipping = (np.asarray(ends) > 0) & np.array(
+                    [float(e["stick"].value) < 0.5 and float(e["direction"].value) != 0
+                     for e in flags["ends"]])
                 entry["friction_force"] = [float(c) for c in friction[:dim]]
                 entry["slip"] = _intervals(
                     x_line, np.concatenate([[end_slipping[0]], slipping[order],
