@@ -113,3 +113,65 @@ def test_pressed_tip_sticks_below_mu_n_and_slips_at_it():
 def corner_x(tip: dict) -> float:
     """x of the tip section's lower corner (the contact point on the floor)."""
     return L + tip["u"] + H / 2 * math.sin(tip["theta"])
+
+
+@pytest.mark.mpi
+def test_capstan_over_a_disc():
+    """A thin inextensible rod (h = R / 100, EI / (T1 R^2) = 1e-2) clamped at x = 0 level with
+    the disc's top, wrapped a quarter turn over it by a dead tip force T1 hanging vertically
+    (frictionless approach), then dragged over the disc (friction on) by pulling the clamp away:
+    the whole contact slips and the clamp's tension is T2 = T1 exp(mu phi R / (R + h/2)) with
+    phi = pi/2 - the capstan formula, with the friction acting at the inner surface (radius R)
+    and the tension at the centreline (R + h/2): the moment balance about the disc's centre.
+    The bending boundary layers (length sqrt(EI/T1) = R / 10) leave ~1e-3."""
+    from fe_beam.solvers.newton import LoadStepping
+
+    radius, thin, tension, bending = 0.1, 0.001, 1.0, 1e-4
+    length, centre, pull = 0.4, 0.1, 0.02
+    config = {
+        "beam": {"length": length},
+        "section": {"shape": "rectangle", "b": thin, "h": thin},
+        "material": {"E": 12 * bending / thin**4, "nu": 0.3},
+        "model": {"law": "reissner", "constraint": "inextensible-unshearable"},
+        "mesh": {"elements": 100, "degree": 2},
+        "loads": {"tip_force": [0.0, -tension], "prescribed_x0": {"u": -pull}, "steps": 1},
+        "obstacles": [{"shape": "cylinder", "name": "disc", "friction": MU, "radius": radius,
+                       "point": [centre, -radius - thin / 2 - 1e-5]}],
+        "contact": {"penetration_tolerance": 1e-8, "penalty": 100.0, "max_updates": 200},
+        "output": {"xdmf": False, "plots": False},
+    }
+    run = run_of(config)
+    problem = run.problem
+
+    def load(value: float) -> None:  # the tip force alone (the clamp stays put)
+        problem.load_factor.value = value
+
+    def load_log(value: float) -> None:  # 0.01 ... 1: the wrap grows with log(T)
+        problem.load_factor.value = 0.01 * 100.0**value
+
+    run.contact.set_friction(0, 0.0)
+    run.advance_along(load, 0.0, 0.01, LoadStepping(steps=10))
+    run.advance_along(load_log, 0.0, 1.0, LoadStepping(steps=20))
+    run.contact.set_friction(0, MU)
+    states = []
+
+    def record(step) -> None:
+        check_penetration(run, 1e-8)
+        states.append((run.contact.summary()[0], problem.end_reaction("x0"),
+                       problem.end_values("xL")))
+
+    run.advance_along(problem.set_prescribed_factor, 0.0, 1.0, LoadStepping(steps=4),
+                      on_converged=record)
+    disc, clamp, tip = states[-1]
+    assert disc["slip"] == disc["active"]  # the whole contact slides
+    phi = -tip["theta"]  # the hanging leg's direction; the clamped leg is horizontal
+    assert phi == pytest.approx(math.pi / 2, abs=1e-5)
+    ratio = math.hypot(clamp["Fx"], clamp["Fy"]) / tension
+    expected = math.exp(MU * phi * radius / (radius + thin / 2))
+    print(f"capstan: T2/T1 = {ratio:.6f}, exp(mu phi R/(R + h/2)) = {expected:.6f} "
+          f"({ratio / expected - 1:.2e}), exp(mu phi) = {math.exp(MU * phi):.6f} "
+          f"({ratio / math.exp(MU * phi) - 1:.2e})")
+    assert ratio == pytest.approx(expected, rel=2.5e-3)
+    # the rod's equilibrium: clamp + disc + tip force = 0
+    assert clamp["Fx"] + disc["force"][0] == pytest.approx(0.0, abs=1e-6)
+    assert clamp["Fy"] + disc["force"][1] - tension == pytest.approx(0.0, abs=1e-6)

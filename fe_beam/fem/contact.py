@@ -905,10 +905,12 @@ class ContactSet:
             peak = float(np.max(pressure)) if len(pressure) else 0.0
             end_gap = state["end_gap"][i]
             x_line = np.concatenate([[0.0], x_all[order], [self.model.length]])
+            touching = np.concatenate([[end_gap[0] <= self.tolerance],
+                                       gap[order] <= self.tolerance,
+                                       [end_gap[1] <= self.tolerance]])
             active = _intervals(
                 x_line, np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
-                np.concatenate([[end_gap[0] <= self.tolerance], gap[order] <= self.tolerance,
-                                [end_gap[1] <= self.tolerance]]))
+                touching)
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
                               float(np.max(-state["end_gap"][i])))
             dim = self.dim
@@ -932,10 +934,12 @@ class ContactSet:
                     [float(e["stick"].value) < 0.5 and float(e["direction"].value) != 0
                      for e in flags["ends"]])
                 entry["friction_force"] = [float(c) for c in friction[:dim]]
+                # slipping runs joined across touching points that carry no pressure
+                pressed = np.concatenate([[ends[0] > 0], pressure[order] > 0.0,
+                                          [ends[1] > 0]])
                 entry["slip"] = _intervals(
                     x_line, np.concatenate([[end_slipping[0]], slipping[order],
-                                            [end_slipping[1]]]),
-                    np.zeros(len(x_line), dtype=bool))
+                                            [end_slipping[1]]]), touching & ~pressed)
                 entry["end_friction"] = [float(t) for t in f["end_traction"]]
             result.append(entry)
         return result
