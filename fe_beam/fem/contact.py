@@ -1,6 +1,15 @@
-"""Frictionless contact of the planar rod with rigid obstacles (docs/theory.md, Contact with
-rigid obstacles): gaps as UFL, the augmented-Lagrangian energy, and `ContactSet`, which holds
-the multipliers and measures the contact state.
+"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction for the
+planar rod (docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
+UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
+holds the multipliers and stick/slip states and measures the contact state.
+
+Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
+`fe_beam.model.obstacles.section_circumradius`); the rest below is the same.
+
+Friction (planar): the slip s of a contact point since the last accepted step
+(`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
+slipping ones with the traction `slip_traction` = +-mu p_n as virtual work (`ContactSet.work`);
+`coulomb_state` updates the stick/slip state between Newton solves.
 
 Gap. The section at x is the segment S(x) = {r + eta d : -below(x) <= eta <= above(x)} with
 r = (x + u, v) the centreline, d = (-sin theta, cos theta) the section director and
