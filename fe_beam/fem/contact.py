@@ -680,7 +680,8 @@ class ContactSet:
         self._positions = state["local"]
 
     def reset(self) -> None:
-        """No contact: zero multipliers (the unloaded state)."""
+        """No contact: zero multipliers and friction states, the configured friction
+        coefficients (the unloaded state)."""
         if self._problem is None:
             return
         for function in self.multipliers + self.active:
@@ -688,7 +689,9 @@ class ContactSet:
         for ends in self.end_multipliers + self.end_active:
             for constant in ends:
                 constant.value = 0.0
-        for f in self._friction.values():
+        for i, f in self._friction.items():  # the configured coefficient again
+            self.friction[i] = float(self.obstacles[i].friction)
+            f["mu"].value = self.friction[i]
             for name in ("multiplier", "stick", "direction"):
                 f[name].x.array[:] = 0.0
             for end in f["ends"]:
