@@ -26,6 +26,8 @@ def with_obstacles(*obstacles, **tables):
     ({**FLOOR, "radius": 1.0}, ("radius", "does not apply")),
     ({**FLOOR, "colour": "red"}, ("unknown key", "colour")),
     ({"shape": "plane", "point": [0.0, -1.0]}, ("needs normal",)),
+    ({**FLOOR, "friction": -0.1}, ("friction", ">= 0")),
+    ({**FLOOR, "friction": "high"}, ("friction",)),
 ])
 def test_bad_obstacle_exits_2(tmp_path, capsys, obstacle, words):
     code, err, out, path = run_cli(tmp_path, with_obstacles(obstacle), capsys=capsys)
@@ -75,3 +77,45 @@ def test_a_command_that_ignores_obstacles_refuses_them():
     with pytest.raises(ConfigError, match=r"does not use \[\[obstacles\]\]"):
         check_command_tables("dynamic", with_obstacles(FLOOR))
     assert check_command_tables("static", with_obstacles(FLOOR)) == []
+
+
+SPATIAL = {**BASE, "model": {"kinematics": "spatial", "law": "reissner", "constraint": "none"},
+           "loads": {"tip_force": [0.0, -1.0, 0.0], "steps": 2}}
+SPATIAL_FLOOR = {"shape": "plane", "point": [0.0, -0.01, 0.0], "normal": [0.0, 1.0, 0.0]}
+
+
+@pytest.mark.parametrize("obstacle, words", [
+    ({**SPATIAL_FLOOR, "friction": 0.3}, ("friction", "planar rods only")),
+    (FLOOR, ("point", "3 numbers")),
+    # the tube of the circumradius (half-diagonal 0.00707 m) reaches y = -0.00707
+    ({**SPATIAL_FLOOR, "point": [0.0, -0.007, 0.0]}, ("intersects the undeformed rod",)),
+    ({"shape": "cylinder", "point": [0.5, 0.0, 0.0], "radius": 0.1, "axis": [0, 0, 1],
+      "length": 0.2}, ("intersects",)),
+    ({"shape": "cylinder", "point": [0.5, 0.3, 0.0], "radius": 0.1, "axis": [0, 0, 0]},
+     ("axis", "zero vector")),
+])
+def test_bad_spatial_obstacle_exits_2(tmp_path, capsys, obstacle, words):
+    code, err, _, path = run_cli(tmp_path, {**SPATIAL, "obstacles": [obstacle]}, capsys=capsys)
+    message = usage_error(code, err, path)
+    for word in words:
+        assert word in message, message
+
+
+def test_spatial_obstacles_parse_in_3d():
+    parsed = validate("static", {**SPATIAL, "obstacles": [
+        {**SPATIAL_FLOOR, "point": [0.0, -0.0075, 0.0]},
+        # a short cylinder beside the rod, clear of it though its infinite axis line is not
+        {"shape": "cylinder", "point": [0.5, 0.2, 0.0], "radius": 0.05, "axis": [0, 1, 0],
+         "length": 0.1}]}).parsed
+    floor, post = parsed.obstacles
+    assert floor.dim == 3 and post.length == 0.1 and post.axis == (0.0, 1.0, 0.0)
+
+
+def test_finite_cylinder_distance():
+    import numpy as np
+
+    from fe_beam.model.obstacles import Cylinder, distance
+
+    post = Cylinder(dim=3, point=(0.0, 0.0, 0.0), radius=1.0, axis=(0, 0, 1), length=2.0)
+    points = np.array([[2.0, 0, 0], [0, 0, 3.0], [2.0, 0, 3.0], [0.5, 0, 0], [0, 0, 0.5]])
+    assert distance(post, points) == pytest.approx([1.0, 2.0, 5**0.5, -0.5, -0.5])

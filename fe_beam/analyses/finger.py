@@ -237,9 +237,10 @@ def sweep_columns(tendons: int, obstacles: int = 0, spatial: bool = False
         for i, k in enumerate("xyz")] if spatial else exports.tip_columns()
     grasp = []
     for i in range(obstacles):
-        grasp += [exports.Column(f"grasp_force_{i}", lambda s, i=i: grasp_force(s)[i]),
-                  exports.Column(f"contact{i}_Fx", lambda s, i=i: s["contact"][i]["force"][0]),
-                  exports.Column(f"contact{i}_Fy", lambda s, i=i: s["contact"][i]["force"][1])]
+        grasp += [exports.Column(f"grasp_force_{i}", lambda s, i=i: grasp_force(s)[i])]
+        grasp += [exports.Column(f"contact{i}_F{a}", lambda s, i=i, k=k:
+                                 s["contact"][i]["force"][k])
+                  for k, a in enumerate("xyz" if spatial else "xy")]
     return [exports.Column("load_factor", lambda s: s["load_factor"]),
             *exports.indexed_columns("tension", tendons, lambda s: s["tensions"]),
             *exports.indexed_columns("pull_in", tendons, lambda s: s["pull_ins"]),

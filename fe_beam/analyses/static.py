@@ -69,10 +69,15 @@ class StaticResult:
 
 def contact_line(entry: dict) -> str:
     """One obstacle's contact state as a report line."""
-    fx, fy = entry["force"]
+    force = ", ".join(f"{c:.6g}" for c in entry["force"])
     where = ", ".join(f"{a:.4g}..{b:.4g}" for a, b in entry["active"]) or "none"
-    return (f"obstacle '{entry['name']}': force on the rod ({fx:.6g}, {fy:.6g}) N, contact at "
-            f"x = {where} m, max penetration {entry['max_penetration']:.3g} m")
+    friction = ""
+    if "friction_force" in entry:
+        slip = ", ".join(f"{a:.4g}..{b:.4g}" for a, b in entry["slip"]) or "none"
+        friction = (f", friction ({', '.join(f'{c:.6g}' for c in entry['friction_force'])}) N, "
+                    f"slipping at x = {slip} m")
+    return (f"obstacle '{entry['name']}': force on the rod ({force}) N, contact at "
+            f"x = {where} m{friction}, max penetration {entry['max_penetration']:.3g} m")
 
 
 def _step_record(problem: BeamProblem, step: StepResult) -> dict:
@@ -138,7 +143,7 @@ def solve_static(
     files = exports.Exports(states + ([
         exports.CSVExport(out / "load_displacement.csv",
                           (SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS)
-                          + contact_columns(len(config.obstacles))),
+                          + contact_columns(len(config.obstacles), problem.spatial)),
         exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
         exports.PlotExport(lambda _: _write_plots(out, result, config)
                            if config.output.plots and result.shapes else None),
@@ -272,18 +277,22 @@ SPATIAL_CSV_COLUMNS = [
     exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 
 
-def contact_columns(count: int) -> list:
+def contact_columns(count: int, spatial: bool = False) -> list:
     """load_displacement.csv's columns of obstacle i (in the order of [[obstacles]]): the
-    force the obstacle exerts on the rod, its moment about the origin, the largest
-    penetration and line pressure."""
+    force the obstacle exerts on the rod, its moment about the origin (spatial rods: Fz and
+    the moment's three components), the largest penetration and line pressure."""
     columns = []
+    axes = ("x", "y", "z") if spatial else ("x", "y")
     for i in range(count):
         def part(record, i=i):
             return record["contact"][i]
+        columns += [exports.Column(f"contact{i}_F{a}", lambda r, p=part, k=k: p(r)["force"][k])
+                    for k, a in enumerate(axes)]
+        columns += ([exports.Column(f"contact{i}_M{a}", lambda r, p=part, k=k:
+                                    p(r)["moment"][k]) for k, a in enumerate(axes)]
+                    if spatial else
+                    [exports.Column(f"contact{i}_moment", lambda r, p=part: p(r)["moment"])])
         columns += [
-            exports.Column(f"contact{i}_Fx", lambda r, p=part: p(r)["force"][0]),
-            exports.Column(f"contact{i}_Fy", lambda r, p=part: p(r)["force"][1]),
-            exports.Column(f"contact{i}_moment", lambda r, p=part: p(r)["moment"]),
             exports.Column(f"contact{i}_max_penetration", lambda r, p=part:
                            p(r)["max_penetration"]),
             exports.Column(f"contact{i}_pressure_peak", lambda r, p=part: p(r)["pressure_peak"]),
@@ -324,6 +333,8 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
             report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
                        f"v = {tip['v']:.6g} m, w = {tip['w']:.6g} m, rotation vector "
                        f"[{rotation}] rad")
+            for entry in step.get("contact", []):
+                report.out(contact_line(entry))
             continue
         report.out(f"load factor {step['load_factor']:.4g}: tip u = {tip['u']:.6g} m, "
                    f"v = {tip['v']:.6g} m, theta = {tip['theta']:.6g} rad")

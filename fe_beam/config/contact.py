@@ -32,6 +32,8 @@ OBSTACLE_KEYS = {
     "min": Key((list,), None, "box: lowest corner [m]"),
     "max": Key((list,), None, "box: highest corner [m]"),
     "size": Key((list,), None, "box: edge lengths [m] (with center)"),
+    "friction": Key(NUMBER, 0.0, "Coulomb friction coefficient mu >= 0 (0: frictionless; "
+                    "planar rods)"),
 }
 #: the keys each shape takes besides shape and name (required ones first)
 SHAPE_KEYS = {
@@ -69,7 +71,7 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
         raise ConfigError(f"{where} shape must be one of {', '.join(OBSTACLE_SHAPES)}; got "
                           f"{shown(shape)}")
     required, optional = SHAPE_KEYS[shape]
-    allowed = set(required) | set(optional) | {"shape", "name"}
+    allowed = set(required) | set(optional) | {"shape", "name", "friction"}
     extra = [k for k in given if k not in allowed]
     if extra:
         raise ConfigError(f"{where} key {extra[0]} does not apply to shape = \"{shape}\" "
@@ -78,15 +80,20 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
     if missing:
         raise ConfigError(f"{where} shape = \"{shape}\" needs {missing[0]} (it takes "
                           f"{', '.join(required + optional)})")
+    mu = values["friction"]
+    if dim == 3 and mu != 0:
+        raise ConfigError(f"{where} friction is available for planar rods only (a spatial "
+                          "rod's contact is frictionless: leave friction out)")
     if shape == "plane":
         obstacle = _wrap(Plane, name=name, dim=dim, point=values["point"],
-                         normal=values["normal"])
+                         normal=values["normal"], friction=mu)
     elif shape == "sphere":
         obstacle = _wrap(Sphere, name=name, dim=dim, center=values["center"],
-                         radius=values["radius"])
+                         radius=values["radius"], friction=mu)
     elif shape == "cylinder":
         obstacle = _wrap(Cylinder, name=name, dim=dim, point=values["point"],
-                         radius=values["radius"], axis=values["axis"], length=values["length"])
+                         radius=values["radius"], axis=values["axis"], length=values["length"],
+                         friction=mu)
     else:
         corners = values["min"] is not None or values["max"] is not None
         centred = values["center"] is not None or values["size"] is not None
@@ -98,9 +105,10 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
         if absent:
             raise ConfigError(f"{where} {pair[0]} and {pair[1]} go together; {absent[0]} is "
                               "missing")
-        obstacle = (_wrap(Box, name=name, dim=dim, min=values["min"], max=values["max"])
+        obstacle = (_wrap(Box, name=name, dim=dim, min=values["min"], max=values["max"],
+                          friction=mu)
                     if corners else
-                    _wrap(Box.from_center, values["center"], values["size"], name, dim))
+                    _wrap(Box.from_center, values["center"], values["size"], name, dim, mu))
     check_clear_of_rod(obstacle, model.section, model.length)
     return obstacle
 
@@ -118,7 +126,8 @@ def parse_contact(config: dict, model) -> tuple[tuple, ContactSettings | None]:
                           "[[obstacles]] (double brackets), not [obstacles]")
     if not isinstance(given, list) or not given:
         raise ConfigError("[[obstacles]] must list at least one obstacle")
-    obstacles = tuple(parse_obstacle(i, o, model) for i, o in enumerate(given))
+    dim = 3 if getattr(model, "kinematics", "planar") == "spatial" else 2
+    obstacles = tuple(parse_obstacle(i, o, model, dim) for i, o in enumerate(given))
     names = [o.name for o in obstacles]
     twice = [n for n in names if names.count(n) > 1]
     if twice:

@@ -326,9 +326,6 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
             "xL = \"roller\")"
         )
     output = OutputOptions(**table(config, "output"))
-    if getattr(model, "kinematics", "planar") == "spatial" and config.get("obstacles"):
-        raise ConfigError("[[obstacles]]: contact of spatial rods ([model] kinematics = "
-                          "\"spatial\") is not available yet; contact works for planar rods")
     obstacles, contact = parse_contact(config, model)
     return StaticConfig(model, settings, stepping, jump, output, raw=config,
                         obstacles=obstacles, contact=contact)

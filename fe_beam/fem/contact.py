@@ -1,6 +1,15 @@
-"""Frictionless contact of the planar rod with rigid obstacles (docs/theory.md, Contact with
-rigid obstacles): gaps as UFL, the augmented-Lagrangian energy, and `ContactSet`, which holds
-the multipliers and measures the contact state.
+"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction for the
+planar rod (docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
+UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
+holds the multipliers and stick/slip states and measures the contact state.
+
+Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
+`fe_beam.model.obstacles.section_circumradius`); the rest below is the same.
+
+Friction (planar): the slip s of a contact point since the last accepted step
+(`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
+slipping ones with the traction `slip_traction` = +-mu p_n as virtual work (`ContactSet.work`);
+`coulomb_state` updates the stick/slip state between Newton solves.
 
 Gap. The section at x is the segment S(x) = {r + eta d : -below(x) <= eta <= above(x)} with
 r = (x + u, v) the centreline, d = (-sin theta, cos theta) the section director and
@@ -53,13 +62,16 @@ from fe_beam.model.obstacles import (
     Obstacle,
     Plane,
     Sphere,
+    distance,
+    section_circumradius,
     section_extents,
     segment_distance,
 )
 
 __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
-           "contact_pressure", "director",
-           "point_gap", "positive_part", "segment_gap"]
+           "contact_point", "contact_pressure", "director", "coulomb_state",
+           "friction_return_map", "outward_normal", "point_gap", "positive_part",
+           "segment_gap", "slip_traction", "stick_density", "tangential_slip", "tube_gap"]
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -94,7 +106,11 @@ def point_gap(obstacle: Obstacle, p):
         rel = p - centre
         if isinstance(obstacle, Cylinder) and obstacle.dim == 3:
             axis = ufl.as_vector(obstacle.axis)
-            rel = rel - ufl.dot(rel, axis) * axis
+            axial = ufl.dot(rel, axis)
+            rel = rel - axial * axis
+            if obstacle.length is not None:
+                return _finite_cylinder_gap(axial, ufl.sqrt(ufl.dot(rel, rel)),
+                                            obstacle.radius, obstacle.length)
         return ufl.sqrt(ufl.dot(rel, rel)) - obstacle.radius
     if isinstance(obstacle, Box):
         gaps = [ufl.dot(p - ufl.as_vector(point), ufl.as_vector(normal))
@@ -152,34 +168,258 @@ def active_set_density(multiplier, active, gap, k):
     return (active * (multiplier - k * gap) ** 2 - multiplier**2) / (2 * k)
 
 
+def tube_gap(obstacle: Obstacle, r, radius):
+    """Signed distance (UFL) of the spatial rod's surface, the tube of ``radius`` (the
+    section's circumradius) about the centreline point r, to the obstacle: the centreline's
+    distance minus the radius (exact for a plane, a sphere and a cylinder; a box: its
+    face-plane distance, conservative near edges and corners)."""
+    return point_gap(obstacle, r) - radius
+
+
+def _finite_cylinder_gap(rel_axial, rel_radial, radius, length):
+    """Signed distance to a solid cylinder of ``radius`` and ``length`` centred on its point:
+    q = (rho - R, |a| - l/2); min(max(q), 0) + |<q>_+| (exact inside and outside)."""
+    q_r = rel_radial - radius
+    q_a = abs(rel_axial) - length / 2
+    outside = ufl.sqrt(positive_part(q_r) ** 2 + positive_part(q_a) ** 2 + 1e-300)
+    return _smaller(_larger(q_r, q_a), 0) + outside
+
+
+def contact_point(obstacle: Obstacle, r, d, below, above):
+    """The point of the planar section segment r + eta d, eta in [-below, above], that
+    `segment_gap` measures (UFL): a plane's nearer end, a disc's nearest point, the nearer end
+    toward the box face whose plane is farthest. Friction acts there."""
+    if isinstance(obstacle, Plane):
+        return r + _plane_facing_eta(obstacle.normal, d, below, above) * d
+    if isinstance(obstacle, (Sphere, Cylinder)):
+        centre = ufl.as_vector(obstacle.center if isinstance(obstacle, Sphere)
+                               else obstacle.point)
+        eta = _larger(_smaller(ufl.dot(centre - r, d), above), -below)
+        return r + eta * d
+    if isinstance(obstacle, Box):
+        gap, eta = _box_face_select(obstacle, r, d, below, above, lambda n: _plane_facing_eta(
+            n, d, below, above))
+        return r + eta * d
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def _plane_facing_eta(normal, d, below, above):
+    """eta of the segment's end facing a plane of ``normal``: above when d.n < 0 (no
+    conditional: its derivative, sign' = 0, keeps no Zero branch)."""
+    dn = ufl.dot(d, ufl.as_vector(normal))
+    return (above - below) / 2 - (above + below) / 2 * ufl.sign(dn)
+
+
+def _box_face_select(obstacle: Box, r, d, below, above, value_of):
+    """(the largest face-plane segment gap, ``value_of(normal)`` of that face): the pairwise
+    selection weight (1 + sign(g_a - g_b)) / 2 picks the larger face."""
+    faces = obstacle.faces()
+    gap, value = None, None
+    for point, normal in faces:
+        g = _plane_segment_gap(point, normal, r, d, below, above)
+        v = value_of(normal)
+        if gap is None:
+            gap, value = g, v
+            continue
+        pick = (1 + ufl.sign(g - gap)) / 2
+        value = pick * v + (1 - pick) * value
+        gap = _larger(gap, g)
+    return gap, value
+
+
+def outward_normal(obstacle: Obstacle, p):
+    """The obstacle's unit outward normal (UFL) at the planar point p on (or near) its
+    surface: a plane's n, a disc's (p - C)/|p - C|, a box's face normal of the largest
+    face-plane distance."""
+    if isinstance(obstacle, Plane):
+        return ufl.as_vector(obstacle.normal)
+    if isinstance(obstacle, (Sphere, Cylinder)):
+        centre = ufl.as_vector(obstacle.center if isinstance(obstacle, Sphere)
+                               else obstacle.point)
+        rel = p - centre
+        return rel / ufl.sqrt(ufl.dot(rel, rel))
+    if isinstance(obstacle, Box):
+        faces = obstacle.faces()
+        gap, normal = None, None
+        for point, n in faces:
+            g = ufl.dot(p - ufl.as_vector(point), ufl.as_vector(n))
+            if gap is None:
+                gap, normal = g, ufl.as_vector(n)
+                continue
+            pick = (1 + ufl.sign(g - gap)) / 2
+            normal = pick * ufl.as_vector(n) + (1 - pick) * normal
+            gap = _larger(gap, g)
+        return normal
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def tangential_slip(obstacle: Obstacle, p, p_reference):
+    """The slip s (UFL, planar): the increment of the contact point's tangential position on
+    the obstacle from ``p_reference`` (the contact point of the last accepted state) to p,
+    along t = (-n_y, n_x) (n the outward normal, t counterclockwise): a plane (p - p0).t
+    (exact); a disc R atan2(a0 x a, a0 . a) with a = p - C (the arc length, exact); a box
+    (p - p0).t of the current face."""
+    if isinstance(obstacle, (Sphere, Cylinder)):
+        centre = ufl.as_vector(obstacle.center if isinstance(obstacle, Sphere)
+                               else obstacle.point)
+        a, a0 = p - centre, p_reference - centre
+        return obstacle.radius * compat.atan2(a0[0] * a[1] - a0[1] * a[0], ufl.dot(a0, a))
+    n = outward_normal(obstacle, p)
+    return ufl.dot(p - p_reference, ufl.as_vector([-n[1], n[0]]))
+
+
+def stick_density(multiplier, stick, slip, k):
+    """The tangential augmented-Lagrangian energy of a stuck point (stick = 1; 0 where the
+    point slips or is clear): stick/(2k) ((lambda_t - k s)^2 - lambda_t^2), its variation
+    -stick (lambda_t - k s) ds: the Uzawa updates lambda_t <- lambda_t - k s drive the slip of
+    a stuck point to zero."""
+    return stick * ((multiplier - k * slip) ** 2 - multiplier**2) / (2 * k)
+
+
+def slip_traction(direction, mu, pressure):
+    """The tangential traction of a slipping point (UFL): direction mu p_n, direction = +-1
+    (the sign of the trial traction when the point began to slip: against the slip), p_n the
+    current normal pressure. Not a potential: its virtual work p_t ds enters the residual
+    (`ContactSet.work`), so that Newton sees the bound |p_t| = mu p_n exactly."""
+    return direction * mu * pressure
+
+
+def friction_return_map(trial: np.ndarray, bound: np.ndarray):
+    """Coulomb's return map (numpy): (p_t, stuck) with p_t = trial where |trial| <= bound
+    (stick), else bound sign(trial) (slip); bound = mu p_n >= 0."""
+    trial, bound = np.asarray(trial, dtype=float), np.asarray(bound, dtype=float)
+    stuck = (np.abs(trial) <= bound) & (bound > 0)
+    return np.where(stuck, trial, np.sign(trial) * bound), stuck
+
+
+def coulomb_state(trial, slip, pressure, mu, stick, direction, slack: float = 0.0):
+    """The next stick/slip state of contact points (numpy; the primal-dual active-set step
+    of friction): (stuck, direction, traction). A point that slipped in the last solve
+    (stick 0, direction +-1) keeps slipping while it slides against its traction (slip
+    direction <= 0), else sticks; any other pressed point sticks while its trial traction
+    lambda_t - k s is within mu p_n, else slips along sign(trial). Clear points (p_n = 0):
+    neither. traction: the stuck points' trial, the slipping ones' direction mu p_n.
+    ``slack`` [m]: a slip this small along the traction still counts as sliding against it
+    (round-off of a point that stopped at the verge)."""
+    trial, slip, pressure = (np.asarray(a, dtype=float) for a in (trial, slip, pressure))
+    bound = mu * pressure
+    pressed = pressure > 0
+    was_slipping = (np.asarray(stick) < 0.5) & (np.asarray(direction) != 0)
+    keeps = was_slipping & (slip * np.asarray(direction) <= slack)
+    mapped, stuck_map = friction_return_map(trial, bound)
+    stuck = pressed & np.where(was_slipping, ~keeps, stuck_map)
+    new_direction = np.where(was_slipping & keeps, np.asarray(direction),
+                             np.where(stuck, 0.0, np.sign(trial)))
+    new_direction = np.where(pressed & ~stuck, new_direction, 0.0)
+    traction = np.where(stuck, np.clip(trial, -bound, bound), new_direction * bound)
+    return stuck, new_direction, traction
+
+
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
-    """The obstacles of one `fe_beam.fem.rod.BeamProblem`: multipliers, the energy hook
-    (``energy(problem, parts)``, like `fe_beam.fem.tendons.TendonSet`), the Uzawa update and
-    the measured contact state. Built before the problem; attached on the first ``energy``."""
+    """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
+    `fe_beam.fem.spatial_rod.SpatialRodProblem` (the tube of the section's circumradius):
+    multipliers, the energy hook (``energy(problem, parts)``, like
+    `fe_beam.fem.tendons.TendonSet`), the Uzawa and friction updates and the measured
+    contact state. Built before the problem; attached on the first ``energy``."""
 
     def __init__(self, obstacles, settings: ContactSettings | None, model):
         self.obstacles = tuple(obstacles)
         self.settings = settings or ContactSettings()
         self.model = model
+        self.spatial = getattr(model, "kinematics", "planar") == "spatial"
+        self.dim = 3 if self.spatial else 2
+        self.friction = [float(getattr(o, "friction", 0.0) or 0.0) for o in self.obstacles]
+        if self.spatial and any(self.friction):
+            raise ValueError("contact: friction of spatial rods is not available yet")
         self.tolerance = self.settings.tolerance(model.section)
         self._problem = None
 
+    @property
+    def frictional(self) -> list[int]:
+        return [i for i, mu in enumerate(self.friction) if mu > 0]
+
     # --- set-up ------------------------------------------------------------------------------
     def energy(self, problem, parts):
-        """sum over the obstacles of the augmented-Lagrangian potential of the state ``parts``."""
+        """sum over the obstacles of the augmented-Lagrangian potential of the state
+        ``parts`` (normal, and with friction the tangential one of the current stick/slip
+        state)."""
         if self._problem is not problem:
             self._attach(problem)
-        u, v, theta = parts
+        geometry = self._geometry(parts)
         total = 0
-        for i, _ in enumerate(self.obstacles):
-            gap = self._gap(i, u, v, theta)
+        for i, obstacle in enumerate(self.obstacles):
+            gap = self._gap_of(obstacle, geometry)
             total += active_set_density(self.multipliers[i], self.active[i], gap,
                                         self.k) * self.dx
             for e, measure in enumerate(self._end_measures):
                 total += active_set_density(self.end_multipliers[i][e], self.end_active[i][e],
                                             gap, self.k_end) * measure
+            if i in self._friction:
+                f = self._friction[i]
+                point = self._point_of(obstacle, geometry)
+                slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
+                total += stick_density(f["multiplier"], f["stick"], slip, self.k) * self.dx
+                for e, measure in enumerate(self._end_measures):
+                    end = f["ends"][e]
+                    slip = tangential_slip(obstacle, point, end["reference"])
+                    total += stick_density(end["multiplier"], end["stick"], slip,
+                                           self.k_end) * measure
         return total
+
+    def work(self, problem, parts, test):
+        """The virtual work of the slipping points' friction, int p_t ds with p_t = direction
+        mu p_n (`slip_traction`), p_n the fixed-active-set pressure chi (lambda - k g):
+        subtracted from the residual (a non-potential force: the tangent is not symmetric)."""
+        if self._problem is not problem:
+            self._attach(problem)
+        geometry = self._geometry(parts)
+        total = 0
+        for i, f in self._friction.items():
+            obstacle = self.obstacles[i]
+            gap = self._gap_of(obstacle, geometry)
+            point = self._point_of(obstacle, geometry)
+            pressure = self.active[i] * (self.multipliers[i] - self.k * gap)
+            slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
+            total += (1 - f["stick"]) * slip_traction(f["direction"], f["mu"], pressure) \
+                * ufl.derivative(slip, problem.w, test) * self.dx
+            for e, measure in enumerate(self._end_measures):
+                end = f["ends"][e]
+                pressure = self.end_active[i][e] * (self.end_multipliers[i][e]
+                                                    - self.k_end * gap)
+                slip = tangential_slip(obstacle, point, end["reference"])
+                total += (1 - end["stick"]) * slip_traction(end["direction"], f["mu"],
+                                                            pressure) \
+                    * ufl.derivative(slip, problem.w, test) * measure
+        return total
+
+    def _geometry(self, parts, variables: bool = False) -> dict:
+        """The rod's surface data of the state ``parts``: centreline r and (planar) the
+        rotation theta, director d and extents below/above, or (spatial) the tube radius;
+        ``variables``: r and theta as UFL variables (for the resultants' densities)."""
+        x = ufl.SpatialCoordinate(self._problem.mesh)[0]
+        if self.spatial:
+            d, _ = parts
+            r = ufl.as_vector([x + d[0], d[1], d[2]])
+            if variables:
+                r = ufl.variable(r)
+            return {"r": r, "radius": self._radius}
+        u, v, theta = parts
+        r = ufl.as_vector([x + u, v])
+        if variables:
+            r, theta = ufl.variable(r), ufl.variable(theta)
+        below, above = self._extents()
+        return {"r": r, "theta": theta, "d": director(theta), "below": below, "above": above}
+
+    def _gap_of(self, obstacle, geometry):
+        if self.spatial:
+            return tube_gap(obstacle, geometry["r"], geometry["radius"])
+        return segment_gap(obstacle, geometry["r"], geometry["d"], geometry["below"],
+                           geometry["above"])
+
+    def _point_of(self, obstacle, geometry):
+        return contact_point(obstacle, geometry["r"], geometry["d"], geometry["below"],
+                             geometry["above"])
 
     def _attach(self, problem) -> None:
         self._problem = problem
@@ -200,79 +440,166 @@ class ContactSet:
                               metadata={"quadrature_degree": degree})
         self._end_measures = (problem.ds_start, problem.ds_tip)
         # k = penalty EI_min / h_e^4 (line pressure per unit gap), k_e = k h_e at the ends
-        inertia = min(float(model.section.properties(s).I) for s in (0.0, 1.0))
+        if self.spatial:
+            props = [model.section.spatial_properties(s) for s in (0.0, 1.0)]
+            inertia = min(min(float(p.Iz), float(p.Iy)) for p in props)
+        else:
+            inertia = min(float(model.section.properties(s).I) for s in (0.0, 1.0))
         bending = float(model.material.E) * inertia
         h_e = float(problem.h_min)
         self.k_value = self.settings.penalty * bending / h_e**4
         self.k = fem.Constant(mesh, self.k_value)
         self.k_end = fem.Constant(mesh, self.k_value * h_e)
+        count = len(self.obstacles)
         self.multipliers = [fem.Function(self.space, name=f"contact_multiplier_{i}")
-                            for i in range(len(self.obstacles))]
+                            for i in range(count)]
         self.end_multipliers = [[fem.Constant(mesh, 0.0), fem.Constant(mesh, 0.0)]
-                                for _ in self.obstacles]
+                                for _ in range(count)]
         self.active = [fem.Function(self.space, name=f"contact_active_{i}")
-                       for i in range(len(self.obstacles))]
+                       for i in range(count)]
         self.end_active = [[fem.Constant(mesh, 0.0), fem.Constant(mesh, 0.0)]
-                           for _ in self.obstacles]
+                           for _ in range(count)]
+        # friction: tangential multiplier, stick flag, slip traction and the contact point of
+        # the last accepted state, at every contact point and end
+        self._friction = {}
+        for i in self.frictional:
+            self._friction[i] = {
+                "multiplier": fem.Function(self.space, name=f"friction_multiplier_{i}"),
+                "stick": fem.Function(self.space, name=f"friction_stick_{i}"),
+                "direction": fem.Function(self.space, name=f"friction_direction_{i}"),
+                "reference": [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
+                              for c in range(self.dim)],
+                "mu": fem.Constant(mesh, self.friction[i]),
+                "ends": [{"multiplier": fem.Constant(mesh, 0.0),
+                          "stick": fem.Constant(mesh, 0.0),
+                          "direction": fem.Constant(mesh, 0.0),
+                          "reference": fem.Constant(mesh, np.zeros(self.dim))}
+                         for _ in range(2)]}
         x = ufl.SpatialCoordinate(mesh)[0]
         self._s = x / model.length
-        u, v, theta, _ = problem.fields()
-        self._build_measures(problem, u, v, theta, x)
+        if self.spatial:
+            self._radius = section_circumradius(model.section, self._s, problem.section_dims,
+                                                problem.section_dims_tip)
+        self._build_measures(problem, x)
+        self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+
+    def set_friction(self, index: int, mu: float) -> None:
+        """Change the friction coefficient of obstacle ``index`` (one built with friction > 0)
+        along the load path, e.g. a frictionless approach, then friction: mu >= 0."""
+        if index not in self._friction:
+            raise ValueError(f"contact: obstacle {index} was built without friction")
+        if not mu >= 0:
+            raise ValueError(f"contact: friction must be >= 0; got {mu!r}")
+        self._friction[index]["mu"].value = float(mu)
+        self.friction[index] = float(mu)
 
     def _extents(self):
         problem = self._problem
         return section_extents(self.model.section, self._s, problem.section_dims,
                                problem.section_dims_tip)
 
-    def _gap(self, i, u, v, theta):
-        x = ufl.SpatialCoordinate(self._problem.mesh)[0]
-        below, above = self._extents()
-        r = ufl.as_vector([x + u, v])
-        return segment_gap(self.obstacles[i], r, director(theta), below, above)
-
-    def _build_measures(self, problem, u, v, theta, x) -> None:
+    def _build_measures(self, problem, x) -> None:
         """Compiled expressions at the contact points and forms of the resultants."""
-        below, above = self._extents()
-        r = ufl.variable(ufl.as_vector([x + u, v]))
-        angle = ufl.variable(theta)
-        columns = [x, r[0], r[1], -ufl.sin(theta), ufl.cos(theta), below, above]
-        resultant_forms, end_gap_forms = [], []
+        parts = problem.state_parts() if self.spatial else problem.fields()[:3]
+        geometry = self._geometry(parts, variables=True)
+        r = geometry["r"]
+        columns = [x] + [r[c] for c in range(self.dim)]
+        if self.spatial:
+            columns += [geometry["radius"]]
+        else:
+            columns += [geometry["d"][0], geometry["d"][1], geometry["below"],
+                        geometry["above"]]
+        self._base_columns = len(columns)
+        self._obstacle_columns = []
+        resultant_forms, end_forms = [], []
         for i, obstacle in enumerate(self.obstacles):
-            gap = segment_gap(obstacle, r, director(angle), below, above)
+            gap = self._gap_of(obstacle, geometry)
+            where = {"gap": len(columns)}
             columns.append(gap)
-            g_r, g_theta = ufl.diff(gap, r), ufl.diff(gap, angle)
-            moment_density = r[0] * g_r[1] - r[1] * g_r[0] + g_theta
-            densities = (g_r[0], g_r[1], moment_density)
-            # the pressure of the fixed-active-set energy: <lambda - k g>_+ once chi is
-            # consistent (converged steps)
             pressure = self.active[i] * (self.multipliers[i] - self.k * gap)
-            forms = []
-            for density in densities:
-                form = pressure * density * self.dx
-                for e, measure in enumerate(self._end_measures):
-                    form += self.end_active[i][e] * (self.end_multipliers[i][e]
-                                                     - self.k_end * gap) * density * measure
-                forms.append(fem.form(form))
+            end_pressures = [self.end_active[i][e] * (self.end_multipliers[i][e]
+                                                      - self.k_end * gap) for e in range(2)]
+            # densities (force, moment) of a traction p on the "coordinate" g (gap or slip):
+            # the force p dg/dr, the moment about the origin r x that (+ p dg/dtheta planar)
+            parts_of = [(pressure, end_pressures, gap, "normal")]
+            ends_of = {"gap": [fem.form(gap * m) for m in self._end_measures]}
+            if i in self._friction:
+                f = self._friction[i]
+                point = self._point_of(obstacle, geometry)
+                slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
+                where["slip"] = len(columns)
+                columns.append(slip)
+                where["point"] = len(columns)
+                columns += [point[c] for c in range(self.dim)]
+                traction = (f["stick"] * (f["multiplier"] - self.k * slip)
+                            + (1 - f["stick"]) * slip_traction(f["direction"], f["mu"],
+                                                               pressure))
+                end_tractions, end_slips = [], []
+                for e in range(2):
+                    end = f["ends"][e]
+                    end_slip = tangential_slip(obstacle, point, end["reference"])
+                    end_slips.append(end_slip)
+                    end_tractions.append(end["stick"] * (end["multiplier"]
+                                                        - self.k_end * end_slip)
+                                         + (1 - end["stick"]) * slip_traction(
+                                             end["direction"], f["mu"], end_pressures[e]))
+                parts_of.append((traction, end_tractions, (slip, end_slips), "friction"))
+                ends_of["slip"] = [fem.form(s * m) for s, m in zip(end_slips,
+                                                                  self._end_measures,
+                                                                  strict=True)]
+                ends_of["point"] = [[fem.form(point[c] * m) for c in range(self.dim)]
+                                    for m in self._end_measures]
+            forms = {}
+            for interior, ends, coordinate, label in parts_of:
+                inner, end_coordinates = (coordinate if isinstance(coordinate, tuple)
+                                          else (coordinate, [coordinate, coordinate]))
+                totals = None
+                for p, g, measure in [(interior, inner, self.dx)] + [
+                        (ends[e], end_coordinates[e], self._end_measures[e]) for e in range(2)]:
+                    densities = self._densities(g, geometry)
+                    terms = [p * density * measure for density in densities]
+                    totals = terms if totals is None else [a + b for a, b in
+                                                           zip(totals, terms, strict=True)]
+                forms[label] = [fem.form(t) for t in totals]
             resultant_forms.append(forms)
-            end_gap_forms.append([fem.form(gap * measure) for measure in self._end_measures])
+            end_forms.append(ends_of)
+            self._obstacle_columns.append(where)
         self._columns = len(columns)
         self._expression = compat.expression(ufl.as_vector(columns), self.points)
         self._resultant_forms = resultant_forms
-        self._end_gap_forms = end_gap_forms
+        self._end_forms = end_forms
         index_map = problem.mesh.topology.index_map(1)
         self._owned_cells = np.arange(index_map.size_local, dtype=np.int32)
         self._dofs = compat.cell_dofs(self.space)[: len(self._owned_cells)].ravel()
 
+    def _densities(self, g, geometry) -> list:
+        """Force and moment densities per unit traction on the coordinate g: dg/dr and
+        r x dg/dr (+ dg/dtheta planar): dim + (1 planar | 3 spatial) entries."""
+        r = geometry["r"]
+        g_r = ufl.diff(g, r)
+        if self.spatial:
+            moment = ufl.cross(r, g_r)
+            return [g_r[c] for c in range(3)] + [moment[c] for c in range(3)]
+        return [g_r[0], g_r[1], r[0] * g_r[1] - r[1] * g_r[0] + ufl.diff(g, geometry["theta"])]
+
     # --- state -------------------------------------------------------------------------------
     def _copy(self):
+        """The multipliers and flags (the state a solve starts from)."""
+        friction = {i: {"multiplier": f["multiplier"].x.array.copy(),
+                        "stick": f["stick"].x.array.copy(),
+                        "direction": f["direction"].x.array.copy(),
+                        "ends": [{n: float(end[n].value) for n in ("multiplier", "stick",
+                                                                   "direction")}
+                                 for end in f["ends"]]}
+                    for i, f in self._friction.items()}
         return ([m.x.array.copy() for m in self.multipliers],
-                [[float(c.value) for c in ends] for ends in self.end_multipliers])
+                [[float(c.value) for c in ends] for ends in self.end_multipliers], friction)
 
     def _set(self, copy) -> None:
         """Multipliers from a copy, and the active set they imply (lambda > 0)."""
-        interior, ends = copy
+        interior, ends, friction = copy
         for function, active, values in zip(self.multipliers, self.active, interior,
                                             strict=True):
             function.x.array[:] = values
@@ -284,14 +611,48 @@ class ContactSet:
             for constant, flag, value in zip(constants, flags, values, strict=True):
                 constant.value = value
                 flag.value = 1.0 if value > 0 else 0.0
+        for i, f in self._friction.items():
+            for name in ("multiplier", "stick", "direction"):
+                f[name].x.array[:] = friction[i][name]
+                f[name].x.scatter_forward()
+            for end, values in zip(f["ends"], friction[i]["ends"], strict=True):
+                for name in ("multiplier", "stick", "direction"):
+                    end[name].value = values[name]
+
+    def _set_references(self, state: dict | None) -> None:
+        """The friction reference points: the contact points of ``state`` (None: the
+        undeformed rod's)."""
+        if not self._friction:
+            return
+        for i, f in self._friction.items():
+            if state is None:
+                # the undeformed contact point (x, +-extent): the current (zero) state's
+                values = self.evaluate(friction=False)
+                where = self._obstacle_columns[i]["point"]
+                points = values["raw"][:, where:where + self.dim]
+                ends = [self._assemble_end_point(i, e) for e in range(2)]
+            else:
+                points = state["friction"][i]["point"]
+                ends = state["friction"][i]["end_point"]
+            for c, function in enumerate(f["reference"]):
+                function.x.array[self._dofs] = points[:, c]
+                function.x.scatter_forward()
+            for end, point in zip(f["ends"], ends, strict=True):
+                end["reference"].value[:] = point
+
+    def _assemble_end_point(self, i, e) -> np.ndarray:
+        return np.array([global_sum(self._problem.comm, fem.assemble_scalar(form))
+                         for form in self._end_forms[i]["point"][e]])
 
     def restore(self) -> None:
         """Multipliers back to those of the last accepted state (`commit`)."""
         self._set(self._committed)
 
     def commit(self) -> None:
-        """The current state is accepted: its pressures start the next solve (warm start) and
-        its surface positions are the reference of the tunnelling check."""
+        """The current state is accepted: its pressures and friction tractions start the next
+        solve (warm start), its contact points are the friction's reference (the slip of the
+        next step is measured from them) and its surface positions the reference of the
+        tunnelling check."""
         state = self.evaluate()
         interior = []
         for i, _ in enumerate(self.obstacles):
@@ -299,11 +660,28 @@ class ContactSet:
             values[self._dofs] = state["pressure"][i]
             interior.append(values)
         ends = [list(state["end_pressure"][i]) for i in range(len(self.obstacles))]
-        self._committed = (interior, ends)  # ghosts: set by `_set`'s scatter
+        friction = {}
+        for i, f in self._friction.items():
+            entry = state["friction"][i]
+            copies = {}
+            for name, values in (("multiplier", entry["traction"]),
+                                 ("stick", entry["stuck"].astype(float)),
+                                 ("direction", entry["direction"])):
+                array = f[name].x.array.copy()
+                array[self._dofs] = values
+                copies[name] = array
+            copies["ends"] = [{"multiplier": float(entry["end_traction"][e]),
+                               "stick": float(entry["end_stuck"][e]),
+                               "direction": float(entry["end_direction"][e])}
+                              for e in range(2)]
+            friction[i] = copies
+        self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
+        self._set_references(state)
         self._positions = state["local"]
 
     def reset(self) -> None:
-        """No contact: zero multipliers (the unloaded state)."""
+        """No contact: zero multipliers and friction states, the configured friction
+        coefficients (the unloaded state)."""
         if self._problem is None:
             return
         for function in self.multipliers + self.active:
@@ -311,42 +689,112 @@ class ContactSet:
         for ends in self.end_multipliers + self.end_active:
             for constant in ends:
                 constant.value = 0.0
+        for i, f in self._friction.items():  # the configured coefficient again
+            self.friction[i] = float(self.obstacles[i].friction)
+            f["mu"].value = self.friction[i]
+            for name in ("multiplier", "stick", "direction"):
+                f[name].x.array[:] = 0.0
+            for end in f["ends"]:
+                for name in ("multiplier", "stick", "direction"):
+                    end[name].value = 0.0
+        self._set_references(None)
         self._committed = self._copy()
         self._positions = None
 
-    def evaluate(self) -> dict:
+    def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and
         pressures at the owned contact points (``gap``, ``pressure``: lists of arrays, in the
         order of the quadrature space's dofs), at the ends (``end_gap``, ``end_pressure``:
-        [x = 0, x = L]), and the local point data (``local``: x, r, d, below, above)."""
+        [x = 0, x = L]), the local point data (``local``: x, r and d, below, above (planar)
+        or radius (spatial)), ``active_changes`` (points whose active set disagrees with
+        their pressure) and, per obstacle with friction, ``friction[i]``: the slip, the
+        return-mapped traction and stick flag, the contact points (interior and ends), and
+        ``friction_changes`` (points whose stick/slip state or slip traction is not yet
+        consistent, or stuck points that slipped more than the tolerance)."""
         values = compat.evaluate_expression(self._expression, self._problem.mesh,
                                             self._owned_cells)
         values = np.asarray(values).reshape(-1, self._columns)
+        comm = self._problem.comm
         k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
         gaps, pressures, end_gaps, end_pressures = [], [], [], []
         changes = 0  # points whose active set disagrees with their pressure
         tiny = 1e-6 * k * self.tolerance  # pressures below it are round-off
         for i, _ in enumerate(self.obstacles):
-            gap = values[:, 7 + i]
+            gap = values[:, self._obstacle_columns[i]["gap"]]
             trial = self.multipliers[i].x.array[self._dofs] - k * gap
             chi = self.active[i].x.array[self._dofs] > 0.5
             changes += int(np.count_nonzero((chi & (trial < -tiny)) | (~chi & (trial > tiny))))
             gaps.append(gap)
             pressures.append(np.maximum(trial, 0.0))
-            ends = np.array([global_sum(self._problem.comm, fem.assemble_scalar(form))
-                             for form in self._end_gap_forms[i]])
+            ends = np.array([global_sum(comm, fem.assemble_scalar(form))
+                             for form in self._end_forms[i]["gap"]])
             end_gaps.append(ends)
             trial = np.array([float(c.value) for c in self.end_multipliers[i]]) - k_end * ends
             chi = np.array([float(c.value) for c in self.end_active[i]]) > 0.5
-            if self._problem.comm.rank == 0:  # the ends are global numbers: counted once
+            if comm.rank == 0:  # the ends are global numbers: counted once
                 changes += int(np.count_nonzero((chi & (trial < -tiny * float(
                     self._problem.h_min))) | (~chi & (trial > tiny * float(self._problem.h_min)))))
             end_pressures.append(np.maximum(trial, 0.0))
-        local = {"x": values[:, 0], "r": values[:, 1:3], "d": values[:, 3:5],
-                 "below": values[:, 5], "above": values[:, 6]}
-        changes = int(self._problem.comm.allreduce(changes, op=MPI.SUM))
-        return {"gap": gaps, "pressure": pressures, "end_gap": end_gaps,
-                "end_pressure": end_pressures, "local": local, "active_changes": changes}
+        local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
+        if self.spatial:
+            local["radius"] = values[:, 4]
+        else:
+            local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
+        changes = int(comm.allreduce(changes, op=MPI.SUM))
+        state = {"gap": gaps, "pressure": pressures, "end_gap": end_gaps,
+                 "end_pressure": end_pressures, "local": local, "active_changes": changes,
+                 "raw": values, "friction": {}, "friction_changes": 0}
+        if friction and self._friction:
+            self._evaluate_friction(state, values)
+        return state
+
+    def _evaluate_friction(self, state, values) -> None:
+        comm = self._problem.comm
+        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        tolerance = self.tolerance
+        changes = 0
+        for i, f in self._friction.items():
+            mu, where = float(f["mu"].value), self._obstacle_columns[i]
+            slip = values[:, where["slip"]]
+            points = values[:, where["point"]:where["point"] + self.dim]
+            stick = f["stick"].x.array[self._dofs]
+            direction = f["direction"].x.array[self._dofs]
+            trial = f["multiplier"].x.array[self._dofs] - k * slip
+            stuck, new_direction, traction = coulomb_state(
+                trial, slip, state["pressure"][i], mu, stick, direction, 1e-3 * tolerance)
+            changes += self._friction_changes(stick, direction, stuck, new_direction, slip,
+                                              state["pressure"][i], tolerance)
+            end_slip = np.array([global_sum(comm, fem.assemble_scalar(form))
+                                 for form in self._end_forms[i]["slip"]])
+            end_point = [self._assemble_end_point(i, e) for e in range(2)]
+            ends = f["ends"]
+            end_stick = np.array([float(e["stick"].value) for e in ends])
+            end_direction = np.array([float(e["direction"].value) for e in ends])
+            end_trial = np.array([float(e["multiplier"].value) for e in ends]) - k_end * end_slip
+            end_stuck, end_new_direction, end_traction = coulomb_state(
+                end_trial, end_slip, state["end_pressure"][i], mu, end_stick, end_direction,
+                1e-3 * tolerance)
+            if comm.rank == 0:  # the ends are global numbers: counted once
+                changes += self._friction_changes(end_stick, end_direction, end_stuck,
+                                                  end_new_direction, end_slip,
+                                                  state["end_pressure"][i], tolerance)
+            state["friction"][i] = {"slip": slip, "point": points, "traction": traction,
+                                    "stuck": stuck, "direction": new_direction,
+                                    "end_slip": end_slip, "end_point": end_point,
+                                    "end_traction": end_traction, "end_stuck": end_stuck,
+                                    "end_direction": end_new_direction}
+        state["friction_changes"] = int(comm.allreduce(changes, op=MPI.SUM))
+
+    @staticmethod
+    def _friction_changes(stick, direction, stuck, new_direction, slip, pressure,
+                          tolerance) -> int:
+        """Points whose stick/slip state must change, or stuck points that slipped more than
+        the tolerance (their multiplier needs an Uzawa update)."""
+        used_stuck = np.asarray(stick) > 0.5
+        bad = (used_stuck != stuck) | ((~stuck) & (np.asarray(direction) != new_direction)
+                                       & (pressure > 0))
+        bad |= stuck & (np.abs(slip) > tolerance)
+        return int(np.count_nonzero(bad))
 
     def max_penetration(self, state: dict | None = None) -> float:
         """max over all obstacles, contact points and ends of <-g>_+ (global) [m]."""
@@ -370,7 +818,8 @@ class ContactSet:
 
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
         """The active set chi <- [lambda - k g > 0] at every contact point and end and, with
-        ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+."""
+        ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+; with friction the
+        stick/slip state (`coulomb_state`) and, with ``multipliers``, lambda_t <- p_t."""
         state = state or self.evaluate()
         k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
         for i, function in enumerate(self.multipliers):
@@ -387,6 +836,19 @@ class ContactSet:
                 flag.value = 1.0 if trial > 0 else 0.0
                 if multipliers:
                     constant.value = float(state["end_pressure"][i][e])
+        for i, f in self._friction.items():
+            entry = state["friction"][i]
+            names = [("stick", entry["stuck"].astype(float)), ("direction", entry["direction"])]
+            if multipliers:
+                names.append(("multiplier", entry["traction"]))
+            for name, values in names:
+                f[name].x.array[self._dofs] = values
+                f[name].x.scatter_forward()
+            for e, end in enumerate(f["ends"]):
+                end["stick"].value = float(entry["end_stuck"][e])
+                end["direction"].value = float(entry["end_direction"][e])
+                if multipliers:
+                    end["multiplier"].value = float(entry["end_traction"][e])
 
     def tunnelled(self) -> str | None:
         """Why the step from the last accepted state (the undeformed rod before the first) to
@@ -395,15 +857,17 @@ class ContactSet:
         through a thin one), sampled finer than half the thinnest section or box. Local (the
         caller agrees over ranks); a false alarm (a path cutting a disc's chord) only cuts the
         step back."""
-        after = self.evaluate()["local"]
+        after = self.evaluate(friction=False)["local"]
         before = self._positions
         if before is None:  # the undeformed rod
-            r = np.column_stack([after["x"], np.zeros_like(after["x"])])
+            r = np.zeros((len(after["x"]), self.dim))
+            r[:, 0] = after["x"]
             d = np.tile([0.0, 1.0], (len(r), 1))
             before = {"r": r, "d": d}
         if not len(after["x"]):
             return None
-        thickness = float(np.min(after["below"] + after["above"]))
+        thickness = float(np.min(2 * after["radius"] if self.spatial
+                                 else after["below"] + after["above"]))
         thinnest = min([thickness] + [min(np.array(o.max) - np.array(o.min))
                                       for o in self.obstacles if isinstance(o, Box)])
         moved = float(np.max(np.linalg.norm(after["r"] - before["r"], axis=1)))
@@ -412,9 +876,12 @@ class ContactSet:
         for obstacle in self.obstacles:
             for t in np.linspace(0.0, 1.0, samples + 1)[1:-1]:
                 r = (1 - t) * before["r"] + t * after["r"]
-                d = (1 - t) * before["d"] + t * after["d"]
-                d = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
-                gap = segment_distance(obstacle, r, d, after["below"], after["above"])
+                if self.spatial:
+                    gap = distance(obstacle, r) - after["radius"]
+                else:
+                    d = (1 - t) * before["d"] + t * after["d"]
+                    d = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+                    gap = segment_distance(obstacle, r, d, after["below"], after["above"])
                 if np.min(gap) < -depth:
                     j = int(np.argmin(gap))
                     return (f"contact: the load step moved the rod through obstacle "
@@ -422,40 +889,71 @@ class ContactSet:
         return None
 
     def summary(self, state: dict | None = None) -> list[dict]:
-        """Per obstacle, in the order given: {name, force [Fx, Fy] (the obstacle on the rod,
-        global axes) [N], moment (about the origin, counterclockwise) [N m], active (contact
-        intervals [[x0, x1], ...] in the reference x) [m], max_penetration [m],
-        pressure_peak (largest line pressure at the contact points) [N/m], end_forces
-        (the point forces at x = 0 and x = L) [N]}. Collective."""
+        """Per obstacle, in the order given: {name, force (the obstacle on the rod, global
+        axes: [Fx, Fy] planar, [Fx, Fy, Fz] spatial) [N], moment (about the origin: planar
+        the counterclockwise scalar, spatial [Mx, My, Mz]) [N m], active (contact intervals
+        [[x0, x1], ...] in the reference x) [m], max_penetration [m], pressure_peak (largest
+        line pressure at the contact points) [N/m], end_forces (the normal point forces at
+        x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
+        force) [N], slip (intervals of slipping points) [m] and end_friction (the tangential
+        point forces at the ends, along t = (-n_y, n_x)) [N]. Collective."""
         state = state or self.evaluate()
         comm = self._problem.comm
         x_all = np.concatenate(comm.allgather(state["local"]["x"]))
         order = np.argsort(x_all, kind="stable")
         result = []
         for i, obstacle in enumerate(self.obstacles):
-            resultants = [global_sum(comm, fem.assemble_scalar(form))
-                          for form in self._resultant_forms[i]]
+            forms = self._resultant_forms[i]
+            resultants = np.array([global_sum(comm, fem.assemble_scalar(form))
+                                   for form in forms["normal"]])
+            friction = None
+            if "friction" in forms:
+                friction = np.array([global_sum(comm, fem.assemble_scalar(form))
+                                     for form in forms["friction"]])
+                resultants = resultants + friction
             pressure = np.concatenate(comm.allgather(state["pressure"][i]))
             gap = np.concatenate(comm.allgather(state["gap"][i]))
             ends = state["end_pressure"][i]
             peak = float(np.max(pressure)) if len(pressure) else 0.0
             end_gap = state["end_gap"][i]
+            x_line = np.concatenate([[0.0], x_all[order], [self.model.length]])
+            touching = np.concatenate([[end_gap[0] <= self.tolerance],
+                                       gap[order] <= self.tolerance,
+                                       [end_gap[1] <= self.tolerance]])
             active = _intervals(
-                np.concatenate([[0.0], x_all[order], [self.model.length]]),
-                np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
-                np.concatenate([[end_gap[0] <= self.tolerance], gap[order] <= self.tolerance,
-                                [end_gap[1] <= self.tolerance]]))
+                x_line, np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
+                touching)
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
                               float(np.max(-state["end_gap"][i])))
-            result.append({
+            dim = self.dim
+            entry = {
                 "name": obstacle.name,
-                "force": [float(resultants[0]), float(resultants[1])],
-                "moment": float(resultants[2]),
+                "force": [float(c) for c in resultants[:dim]],
+                "moment": ([float(c) for c in resultants[dim:]] if self.spatial
+                           else float(resultants[dim])),
                 "active": active,
                 "max_penetration": penetration,
                 "pressure_peak": peak,
                 "end_forces": [float(e) for e in ends],
-            })
+            }
+            if friction is not None:
+                f, flags = state["friction"][i], self._friction[i]
+                # the stick/slip state of the last solve (committed with an accepted step)
+                used = (flags["stick"].x.array[self._dofs] < 0.5) \
+                    & (flags["direction"].x.array[self._dofs] != 0)
+                slipping = (pressure > 0) & np.concatenate(comm.allgather(used))
+                end_slipping = (np.asarray(ends) > 0) & np.array(
+                    [float(e["stick"].value) < 0.5 and float(e["direction"].value) != 0
+                     for e in flags["ends"]])
+                entry["friction_force"] = [float(c) for c in friction[:dim]]
+                # slipping runs joined across touching points that carry no pressure
+                pressed = np.concatenate([[ends[0] > 0], pressure[order] > 0.0,
+                                          [ends[1] > 0]])
+                entry["slip"] = _intervals(
+                    x_line, np.concatenate([[end_slipping[0]], slipping[order],
+                                            [end_slipping[1]]]), touching & ~pressed)
+                entry["end_friction"] = [float(t) for t in f["end_traction"]]
+            result.append(entry)
         return result
 
 

@@ -247,10 +247,13 @@ class BeamProblem:
         comm: MPI.Comm = MPI.COMM_WORLD,
         breakpoints: tuple[float, ...] = (),
         extra_energy=None,
+        extra_work=None,
     ):
         """``breakpoints``: interior x that must be mesh vertices (tendon entries, anchors,
         kinks of tendon paths); ``extra_energy(problem, (u, v, theta))`` returns a UFL form
-        added to the stored energy (e.g. tendons)."""
+        added to the stored energy (e.g. tendons); ``extra_work(problem, (u, v, theta),
+        test)`` the virtual work of non-potential forces on the rod (e.g. slipping friction),
+        subtracted from the residual."""
         self.model = model
         # every point force sits on a mesh vertex (its work is a vertex integral)
         breakpoints = tuple(breakpoints) + tuple(f[0] for f in model.loads.point_forces)
@@ -271,6 +274,7 @@ class BeamProblem:
         self._point_force_measures()
         self.bcs, self._prescribed = self._dirichlet_conditions()
         self.extra_energy = extra_energy
+        self.extra_work = extra_work
         self.residual = self._residual()
 
     # --- set-up pipeline -------------------------------------------------------------------
@@ -515,7 +519,15 @@ class BeamProblem:
         residual = ufl.derivative(self.potential(), self.w, test)
         if self.model.loads.follower:
             residual -= self.follower_virtual_work(self.fields()[:3], test)
+        if self.extra_work is not None:
+            residual -= self.extra_work(self, self.fields()[:3], test)
         return residual
+
+    @property
+    def conservative(self) -> bool:
+        """The forces derive from a potential (a symmetric tangent): no follower force, no
+        non-potential extra work (slipping friction)."""
+        return not (self.model.loads.follower or self.extra_work is not None)
 
     def set_load_factor(self, value: float) -> None:
         """Scale every load and every prescribed end value by ``value``."""

@@ -145,9 +145,10 @@ class SpatialRodProblem(BeamProblem):
     components = SPATIAL_COMPONENTS
     spatial = True
 
-    def __init__(self, model: SpatialRodModel, comm, breakpoints=(), extra_energy=None):
+    def __init__(self, model: SpatialRodModel, comm, breakpoints=(), extra_energy=None,
+                 extra_work=None):
         self.reference_tip = np.zeros(3)
-        super().__init__(model, comm, breakpoints, extra_energy)
+        super().__init__(model, comm, breakpoints, extra_energy, extra_work)
         if self.curved:
             self._set_stress_free_guess()
 
@@ -324,13 +325,16 @@ class SpatialRodProblem(BeamProblem):
         loads = self.model.loads
         if any(loads.tip_moment) or loads.follower:
             residual -= self.nonconservative_work(self.state_parts(), test)
+        if self.extra_work is not None:
+            residual -= self.extra_work(self, self.state_parts(), test)
         return residual
 
     @property
     def conservative(self) -> bool:
         """The loads derive from a potential (a symmetric tangent): no tip moment, no
         follower force."""
-        return not (any(self.model.loads.tip_moment) or self.model.loads.follower)
+        return not (any(self.model.loads.tip_moment) or self.model.loads.follower
+                    or self.extra_work is not None)
 
     def multiplier_dofs(self) -> np.ndarray:
         parts = [np.asarray(compat.sub_space_collapsed(self.space, 6 + i)[1])

@@ -29,7 +29,8 @@ import numpy as np
 from fe_beam.errors import ConfigError
 
 __all__ = ["OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Obstacle", "Plane",
-           "Sphere", "check_clear_of_rod", "distance", "section_extents", "segment_distance"]
+           "Sphere", "check_clear_of_rod", "distance", "section_circumradius", "section_extents",
+           "segment_distance"]
 
 
 def _vector(name: str, value, dim: int, where: str) -> tuple[float, ...]:
@@ -55,6 +56,7 @@ class Obstacle:
 
     name: str = ""
     dim: int = 2
+    friction: float = 0.0
 
     @property
     def where(self) -> str:
@@ -63,6 +65,12 @@ class Obstacle:
     def __post_init__(self):
         if self.dim not in (2, 3):
             raise ValueError(f"{self.where} dimension must be 2 or 3; got {self.dim!r}")
+        mu = self.friction
+        if isinstance(mu, bool) or not isinstance(mu, (int, float)) or not (
+                math.isfinite(mu) and mu >= 0):
+            raise ValueError(f"{self.where} friction must be a number >= 0 (the Coulomb "
+                             f"coefficient mu; 0: frictionless); got {mu!r}")
+        object.__setattr__(self, "friction", float(mu))
 
 
 @dataclass(frozen=True)
@@ -154,13 +162,15 @@ class Box(Obstacle):
         object.__setattr__(self, "max", high)
 
     @classmethod
-    def from_center(cls, center, size, name: str = "", dim: int = 2) -> Box:
+    def from_center(cls, center, size, name: str = "", dim: int = 2,
+                    friction: float = 0.0) -> Box:
         where = f"[[obstacles]] {name!r}:" if name else "[[obstacles]]"
         c = np.array(_vector("center", center, dim, where))
         s = np.array(_vector("size", size, dim, where))
         if not np.all(s > 0):
             raise ValueError(f"{where} size must be > 0 in every component; got {list(size)!r}")
-        return cls(name=name, dim=dim, min=tuple(c - s / 2), max=tuple(c + s / 2))
+        return cls(name=name, dim=dim, min=tuple(c - s / 2), max=tuple(c + s / 2),
+                   friction=friction)
 
     @property
     def center(self) -> tuple:
@@ -240,6 +250,28 @@ def section_extents(section, s, dims: dict | None = None, dims_tip: dict | None 
     return half, half
 
 
+def section_circumradius(section, s, dims: dict | None = None, dims_tip: dict | None = None):
+    """The radius of the spatial rod's contact tube at s = x / L: the section's circumradius
+    about the centroid (floats, arrays or UFL): circle and tube d/2, rectangle the
+    half-diagonal sqrt(b^2 + h^2)/2, t-section the farthest corner, custom sqrt(y_half^2 +
+    z_half^2) of its h and b (b defaulting to h)."""
+    base = section.dims if dims is None else dims
+    tip = section.dims_tip if dims_tip is None else dims_tip
+    at = {n: v + (tip[n] - v) * s if n in tip else v for n, v in base.items()}
+    if section.shape in ("circle", "tube"):
+        return at["d"] / 2
+    if section.shape == "rectangle":
+        return (at["b"] ** 2 + at["h"] ** 2) ** 0.5 / 2
+    if section.shape == "t-section":
+        below, above = section_extents(section, s, dims, dims_tip)
+        flange = ((at["b"] / 2) ** 2 + above**2) ** 0.5
+        web = ((at["tw"] / 2) ** 2 + below**2) ** 0.5
+        return (flange + web + abs(flange - web)) / 2
+    h = section.properties(s, dims, dims_tip).h
+    b = at.get("b", h)
+    return ((h / 2) ** 2 + (b / 2) ** 2) ** 0.5
+
+
 def distance(obstacle: Obstacle, points: np.ndarray) -> np.ndarray:
     """Signed distance of points (n, dim) to the obstacle (>= 0 outside)."""
     p = np.atleast_2d(np.asarray(points, dtype=float))
@@ -251,7 +283,13 @@ def distance(obstacle: Obstacle, points: np.ndarray) -> np.ndarray:
         rel = p - np.array(obstacle.point)
         if obstacle.dim == 3:
             axis = np.array(obstacle.axis)
-            rel = rel - np.outer(rel @ axis, axis)
+            axial = rel @ axis
+            rel = rel - np.outer(axial, axis)
+            if obstacle.length is not None:  # a solid cylinder centred on its point
+                q_r = np.linalg.norm(rel, axis=1) - obstacle.radius
+                q_a = np.abs(axial) - obstacle.length / 2
+                return (np.minimum(np.maximum(q_r, q_a), 0.0)
+                        + np.hypot(np.maximum(q_r, 0.0), np.maximum(q_a, 0.0)))
         return np.linalg.norm(rel, axis=1) - obstacle.radius
     if isinstance(obstacle, Box):
         rel = np.abs(p - np.array(obstacle.center)) - np.array(obstacle.half)
@@ -291,10 +329,13 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
     x = np.linspace(0.0, length, samples)
     r = np.column_stack([x, np.zeros_like(x)] + ([np.zeros_like(x)] if obstacle.dim == 3
                                                   else []))
-    d = np.zeros_like(r)
-    d[:, 1] = 1.0
-    below, above = section_extents(section, x / length)
-    gap = segment_distance(obstacle, r, d, below, above)
+    if obstacle.dim == 3:  # the spatial rod's contact tube
+        gap = distance(obstacle, r) - section_circumradius(section, x / length)
+    else:
+        d = np.zeros_like(r)
+        d[:, 1] = 1.0
+        below, above = section_extents(section, x / length)
+        gap = segment_distance(obstacle, r, d, below, above)
     worst = int(np.argmin(gap))
     if not gap[worst] > 0:
         raise ConfigError(

@@ -2,7 +2,9 @@
 active set, then active-set updates until the set is consistent with the pressures, and Uzawa
 updates of the augmented-Lagrangian multipliers (`fe_beam.fem.contact.ContactSet.update`)
 until the largest penetration, and the largest gap of a pressed point (complementarity
-p g = 0), are below the tolerance. Same interface as
+p g = 0), are below the tolerance; with friction also until the stick/slip state agrees with
+Coulomb's return map, every slip traction is mu p_n of the converged pressure and no stuck point
+slipped more than the tolerance. Same interface as
 `fe_beam.solvers.newton.SNESSolver`, so the one continuation engine
 (`fe_beam.solvers.continuation.Continuation`) still does the load stepping and the cut-backs: a
 step whose penetration stays above the tolerance after ``max_updates`` updates raises
@@ -67,8 +69,10 @@ class ContactSolver:
                 penetration = contact.max_penetration(state)
                 separation = contact.max_separation(state)
                 changes = state["active_changes"]
+                sliding = state["friction_changes"]
                 self.updates, self.penetration = update, penetration
-                if penetration <= tolerance and separation <= tolerance and changes == 0:
+                if (penetration <= tolerance and separation <= tolerance and changes == 0
+                        and sliding == 0):
                     self.linear_iterations = linear
                     return iterations
                 if update == limit:
@@ -83,6 +87,10 @@ class ContactSolver:
         if changes:
             raise SolveFailed(f"contact: the active set still changed at {changes} contact "
                               f"points after {limit} updates")
+        if sliding:
+            raise SolveFailed(f"contact: the stick/slip state or the friction traction was "
+                              f"still inconsistent at {sliding} contact points after {limit} "
+                              "updates")
         if penetration > tolerance:
             raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
                               f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")

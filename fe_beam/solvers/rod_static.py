@@ -58,6 +58,8 @@ class StaticContinuation:
             comm,
             breakpoints=self.tendons.breakpoints if self.tendons else (),
             extra_energy=_summed(energies),
+            extra_work=self.contact.work if self.contact is not None and
+            self.contact.frictional else None,
         )
         self.snes = SNESSolver(
             NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
@@ -118,6 +120,31 @@ class StaticContinuation:
                 on_converged(step)
 
         engine.load_control(target, stepping, on_converged=converged, progress=progress,
+                            label=label)
+
+    def advance_along(self, set_parameter, start: float, target: float, stepping,
+                      on_converged=None, label: str = "parameter") -> None:
+        """Load-step another parameter (``set_parameter(value)``, e.g. one load's constant or
+        the prescribed end values' factor, at the current load factor) from ``start`` to
+        ``target``: a non-proportional load path after ``advance``, with the same step checks
+        and the contact state committed at every accepted step (friction is load-path
+        dependent: pressing first, then pulling). Raises `LoadSteppingFailed` with the last
+        converged state kept."""
+        adapter = NonlinearParameterProblem(self.solver, set_parameter,
+                                            check_step=self._step_check(),
+                                            metric=self._metric(), parameter=start)
+        adapter.arc_length_ready = False
+        engine = Continuation(adapter, start)
+
+        def converged(step: StepResult) -> None:
+            if self.contact is not None:
+                self.contact.commit()
+            if self._trial_range is not None:
+                self.watch.observe(self._trial_range)
+            if on_converged is not None:
+                on_converged(step)
+
+        engine.load_control(target, stepping, on_converged=converged, progress=False,
                             label=label)
 
     def parameter_problem(self, parameter: str = "load_factor", tendon: int = 0
@@ -213,12 +240,13 @@ class StaticContinuation:
         self.snes.destroy()
 
 
-def build_problem(model, comm, breakpoints=(), extra_energy=None):
+def build_problem(model, comm, breakpoints=(), extra_energy=None, extra_work=None):
     """The finite-element problem of a rod model: `SpatialRodProblem` for a spatial model
     (``[model] kinematics = "spatial"``), `BeamProblem` for a planar one."""
     kind = SpatialRodProblem if getattr(model, "kinematics", "planar") == "spatial" \
         else BeamProblem
-    return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy)
+    return kind(model, comm, breakpoints=breakpoints, extra_energy=extra_energy,
+                extra_work=extra_work)
 
 
 def _summed(energies):
