@@ -331,7 +331,8 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
             axis.set_xlabel("x + u [m]")
             axis.set_ylabel(text_y)
             axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)"
-                           + (f" ({text_y[0]} view)" if config.spatial else ""), fontsize=9)
+                           + (f" ({text_y[0]} view)" if getattr(config, "spatial", False) else ""),
+                             fontsize=9)
             axis.grid(alpha=0.3)
         axes[0][-1].legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
