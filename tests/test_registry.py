@@ -40,6 +40,7 @@ EXAMPLE_COMMANDS = {
     "spatial_finger.toml": {"finger": tuple},
     "bathe_bolourchi.toml": {"static": StaticConfig},
     "lateral_torsional.toml": {"buckling": tuple, "path": tuple},
+    "spatial_tumbling.toml": {"dynamic": DynamicConfig},
     "section_laws/finger_dragon_skin_30.toml": {"solid": SolidConfig, "compare": CompareConfig},
     "section_laws/finger_neo_hookean.toml": {"solid": SolidConfig, "compare": CompareConfig},
 }

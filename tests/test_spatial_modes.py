@@ -200,7 +200,7 @@ def test_modes_command_names_each_family(tmp_path, capsys):
 def test_other_commands_still_refuse_spatial_rods(tmp_path, capsys):
     path = tmp_path / "c.toml"
     path.write_text(dump_toml(config(0.02, 0.05)))
-    assert main(["solid", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "dynamic" in err and "modes" in err and err.count("\n") == 1
 

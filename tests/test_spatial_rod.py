@@ -327,7 +327,7 @@ def test_static_command_writes_the_tip_frame(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("changes, command, message", [
-    ({}, "solid", "does not run spatial rods yet"),
+    ({}, "design", "does not run spatial rods yet"),
     ({"model.kinematics": "3d"}, "static", "kinematics must be"),
     ({"model.law": "hyperelastic"}, "static", "not available for kinematics"),
     ({"loads.tip_force": [1.0, 2.0, 3.0, 4.0]}, "static", "tip_force must be a vector"),
