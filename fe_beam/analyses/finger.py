@@ -31,7 +31,7 @@ from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     with_defaults,
 )
 from fe_beam.errors import ConfigError
-from fe_beam.exports.outputs import atomic_write_json, virtual_display
+from fe_beam.exports.outputs import atomic_write_json, draw_obstacles, virtual_display
 from fe_beam.exports.plotting import legend_inside
 from fe_beam.exports.spatial import plot_spatial_load_displacement, plot_spatial_shapes
 from fe_beam.model.studies import StaticConfig
@@ -277,6 +277,9 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         for (_, shape), step in shapes:
             axis.plot(shape["x"] + shape["u"], shape["v"],
                       label=f"tension {step['tensions'][0]:.3g} N")
+        if config.obstacles:
+            draw_obstacles(axis, config.obstacles, [s for s, _ in shapes],
+                           config.model.length)
         axis.set_aspect("equal", adjustable="datalim")
         axis.set_xlabel("x [m]")
         axis.set_ylabel("y [m]")
@@ -334,7 +337,8 @@ def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -
     shapes = [(f"tension {step['tensions'][0]:.3g} N", shape) for (_, shape), step in list(
         zip(result.shapes, result.steps, strict=True))[every - 1:: every]]
     plot_spatial_shapes(shapes, out / "fig3_9_backbone.png",
-                        "Backbone (cf. chapter Fig. 3.9)", config.model.length)
+                        "Backbone (cf. chapter Fig. 3.9)", config.model.length,
+                        obstacles=config.obstacles)
     tensions = [s["tensions"][0] for s in result.steps]
     tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w", "rotation_vector")}
     plot_spatial_load_displacement(tensions, tips, out / "tension_tip.png",

@@ -10,6 +10,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, closing_of_steps
+from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
 from fe_beam.exports.spatial import (
     SpatialXDMFWriter,
@@ -138,7 +139,8 @@ def solve_static(
     result.extra = extra
     xdmf_path = out / "beam.xdmf" if writing and config.output.xdmf else None
     writer_kind = SpatialXDMFWriter if problem.spatial else BeamXDMFWriter
-    writer = writer_kind(problem, xdmf_path) if (record_shapes or xdmf_path) else None
+    writer = (writer_kind(problem, xdmf_path, contact=run.contact if xdmf_path else None)
+              if (record_shapes or xdmf_path) else None)
     states = [exports.XDMFExport(writer, "load_factor")] if writer is not None else []
     files = exports.Exports(states + ([
         exports.CSVExport(out / "load_displacement.csv",
@@ -191,6 +193,9 @@ def solve_static(
                                                                              result.steps)
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
+        if writing and root and config.obstacles:
+            write_obstacle_surfaces(config.obstacles, out / "obstacles.vtu",
+                                    *bounding_box(result.shapes, config.model.length))
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
 
@@ -308,7 +313,8 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     m = config.model
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
-        plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length)
+        plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                            obstacles=config.obstacles)
         factors = [s["load_factor"] for s in result.steps]
         tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w",
                                                                   "rotation_vector")}

@@ -395,19 +395,48 @@ def gather_line(problem, functions: dict) -> dict | None:
 class BeamXDMFWriter:
     """XDMF time series of a `BeamProblem`: u, v, theta and a displacement vector (P1, at the
     vertices; "Warp By Vector" in ParaView shows the deformed beam), and the strains eps, gamma,
-    kappa and resultants N, T, M, axial force (DG0, at element midpoints)."""
+    kappa and resultants N, T, M, axial force (DG0, at element midpoints).
 
-    def __init__(self, problem, path: str | Path | None):
+    With ``contact`` (a `fe_beam.fem.contact.ContactSet`), per obstacle i (the order of
+    [[obstacles]]) also ``contact_gap_i`` (P1: the signed gap [m] of the rod's surface at the
+    vertices, interpolated from the set's UFL expression) and ``contact_pressure_i`` (DG0: the
+    largest line pressure [N/m] at the cell's contact points, the values whose maximum is the
+    summary's pressure_peak)."""
+
+    def __init__(self, problem, path: str | Path | None, contact=None):
         self.problem = problem
         mesh = problem.mesh
         self.functions = {}
         self._expressions = []
-        for name, expr, space in self._plan(problem):
+        plan = self._plan(problem)
+        self.contact = contact
+        self._pressures = []
+        if contact is not None:
+            scalar = next(space for name, _, space in plan if name == "u")  # P1, as u
+            plan += [(name, expr, scalar)
+                     for name, expr in contact.output_expressions(problem).items()]
+            cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
+            owned = mesh.topology.index_map(mesh.topology.dim).size_local
+            dofs = compat.cell_dofs(cellwise)[:owned, 0]
+            for i in range(len(contact.obstacles)):
+                function = fem.Function(cellwise, name=f"contact_pressure_{i}")
+                self.functions[function.name] = function
+                self._pressures.append((function, dofs))
+        for name, expr, space in plan:
             function = fem.Function(space, name=name)
             self.functions[name] = function
             self._expressions.append((function, compat.interpolation_expression(
                 ufl.as_ufl(expr), space)))
         self._file = XDMFSeries(mesh, path) if path is not None else None
+
+    @property
+    def contact_names(self) -> tuple[list[str], list[str]]:
+        """(nodal gap fields, cellwise pressure fields)."""
+        if self.contact is None:
+            return [], []
+        count = len(self.contact.obstacles)
+        return ([f"contact_gap_{i}" for i in range(count)],
+                [f"contact_pressure_{i}" for i in range(count)])
 
     @staticmethod
     def _plan(problem) -> list:
@@ -429,6 +458,11 @@ class BeamXDMFWriter:
     def update(self) -> None:
         for function, expression in self._expressions:
             function.interpolate(expression)
+        if self._pressures:
+            for (function, dofs), values in zip(self._pressures, self.contact.cell_pressures(),
+                                                strict=True):
+                function.x.array[dofs] = values
+                function.x.scatter_forward()
 
     def write(self, time: float, flush: bool | None = None) -> None:
         self.update()
@@ -447,13 +481,15 @@ class BeamXDMFWriter:
         interpolation)."""
         if update:
             self.update()
-        nodal = gather_line(self.problem, {k: self.functions[k] for k in ("u", "v", "theta")})
+        gaps, _ = self.contact_names
+        nodal = gather_line(self.problem, {k: self.functions[k]
+                                           for k in ("u", "v", "theta", *gaps)})
         cellwise = gather_line(
             self.problem,
             {
                 k: f
                 for k, f in self.functions.items()
-                if k not in ("u", "v", "theta", "displacement")
+                if k not in ("u", "v", "theta", "displacement", *gaps)
             },
         )
         if nodal is not None:

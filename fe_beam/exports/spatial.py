@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fe_beam.exports.obstacles import bounding_box, obstacle_surface
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, figure, gather_line
 from fe_beam.exports.plotting import legend_inside
 from fe_beam.fem import compat
@@ -47,7 +48,8 @@ class SpatialXDMFWriter(BeamXDMFWriter):
         shape (n, 3)), gathered on rank 0 sorted by x (None elsewhere)."""
         if update:
             self.update()
-        nodal = gather_line(self.problem, {k: self.functions[k] for k in NODAL})
+        gaps, pressures = self.contact_names
+        nodal = gather_line(self.problem, {k: self.functions[k] for k in (*NODAL, *gaps)})
         frames = {}
         for name in ("d2", "d3"):
             function = self.functions[name]
@@ -60,7 +62,8 @@ class SpatialXDMFWriter(BeamXDMFWriter):
                 frames[name] = np.concatenate([g[1] for g in gathered])[np.argsort(
                     xs, kind="stable")]
         cellwise = gather_line(self.problem, {k: f for k, f in self.functions.items()
-                                              if k in self.problem.output_expressions()})
+                                              if k in self.problem.output_expressions()
+                                              or k in pressures})
         if nodal is not None:
             nodal.update(frames)
             nodal["cells"] = cellwise
@@ -68,11 +71,19 @@ class SpatialXDMFWriter(BeamXDMFWriter):
 
 
 def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title: str,
-                        length: float, offset: np.ndarray | None = None) -> None:
+                        length: float, offset: np.ndarray | None = None,
+                        obstacles=()) -> None:
     """Deformed centrelines in three views (x-y from above, x-z from the side, y-z along the
     axis) and a 3D view with the section frames' d2 (the h direction) drawn along the last
-    shape. ``offset``: the straight reference's displacement to subtract (none here)."""
+    shape. ``offset``: the straight reference's displacement to subtract (none here).
+    ``obstacles`` (3D `fe_beam.model.obstacles`) are drawn in grey: in the views a sphere as
+    its outline circle, a cylinder as its outline (a circle seen along its axis, else a strip
+    of its diameter), a box as its rectangle, a plane as its trace through its point with a
+    strip on the solid side (left out in a view along which it lies); in the 3D view as
+    translucent surfaces (`fe_beam.exports.obstacles.obstacle_surface`), cut to the rod's
+    bounding box widened by a quarter."""
     plt = _pyplot()
+    low, high = bounding_box(shapes, length)
     drawn = plt.figure(figsize=(11, 8.5))
     try:
         colours = plt.cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
@@ -88,6 +99,10 @@ def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title:
                 points = _points(shape)
                 axes.plot(points[:, i], points[:, j], color=colour, lw=1.8, label=label)
                 axes.plot(points[-1, i], points[-1, j], "o", color=colour, ms=3)
+            if obstacles:
+                _draw_view_obstacles(axes, obstacles, i, j, low, high)
+                axes.set_xlim(low[i], high[i])
+                axes.set_ylim(low[j], high[j])
             axes.set_aspect("equal", adjustable="datalim")
             axes.set_xlabel(f"{first} [m]")
             axes.set_ylabel(f"{second} [m]")
@@ -112,6 +127,14 @@ def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title:
                                arrows[:, 2], color=colour, lw=0.8,
                                label=f"{name} ({'h' if name == 'd2' else 'b'} direction)")
             axes_3d.legend(fontsize=7, loc="upper left")
+        if obstacles:
+            near_low, near_high = bounding_box(shapes, length, pad=0.1)
+            for obstacle in obstacles:
+                points, triangles = obstacle_surface(obstacle, near_low, near_high,
+                                                     resolution=24)
+                axes_3d.plot_trisurf(points[:, 0], points[:, 1], triangles, points[:, 2],
+                                     color="0.6", alpha=0.25, edgecolor="0.45",
+                                     linewidth=0.2)
         if len(extent):
             centre = (extent.max(axis=0) + extent.min(axis=0)) / 2
             half = max(float(np.ptp(extent, axis=0).max()) / 2, 1e-3 * length)
@@ -127,6 +150,56 @@ def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title:
         drawn.savefig(path, dpi=130)
     finally:
         plt.close(drawn)
+
+
+def _draw_view_obstacles(axes, obstacles, i: int, j: int, low, high) -> None:
+    """The obstacles seen along the remaining axis in the view of components (i, j)."""
+    from matplotlib import patches
+
+    style = {"facecolor": "0.8", "edgecolor": "0.4", "lw": 1, "zorder": 0}
+    reach = 2 * float(np.linalg.norm(np.asarray(high) - np.asarray(low)))
+    span = float(np.max(np.asarray(high) - np.asarray(low)))
+    for obstacle in obstacles:
+        shape = getattr(obstacle, "shape", "")
+        if shape == "plane":
+            normal = np.array([obstacle.normal[i], obstacle.normal[j]])
+            size = float(np.linalg.norm(normal))
+            if size < 0.05:  # the plane is seen edge-on in no direction of this view
+                continue
+            normal /= size
+            point = np.array([obstacle.point[i], obstacle.point[j]])
+            tangent = np.array([-normal[1], normal[0]])
+            a, b = point - reach * tangent, point + reach * tangent
+            depth = 0.05 * span * normal
+            axes.add_patch(patches.Polygon([a, b, b - depth, a - depth], closed=True, **style))
+            anchor = point
+        elif shape == "sphere":
+            anchor = np.array([obstacle.center[i], obstacle.center[j]])
+            axes.add_patch(patches.Circle(anchor, obstacle.radius, **style))
+        elif shape == "cylinder":
+            anchor = np.array([obstacle.point[i], obstacle.point[j]])
+            axis = np.array(obstacle.axis if obstacle.axis is not None else (0.0, 0.0, 1.0))
+            along = np.array([axis[i], axis[j]])
+            size = float(np.linalg.norm(along))
+            if size < 1e-6:
+                axes.add_patch(patches.Circle(anchor, obstacle.radius, **style))
+            else:
+                e = along / size
+                half = reach if obstacle.length is None else obstacle.length / 2 * size
+                side = obstacle.radius * np.array([-e[1], e[0]])
+                axes.add_patch(patches.Polygon(
+                    [anchor - half * e - side, anchor + half * e - side,
+                     anchor + half * e + side, anchor - half * e + side], closed=True,
+                    **style))
+        elif shape == "box":
+            corner = np.array([obstacle.min[i], obstacle.min[j]])
+            size = np.array([obstacle.max[i], obstacle.max[j]]) - corner
+            axes.add_patch(patches.Rectangle(corner, size[0], size[1], **style))
+            anchor = corner + size / 2
+        else:
+            continue
+        if getattr(obstacle, "name", ""):
+            axes.annotate(obstacle.name, anchor, fontsize=7, color="0.3")
 
 
 def _points(shape: dict) -> np.ndarray:

@@ -888,6 +888,28 @@ class ContactSet:
                             f"{obstacle.name!r} (near x = {after['x'][j]:.4g} m)")
         return None
 
+    def output_expressions(self, problem) -> dict:
+        """Fields for the result files, per obstacle i (in the order of [[obstacles]]):
+        ``contact_gap_i``, the signed gap [m] of the rod's surface (planar: the section
+        segment, spatial: the tube) as a UFL expression of the state alone (no multipliers:
+        it can be interpolated anywhere, e.g. at the vertices); the pressures are at the
+        contact points only (`cell_pressures`)."""
+        if self._problem is not problem:
+            self._attach(problem)
+        parts = problem.state_parts() if self.spatial else problem.fields()[:3]
+        geometry = self._geometry(parts)
+        return {f"contact_gap_{i}": self._gap_of(obstacle, geometry)
+                for i, obstacle in enumerate(self.obstacles)}
+
+    def cell_pressures(self, state: dict | None = None) -> list[np.ndarray]:
+        """Per obstacle, the largest line pressure [N/m] over each owned cell's contact
+        points (the pressures `summary` reports, pressure_peak being their maximum), in the
+        order of the owned cells (local)."""
+        state = state or self.evaluate(friction=False)
+        cells = len(self._owned_cells)
+        return [np.asarray(p).reshape(cells, -1).max(axis=1) if cells else np.zeros(0)
+                for p in state["pressure"]]
+
     def summary(self, state: dict | None = None) -> list[dict]:
         """Per obstacle, in the order given: {name, force (the obstacle on the rod, global
         axes: [Fx, Fy] planar, [Fx, Fy, Fz] spatial) [N], moment (about the origin: planar
