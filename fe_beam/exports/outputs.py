@@ -650,3 +650,5 @@ def draw_obstacles(axes, obstacles, shapes, length: float) -> None:
         else:
             continue
         axes.annotate(obstacle.name, anchor, fontsize=7, color="0.3")
+    axes.set_xlim(low[0], high[0])  # the patches reach farther: the rod's region is shown
+    axes.set_ylim(low[1], high[1])
