@@ -10,8 +10,10 @@ contact points and the two ends, the field's over the vertices: both are below t
 tolerance, their difference is the gap's variation between a vertex and the Gauss points).
 """
 
+import json
 import math
 import re
+from pathlib import Path
 
 import h5py
 import meshio
@@ -21,6 +23,7 @@ import pytest
 from fe_beam.analyses.static import solve_static
 from fe_beam.config.registry import validate
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 L = 1.0
 EI = 1.0
 GAP = 1e-4
@@ -149,3 +152,55 @@ def test_spatial_contact_fields_surfaces_and_pictures(tmp_path):
     assert measured[0][0] > 0
     check_surfaces(tmp_path, config, 3)
     assert (tmp_path / "deformed_shapes.png").stat().st_size > 10_000
+
+
+FINGERS = {
+    "planar": ("finger.toml", """
+[[obstacles]]
+shape = "cylinder"
+name = "bottle"
+point = [0.09, 0.032]
+radius = 0.015
+"""),
+    "spatial": ("spatial_finger.toml", """
+[[obstacles]]
+shape = "sphere"
+name = "ball"
+center = [0.095, 0.008, 0.024]
+radius = 0.01
+
+[[obstacles]]
+shape = "plane"
+name = "table"
+point = [0.0, -0.03, 0.0]
+normal = [0.0, 1.0, 0.0]
+"""),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(FINGERS))
+def test_finger_with_obstacles_writes_fields_surfaces_and_backbone(tmp_path, kind):
+    """The finger presses on the obstacle: beam.xdmf carries its gap and pressure,
+    obstacles.vtu is written, the backbone figure (with the obstacles) is written."""
+    from fe_beam.cli import main
+
+    example, obstacles = FINGERS[kind]
+    text = (EXAMPLES / example).read_text().replace("steps = 20", "steps = 8")
+    config = tmp_path / "finger.toml"
+    config.write_text(text.replace("elements = 40", "elements = 20") + obstacles)
+    out = tmp_path / "out"
+    code = main(["finger", str(config), "--out", str(out), "--quiet",
+                 "--set", "output.plots=true"])
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    touched = summary["steps"][-1]["contact"][0]
+    assert touched["max_penetration"] > 0 or touched["end_forces"][1] > 0  # it touches
+    count = 1 if kind == "planar" else 2
+    fields = last_fields(out)
+    assert set(fields) == {f"contact_{k}_{i}" for k in ("gap", "pressure")
+                           for i in range(count)}
+    gap = fields["contact_gap_0"]
+    # the default penetration tolerance: 1e-3 of the thinnest section height, >= 1e-5 m here
+    assert abs(max(0.0, float(-np.min(gap))) - touched["max_penetration"]) <= 1e-5
+    assert len(meshio.read(out / "obstacles.vtu").points) > 0
+    assert (out / "fig3_9_backbone.png").stat().st_size > 10_000
