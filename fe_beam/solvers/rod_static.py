@@ -112,15 +112,19 @@ class StaticContinuation:
 
         def converged(step: StepResult) -> None:
             self.load_factor = step.load_factor
-            if self.contact is not None:
-                self.contact.commit()
-            if self._trial_range is not None:
-                self.watch.observe(self._trial_range)
-            if on_converged is not None:
-                on_converged(step)
+            self._accepted(step, on_converged)
 
         engine.load_control(target, stepping, on_converged=converged, progress=progress,
                             label=label)
+
+    def _accepted(self, step: StepResult, on_converged=None) -> None:
+        """An accepted step: the contact state committed, the strain range observed."""
+        if self.contact is not None:
+            self.contact.commit()
+        if self._trial_range is not None:
+            self.watch.observe(self._trial_range)
+        if on_converged is not None:
+            on_converged(step)
 
     def advance_along(self, set_parameter, start: float, target: float, stepping,
                       on_converged=None, label: str = "parameter") -> None:
@@ -135,17 +139,9 @@ class StaticContinuation:
                                             metric=self._metric(), parameter=start)
         adapter.arc_length_ready = False
         engine = Continuation(adapter, start)
-
-        def converged(step: StepResult) -> None:
-            if self.contact is not None:
-                self.contact.commit()
-            if self._trial_range is not None:
-                self.watch.observe(self._trial_range)
-            if on_converged is not None:
-                on_converged(step)
-
-        engine.load_control(target, stepping, on_converged=converged, progress=False,
-                            label=label)
+        engine.load_control(target, stepping,
+                            on_converged=lambda step: self._accepted(step, on_converged),
+                            progress=False, label=label)
 
     def parameter_problem(self, parameter: str = "load_factor", tendon: int = 0
                           ) -> NonlinearParameterProblem:
