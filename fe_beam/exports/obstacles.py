@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fe_beam.exports.outputs import _atomic_path
+
 __all__ = ["bounding_box", "obstacle_surface", "write_obstacle_surfaces"]
 
 
@@ -126,7 +128,6 @@ def write_obstacle_surfaces(obstacles, path: str | Path, low, high) -> Path:
     ``obstacle`` (its index in [[obstacles]]; "Threshold" on it shows one). Rank-local."""
     import meshio
 
-    from fe_beam.exports.outputs import _atomic_path
 
     points, cells, index = [], [], []
     shift = 0
