@@ -14,8 +14,9 @@ integrated over the whole exterior boundary of the reference body (the clamp doe
 with its own quadrature rule (``[contact] quadrature_degree``, default 2 p for P_p
 displacements: 4 for P2, 6 points per triangle). Its variation is -int p dg dA with the nominal
 contact pressure p = <lambda - k g>_+ >= 0 [N per reference m^2]. The multiplier lambda is a
-P_p Lagrange field whose nodes on the exterior facets carry it (zero elsewhere), updated at the
-nodes by Uzawa, lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
+P1 Lagrange field whose vertices on the exterior facets carry it (zero elsewhere; not P2: the
+vertex functions of a P2 triangle integrate to zero, so a P2 vertex multiplier pushes with no
+net force and its Uzawa update stalls, measured), updated at the vertices by Uzawa, lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
 (`fe_beam.solvers.contact.ContactSolver`); with lambda = 0 the first solve is the plain penalty
 k/2 <-g>_+^2. Newton solves the semi-smooth problem directly (the Heaviside step in its
 Jacobian).
@@ -27,8 +28,9 @@ element size (``[solid] mesh_size``): a pressure mu squeezes a layer of one elem
 Measured per obstacle (`SolidContact.summary`): the force the obstacle exerts on the solid
 F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative of g), the
 active area int [p > 0] dA (reference), the largest penetration max(-g) and the peak pressure
-max p at the P_p nodes of the exterior facets (where lambda lives, vertices and edge
-midpoints): a converged step is accepted only with max_penetration <= the tolerance.
+max p at the vertices of the exterior facets (where lambda lives), the largest penetration
+max(-g) at the P_p nodes there (vertices and edge midpoints; between the vertices the Uzawa
+updates act through the neighbouring vertices' multipliers): a converged step is accepted only with max_penetration <= the tolerance.
 """
 
 from __future__ import annotations
@@ -81,14 +83,14 @@ class SolidContact:
         self.comm = mesh.comm
         self.k = self.settings.penalty * float(shear_modulus) / float(element_size)
         self.quadrature_degree = self.settings.quadrature_degree or 2 * degree
-        self.Q = compat.function_space(mesh, compat.element(mesh, "Lagrange", degree))
+        self.Q = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
+        #: the gap is measured at the P_p nodes (vertices and, for P2, edge midpoints)
+        self.Q_nodes = compat.function_space(mesh, compat.element(mesh, "Lagrange", degree))
         fdim = mesh.topology.dim - 1
         facets = compat.locate_entities_boundary(mesh, fdim,
                                                  lambda x: np.full(x.shape[1], True))
-        dofs = fem.locate_dofs_topological(self.Q, fdim, facets)
-        self._boundary = np.zeros(len(compat.local_array(fem.Function(self.Q))), dtype=bool)
-        self._boundary[dofs] = True
-        self._owned = np.arange(len(self._boundary)) < self.Q.dofmap.index_map.size_local
+        self._boundary, self._owned = self._masks(self.Q, facets)
+        self._boundary_nodes, self._owned_nodes = self._masks(self.Q_nodes, facets)
         self.ds = ufl.Measure("ds", domain=mesh,
                               metadata={"quadrature_degree": self.quadrature_degree})
         X = ufl.SpatialCoordinate(mesh)
@@ -96,6 +98,10 @@ class SolidContact:
         self._gaps = [fem.Function(self.Q) for _ in obstacles]
         self._gap_expr = [compat.interpolation_expression(solid_gap(o, X, u), self.Q)
                           for o in self.obstacles]
+        self._node_gaps = [fem.Function(self.Q_nodes) for _ in obstacles]
+        self._node_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
+                                                               self.Q_nodes)
+                               for o in self.obstacles]
         k = fem.Constant(mesh, float(self.k))
         self._k = k
         self.energy = sum(solid_contact_density(o, X, u, lam, k) * self.ds
@@ -110,6 +116,14 @@ class SolidContact:
         self._committed = self._copy()
         self.check_clear()
 
+    @staticmethod
+    def _masks(space, facets):
+        """(on the exterior facets, owned) masks of the local dofs of a scalar space."""
+        dofs = fem.locate_dofs_topological(space, space.mesh.topology.dim - 1, facets)
+        boundary = np.zeros(len(compat.local_array(fem.Function(space))), dtype=bool)
+        boundary[dofs] = True
+        return boundary, np.arange(len(boundary)) < space.dofmap.index_map.size_local
+
     # --- state ------------------------------------------------------------------------------
     def _copy(self):
         return [compat.local_array(lam).copy() for lam in self.multipliers]
@@ -122,9 +136,11 @@ class SolidContact:
     def commit(self) -> None:
         self._committed = self._copy()
 
-    def _nodal_gaps(self) -> list[np.ndarray]:
+    def _nodal_gaps(self, nodes: bool = False) -> list[np.ndarray]:
         values = []
-        for gap, expr in zip(self._gaps, self._gap_expr, strict=True):
+        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes else
+                                  (self._gaps, self._gap_expr))
+        for gap, expr in zip(functions, expressions, strict=True):
             gap.interpolate(expr)
             values.append(compat.local_array(gap).copy())
         return values
@@ -132,8 +148,8 @@ class SolidContact:
     def check_clear(self) -> None:
         """ConfigError when an obstacle touches or intersects the undeformed solid (a node of
         the mesh on or inside it); called before any load (u = 0)."""
-        for obstacle, gap in zip(self.obstacles, self._nodal_gaps(), strict=True):
-            mine = gap[self._owned]
+        for obstacle, gap in zip(self.obstacles, self._nodal_gaps(nodes=True), strict=True):
+            mine = gap[self._owned_nodes]
             worst = float(mine.min()) if len(mine) else np.inf
             worst = -global_max(self.comm, -worst)
             if not worst > 0:
@@ -143,13 +159,15 @@ class SolidContact:
                     "body (0 <= x <= L, |y| <= h(x)/2, |z| <= b/2)")
 
     def evaluate(self) -> dict:
-        """Nodal gaps and pressures on the exterior facets (owned nodes)."""
+        """Gaps and pressures at the exterior-facet vertices (the multipliers'), the largest
+        penetration at the P_p nodes there (owned nodes, MPI-reduced)."""
         gaps = self._nodal_gaps()
         pressures = [np.where(self._boundary, np.maximum(
             compat.local_array(lam) - self.k * g, 0.0), 0.0)
                      for lam, g in zip(self.multipliers, gaps, strict=True)]
         penetration = [global_max(self.comm, float(np.max(
-            np.where(self._boundary & self._owned, -g, 0.0), initial=0.0))) for g in gaps]
+            np.where(self._boundary_nodes & self._owned_nodes, -g, 0.0), initial=0.0)))
+                       for g in self._nodal_gaps(nodes=True)]
         peak = [global_max(self.comm, float(np.max(np.where(self._owned, p, 0.0),
                                                       initial=0.0))) for p in pressures]
         return {"gaps": gaps, "pressures": pressures, "penetration": penetration,

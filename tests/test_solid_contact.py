@@ -1,0 +1,124 @@
+"""Contact of the 3D solid with rigid obstacles (`fe_beam.fem.solid.contact`): a short block
+pushed by a tip force onto a frictionless wall against the linear-elastic bar, the summary's
+contact entries, the rejected step, the refusal of an obstacle inside the body, 2 ranks =
+serial."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from fe_beam.errors import ConfigError
+from fe_beam.model.obstacles import ContactSettings, Plane, Sphere
+from fe_beam.model.solid import Discretization
+from fe_beam.solid import (
+    FingerGeometry,
+    MeshSizes,
+    NeoHookean,
+    SolidFingerProblem,
+    create_finger_mesh,
+)
+from fe_beam.solvers.continuation import ContinuationFailed
+from fe_beam.solvers.newton import LoadStepping, SolverSettings
+
+# a short block, clamped at x = 0, its tip face a gap G from a rigid wall at x = L + G
+L, B, H, E = 2.0, 1.0, 1.0, 1.0
+G = 1e-3
+P_TOUCH = E * B * H * G / L  # the tip force that closes the gap (linear bar)
+TOLERANCE = 1e-3 * G
+
+
+def wall(gap=G):
+    return Plane(name="wall", dim=3, point=(L + gap, 0.0, 0.0), normal=(-1.0, 0.0, 0.0))
+
+
+def block(obstacles, force=2 * P_TOUCH, nu=0.0, size=0.5, comm=MPI.COMM_WORLD,
+          formulation="displacement", solver="mumps", settings=None):
+    finger = create_finger_mesh(FingerGeometry(L, B, H), MeshSizes(size), comm)
+    return SolidFingerProblem(
+        finger, NeoHookean.from_young(E, nu), tip_force=(force, 0.0, 0.0),
+        obstacles=obstacles,
+        contact=settings or ContactSettings(penetration_tolerance=TOLERANCE),
+        discretization=Discretization(formulation, 2) if formulation != "displacement" else None,
+        solver=SolverSettings(linear_solver=solver))
+
+
+def test_block_on_a_frictionless_wall_carries_the_rest_of_the_load():
+    """nu = 0 (no lateral strain, the clamp constrains nothing): the bar's tip closes the gap
+    at P_touch = E A G / L; beyond it the wall carries R = P - E A G / L, uniformly over the
+    tip face (the linear solution is exact in P2; the strain 5e-4 keeps it linear)."""
+    problem = block([wall()])
+    result = problem.solve(LoadStepping(steps=4))
+    first, last = result["steps"][1]["contact"][0], result["contact"][0]
+    expected = 2 * P_TOUCH - E * B * H * G / L
+    print(f"block on wall: R = {-last['force'][0]:.8g} vs {expected:.8g}, penetration "
+          f"{last['max_penetration']:.3g} (tolerance {TOLERANCE:.3g}), area "
+          f"{last['active_area']:.6g}, Uzawa updates {problem.solver.updates}")
+    assert -last["force"][0] == pytest.approx(expected, rel=2e-3)
+    assert np.abs(last["force"][1:]).max() < 1e-9 * expected
+    assert abs(first["force"][0]) < 0.02 * expected  # at P = P_touch it just touches
+    assert last["active_area"] == pytest.approx(B * H, rel=1e-9)
+    assert last["pressure_peak"] == pytest.approx(expected / (B * H), rel=0.01)
+    assert 0 < last["max_penetration"] <= TOLERANCE
+    for step in result["steps"]:
+        assert step["contact"][0]["max_penetration"] <= TOLERANCE
+    u_tip = result["tip_displacement"][0]
+    assert u_tip == pytest.approx(G, abs=TOLERANCE)
+
+
+def test_block_with_poisson_mixed_fieldsplit():
+    """nu = 0.3, Taylor-Hood u-p with the fieldsplit solver: the wall's force is the bar's to
+    3 % (the clamped face stiffens the short bar, ~1.7 % measured at L / H = 2), and the same
+    as the displacement formulation with MUMPS on the same mesh to 1 %."""
+    mixed = block([wall()], nu=0.3, formulation="mixed", solver="fieldsplit")
+    R_mixed = -mixed.solve(LoadStepping(steps=2))["contact"][0]["force"][0]
+    plain = block([wall()], nu=0.3)
+    result = plain.solve(LoadStepping(steps=2))
+    R_plain = -result["contact"][0]["force"][0]
+    expected = P_TOUCH
+    print(f"nu = 0.3: R mixed/fieldsplit {R_mixed:.6g}, displacement/mumps {R_plain:.6g}, "
+          f"bar {expected:.6g}")
+    assert mixed.linear_solver == "fieldsplit"
+    assert R_mixed == pytest.approx(expected, rel=0.03)
+    assert R_mixed < expected  # stiffer than the bar: less left for the wall
+    assert R_plain == pytest.approx(R_mixed, rel=0.01)
+    assert result["contact"][0]["max_penetration"] <= TOLERANCE
+
+
+def test_an_obstacle_clear_of_the_solid_carries_nothing():
+    """A ball and the wall: the entries come in the order of the obstacles, the ball (clear
+    of the deformed block) with zero force and area."""
+    ball = Sphere(name="ball", dim=3, center=(1.0, 2.0, 0.0), radius=0.5)
+    result = block([ball, wall()]).solve(LoadStepping(steps=2))
+    clear, pressed = result["contact"]
+    assert [clear["name"], pressed["name"]] == ["ball", "wall"]
+    assert clear["force"] == [0.0, 0.0, 0.0] and clear["active_area"] == 0.0
+    assert clear["max_penetration"] == 0.0 and clear["pressure_peak"] == 0.0
+    assert -pressed["force"][0] == pytest.approx(P_TOUCH, rel=2e-3)
+
+
+def test_a_step_above_the_tolerance_is_rejected():
+    """One Uzawa update with a tolerance below the plain penalty's penetration: no step may be
+    accepted with the penetration above it, the load stepping fails."""
+    settings = ContactSettings(penetration_tolerance=1e-9, max_updates=1, penalty=1.0)
+    problem = block([wall()], settings=settings)
+    with pytest.raises(ContinuationFailed):
+        problem.solve(LoadStepping(steps=1, min_increment=0.25))
+
+
+def test_an_obstacle_inside_the_undeformed_solid_is_refused():
+    with pytest.raises(ConfigError, match="intersects the undeformed solid"):
+        block([wall(gap=-0.1)])
+
+
+@pytest.mark.mpi
+def test_serial_and_parallel_contact_agree():
+    """The block with nu = 0.3 on COMM_SELF and on COMM_WORLD (meaningful under mpirun -n 2)."""
+    if MPI.COMM_WORLD.size == 1:
+        pytest.skip("run under mpirun -n 2 to compare a serial and a parallel solve")
+    parallel = block([wall()], nu=0.3).solve(LoadStepping(steps=2))["contact"][0]
+    serial = block([wall()], nu=0.3, comm=MPI.COMM_SELF).solve(
+        LoadStepping(steps=2))["contact"][0]
+    print(f"serial {serial}\nparallel {parallel}")
+    for key in ("force", "active_area", "max_penetration", "pressure_peak"):
+        assert np.allclose(serial[key], parallel[key], rtol=1e-6,
+                           atol=1e-9 * abs(serial["force"][0])), key
