@@ -3,6 +3,8 @@ pushed by a tip force onto a frictionless wall against the linear-elastic bar, t
 contact entries, the rejected step, the refusal of an obstacle inside the body, 2 ranks =
 serial."""
 
+import json
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -122,3 +124,51 @@ def test_serial_and_parallel_contact_agree():
     for key in ("force", "active_area", "max_penetration", "pressure_peak"):
         assert np.allclose(serial[key], parallel[key], rtol=1e-6,
                            atol=1e-9 * abs(serial["force"][0])), key
+
+
+# --- fe-beam solid with [[obstacles]] ---------------------------------------------------------
+BLOCK = {
+    "beam": {"length": L},
+    "section": {"shape": "rectangle", "b": B, "h": H},
+    "material": {"E": E, "nu": 0.0, "rho": 1.0},
+    "loads": {"steps": 2, "tip_force": [2 * P_TOUCH, 0.0]},
+    "solid": {"material": "neo-hookean", "mesh_size": 0.5, "order": 2},
+    "output": {"xdmf": False, "plots": False},
+    "obstacles": [{"shape": "plane", "name": "wall", "point": [L + G, 0.0, 0.0],
+                   "normal": [-1.0, 0.0, 0.0]}],
+    "contact": {"penetration_tolerance": TOLERANCE},
+}
+
+
+def cli(tmp_path, config):
+    from tests.solid.test_solid_driver import run_cli, shared_folder
+
+    folder = shared_folder(tmp_path)
+    return run_cli("solid", folder, config)
+
+
+def test_fe_beam_solid_writes_the_contact_entries_per_step(tmp_path):
+    code, _, stderr, out = cli(tmp_path, BLOCK)
+    assert code == 0, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "converged"
+    assert "obstacles" in summary["rod"]["message"]  # the planar rod reads 2D obstacles
+    entries = [step["contact"] for step in summary["steps"]]
+    assert len(entries) == 2 and all(len(e) == 1 for e in entries)
+    last = entries[-1][0]
+    assert set(last) == {"name", "force", "active_area", "max_penetration", "pressure_peak"}
+    assert -last["force"][0] == pytest.approx(P_TOUCH, rel=2e-3)
+    assert last["max_penetration"] <= TOLERANCE
+
+
+@pytest.mark.parametrize("changes, fragment", [
+    ({"point": [L - 0.1, 0.0, 0.0]}, "intersects the undeformed solid"),
+    ({"friction": 0.3}, "friction"),
+    ({"point": [L + G, 0.0]}, "point must be a list of 3 numbers"),
+])
+def test_fe_beam_solid_refuses_bad_obstacles_with_exit_2(tmp_path, changes, fragment):
+    config = json.loads(json.dumps(BLOCK))
+    config["obstacles"][0] |= changes
+    code, _, stderr, _ = cli(tmp_path, config)
+    assert code == 2, stderr
+    assert fragment in stderr and "Traceback" not in stderr

@@ -106,7 +106,7 @@ _SPECS = (
                 lambda config, options: parse_modes(config), "modes:run", spatial=True),
     CommandSpec("solid", "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod "
                          "alongside",
-                ("tendons", "solid", "compare", "modes"),
+                ("tendons", "solid", "compare", "modes", "obstacles", "contact"),
                 lambda config, options: parse_solid(config), "solid:run", spatial=True),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",

@@ -16,7 +16,8 @@ displacements: 4 for P2, 6 points per triangle). Its variation is -int p dg dA w
 contact pressure p = <lambda - k g>_+ >= 0 [N per reference m^2]. The multiplier lambda is a
 P1 Lagrange field whose vertices on the exterior facets carry it (zero elsewhere; not P2: the
 vertex functions of a P2 triangle integrate to zero, so a P2 vertex multiplier pushes with no
-net force and its Uzawa update stalls, measured), updated at the vertices by Uzawa, lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
+net force and its Uzawa update stalls, measured), updated at the vertices by Uzawa,
+lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
 (`fe_beam.solvers.contact.ContactSolver`); with lambda = 0 the first solve is the plain penalty
 k/2 <-g>_+^2. Newton solves the semi-smooth problem directly (the Heaviside step in its
 Jacobian).
@@ -30,7 +31,8 @@ F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative
 active area int [p > 0] dA (reference), the largest penetration max(-g) and the peak pressure
 max p at the vertices of the exterior facets (where lambda lives), the largest penetration
 max(-g) at the P_p nodes there (vertices and edge midpoints; between the vertices the Uzawa
-updates act through the neighbouring vertices' multipliers): a converged step is accepted only with max_penetration <= the tolerance.
+updates act through the neighbouring vertices' multipliers):
+a converged step is accepted only with max_penetration <= the tolerance.
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from dolfinx import fem
 
 from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
-from fe_beam.fem.contact import contact_pressure, point_gap, augmented_lagrangian_density
+from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, point_gap
 from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.model.obstacles import ContactSettings
 
