@@ -1,6 +1,7 @@
 """The ``[[obstacles]]`` array of tables and the ``[contact]`` table (`parse_contact`): rigid
 obstacles in the rod's coordinates (`fe_beam.model.obstacles`), each checked clear of the
-undeformed rod. Read by ``fe-beam static`` and ``fe-beam finger``."""
+undeformed rod. Read by ``fe-beam static``, ``fe-beam finger`` and ``fe-beam solid`` (3D
+coordinates, frictionless, checked against the meshed solid)."""
 
 from __future__ import annotations
 
@@ -44,9 +45,11 @@ SHAPE_KEYS = {
 }
 CONTACT_KEYS = {
     "penetration_tolerance": Key(NUMBER, None, "largest penetration a converged load step may "
-                                 "keep [m] (default 1e-3 x the smallest section height)"),
+                                 "keep [m] (default 1e-3 x the smallest section height; the 3D "
+                                 "solid: x min(h, h_tip, b))"),
     "penalty": Key(NUMBER, 1.0, "augmented-Lagrangian stiffness k relative to the element "
-                   "bending stiffness: k = penalty EI / h_e^4 per unit length"),
+                   "bending stiffness: k = penalty EI / h_e^4 per unit length (the 3D solid: "
+                   "k = penalty mu / mesh_size per unit area)"),
     "max_updates": Key((int,), 50, "augmented-Lagrangian (Uzawa) updates per load step before "
                        "the step is cut back (active-set and multiplier updates)"),
     "quadrature_degree": Key((int,), None, "Gauss rule of the contact integral (default 4 x "

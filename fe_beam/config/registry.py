@@ -150,8 +150,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": "fe-beam static or fe-beam finger for contact with rigid obstacles",
-    "contact": "fe-beam static or fe-beam finger for contact with rigid obstacles",
+    "obstacles": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
+                 "obstacles"),
+    "contact": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
+               "obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 
