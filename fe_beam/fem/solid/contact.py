@@ -16,7 +16,7 @@ displacements: 4 for P2, 6 points per triangle). Its variation is -int p dg dA w
 contact pressure p = <lambda - k g>_+ >= 0 [N per reference m^2]. The multiplier lambda is a
 P1 Lagrange field whose vertices on the exterior facets carry it (zero elsewhere; not P2: the
 vertex functions of a P2 triangle integrate to zero, so a P2 vertex multiplier pushes with no
-net force and its Uzawa update stalls, measured), updated at the vertices by Uzawa,
+net force), updated at the vertices by Uzawa,
 lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
 (`fe_beam.solvers.contact.ContactSolver`); with lambda = 0 the first solve is the plain penalty
 k/2 <-g>_+^2. Newton solves the semi-smooth problem directly (the Heaviside step in its
@@ -28,11 +28,12 @@ element size (``[solid] mesh_size``): a pressure mu squeezes a layer of one elem
 
 Measured per obstacle (`SolidContact.summary`): the force the obstacle exerts on the solid
 F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative of g), the
-active area int [p > 0] dA (reference), the largest penetration max(-g) and the peak pressure
-max p at the vertices of the exterior facets (where lambda lives), the largest penetration
-max(-g) at the P_p nodes there (vertices and edge midpoints; between the vertices the Uzawa
-updates act through the neighbouring vertices' multipliers):
-a converged step is accepted only with max_penetration <= the tolerance.
+active area int [p > 0] dA (reference), the peak pressure max p at the vertices of the
+exterior facets (where lambda lives) and the largest penetration max(-g) at the P_p nodes
+there (vertices and edge midpoints; the Uzawa updates reach the midpoints through the
+neighbouring vertices' multipliers): a converged step is accepted only with max_penetration
+<= the tolerance. A contact patch smaller than the boundary elements (a ball on a coarse mesh,
+touching between the nodes) is held by the penalty alone and its penetration is not seen.
 """
 
 from __future__ import annotations
