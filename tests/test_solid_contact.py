@@ -29,13 +29,13 @@ P_TOUCH = E * B * H * G / L  # the tip force that closes the gap (linear bar)
 TOLERANCE = 1e-3 * G
 
 
-def wall(gap=G):
-    return Plane(name="wall", dim=3, point=(L + gap, 0.0, 0.0), normal=(-1.0, 0.0, 0.0))
+def wall(gap=G, length=L):
+    return Plane(name="wall", dim=3, point=(length + gap, 0.0, 0.0), normal=(-1.0, 0.0, 0.0))
 
 
 def block(obstacles, force=2 * P_TOUCH, nu=0.0, size=0.5, comm=MPI.COMM_WORLD,
-          formulation="displacement", solver="mumps", settings=None):
-    finger = create_finger_mesh(FingerGeometry(L, B, H), MeshSizes(size), comm)
+          formulation="displacement", solver="mumps", settings=None, length=L):
+    finger = create_finger_mesh(FingerGeometry(length, B, H), MeshSizes(size), comm)
     return SolidFingerProblem(
         finger, NeoHookean.from_young(E, nu), tip_force=(force, 0.0, 0.0),
         obstacles=obstacles,
@@ -114,11 +114,18 @@ def test_an_obstacle_inside_the_undeformed_solid_is_refused():
 
 @pytest.mark.mpi
 def test_serial_and_parallel_contact_agree():
-    """The block with nu = 0.3 on COMM_SELF and on COMM_WORLD (meaningful under mpirun -n 2)."""
+    """A shorter block (L = B / 2, so that the partition cuts its tip face and the patch spans
+    the ranks) with nu = 0.3 on COMM_SELF and on COMM_WORLD (meaningful under mpirun -n 2)."""
     if MPI.COMM_WORLD.size == 1:
         pytest.skip("run under mpirun -n 2 to compare a serial and a parallel solve")
-    parallel = block([wall()], nu=0.3).solve(LoadStepping(steps=2))["contact"][0]
-    serial = block([wall()], nu=0.3, comm=MPI.COMM_SELF).solve(
+    short = {"nu": 0.3, "length": 0.5, "force": 2 * E * B * H * G / 0.5, "size": 0.35}
+    problem = block([wall(length=0.5)], **short)
+    parallel = problem.solve(LoadStepping(steps=2))["contact"][0]
+    from dolfinx import fem
+
+    local = MPI.COMM_WORLD.allgather(fem.assemble_scalar(problem.contact._area[0]))
+    assert np.count_nonzero(local) > 1, f"the contact patch should span the ranks: {local}"
+    serial = block([wall(length=0.5)], comm=MPI.COMM_SELF, **short).solve(
         LoadStepping(steps=2))["contact"][0]
     print(f"serial {serial}\nparallel {parallel}")
     for key in ("force", "active_area", "max_penetration", "pressure_peak"):
