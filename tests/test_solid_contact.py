@@ -217,3 +217,20 @@ def test_solid_finger_and_rod_press_on_the_same_roof_alike():
     assert abs(F_solid["force"][0]) < 1e-6 * abs(F_solid["force"][1])  # frictionless roof
     assert 0 < F_solid["max_penetration"] <= tolerance
     assert F_rod["max_penetration"] <= tolerance
+
+
+def test_the_rod_companion_with_obstacles():
+    """The planar rod does not read 3D obstacles, and the spatial rod's contact tube (the
+    section's circumradius) may cut an obstacle clear of the solid: the solid then runs alone,
+    saying why; a spatial rod clear of the obstacle runs beside it against the same one."""
+    from fe_beam.config.solid import parse_solid
+
+    planar = parse_solid(json.loads(json.dumps(BLOCK)))
+    assert planar.rod is None and "3D coordinates" in planar.rod_note
+    assert planar.obstacles[0].dim == 3 and planar.contact.penetration_tolerance == TOLERANCE
+    spatial = json.loads(json.dumps(BLOCK)) | {"model": {"kinematics": "spatial"}}
+    cut = parse_solid(spatial)
+    assert cut.rod is None and "circumradius" in cut.rod_note
+    spatial["obstacles"][0]["point"] = [L + 1.0, 0.0, 0.0]
+    beside = parse_solid(spatial)
+    assert beside.rod is not None and beside.rod.obstacles == beside.obstacles

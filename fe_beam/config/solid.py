@@ -376,7 +376,18 @@ def parse_solid(raw: dict) -> SolidConfig:
     planar_contact = bool(obstacles) and not spatial_rod(raw)
     rod_raw = ({k: v for k, v in raw.items() if k not in ("obstacles", "contact")}
                if planar_contact else raw)
-    rod = _rod_static(rod_raw, law, section, tip_force)
+    tube_note = ""
+    try:
+        rod = _rod_static(rod_raw, law, section, tip_force)
+    except ConfigError as error:
+        if not (obstacles and "undeformed rod" in str(error)):
+            raise
+        # the spatial rod's contact tube (the section's circumradius) reaches farther than the
+        # solid's faces: an obstacle clear of the solid may cut it; the solid runs alone
+        tube_note = (f"no rod comparison: {error} (the spatial rod's contact surface is the "
+                     "tube of the section's circumradius, wider than the solid)")
+        rod = _rod_static({k: v for k, v in raw.items() if k not in ("obstacles", "contact")},
+                          law, section, tip_force)
     paths, tendon_loads, owners, names = _cables(rod, b, sizes.tendon)
     pulled = [name for name, load in zip(names, tendon_loads, strict=True)
               if load.controlled_by_pull_in]
@@ -396,9 +407,12 @@ def parse_solid(raw: dict) -> SolidConfig:
     )
     spatial = [t.name for t in rod.tendons if t.out_of_plane]
     # the spatial rod runs beside any solid; the planar one only in the x-y plane
-    planar = spatial_rod(raw) or (tip_force[2] == 0 and not spatial and not planar_contact)
+    planar = not tube_note and (spatial_rod(raw) or (tip_force[2] == 0 and not spatial
+                                                     and not planar_contact))
     if planar:
         rod_note = ""
+    elif tube_note:
+        rod_note = tube_note
     elif planar_contact:
         rod_note = ("no rod comparison: [[obstacles]] take 3D coordinates, which the planar rod "
                     "does not read: [model] kinematics = \"spatial\" runs the rod beside the "
