@@ -76,6 +76,8 @@ class SolidRun:
             solver=config.solver,
             prefix=f"fe_beam_solid{next(_RUNS)}_",
             anchor=config.anchor,
+            obstacles=config.obstacles,
+            contact=config.contact,
         )
         self.load_factor = 0.0
         self._theta = 0.0
@@ -114,6 +116,7 @@ class SolidRun:
         engine.parameter = start
 
         def converged(step) -> None:
+            self.problem.accept_step()
             self.load_factor = float(target) if step.fraction == 1.0 else step.load_factor
             record = self.record(step.iterations, step.linear_iterations)
             if on_step is not None:
@@ -179,6 +182,7 @@ class SolidRun:
             "newton_iterations": int(newton_iterations),
             "linear_iterations": int(linear_iterations),
             **stretch_keys(self.problem.max_principal_stretches()),
+            **({"contact": self.problem.contact.summary()} if self.problem.contact else {}),
         }
 
     def destroy(self) -> None:

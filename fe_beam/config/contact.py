@@ -1,6 +1,7 @@
 """The ``[[obstacles]]`` array of tables and the ``[contact]`` table (`parse_contact`): rigid
 obstacles in the rod's coordinates (`fe_beam.model.obstacles`), each checked clear of the
-undeformed rod. Read by ``fe-beam static`` and ``fe-beam finger``."""
+undeformed rod. Read by ``fe-beam static``, ``fe-beam finger`` and ``fe-beam solid`` (3D
+coordinates, frictionless, checked against the meshed solid)."""
 
 from __future__ import annotations
 
@@ -44,9 +45,11 @@ SHAPE_KEYS = {
 }
 CONTACT_KEYS = {
     "penetration_tolerance": Key(NUMBER, None, "largest penetration a converged load step may "
-                                 "keep [m] (default 1e-3 x the smallest section height)"),
+                                 "keep [m] (default 1e-3 x the smallest section height; the 3D "
+                                 "solid: x min(h, h_tip, b))"),
     "penalty": Key(NUMBER, 1.0, "augmented-Lagrangian stiffness k relative to the element "
-                   "bending stiffness: k = penalty EI / h_e^4 per unit length"),
+                   "bending stiffness: k = penalty EI / h_e^4 per unit length (the 3D solid: "
+                   "k = penalty mu / mesh_size per unit area)"),
     "max_updates": Key((int,), 50, "augmented-Lagrangian (Uzawa) updates per load step before "
                        "the step is cut back (active-set and multiplier updates)"),
     "quadrature_degree": Key((int,), None, "Gauss rule of the contact integral (default 4 x "
@@ -54,8 +57,10 @@ CONTACT_KEYS = {
 }
 
 
-def parse_obstacle(index: int, given, model, dim: int = 2):
-    """One obstacle of ``[[obstacles]]`` (#index + 1), checked clear of the undeformed rod."""
+def parse_obstacle(index: int, given, model, dim: int = 2, solid: bool = False):
+    """One obstacle of ``[[obstacles]]`` (#index + 1), checked clear of the undeformed rod
+    (``solid``: 3D coordinates, frictionless, checked against the meshed solid later by
+    `fe_beam.fem.solid.contact.SolidContact.check_clear`)."""
     if not isinstance(given, dict):
         raise ConfigError(f"[[obstacles]] #{index + 1} must be a table; got {shown(given)}")
     label = given.get("name") if isinstance(given.get("name"), str) else f"#{index + 1}"
@@ -82,8 +87,9 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
                           f"{', '.join(required + optional)})")
     mu = values["friction"]
     if dim == 3 and mu != 0:
-        raise ConfigError(f"{where} friction is available for planar rods only (a spatial "
-                          "rod's contact is frictionless: leave friction out)")
+        body = "the 3D solid's" if solid else "a spatial rod's"
+        raise ConfigError(f"{where} friction is available for planar rods only ({body} "
+                          "contact is frictionless: leave friction out)")
     if shape == "plane":
         obstacle = _wrap(Plane, name=name, dim=dim, point=values["point"],
                          normal=values["normal"], friction=mu)
@@ -109,12 +115,15 @@ def parse_obstacle(index: int, given, model, dim: int = 2):
                           friction=mu)
                     if corners else
                     _wrap(Box.from_center, values["center"], values["size"], name, dim, mu))
-    check_clear_of_rod(obstacle, model.section, model.length)
+    if not solid:
+        check_clear_of_rod(obstacle, model.section, model.length)
     return obstacle
 
 
-def parse_contact(config: dict, model) -> tuple[tuple, ContactSettings | None]:
-    """(obstacles in the order of [[obstacles]], contact settings or None without obstacles)."""
+def parse_contact(config: dict, model, solid: bool = False
+                  ) -> tuple[tuple, ContactSettings | None]:
+    """(obstacles in the order of [[obstacles]], contact settings or None without obstacles);
+    ``solid``: the 3D solid's obstacles (3D coordinates, ``model`` unused)."""
     given = config.get("obstacles")
     if given is None:
         if "contact" in config:
@@ -126,8 +135,8 @@ def parse_contact(config: dict, model) -> tuple[tuple, ContactSettings | None]:
                           "[[obstacles]] (double brackets), not [obstacles]")
     if not isinstance(given, list) or not given:
         raise ConfigError("[[obstacles]] must list at least one obstacle")
-    dim = 3 if getattr(model, "kinematics", "planar") == "spatial" else 2
-    obstacles = tuple(parse_obstacle(i, o, model, dim) for i, o in enumerate(given))
+    dim = 3 if solid or getattr(model, "kinematics", "planar") == "spatial" else 2
+    obstacles = tuple(parse_obstacle(i, o, model, dim, solid) for i, o in enumerate(given))
     names = [o.name for o in obstacles]
     twice = [n for n in names if names.count(n) > 1]
     if twice:

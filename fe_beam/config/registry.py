@@ -106,7 +106,7 @@ _SPECS = (
                 lambda config, options: parse_modes(config), "modes:run", spatial=True),
     CommandSpec("solid", "3D hyperelastic finger (gmsh, tendon cables), with the 1D rod "
                          "alongside",
-                ("tendons", "solid", "compare", "modes"),
+                ("tendons", "solid", "compare", "modes", "obstacles", "contact"),
                 lambda config, options: parse_solid(config), "solid:run", spatial=True),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",
@@ -150,8 +150,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": "fe-beam static or fe-beam finger for contact with rigid obstacles",
-    "contact": "fe-beam static or fe-beam finger for contact with rigid obstacles",
+    "obstacles": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
+                 "obstacles"),
+    "contact": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
+               "obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 

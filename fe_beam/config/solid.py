@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from fe_beam.config.contact import parse_contact
 from fe_beam.config.finger import parse_finger
 from fe_beam.config.material_laws import (  # noqa: F401
     LAW_CONSTANTS,
@@ -134,6 +135,8 @@ class SolidConfig:
     notes: tuple[str, ...] = ()
     anchor: str = "face"
     modes: dict | None = None  # [modes]: {"count", "about", "rho"} (`parse_solid_modes`)
+    obstacles: tuple = ()  # [[obstacles]] in 3D coordinates (`fe_beam.fem.solid.contact`)
+    contact: object = None  # their ContactSettings ([contact]), None without obstacles
 
     @property
     def length(self) -> float:
@@ -314,6 +317,10 @@ def parse_solid(raw: dict) -> SolidConfig:
     tip_force = _tip_force(loads)
     _check_rod_only_settings(raw, loads)
     law = solid_law(raw, solid)
+    obstacles, contact = parse_contact(raw, None, solid=True)
+    if obstacles and "modes" in raw:
+        raise ConfigError("[modes] with [[obstacles]]: the 3D modal analysis about a state in "
+                          "contact is not available yet; remove [modes] or the obstacles")
 
     formulation = solid["formulation"]
     if formulation not in FORMULATIONS:
@@ -364,7 +371,23 @@ def parse_solid(raw: dict) -> SolidConfig:
         MeshSizes, size, tendon=size / solid["tendon_refinement"], tendon_distance=distance,
         clamp=size / solid["clamp_refinement"], clamp_distance=distance, order=1,
     )
-    rod = _rod_static(raw, law, section, tip_force)
+    # the planar rod's obstacles take 2D coordinates: with 3D ones only the spatial rod runs
+    # beside the solid in contact
+    planar_contact = bool(obstacles) and not spatial_rod(raw)
+    rod_raw = ({k: v for k, v in raw.items() if k not in ("obstacles", "contact")}
+               if planar_contact else raw)
+    tube_note = ""
+    try:
+        rod = _rod_static(rod_raw, law, section, tip_force)
+    except ConfigError as error:
+        if not (obstacles and "undeformed rod" in str(error)):
+            raise
+        # the spatial rod's contact tube (the section's circumradius) reaches farther than the
+        # solid's faces: an obstacle clear of the solid may cut it; the solid runs alone
+        tube_note = (f"no rod comparison: {error} (the spatial rod's contact surface is the "
+                     "tube of the section's circumradius, wider than the solid)")
+        rod = _rod_static({k: v for k, v in raw.items() if k not in ("obstacles", "contact")},
+                          law, section, tip_force)
     paths, tendon_loads, owners, names = _cables(rod, b, sizes.tendon)
     pulled = [name for name, load in zip(names, tendon_loads, strict=True)
               if load.controlled_by_pull_in]
@@ -384,12 +407,22 @@ def parse_solid(raw: dict) -> SolidConfig:
     )
     spatial = [t.name for t in rod.tendons if t.out_of_plane]
     # the spatial rod runs beside any solid; the planar one only in the x-y plane
-    planar = spatial_rod(raw) or (tip_force[2] == 0 and not spatial)
-    rod_note = ("" if planar else ("no rod comparison: the tip force has a z component, which "
-                                   "needs [model] kinematics = \"spatial\"")
-                if tip_force[2] != 0 else
-                f"no rod comparison: [[tendons]] {spatial[0]!r} is routed out of the x-y plane "
-                "(offset_z), which needs [model] kinematics = \"spatial\"")
+    planar = not tube_note and (spatial_rod(raw) or (tip_force[2] == 0 and not spatial
+                                                     and not planar_contact))
+    if planar:
+        rod_note = ""
+    elif tube_note:
+        rod_note = tube_note
+    elif planar_contact:
+        rod_note = ("no rod comparison: [[obstacles]] take 3D coordinates, which the planar rod "
+                    "does not read: [model] kinematics = \"spatial\" runs the rod beside the "
+                    "solid in contact")
+    elif tip_force[2] != 0:
+        rod_note = ("no rod comparison: the tip force has a z component, which needs [model] "
+                    "kinematics = \"spatial\"")
+    else:
+        rod_note = (f"no rod comparison: [[tendons]] {spatial[0]!r} is routed out of the x-y "
+                    "plane (offset_z), which needs [model] kinematics = \"spatial\"")
     notes = []
     if formulation == "displacement" and law.poisson_ratio > NEARLY_INCOMPRESSIBLE_NU:
         notes.append(
@@ -418,6 +451,8 @@ def parse_solid(raw: dict) -> SolidConfig:
         notes=tuple(notes),
         anchor=solid["anchor"],
         modes=parse_solid_modes(raw, tip_force, tendon_loads),
+        obstacles=obstacles,
+        contact=contact,
     )
 
 

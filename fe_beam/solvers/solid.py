@@ -41,6 +41,7 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_max, global_sum
 from fe_beam.fem.solid.cable import TendonCable
+from fe_beam.fem.solid.contact import SolidContact
 from fe_beam.fem.solid.geometry import CLAMP_TAG, TIP_TAG, FingerMesh
 from fe_beam.model.hyperelastic import HyperelasticLaw
 from fe_beam.model.settings import (
@@ -54,6 +55,7 @@ from fe_beam.model.solid import (  # noqa: F401  (their home; re-exported)
     Discretization,
     TendonLoad,
 )
+from fe_beam.solvers.contact import ContactSolver
 from fe_beam.solvers.continuation import (
     BorderedConstraintSolver,
     Continuation,
@@ -86,6 +88,9 @@ class SolidFingerProblem:
     tendons : one `TendonLoad` per tendon of ``finger.geometry`` (default: all slack).
     tip_force : total dead force (N) on the tip face, spread as a uniform traction.
     discretization, solver : see `Discretization`, `fe_beam.solvers.newton.SolverSettings`.
+    obstacles, contact : rigid obstacles (3D `fe_beam.model.obstacles` shapes) the exterior
+        boundary may touch, and their `ContactSettings` (`fe_beam.fem.solid.contact`;
+        augmented-Lagrangian Uzawa updates around Newton, `fe_beam.solvers.contact`).
     """
 
     def __init__(
@@ -98,6 +103,8 @@ class SolidFingerProblem:
         solver: SolverSettings | None = None,
         prefix: str = "fe_beam_solid_",
         anchor: str = "face",
+        obstacles: Sequence = (),
+        contact=None,
     ):
         if anchor not in ANCHORS:
             raise ValueError(f"anchor must be one of {', '.join(ANCHORS)}, got {anchor!r}")
@@ -119,6 +126,11 @@ class SolidFingerProblem:
         if not mixed and math.isinf(material.kappa):
             raise ValueError("material.kappa = inf needs discretization.formulation = 'mixed'")
         self.load_factor = 0.0
+        self.obstacles = tuple(obstacles)
+        if any(o.dim != 3 for o in self.obstacles):
+            raise ValueError("the solid's obstacles take 3D coordinates (dim = 3)")
+        self.contact_settings = contact
+        self.contact: SolidContact | None = None
 
         self._spaces()
         self._measures()
@@ -192,6 +204,17 @@ class SolidFingerProblem:
         self.traction = fem.Constant(msh, np.zeros(3, dtype=PETSc.ScalarType))
         external = ufl.dot(self.traction, self.u) * self.ds(TIP_TAG)
         self.potential = energy_density * self.dx - external
+        if self.obstacles:
+            geometry = self.finger.geometry
+            settings = self.contact_settings
+            tolerance = (settings.penetration_tolerance
+                         if settings is not None and settings.penetration_tolerance else
+                         1e-3 * min(geometry.height(0.0), geometry.height(geometry.length),
+                                    geometry.width))
+            self.contact = SolidContact(self.obstacles, settings, msh, self.u,
+                                        self.discretization.degree, law.shear_modulus,
+                                        self.finger.sizes.size, tolerance)
+            self.potential = self.potential + self.contact.energy
         self.residual = ufl.derivative(self.potential, self.w, ufl.TestFunction(self.W))
 
     def _boundary_conditions(self) -> None:
@@ -274,6 +297,8 @@ class SolidFingerProblem:
             )
         else:
             self.solver = self.snes_solver
+        if self.contact is not None:
+            self.solver = ContactSolver(self.solver, self.contact)
 
     def _postprocessing_forms(self) -> None:
         ds_tip = self.ds(TIP_TAG)
@@ -328,6 +353,7 @@ class SolidFingerProblem:
         steps = []
 
         def on_converged(step):
+            self.accept_step()
             if not record_steps:
                 return
             rot = self.tip_rotation()
@@ -339,6 +365,7 @@ class SolidFingerProblem:
                     "tensions": self.tensions(),
                     "tip_displacement": self.tip_displacement().tolist(),
                     "tip_rotation": rot["angle"],
+                    **({"contact": self.contact.summary()} if self.contact else {}),
                 }
             )
 
@@ -347,6 +374,11 @@ class SolidFingerProblem:
         engine.load_control(1.0, stepping or LoadStepping(steps=5), on_converged=on_converged,
                             progress=progress, label="solid")
         return {"steps": steps, **self.summary()}
+
+    def accept_step(self) -> None:
+        """A load step was accepted: the contact multipliers become the committed ones."""
+        if self.contact is not None:
+            self.contact.commit()
 
     def parameter_problem(self):
         """This problem as a `fe_beam.solvers.continuation.ParameterProblem` of the load factor
@@ -477,6 +509,7 @@ class SolidFingerProblem:
             "tendon_reference_lengths": [c.reference_length for c in self.cables],
             "backbone": self.backbone(),
             **stretch_keys(self.max_principal_stretches()),
+            **({"contact": self.contact.summary()} if self.contact else {}),
         }
 
 

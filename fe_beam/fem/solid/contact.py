@@ -1,0 +1,207 @@
+"""Contact of the 3D solid with rigid obstacles (docs/theory.md, Contact of the 3D solid):
+frictionless, augmented Lagrangian on the exterior facets.
+
+Gap. A boundary point X of the reference body sits at x = X + u(X); its gap to an obstacle is
+the signed distance g(x) of `fe_beam.fem.contact.point_gap` (the same formulas as the rod's,
+in 3D coordinates), g >= 0 admissible.
+
+Enforcement, per obstacle (Alart-Curnier / Rockafellar, the rod's density
+`fe_beam.fem.contact.augmented_lagrangian_density`):
+
+    Pi_c = int_{dOmega_0} 1/(2k) (<lambda - k g>_+^2 - lambda^2) dA,
+
+integrated over the whole exterior boundary of the reference body (the clamp does not move)
+with its own quadrature rule (``[contact] quadrature_degree``, default 2 p for P_p
+displacements: 4 for P2, 6 points per triangle). Its variation is -int p dg dA with the nominal
+contact pressure p = <lambda - k g>_+ >= 0 [N per reference m^2]. The multiplier lambda is a
+P1 Lagrange field whose vertices on the exterior facets carry it (zero elsewhere; not P2: the
+vertex functions of a P2 triangle integrate to zero, so a P2 vertex multiplier pushes with no
+net force), updated at the vertices by Uzawa,
+lambda <- <lambda - k g>_+ (`SolidContact.update`), between Newton solves
+(`fe_beam.solvers.contact.ContactSolver`); with lambda = 0 the first solve is the plain penalty
+k/2 <-g>_+^2. Newton solves the semi-smooth problem directly (the Heaviside step in its
+Jacobian).
+
+Penalty: k = penalty * mu / h [Pa/m], mu the law's small-strain shear modulus and h the mesh's
+element size (``[solid] mesh_size``): a pressure mu squeezes a layer of one element by about
+1 / penalty of its thickness before the Uzawa updates remove the penetration.
+
+Measured per obstacle (`SolidContact.summary`): the force the obstacle exerts on the solid
+F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative of g), the
+active area int [p > 0] dA (reference), the peak pressure max p at the vertices of the
+exterior facets (where lambda lives) and the largest penetration max(-g) there: a converged
+step is accepted only with max_penetration <= the tolerance. Between the vertices (the P2 edge
+midpoints, the quadrature points) the surface is held by the penalty alone: a P1 multiplier
+cannot cancel a midpoint's own penetration, which stays about p / k (on a short block with
+nu = 0.3 the midpoints' residual 1e-6 m stalled the Uzawa updates when they were measured
+there), and a contact patch smaller than the boundary elements (a ball touching a coarse mesh
+between its vertices) is held by k alone and not seen by the check.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from fe_beam.errors import ConfigError
+from fe_beam.fem import compat
+from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, point_gap
+from fe_beam.fem.mpi import assemble_scalar, global_max
+from fe_beam.model.obstacles import ContactSettings
+
+__all__ = ["SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
+
+
+# --- pure functions returning UFL ---------------------------------------------------------------
+def solid_gap(obstacle, X, u):
+    """Signed distance (UFL) of the deformed boundary point x = X + u to the obstacle."""
+    return point_gap(obstacle, X + u)
+
+
+def solid_contact_density(obstacle, X, u, multiplier, k):
+    """The augmented-Lagrangian energy density per reference area (module docstring)."""
+    return augmented_lagrangian_density(multiplier, solid_gap(obstacle, X, u), k)
+
+
+def solid_traction(obstacle, X, u, multiplier, k):
+    """The nominal traction the obstacle exerts on the solid, p grad g(x) (UFL vector)."""
+    x = ufl.variable(X + u)
+    gap = point_gap(obstacle, x)
+    return contact_pressure(multiplier, gap, k) * ufl.diff(gap, x)
+
+
+class SolidContact:
+    """Multipliers, energy and measurements of the solid's contact with ``obstacles``.
+
+    The interface of `fe_beam.fem.contact.ContactSet` that `fe_beam.solvers.contact.ContactSolver`
+    uses: ``tolerance``, ``settings``, ``restore``, ``commit``, ``evaluate``, ``update``,
+    ``max_penetration``, ``max_separation``.
+    """
+
+    def __init__(self, obstacles, settings: ContactSettings | None, mesh, u, degree: int,
+                 shear_modulus: float, element_size: float, tolerance: float):
+        self.obstacles = tuple(obstacles)
+        self.settings = settings or ContactSettings()
+        self.tolerance = float(tolerance)
+        self.mesh, self.u = mesh, u
+        self.comm = mesh.comm
+        self.k = self.settings.penalty * float(shear_modulus) / float(element_size)
+        self.quadrature_degree = self.settings.quadrature_degree or 2 * degree
+        self.Q = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
+        #: the gap is measured at the P_p nodes (vertices and, for P2, edge midpoints)
+        self.Q_nodes = compat.function_space(mesh, compat.element(mesh, "Lagrange", degree))
+        fdim = mesh.topology.dim - 1
+        facets = compat.locate_entities_boundary(mesh, fdim,
+                                                 lambda x: np.full(x.shape[1], True))
+        self._boundary, self._owned = self._masks(self.Q, facets)
+        self._boundary_nodes, self._owned_nodes = self._masks(self.Q_nodes, facets)
+        self.ds = ufl.Measure("ds", domain=mesh,
+                              metadata={"quadrature_degree": self.quadrature_degree})
+        X = ufl.SpatialCoordinate(mesh)
+        self.multipliers = [fem.Function(self.Q, name=f"lambda_{o.name}") for o in obstacles]
+        self._gaps = [fem.Function(self.Q) for _ in obstacles]
+        self._gap_expr = [compat.interpolation_expression(solid_gap(o, X, u), self.Q)
+                          for o in self.obstacles]
+        self._node_gaps = [fem.Function(self.Q_nodes) for _ in obstacles]
+        self._node_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
+                                                               self.Q_nodes)
+                               for o in self.obstacles]
+        k = fem.Constant(mesh, float(self.k))
+        self._k = k
+        self.energy = sum(solid_contact_density(o, X, u, lam, k) * self.ds
+                          for o, lam in zip(self.obstacles, self.multipliers, strict=True))
+        self._force = [[fem.form(solid_traction(o, X, u, lam, k)[i] * self.ds)
+                        for i in range(3)]
+                       for o, lam in zip(self.obstacles, self.multipliers, strict=True)]
+        self._area = [fem.form(ufl.conditional(ufl.gt(contact_pressure(lam, solid_gap(o, X, u),
+                                                                       k), 0), 1.0, 0.0)
+                               * self.ds)
+                      for o, lam in zip(self.obstacles, self.multipliers, strict=True)]
+        self._committed = self._copy()
+        self.check_clear()
+
+    @staticmethod
+    def _masks(space, facets):
+        """(on the exterior facets, owned) masks of the local dofs of a scalar space."""
+        dofs = fem.locate_dofs_topological(space, space.mesh.topology.dim - 1, facets)
+        boundary = np.zeros(len(compat.local_array(fem.Function(space))), dtype=bool)
+        boundary[dofs] = True
+        return boundary, np.arange(len(boundary)) < space.dofmap.index_map.size_local
+
+    # --- state ------------------------------------------------------------------------------
+    def _copy(self):
+        return [compat.local_array(lam).copy() for lam in self.multipliers]
+
+    def restore(self) -> None:
+        """Multipliers back to those of the last accepted state (`commit`)."""
+        for lam, saved in zip(self.multipliers, self._committed, strict=True):
+            compat.local_array(lam)[:] = saved
+
+    def commit(self) -> None:
+        self._committed = self._copy()
+
+    def _nodal_gaps(self, nodes: bool = False) -> list[np.ndarray]:
+        values = []
+        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes else
+                                  (self._gaps, self._gap_expr))
+        for gap, expr in zip(functions, expressions, strict=True):
+            gap.interpolate(expr)
+            values.append(compat.local_array(gap).copy())
+        return values
+
+    def check_clear(self) -> None:
+        """ConfigError when an obstacle touches or intersects the undeformed solid (a node of
+        the mesh on or inside it); called before any load (u = 0)."""
+        for obstacle, gap in zip(self.obstacles, self._nodal_gaps(nodes=True), strict=True):
+            mine = gap[self._owned_nodes]
+            worst = float(mine.min()) if len(mine) else np.inf
+            worst = -global_max(self.comm, -worst)
+            if not worst > 0:
+                raise ConfigError(
+                    f"{obstacle.where} the {obstacle.shape} intersects the undeformed solid "
+                    f"(a node of the mesh is {-worst:.4g} m inside it); move it clear of the "
+                    "body (0 <= x <= L, |y| <= h(x)/2, |z| <= b/2)")
+
+    def evaluate(self) -> dict:
+        """Gaps, pressures and the largest penetration at the exterior-facet vertices (the
+        multipliers'; owned nodes, MPI-reduced)."""
+        gaps = self._nodal_gaps()
+        pressures = [np.where(self._boundary, np.maximum(
+            compat.local_array(lam) - self.k * g, 0.0), 0.0)
+                     for lam, g in zip(self.multipliers, gaps, strict=True)]
+        penetration = [global_max(self.comm, float(np.max(
+            np.where(self._boundary & self._owned, -g, 0.0), initial=0.0))) for g in gaps]
+        peak = [global_max(self.comm, float(np.max(np.where(self._owned, p, 0.0),
+                                                      initial=0.0))) for p in pressures]
+        return {"gaps": gaps, "pressures": pressures, "penetration": penetration,
+                "pressure_peak": peak, "active_changes": 0, "friction_changes": 0}
+
+    def max_penetration(self, state: dict | None = None) -> float:
+        state = self.evaluate() if state is None else state
+        return max(state["penetration"], default=0.0)
+
+    def max_separation(self, state: dict | None = None) -> float:
+        """0: the solid's complementarity is not checked beyond the penetration."""
+        return 0.0
+
+    def update(self, state: dict | None = None, multipliers: bool = True) -> None:
+        """Uzawa: lambda <- <lambda - k g>_+ at the exterior-facet nodes."""
+        state = self.evaluate() if state is None else state
+        for lam, p in zip(self.multipliers, state["pressures"], strict=True):
+            compat.local_array(lam)[:] = p
+
+    def summary(self, state: dict | None = None) -> list[dict]:
+        """One entry per obstacle: force [N] (on the solid), active_area [m^2, reference],
+        max_penetration [m], pressure_peak [Pa, nominal] (collective)."""
+        state = self.evaluate() if state is None else state
+        entries = []
+        for i, obstacle in enumerate(self.obstacles):
+            entries.append({
+                "name": obstacle.name,
+                "force": [assemble_scalar(f) for f in self._force[i]],
+                "active_area": assemble_scalar(self._area[i]),
+                "max_penetration": state["penetration"][i],
+                "pressure_peak": state["pressure_peak"][i],
+            })
+        return entries
