@@ -240,6 +240,8 @@ class BeamProblem:
     #: the unknowns' names, in the mixed space's order (before the multipliers)
     components = COMPONENTS
     spatial = False
+    #: (key, component) of `end_reaction`
+    reaction_keys = (("Fx", "u"), ("Fy", "v"), ("M", "theta"))
 
     def __init__(
         self,
@@ -581,7 +583,9 @@ class BeamProblem:
 
     def end_reaction(self, end: str = "xL") -> dict:
         """The support's force and moment on the beam at an end, {Fx, Fy, M} (global axes;
-        0 on free components): the residual of the current state at the end's dofs."""
+        0 on free components): the residual of the current state at the end's dofs. Spatial
+        rods: {Fx, Fy, Fz, M_theta_x, M_theta_y, M_theta_z}, the rotation rows the
+        work-conjugates of the rotation vector."""
         if not hasattr(self, "_residual_form"):
             self._residual_form = fem.form(self.residual)
         from petsc4py import PETSc
@@ -591,7 +595,7 @@ class BeamProblem:
         values = vector.getArray(readonly=True)
         fixed = self.model.supports.fixed(end)
         result = {}
-        for key, name in (("Fx", "u"), ("Fy", "v"), ("M", "theta")):
+        for key, name in self.reaction_keys:
             local = values[self.component_dofs(name, end)].sum() if name in fixed else 0.0
             result[key] = float(global_sum(self.comm, local))
         vector.destroy()

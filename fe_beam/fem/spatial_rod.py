@@ -21,7 +21,7 @@ import ufl
 from dolfinx import fem
 
 from fe_beam.fem import compat
-from fe_beam.fem.mpi import assemble_scalar, global_sum
+from fe_beam.fem.mpi import assemble_scalar
 from fe_beam.fem.rod import BeamProblem, StrainRange
 from fe_beam.fem.rotations import (
     angular_velocity,
@@ -144,6 +144,8 @@ class SpatialRodProblem(BeamProblem):
 
     components = SPATIAL_COMPONENTS
     spatial = True
+    reaction_keys = tuple(zip(("Fx", "Fy", "Fz", "M_theta_x", "M_theta_y", "M_theta_z"),
+                              SPATIAL_COMPONENTS, strict=True))
 
     def __init__(self, model: SpatialRodModel, comm, breakpoints=(), extra_energy=None,
                  extra_work=None):
@@ -361,26 +363,6 @@ class SpatialRodProblem(BeamProblem):
                 "rotation_vector": [float(c) for c in vector],
                 "position": [float(x + displacement[0]), float(displacement[1]),
                              float(displacement[2])]}
-
-    def end_reaction(self, end: str = "xL") -> dict:
-        """The support's force and moment-like residual on the rod at an end, {Fx, Fy, Fz,
-        M_theta_x, M_theta_y, M_theta_z} (the residual at the end's dofs: forces in world axes;
-        the rotation rows are the work-conjugates of the rotation vector)."""
-        if not hasattr(self, "_residual_form"):
-            self._residual_form = fem.form(self.residual)
-        from petsc4py import PETSc
-
-        vector = compat.assemble_vector(self._residual_form)
-        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        values = vector.getArray(readonly=True)
-        fixed = self.model.supports.fixed(end)
-        result = {}
-        for key, name in zip(("Fx", "Fy", "Fz", "M_theta_x", "M_theta_y", "M_theta_z"),
-                             SPATIAL_COMPONENTS, strict=True):
-            local = values[self.component_dofs(name, end)].sum() if name in fixed else 0.0
-            result[key] = float(global_sum(self.comm, local))
-        vector.destroy()
-        return result
 
     def output_expressions(self) -> dict:
         d, theta, _ = self.fields()
