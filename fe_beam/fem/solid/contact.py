@@ -193,15 +193,39 @@ class SolidContact:
 
     def summary(self, state: dict | None = None) -> list[dict]:
         """One entry per obstacle: force [N] (on the solid), active_area [m^2, reference],
-        max_penetration [m], pressure_peak [Pa, nominal] (collective)."""
+        max_penetration [m], pressure_peak [Pa, nominal], extent ([x0, x1]: the reference x
+        range of the exterior-facet vertices that carry pressure, None without any: the contact
+        patch along the backbone, `contact_extent`) and contact_length = x1 - x0 [m]
+        (collective)."""
         state = self.evaluate() if state is None else state
         entries = []
         for i, obstacle in enumerate(self.obstacles):
+            extent = self.contact_extent(state["pressures"][i])
             entries.append({
                 "name": obstacle.name,
                 "force": [assemble_scalar(f) for f in self._force[i]],
                 "active_area": assemble_scalar(self._area[i]),
                 "max_penetration": state["penetration"][i],
                 "pressure_peak": state["pressure_peak"][i],
+                "extent": extent,
+                "contact_length": 0.0 if extent is None else extent[1] - extent[0],
             })
         return entries
+
+    def contact_extent(self, pressure: np.ndarray) -> list[float] | None:
+        """[min x, max x] of the reference positions of the owned exterior-facet vertices
+        where ``pressure`` (local P1 values) is > 0, over the ranks; None when none is."""
+        if not hasattr(self, "_x_nodes"):
+            self._x_nodes = self.Q.tabulate_dof_coordinates()[:, 0].copy()
+        pressed = self._x_nodes[:len(pressure)][(pressure > 0) & self._boundary & self._owned]
+        low = -global_max(self.comm, -float(pressed.min()) if len(pressed) else -np.inf)
+        high = global_max(self.comm, float(pressed.max()) if len(pressed) else -np.inf)
+        return [low, high] if np.isfinite(low) and np.isfinite(high) else None
+
+    def output_fields(self, state: dict | None = None) -> tuple[list[np.ndarray],
+                                                                list[np.ndarray]]:
+        """(gaps, pressures): per obstacle the local P1 values (the multiplier space, ``Q``) of
+        the signed gap [m] at every vertex and of the nominal contact pressure [Pa] at the
+        exterior-facet vertices (0 elsewhere): the values `summary` measures (for the XDMF)."""
+        state = self.evaluate() if state is None else state
+        return state["gaps"], state["pressures"]
