@@ -8,9 +8,10 @@ The files are written by `fe_beam.exports.outputs.XDMFSeries`: readable at any m
 In contact with [[obstacles]] (the problem's ``contact``, `fe_beam.fem.solid.contact.SolidContact`),
 per obstacle i (the order of [[obstacles]]) also ``contact_gap_i`` (the signed gap [m] of the
 deformed point x = X + u to the obstacle, at every vertex) and ``contact_pressure_i`` (the
-nominal contact pressure <lambda - k g>_+ [Pa, per reference area] at the exterior-facet
-vertices, 0 elsewhere: the values whose maximum is the summary's pressure_peak), both nodal (P1,
-as the multipliers; interpolated into the geometry's space).
+nominal contact pressure [Pa, per reference area] at the exterior-facet vertices, 0 elsewhere:
+the lumped L2 projection of the quadrature-point pressure <lambda - k g>_+, so that its surface
+integral is the summary's int p dA, `SolidContact.output_fields`), both nodal (P1, as the
+multipliers; interpolated into the geometry's space).
 """
 
 from __future__ import annotations
