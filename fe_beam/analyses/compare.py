@@ -284,7 +284,7 @@ def _departures(rows: list[dict], config: CompareConfig, scale: float | None) ->
             f"rod ({law}) vs 3D solid, d = max_x |r_rod - r_solid| / L: " + "; ".join(words)
             + (f" (largest d in the sweep: {100 * biggest:.3g} %)" if biggest is not None else "")
         )
-        if config.solid.obstacles:
+        if getattr(config.solid, "obstacles", ()):
             found = [(r["rod"][law]["max_contact_force_difference"], r["load_factor"])
                      for r in rows if "max_contact_force_difference" in r["rod"][law]]
             top = max(found, default=None)
@@ -380,7 +380,8 @@ def _exports(out: Path, config: CompareConfig, content, every_step: bool = True)
     return [exports.SummaryExport(out / "summary.json", content),
             exports.CSVExport(out / "compare.csv",
                               lambda first: _columns(first, config.laws, config.spatial,
-                                                     len(config.solid.obstacles))),
+                                                     len(getattr(config.solid, "obstacles",
+                                                                 ())))),
             exports.PlotExport(lambda summary: _plot(out, summary, config)
                                if summary["table"] and config.solid.output.plots else None,
                                content, every_step)]
@@ -414,6 +415,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
     axis_values = [r.get("tension", r["load_factor"]) if tensions else r["load_factor"]
                    for r in rows]
     length = config.solid.length
+    obstacles = getattr(config.solid, "obstacles", ())
 
     views = ((("v", "y + v [m]"), ("w", "z + w [m]")) if getattr(config, "spatial", False)
              else (("v", "y + v [m]"),))
@@ -434,11 +436,11 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                               backbone.get(key, np.zeros(len(backbone["x"]))), style,
                               color=colour, lw=1.6,
                               label=f"{text}, {sweep_label(value, bool(tensions))}")
-            if config.solid.obstacles:  # the obstacles (3D) seen along the remaining axis
+            if obstacles:  # the obstacles (3D) seen along the remaining axis
                 limits = axis.get_xlim(), axis.get_ylim()
                 low, high = (np.array([limits[0][0], limits[1][0]]),
                              np.array([limits[0][1], limits[1][1]]))
-                _draw_view_obstacles(axis, config.solid.obstacles, 0, 1 if key == "v" else 2,
+                _draw_view_obstacles(axis, obstacles, 0, 1 if key == "v" else 2,
                                      low, high)
                 axis.set_xlim(*limits[0])
                 axis.set_ylim(*limits[1])
@@ -480,7 +482,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
         axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
-    if config.solid.obstacles:
+    if obstacles:
         _plot_contact(out, rows, axis_values, label, config)
 
 
