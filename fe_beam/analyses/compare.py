@@ -55,7 +55,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
-from fe_beam.analyses.solid import SolidRun
+from fe_beam.analyses.solid import SolidRun, draw_obstacles_in_view
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_distance, tip_frame
 from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
     COMPARE_KEYS,
@@ -69,7 +69,6 @@ from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
     rod_at,
 )
 from fe_beam.exports.outputs import _pyplot
-from fe_beam.exports.spatial import _draw_view_obstacles
 from fe_beam.solvers.newton import LoadSteppingFailed
 
 __all__ = ["run", "COMPARE_KEYS", "THRESHOLDS", "CompareConfig", "parse_compare", "run_compare"]
@@ -437,16 +436,13 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                               color=colour, lw=1.6,
                               label=f"{text}, {sweep_label(value, bool(tensions))}")
             if obstacles:  # the obstacles (3D) seen along the remaining axis
-                limits = axis.get_xlim(), axis.get_ylim()
-                low, high = (np.array([limits[0][0], limits[1][0]]),
-                             np.array([limits[0][1], limits[1][1]]))
-                _draw_view_obstacles(axis, obstacles, 0, 1 if key == "v" else 2,
-                                     low, high)
-                axis.set_xlim(*limits[0])
-                axis.set_ylim(*limits[1])
+                geometry = config.solid.geometry
+                draw_obstacles_in_view(axis, obstacles, 1 if key == "v" else 2,
+                                       geometry.height_base if key == "v" else geometry.width)
             axis.set_xlabel("x + u [m]")
             axis.set_ylabel(text_y)
             axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)"
+                           + (": section centroids, obstacles in grey" if obstacles else "")
                            + (f" ({text_y[0]} view)" if getattr(config, "spatial", False) else ""),
                              fontsize=9)
             axis.grid(alpha=0.3)

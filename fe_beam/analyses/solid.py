@@ -384,6 +384,17 @@ def _write_tables(out: Path, summary: dict) -> None:
               [[c.get(s) for c in columns] for s in steps])
 
 
+def draw_obstacles_in_view(axis, obstacles, j: int, thickness: float) -> None:
+    """The 3D ``obstacles`` in grey in the view (x, component ``j``) of backbones (the section
+    centroids): the view widened by the body's ``thickness`` in that direction on both sides
+    (an obstacle the surface touches lies within half of it), then kept."""
+    (x0, x1), (y0, y1) = axis.get_xlim(), axis.get_ylim()
+    y0, y1 = y0 - thickness, y1 + thickness
+    _draw_view_obstacles(axis, obstacles, 0, j, np.array([x0, y0]), np.array([x1, y1]))
+    axis.set_xlim(x0, x1)
+    axis.set_ylim(y0, y1)
+
+
 def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
     """backbone.png (deformed backbones, 3D and rod) and load_displacement.png (tip u, v, theta
     against the load factor) of ``summary`` (with at least one step)."""
@@ -406,13 +417,8 @@ def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
             axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
                       label=f"rod ({rod['law']}), load factor "
                       f"{rod['steps'][-1]['load_factor']:.3g}")
-        if config.obstacles:  # seen along z, the region of the backbones kept
-            limits = axis.get_xlim(), axis.get_ylim()
-            _draw_view_obstacles(axis, config.obstacles, 0, 1,
-                                 np.array([limits[0][0], limits[1][0]]),
-                                 np.array([limits[0][1], limits[1][1]]))
-            axis.set_xlim(*limits[0])
-            axis.set_ylim(*limits[1])
+        if config.obstacles:  # seen along z (backbones: the section centroids)
+            draw_obstacles_in_view(axis, config.obstacles, 1, config.geometry.height_base)
         axis.set_xlabel("x + u [m]")
         axis.set_ylabel("y + v [m]")
         axis.set_title(f"Backbone: 3D {config.material_name} vs rod")
