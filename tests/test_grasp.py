@@ -1,0 +1,252 @@
+"""Grasp studies (issue 23 item 5): fe-beam design for a grasp force, the grasp examples, and
+an independent check of a grasp state.
+
+- The designed tendon offset, written into the finger's configuration and run by `fe-beam
+  finger`, grips the cylinder with the target force to the design's tolerance.
+- The contact force is checked by itself: the same finger without the obstacle, pulled by the
+  same tendon and loaded by the reported contact force as a dead point force where its line of
+  action (the reported force and moment about the origin) crosses the centreline, takes the
+  contacting shape (tip within 2e-4 L, the section's surface on the cylinder within 0.1 mm);
+  a force 10 % off misses by far more.
+- The examples grip with forces that are positive and grow with the tension; the wrap has two
+  contact intervals; bad [design] tables exit 2 with one sentence; a target the bounds cannot
+  reach is not met (exit 3, summary written), never reported as met.
+"""
+
+import copy
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from tomlio import dump_toml
+
+from fe_beam.analyses.design import run_design
+from fe_beam.analyses.finger import grasp_force
+from fe_beam.analyses.static import solve_static
+from fe_beam.cli import main
+from fe_beam.config.design import parse_design
+from fe_beam.config.finger import parse_finger
+from fe_beam.config.schema import load_config
+from fe_beam.errors import ConfigError
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+QUIET = {"output": {"plots": False, "xdmf": False}}
+
+
+def example(name: str) -> dict:
+    return load_config(EXAMPLES / name) | copy.deepcopy(QUIET)
+
+
+def finger_of(design_config: dict, **tendon) -> dict:
+    """The finger configuration of a design configuration, with tendon 0's keys changed."""
+    config = {k: copy.deepcopy(v) for k, v in design_config.items() if k != "design"}
+    config["tendons"][0].update(tendon)
+    return config
+
+
+def sweep(config: dict):
+    parsed, _ = parse_finger(config)
+    result = solve_static(parsed, None, MPI.COMM_WORLD, progress=False, record_shapes=False,
+                          stability=False)
+    assert result.status == "converged", result.message
+    return parsed, result
+
+
+@pytest.mark.mpi
+def test_designed_offset_gives_the_target_grasp_force_in_fe_beam_finger(tmp_path):
+    config = example("finger_grasp_design.toml")
+    summary = run_design(copy.deepcopy(config), None, MPI.COMM_WORLD)
+    grasp = summary["grasp"]
+    tolerance, target = grasp["tolerance"], grasp["target"]
+    assert summary["status"] == "converged", summary["message"]
+    assert (target, tolerance) == (1.0, 1e-3)
+    assert abs(grasp["value"] - target) <= tolerance
+    assert abs(math.hypot(*grasp["contact"]["force"]) - grasp["value"]) < 1e-12
+    offset = summary["variables"]["tendons.0.offset_base"]
+    low, high = summary["bounds"]["tendons.0.offset_base"]
+    assert low < offset < high
+    # the same value on every rank
+    assert len(set(MPI.COMM_WORLD.allgather(offset))) == 1
+    # fe-beam finger with the designed offset: the same grasp force (the same load stepping)
+    path = tmp_path / "finger.toml"
+    finger = finger_of(config, offset_base=offset)
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(dump_toml(finger))
+    MPI.COMM_WORLD.barrier()
+    out = tmp_path / "out"
+    assert main(["finger", str(path), "--out", str(out), "--quiet"]) == 0
+    if MPI.COMM_WORLD.rank == 0:
+        final = json.loads((out / "summary.json").read_text())["steps"][-1]
+        assert final["tensions"][0] == pytest.approx(5.0, rel=1e-12)
+        force = grasp_force(final)[0]
+        assert abs(force - target) <= tolerance
+        assert force == pytest.approx(grasp["value"], abs=1e-9)
+        with open(out / "tension_sweep.csv") as table:
+            rows = list(csv.DictReader(table))
+        assert float(rows[-1]["grasp_force_0"]) == pytest.approx(force, rel=1e-9)
+
+
+def test_unreachable_grasp_target_is_not_met_exit_3(tmp_path, capfd):
+    """5 N of grip is beyond every offset within the bounds (1.09 N at the upper one): exit 3,
+    status "not converged", the message names the forces reached; never "converged"."""
+    config = example("finger_grasp_design.toml")
+    config["design"]["target"] = {"obstacle": "bottle", "force": 5.0}
+    config["design"].pop("tolerance")
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "--quiet"]) == 3
+    err = capfd.readouterr().err
+    assert "the target is not met" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "not converged"
+    assert summary["grasp"]["value"] < 1.1 < 5.0 - summary["grasp"]["tolerance"]
+    # the closest trial is the upper bound, and its force is the one reported
+    assert summary["variables"]["tendons.0.offset_base"] == pytest.approx(0.0095)
+
+
+def _line_crossing(shape: dict, force, moment: float) -> float:
+    """Reference x where the line of action of ``force`` (moment ``moment`` about the origin)
+    crosses the deformed centreline (vertex values, linear in between)."""
+    x = np.asarray(shape["x"])
+    px, py = x + np.asarray(shape["u"]), np.asarray(shape["v"])
+    excess = px * force[1] - py * force[0] - moment  # (r x F)_z - M along the rod
+    crossings = np.flatnonzero(np.sign(excess[:-1]) != np.sign(excess[1:]))
+    assert len(crossings) == 1, crossings
+    i = crossings[0]
+    return float(x[i] + (x[i + 1] - x[i]) * excess[i] / (excess[i] - excess[i + 1]))
+
+
+def test_contact_force_as_a_point_force_gives_the_grasp_shape():
+    """Independent check of the contact force: the finger without the cylinder, the same
+    tendon, and the reported force as a dead point force at its line of action's crossing
+    with the centreline: the tip within 2e-4 L of the grasp, the section's surface at that
+    point on the cylinder within 0.1 mm (the penetration tolerance is 0.01 mm); 0.9 x the
+    force puts the tip 10x farther off."""
+    config = example("finger_grasp.toml")
+    parsed, grasp = sweep(copy.deepcopy(config))
+    length = parsed.model.length
+    obstacle = parsed.obstacles[0]
+    entry = grasp.steps[-1]["contact"][0]
+    force, moment = entry["force"], entry["moment"]
+    assert math.hypot(*force) > 0.5 and len(entry["active"]) == 1
+    shaped = solve_static(parsed, None, MPI.COMM_WORLD, progress=False, record_shapes=True,
+                          stability=False)
+    x_c = _line_crossing(shaped.shapes[-1][1], force, moment)
+    a, b = entry["active"][0]
+    assert a - 1e-3 <= x_c <= b + 1e-3  # where the finger touches
+
+    def loaded(factor: float):
+        free = copy.deepcopy(config)
+        free.pop("obstacles")
+        free.pop("contact")
+        free["loads"]["point_forces"] = [[x_c, factor * force[0], factor * force[1]]]
+        return sweep(free)
+
+    free_parsed, free = loaded(1.0)
+    tip, tip_free = grasp.steps[-1]["tip"], free.steps[-1]["tip"]
+    miss = math.hypot(tip["u"] - tip_free["u"], tip["v"] - tip_free["v"])
+    assert miss < 2e-4 * length, miss / length
+    assert abs(tip["theta"] - tip_free["theta"]) < 5e-4
+    # the point of the section facing the cylinder lies on it
+    shape = solve_static(free_parsed, None, MPI.COMM_WORLD, progress=False, record_shapes=True,
+                         stability=False).shapes[-1][1]
+    x = np.asarray(shape["x"])
+    r = np.array([np.interp(x_c, x, x + np.asarray(shape["u"])),
+                  np.interp(x_c, x, np.asarray(shape["v"]))])
+    theta = np.interp(x_c, x, np.asarray(shape["theta"]))
+    half = free_parsed.model.section.properties(x_c / length).h / 2
+    surface = r + half * np.array([-math.sin(theta), math.cos(theta)])
+    gap = np.linalg.norm(surface - np.array(obstacle.point)) - obstacle.radius
+    assert abs(gap) < 1e-4, gap
+    # discriminating: a force 10 % smaller misses the grasp shape by far more
+    _, weaker = loaded(0.9)
+    off = weaker.steps[-1]["tip"]
+    assert math.hypot(tip["u"] - off["u"], tip["v"] - off["v"]) > 10 * miss
+
+
+@pytest.mark.parametrize("name", ["finger_grasp.toml", "pinch.toml", "finger_wrap.toml"])
+def test_examples_grip_harder_with_more_tension(name):
+    """Once touched, the grasp force is positive and grows with the tension at every step,
+    with every accepted step within the penetration tolerance."""
+    parsed, result = sweep(example(name))
+    tolerance = parsed.contact.tolerance(parsed.model.section)
+    forces = [grasp_force(s)[0] for s in result.steps]
+    tensions = [s["tensions"][0] for s in result.steps]
+    touched = [i for i, f in enumerate(forces) if f > 0]
+    assert touched and touched == list(range(touched[0], len(forces)))
+    assert all(np.diff([forces[i] for i in touched]) > 0)
+    assert all(np.diff(tensions) > 0)
+    assert all(e["max_penetration"] <= tolerance for s in result.steps for e in s["contact"])
+    final = result.steps[-1]["contact"]
+    if name == "pinch.toml":  # the fingers do not touch each other: no force on the plane
+        assert final[1]["force"] == [0.0, 0.0] and final[0]["name"] == "marker"
+    if name == "finger_wrap.toml":  # a contact zone and the tip
+        assert len(final[0]["active"]) == 2
+        (a, b), (c, d) = final[0]["active"]
+        assert b - a > 0.01 and d == pytest.approx(parsed.model.length)
+
+
+BASE = {
+    "mesh": {"elements": 4, "degree": 2},
+    "tendons": [{"offset_base": 0.008, "offset_tip": 0.004, "tension": 5.0}],
+    "obstacles": [{"shape": "cylinder", "name": "bottle", "point": [0.04, 0.0245],
+                   "radius": 0.015}],
+}
+GOOD = {"variables": ["tendons.0.offset_base"], "bounds": [[0.004, 0.0095]],
+        "objective": "grasp_force", "target": {"obstacle": "bottle", "force": 1.0}}
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"target": {"obstacle": "cup", "force": 1.0}}, ("'cup' is not an obstacle", "'bottle'")),
+    ({"target": {"obstacle": "bottle", "force": -1.0}}, ("target force", "> 0")),
+    ({"target": {"obstacle": "bottle"}}, ("force = <N>", "normal")),
+    ({"target": {"force": 1.0, "normal": 1.0}}, ("force = <N>",)),
+    ({"target": {"force": 1.0, "theta": 1.0}}, ("target keys",)),
+    ({"variables": ["tendons.0.offset_base", "tendons.0.offset_tip"],
+      "bounds": [[0.004, 0.0095], [0.001, 0.004]]}, ("exactly one variable",)),
+    ({"max_fibre_strain": 0.1}, ("max_fibre_strain", "grasp_force")),
+    ({"tolerance": 2.0}, ("tolerance", "below the target")),
+    ({"bounds": [[0.004, 0.012]]}, ("high bound 0.012",)),
+    ({"objective": "tip_pose", "target": {"theta": 1.0}}, ("with [[obstacles]]",
+                                                             "grasp_force")),
+])
+def test_bad_grasp_design_tables(change, words):
+    config = copy.deepcopy(BASE) | {"design": GOOD | change}
+    with pytest.raises(ConfigError) as error:
+        parse_design(config)
+    message = str(error.value)
+    assert all(w in message for w in words), message
+    assert "\n" not in message
+
+
+def test_grasp_target_without_obstacles_and_tolerance_elsewhere():
+    no_obstacles = {k: v for k, v in BASE.items() if k != "obstacles"} | {"design": GOOD}
+    with pytest.raises(ConfigError, match="needs \\[\\[obstacles\\]\\]"):
+        parse_design(no_obstacles)
+    rod = {k: v for k, v in BASE.items() if k != "obstacles"} | {"design": {
+        "variables": ["tendons.0.offset_tip"], "bounds": [[0.0, 0.004]],
+        "objective": "tip_pose", "target": {"theta": 0.5}, "tolerance": 0.1}}
+    with pytest.raises(ConfigError, match="grasp_force"):
+        parse_design(rod)
+    # the only obstacle need not be named
+    design, _ = parse_design(copy.deepcopy(BASE) | {"design": GOOD | {"target": {
+        "normal": 1.0}}})
+    assert design.target == {"obstacle": "bottle", "index": 0, "component": "normal",
+                             "value": 1.0}
+    assert design.tolerance == pytest.approx(1e-3)
+
+
+def test_cli_bad_grasp_design_exits_2_with_one_sentence(tmp_path, capfd):
+    config = copy.deepcopy(BASE) | {"design": GOOD | {"target": {"obstacle": "cup",
+                                                                "force": 1.0}}}
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capfd.readouterr().err.strip()
+    assert "'cup' is not an obstacle" in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / "out" / "summary.json").exists()
