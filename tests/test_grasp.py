@@ -72,6 +72,8 @@ def test_designed_offset_gives_the_target_grasp_force_in_fe_beam_finger(tmp_path
     # the same value on every rank
     assert len(set(MPI.COMM_WORLD.allgather(offset))) == 1
     # fe-beam finger with the designed offset: the same grasp force (the same load stepping)
+    comm = MPI.COMM_WORLD
+    tmp_path = Path(comm.bcast(str(tmp_path) if comm.rank == 0 else None, root=0))
     path = tmp_path / "finger.toml"
     finger = finger_of(config, offset_base=offset)
     if MPI.COMM_WORLD.rank == 0:
