@@ -17,6 +17,8 @@ The configuration is a rod's (`fe-beam static`) or, with ``[[tendons]]``, a fing
     #           loads.tip_moment, loads.tip_force.<k>) with the tip angle held at tip_angle
     max_fibre_strain = 0.05       # optional constraint: |eps| + h/2 |kappa| <= this everywhere
     max_iterations = 100
+    # grasp_force (with [[obstacles]]): one variable, target = {obstacle = "<name>", force = F}
+    #           (or normal = F) [N] at load factor 1, tolerance [N] (default 1e-3 F)
 
 Objectives are made dimensionless: tip_pose = sum over the given components of
 ((value - target) / scale)^2, scale L for u, v and 1 rad for theta; backbone = the mean of
@@ -34,6 +36,16 @@ inequalities, 0 for equalities), ``kkt_residual`` and ``kkt`` (stationarity, fea
 dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``evaluations``,
 ``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
 shapes, targets).
+
+Grasp force (``objective = "grasp_force"``, `grasp_design`): no gradient. The grasp force of
+a trial is that of the converged contact state of the load stepping of ``fe-beam finger`` (or
+``static``) from the straight rod (`GraspEvaluator`: `solve_static`), a non-smooth function of
+the one variable (active sets, Uzawa stops); the bounds (or 6 points across them) bracket
+F - target, Brent's method finds a trial within ``tolerance``. A target outside the forces
+reached, or a force jumping across it, is status "not converged" (exit 3). summary.json then
+has ``grasp`` ({obstacle, component, target, tolerance, value, initial, contact}),
+``kkt_residual``/``kkt`` null and ``gradient`` "none (bracketing root solve)". The other
+objectives refuse ``[[obstacles]]`` (exit 2): their gradients do not see contact.
 
 Validation (`fe_beam.config.design.parse_design`, imported back here) imports no FE code: a bad
 [design] table is a ConfigError (exit 2, one sentence).
