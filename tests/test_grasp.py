@@ -92,6 +92,41 @@ def test_designed_offset_gives_the_target_grasp_force_in_fe_beam_finger(tmp_path
         assert float(rows[-1]["grasp_force_0"]) == pytest.approx(force, rel=1e-9)
 
 
+@pytest.mark.parametrize("variable, bounds, target, friction", [
+    ("section.h_tip", [0.008, 0.016], {"force": 0.8}, 0.0),  # the taper
+    ("tendons.0.offset_base", [0.004, 0.0095], {"normal": 0.5}, 0.5),  # with friction
+])
+def test_taper_and_normal_grasp_designs_rerun(variable, bounds, target, friction):
+    """The taper (a section dimension: the contact forms are rebuilt per trial) and the normal
+    part of the force of a frictional cylinder (friction follows each trial's load path): the
+    designed value, run as a finger configuration, gives the target to the tolerance."""
+    config = example("finger_grasp_design.toml")
+    config["mesh"]["elements"] = 10
+    config["loads"]["steps"] = 5
+    config["tendons"][0].update(offset_base=0.008, offset_tip=0.0035)
+    config["obstacles"][0]["friction"] = friction
+    config["design"].update(variables=[variable], bounds=[bounds],
+                            target={"obstacle": "bottle"} | target)
+    summary = run_design(copy.deepcopy(config), None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged", summary["message"]
+    grasp = summary["grasp"]
+    value = summary["variables"][variable]
+    finger = {k: v for k, v in config.items() if k != "design"}
+    table, key = variable.split(".")[0], variable.split(".")[-1]
+    if table == "section":
+        finger["section"] = {"shape": "rectangle", "b": 0.02, "h": 0.02, key: value}
+    else:
+        finger["tendons"][0][key] = value
+    _, result = sweep(finger)
+    entry = result.steps[-1]["contact"][0]
+    force = np.asarray(entry["force"])
+    if friction:
+        assert np.linalg.norm(entry["friction_force"]) > 0.1  # it does rub
+        force = force - np.asarray(entry["friction_force"])
+    assert abs(np.linalg.norm(force) - list(target.values())[0]) <= grasp["tolerance"]
+    assert np.linalg.norm(force) == pytest.approx(grasp["value"], abs=1e-9)
+
+
 def test_unreachable_grasp_target_is_not_met_exit_3(tmp_path, capfd):
     """5 N of grip is beyond every offset within the bounds (1.09 N at the upper one): exit 3,
     status "not converged", the message names the forces reached; never "converged"."""

@@ -718,7 +718,8 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
     if "grasp" in summary:
         grasp = summary["grasp"]
         code = fit_report(report, "design", summary,
-                          f"design {summary['status']}: {values}; grasp force on "
+                          f"design {summary['status']}: {values}; "
+                          f"{'normal ' if grasp['component'] == 'normal' else ''}grasp force on "
                           f"{grasp['obstacle']!r} {grasp['value']:.6g} N (target "
                           f"{grasp['target']:.6g} N, tolerance {grasp['tolerance']:.2g} N), "
                           f"{summary['evaluations']} contact solves; results in {out}")

@@ -290,10 +290,12 @@ def _parse_grasp(problem: DesignProblem, given: dict, rest: dict) -> None:
                       "value": float(value)}
     problem.tolerance = float(tolerance)
     key = problem.variables[0]
+    finger = bool(rest.get("tendons"))
+    base = with_defaults(rest) if finger else rest  # the finger's default tables written out
     for bound, edge in zip(problem.bounds[0], ("low", "high"), strict=True):
-        changed = with_value(rest, key, float(bound))
+        changed = with_value(base, key, float(bound))
         try:
-            parse_finger(changed) if changed.get("tendons") else parse_static(changed)
+            parse_finger(changed) if finger else parse_static(changed)
         except ConfigError as error:
             raise ConfigError(f"[design] bounds of {key!r}: at its {edge} bound {bound:g}, "
                               f"{error}") from None
