@@ -287,3 +287,23 @@ def test_cli_bad_grasp_design_exits_2_with_one_sentence(tmp_path, capfd):
     err = capfd.readouterr().err.strip()
     assert "'cup' is not an obstacle" in err and len(err.splitlines()) == 1, err
     assert not (tmp_path / "out" / "summary.json").exists()
+
+
+def test_design_for_a_tip_reaction_against_the_closed_form():
+    """A rod without tendons: the uniform load q on a cantilever above a frictionless plane at
+    gap g whose tip reaction (the plane's grasp force) is R* = 12 EI g / L^3. For q1 < q < 9 q1
+    the tip alone touches and R = 3 q L / 8 - 3 EI g / L^3 (tests/test_contact.py), so
+    q* = 8 (R* + 3 EI g / L^3) / (3 L) = 5 q1 (q1 = 8 EI g / L^4)."""
+    from test_contact import EI, GAP, L, Q1, cantilever
+
+    config = cantilever(4 * Q1, steps=4, elements=40)
+    target = 12 * EI * GAP / L**3
+    config["design"] = {"variables": ["loads.distributed.1"], "bounds": [[-8 * Q1, -2 * Q1]],
+                        "objective": "grasp_force", "target": {"force": target},
+                        "tolerance": 1e-5 * target}
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged", summary["message"]
+    q = -summary["variables"]["loads.distributed.1"]
+    assert q == pytest.approx(5 * Q1, rel=2e-5)
+    assert summary["grasp"]["contact"]["active"] == [[L, L]]
+    assert abs(summary["grasp"]["value"] - target) <= 1e-5 * target
