@@ -294,7 +294,7 @@ def test_design_for_a_tip_reaction_against_the_closed_form():
     gap g whose tip reaction (the plane's grasp force) is R* = 12 EI g / L^3. For q1 < q < 9 q1
     the tip alone touches and R = 3 q L / 8 - 3 EI g / L^3 (tests/test_contact.py), so
     q* = 8 (R* + 3 EI g / L^3) / (3 L) = 5 q1 (q1 = 8 EI g / L^4)."""
-    from test_contact import EI, GAP, L, Q1, cantilever
+    from test_contact import EI, GAP, Q1, L, cantilever
 
     config = cantilever(4 * Q1, steps=4, elements=40)
     target = 12 * EI * GAP / L**3
