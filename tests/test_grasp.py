@@ -307,3 +307,21 @@ def test_design_for_a_tip_reaction_against_the_closed_form():
     assert q == pytest.approx(5 * Q1, rel=2e-5)
     assert summary["grasp"]["contact"]["active"] == [[L, L]]
     assert abs(summary["grasp"]["value"] - target) <= 1e-5 * target
+
+
+def test_realtime_update_with_an_obstacle_keeps_the_contact_converged():
+    """`fe_beam.RealtimeSolver` on a finger with an obstacle: an update goes through the
+    contact solver (was: the bare dense Newton at frozen multipliers, 1.3e-4 m into the
+    cylinder at 13x the tolerance, reported as an equilibrium)."""
+    from fe_beam.solvers.realtime import RealtimeSolver, set_parameters
+
+    config, _ = parse_finger(example("finger_grasp.toml"))
+    tolerance = config.contact.tolerance(config.model.section)
+    _, reference = sweep(example("finger_grasp.toml"))
+    with RealtimeSolver(set_parameters(config, {"tendons.0.tension": 4.0})) as solver:
+        tip = solver.update(tensions=[5.0])
+        (entry,) = solver.run.contact.summary()
+    assert entry["max_penetration"] <= tolerance
+    expected = reference.steps[-1]
+    assert math.hypot(*entry["force"]) == pytest.approx(grasp_force(expected)[0], rel=1e-2)
+    assert math.hypot(tip["u"] - expected["tip"]["u"], tip["v"] - expected["tip"]["v"]) < 1e-3 * 0.1
