@@ -57,6 +57,7 @@ import copy
 import math
 import re
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -498,6 +499,7 @@ def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float
 
 # --- grasp force: a bracketing root solve on converged contact states -------------------------
 GRASP_SCAN = 6  # points across the bounds (bounds included) searched for a bracket
+GRASP_TIGHTER = 10  # the accuracy check re-solves the design with the tolerance / this
 
 
 class _GraspMet(Exception):
@@ -550,6 +552,24 @@ class GraspEvaluator:
         self.history.append({"variables": {self.key: x}, "grasp_force": grasp,
                              "active": entry["active"]})
         return value
+
+    def tighter(self, x: float, factor: float = GRASP_TIGHTER) -> float:
+        """The grasp force of the trial x with the penetration tolerance divided by
+        ``factor`` (the same penalty and steps): how far the force is from the exact contact
+        (it moves with the penetration the tolerance allows)."""
+        config = self.trial(x)
+        tolerance = config.contact.tolerance(config.model.section)
+        tight = replace(config, contact=replace(config.contact,
+                                                penetration_tolerance=tolerance / factor))
+        result = solve_static(tight, None, self.comm, progress=False, record_shapes=False,
+                              stability=False)
+        if result.status != "converged":
+            raise UpdateFailed(f"{self.key} = {x:.6g} with [contact] penetration_tolerance = "
+                               f"{tolerance / factor:.3g} m (the accuracy check of the grasp "
+                               f"force): {result.message}",
+                               result.steps[-1]["load_factor"] if result.steps else 0.0)
+        entry = result.steps[-1]["contact"][self.design.target["index"]]
+        return grasp_value(entry, self.design.target["component"]), tolerance
 
     def shape(self, x: float):
         """The deformed shape (vertex values) of the trial design at load factor 1 (rank 0)."""
@@ -640,6 +660,21 @@ def grasp_design(design: DesignProblem, config, comm) -> dict:
                        f"at {key} = {best['x']:.8g} (closest {tried['grasp']:.6g} N at "
                        f"{tried['x']:.8g}; tolerance {tolerance:g} N): the contact state "
                        "changes there; a larger tolerance or other bounds")
+    # the grasp force of the discrete contact moves with the penetration the tolerance allows:
+    # the design is met only if it holds with a 10x tighter tolerance too
+    tight, penetration = evaluator.tighter(final["x"])
+    check = {"penetration_tolerance": penetration,
+             "tighter_tolerance": penetration / GRASP_TIGHTER, "value": tight,
+             "difference": abs(tight - final["grasp"])}
+    if status == "converged" and abs(tight - target["value"]) > tolerance:
+        status = "not converged"
+        message = (f"the target is met to the tolerance only for [contact] "
+                   f"penetration_tolerance = {penetration:.3g} m: with "
+                   f"{penetration / GRASP_TIGHTER:.3g} m {what} at {key} = {final['x']:.6g} is "
+                   f"{tight:.6g} N, {abs(tight - target['value']):.3g} N from the target "
+                   f"(tolerance {tolerance:g} N): set a smaller [contact] "
+                   "penetration_tolerance (and a larger penalty) or a larger [design] "
+                   "tolerance")
     return {
         "status": status,
         "message": message,
@@ -651,7 +686,7 @@ def grasp_design(design: DesignProblem, config, comm) -> dict:
         "grasp": {"obstacle": target["obstacle"], "component": target["component"],
                   "target": target["value"], "tolerance": tolerance,
                   "value": final["grasp"], "initial": initial["grasp"],
-                  "contact": final["contact"]},
+                  "contact": final["contact"], "contact_check": check},
         "constraints": {},
         "kkt_residual": None,
         "kkt": None,
