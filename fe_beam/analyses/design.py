@@ -41,9 +41,13 @@ Grasp force (``objective = "grasp_force"``, `grasp_design`): no gradient. The gr
 a trial is that of the converged contact state of the load stepping of ``fe-beam finger`` (or
 ``static``) from the straight rod (`GraspEvaluator`: `solve_static`), a non-smooth function of
 the one variable (active sets, Uzawa stops); the bounds (or 6 points across them) bracket
-F - target, Brent's method finds a trial within ``tolerance``. A target outside the forces
-reached, or a force jumping across it, is status "not converged" (exit 3). summary.json then
-has ``grasp`` ({obstacle, component, target, tolerance, value, initial, contact}),
+F - target, Brent's method finds a trial within ``tolerance``; the answer is re-solved with
+the penetration tolerance / GRASP_TIGHTER and must meet the target there too (the force moves
+with the penetration the contact keeps). A target outside the forces reached, a force
+jumping across it, or one met at the given penetration tolerance only, is status "not
+converged" (exit 3). summary.json then
+has ``grasp`` ({obstacle, component, target, tolerance, value, initial, contact,
+contact_check}),
 ``kkt_residual``/``kkt`` null and ``gradient`` "none (bracketing root solve)". The other
 objectives refuse ``[[obstacles]]`` (exit 2): their gradients do not see contact.
 
