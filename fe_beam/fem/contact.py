@@ -484,6 +484,7 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
 
     def set_friction(self, index: int, mu: float) -> None:
         """Change the friction coefficient of obstacle ``index`` (one built with friction > 0)
@@ -678,6 +679,55 @@ class ContactSet:
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
         self._set_references(state)
         self._positions = state["local"]
+        self._pressed = [(np.asarray(state["pressure"][i]) > 0,
+                          np.asarray(state["end_pressure"][i]) > 0)
+                         for i in range(len(self.obstacles))]
+
+    def save(self):
+        """The accepted contact state (multipliers, friction state, positions, pressed
+        points), for `load` (the continuation engine's snapshots)."""
+        if self._problem is None:
+            return None
+        return self._committed, self._positions, self._pressed
+
+    def load(self, saved) -> None:
+        """Back to a `save`d accepted state (its multipliers and active set in place)."""
+        if saved is None or self._problem is None:
+            return
+        self._committed, self._positions, self._pressed = saved
+        self.restore()
+
+    def active_change(self, state: dict | None = None) -> list[float]:
+        """Per obstacle, the share of its contact points (the owned quadrature points of all
+        ranks and the two ends) pressed now and not in the last accepted state, or the
+        reverse (collective)."""
+        state = state or self.evaluate(friction=False)
+        comm = self._problem.comm
+        counts = np.zeros(len(self.obstacles))
+        for i in range(len(self.obstacles)):
+            now = np.asarray(state["pressure"][i]) > 0
+            ends = np.asarray(state["end_pressure"][i]) > 0
+            before, ends_before = (self._pressed[i] if self._pressed is not None
+                                   else (np.zeros_like(now), np.zeros_like(ends)))
+            counts[i] = np.count_nonzero(now != before)
+            if comm.rank == 0:  # the ends are global numbers: counted once
+                counts[i] += np.count_nonzero(ends != ends_before)
+        counts = comm.allreduce(counts, op=MPI.SUM)
+        total = comm.allreduce(len(self._dofs), op=MPI.SUM) + 2
+        return [float(c) / total for c in counts]
+
+    def large_change(self, state: dict | None = None) -> str | None:
+        """Why a converged step is rejected: its active set changed at more than
+        ``max_active_change`` of an obstacle's contact points (None: accepted). Collective."""
+        limit = self.settings.max_active_change
+        if limit >= 1:
+            return None
+        for obstacle, share in zip(self.obstacles, self.active_change(state), strict=True):
+            if share > limit:
+                return (f"contact: the step changed the contact state of {share:.0%} of the "
+                        f"contact points of obstacle {obstacle.name!r} (more than [contact] "
+                        f"max_active_change = {limit:g})")
+        return None
 
     def reset(self) -> None:
         """No contact: zero multipliers and friction states, the configured friction
@@ -700,6 +750,7 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
 
     def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and

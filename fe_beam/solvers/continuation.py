@@ -109,6 +109,9 @@ class Snapshot:
     parameter: float
     tangent: tuple[np.ndarray, float] | None
     arc_length: float | None
+    #: the problem's own state beside x (`NonlinearParameterProblem.save_state`: e.g. the
+    #: committed contact multipliers), None without one
+    extra: object = None
 
 
 @dataclass
@@ -224,15 +227,22 @@ class NonlinearParameterProblem:
     h = ``step`` max(1, |lambda|), second-order accurate.
     ``metric``: diagonal weights of the arc metric (e.g. 1/L on displacements, 1 on rotations,
     0 on multipliers and pressures); ``check_step(previous, current)`` vetoes converged steps.
+    ``accept()``, ``save() -> object`` and ``load(saved)``: the problem's state beside x (e.g.
+    the contact multipliers and active set of `fe_beam.fem.contact.ContactSet`): ``accept`` when
+    the engine accepts a point (every strategy), ``save`` / ``load`` with the engine's
+    `Continuation.snapshot` / `Continuation.restore` (critical-point bisections, landings).
     """
 
     def __init__(self, solver, set_parameter: Callable[[float], None],
                  check_step: Callable[[np.ndarray, np.ndarray], str | None] | None = None,
                  metric: PETSc.Vec | None = None, affine: bool = True, step: float = 1e-6,
-                 parameter: float = 0.0):
+                 parameter: float = 0.0, accept: Callable[[], None] | None = None,
+                 save: Callable[[], object] | None = None,
+                 load: Callable[[object], None] | None = None):
         self.solver = solver
         self._set = set_parameter
         self._check = check_step
+        self._accept, self._save, self._load = accept, save, load
         self.affine = affine
         self.step = step
         self.metric = metric
@@ -256,6 +266,19 @@ class NonlinearParameterProblem:
 
     def check_step(self, previous, current):
         return None if self._check is None else self._check(previous, current)
+
+    def accept_state(self) -> None:
+        """The engine accepted the current point."""
+        if getattr(self, "_accept", None) is not None:
+            self._accept()
+
+    def save_state(self):
+        """The problem's state beside x (None without one)."""
+        return None if getattr(self, "_save", None) is None else self._save()
+
+    def load_state(self, saved) -> None:
+        if getattr(self, "_load", None) is not None and saved is not None:
+            self._load(saved)
 
     def residual(self, x, b):
         self.nonlinear.residual(None, x, b)
@@ -572,13 +595,18 @@ class Continuation:
         tangent = None
         if self._tangent is not None:
             tangent = (self._tangent[0].getArray().copy(), self._tangent[1])
-        return Snapshot(self.state.copy(), self.parameter, tangent, self.arc_length)
+        save = getattr(self.problem, "save_state", None)
+        return Snapshot(self.state.copy(), self.parameter, tangent, self.arc_length,
+                        None if save is None else save())
 
     def restore(self, snapshot: Snapshot) -> None:
         """Back to a snapshot (state, parameter applied to the problem, tangent)."""
         self.state[:] = snapshot.state
         self.parameter = snapshot.parameter
         self.problem.set_parameter(snapshot.parameter)
+        load = getattr(self.problem, "load_state", None)
+        if load is not None:
+            load(snapshot.extra)
         self.arc_length = snapshot.arc_length
         if snapshot.tangent is None:
             self._tangent = None
@@ -694,6 +722,7 @@ class Continuation:
                 previous = state.copy()
                 lam = target_fraction
                 self.parameter = value(lam)
+                self._accept_state()
                 point = ContinuationPoint(
                     len(results) + 1, self.parameter, iterations, solver.linear_iterations,
                     time.perf_counter() - started, fraction=lam, state=previous.copy())
@@ -800,7 +829,7 @@ class Continuation:
         started = time.perf_counter()
         direction = self._direction or self._tangent
         try:
-            iterations = self._corrector(direction, size, settings)
+            iterations = self._wrapped_corrector(direction, size, settings, start)
             reason = _agreed(self.comm, self.problem.check_step(start.state, self.state))
             if reason is not None:
                 raise SolveFailed(reason)
@@ -892,8 +921,14 @@ class Continuation:
         landed.arc_length = point.arc_length
         return landed
 
+    def _accept_state(self) -> None:
+        accept = getattr(self.problem, "accept_state", None)
+        if accept is not None:
+            accept()
+
     def _accept(self, iterations: int, started: float, size: float,
                 emit: bool = True) -> ContinuationPoint:
+        self._accept_state()
         self._count += 1
         t_lam = None if self._tangent is None else self._tangent[1]
         point = ContinuationPoint(self._count, self.parameter, iterations,
@@ -972,15 +1007,41 @@ class Continuation:
             t_lam = -t_lam
         return t, t_lam
 
-    def _corrector(self, direction, size: float, settings: ArcLength) -> int:
+    def _wrapped_corrector(self, direction, size: float, settings: ArcLength,
+                           start: Snapshot) -> int:
+        """The corrector, inside the problem's solver wrapper when it has one (``solve_with``:
+        e.g. `fe_beam.solvers.contact.ContactSolver`, whose active-set and Uzawa updates then
+        wrap the corrector as they wrap Newton under load control): the first call predicts
+        from the start, every later one corrects again from the current iterate on the same
+        arc constraint (x_n, lambda_n of ``start``) at the wrapper's updated active set and
+        multipliers."""
+        wrapper = getattr(getattr(self.problem, "solver", None), "solve_with", None)
+        if wrapper is None:
+            return self._corrector(direction, size, settings)
+        calls = []
+
+        def corrector() -> int:
+            origin = start if calls else None
+            calls.append(1)
+            return self._corrector(direction, size, settings, origin)
+
+        return wrapper(corrector)
+
+    def _corrector(self, direction, size: float, settings: ArcLength,
+                   origin: Snapshot | None = None) -> int:
         """Predictor x_n + size t, lambda_n + size t_lambda, then Newton on
-        R(x, lambda) = 0 and the arc constraint, each iteration one `bordered_solve`."""
+        R(x, lambda) = 0 and the arc constraint, each iteration one `bordered_solve`.
+        ``origin``: (x_n, lambda_n) of the constraint when the corrector starts again from
+        the current iterate (no predictor); None: they are the current state."""
         problem = self.problem
         t, t_lam = direction
         psi2 = self.psi**2
         x = problem.state_vector
         x0 = x.copy()
         lam0 = self.parameter
+        if origin is not None:
+            x0.getArray()[:] = origin.state[: x0.getLocalSize()]
+            lam0 = origin.parameter
         solver = getattr(problem, "snes_solver", None)
         snes_settings = getattr(solver, "settings", None)
         rtol = getattr(snes_settings, "rtol", 1e-9)
@@ -994,8 +1055,11 @@ class Continuation:
         row = self._weighted(t)
         delta = self._new_vector()
         try:
-            self._axpy_state(size, t)
-            lam = lam0 + size * t_lam
+            if origin is None:
+                self._axpy_state(size, t)
+                lam = lam0 + size * t_lam
+            else:
+                lam = self.parameter
             self.parameter = lam
             problem.set_parameter(lam)
             problem.parameter_derivative(x, derivative)
