@@ -227,6 +227,7 @@ class NonlinearParameterProblem:
     h = ``step`` max(1, |lambda|), second-order accurate.
     ``metric``: diagonal weights of the arc metric (e.g. 1/L on displacements, 1 on rotations,
     0 on multipliers and pressures); ``check_step(previous, current)`` vetoes converged steps.
+    ``orient(tangent) -> int``: see `orient_tangent`.
     ``accept()``, ``save() -> object`` and ``load(saved)``: the problem's state beside x (e.g.
     the contact multipliers and active set of `fe_beam.fem.contact.ContactSet`): ``accept`` when
     the engine accepts a point (every strategy), ``save`` / ``load`` with the engine's
@@ -238,11 +239,13 @@ class NonlinearParameterProblem:
                  metric: PETSc.Vec | None = None, affine: bool = True, step: float = 1e-6,
                  parameter: float = 0.0, accept: Callable[[], None] | None = None,
                  save: Callable[[], object] | None = None,
-                 load: Callable[[object], None] | None = None):
+                 load: Callable[[object], None] | None = None,
+                 orient: Callable[[PETSc.Vec], int] | None = None):
         self.solver = solver
         self._set = set_parameter
         self._check = check_step
         self._accept, self._save, self._load = accept, save, load
+        self._orient = orient
         self.affine = affine
         self.step = step
         self.metric = metric
@@ -275,6 +278,14 @@ class NonlinearParameterProblem:
     def save_state(self):
         """The problem's state beside x (None without one)."""
         return None if getattr(self, "_save", None) is None else self._save()
+
+    def orient_tangent(self, tangent: PETSc.Vec) -> int:
+        """-1: the new point's unit tangent (its x part ``tangent``) must be reversed, +1:
+        kept, 0: no opinion (then it continues the predictor's direction). E.g. at a point
+        where the rod came into contact, the direction that presses on (the path turns at a
+        contact corner: `fe_beam.fem.contact.ContactSet.orientation`)."""
+        orient = getattr(self, "_orient", None)
+        return 0 if orient is None else int(orient(tangent))
 
     def load_state(self, saved) -> None:
         if getattr(self, "_load", None) is not None and saved is not None:
@@ -831,6 +842,8 @@ class Continuation:
         try:
             iterations = self._wrapped_corrector(direction, size, settings, start)
             reason = _agreed(self.comm, self.problem.check_step(start.state, self.state))
+            if reason is None and _wrapped(self.problem):
+                reason = self._left_the_step(start, size)
             if reason is not None:
                 raise SolveFailed(reason)
         except SolveFailed as error:
@@ -843,6 +856,11 @@ class Continuation:
         reference = direction
         self._direction = None
         self._tangent = self._unit_tangent(reference)
+        orient = getattr(self.problem, "orient_tangent", None)
+        if orient is not None and orient(self._tangent[0]) < 0:
+            # a corner of the path (e.g. contact began): the problem knows the way on
+            self._tangent[0].scale(-1.0)
+            self._tangent = (self._tangent[0], -self._tangent[1])
         return self._accept(iterations, started, size, emit)
 
     def arc_length_path(self, settings: ArcLength | None = None,
@@ -1007,6 +1025,22 @@ class Continuation:
             t_lam = -t_lam
         return t, t_lam
 
+    def _left_the_step(self, start: Snapshot, size: float) -> str | None:
+        """Veto of a wrapped corrector's point farther than `WRAPPED_REACH` arc lengths from
+        the start (arc metric): the wrapper's updates (e.g. contact that stops the path) change
+        the equations under a fixed Riks plane, which may then meet the path again far away
+        (e.g. back on the branch the step came along)."""
+        n = self.problem.state_vector.getLocalSize()
+        metric = self.problem.metric
+        weights = 1.0 if metric is None else metric.getArray(readonly=True)[:n]
+        change = self.state[:n] - start.state[:n]
+        squared = self.comm.allreduce(float(np.sum(weights * change**2)), op=MPI.SUM)
+        distance = math.sqrt(squared + self.psi**2 * (self.parameter - start.parameter) ** 2)
+        if distance > WRAPPED_REACH * size:
+            return (f"arc length: the corrector ended {distance / size:.3g} arc lengths from the "
+                    f"step's start (more than {WRAPPED_REACH:g}: it left the step)")
+        return None
+
     def _wrapped_corrector(self, direction, size: float, settings: ArcLength,
                            start: Snapshot) -> int:
         """The corrector, inside the problem's solver wrapper when it has one (``solve_with``:
@@ -1116,6 +1150,15 @@ class Continuation:
 def _ghost_update(x: PETSc.Vec) -> None:
     if x.getType() != PETSc.Vec.Type.SEQ:
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+
+#: a wrapped corrector's point (`Continuation._wrapped_corrector`: e.g. with contact) farther
+#: than this many arc lengths from the step's start is rejected (cut back)
+WRAPPED_REACH = 2.0
+
+
+def _wrapped(problem) -> bool:
+    return getattr(getattr(problem, "solver", None), "solve_with", None) is not None
 
 
 def _has_arc_interface(problem) -> bool:

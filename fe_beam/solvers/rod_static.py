@@ -178,7 +178,8 @@ class StaticContinuation:
         updates wrap the corrector, `fe_beam.solvers.contact.ContactSolver.solve_with`)."""
         contact = self.contact
         hooks = ({} if contact is None else
-                 {"accept": contact.commit, "save": contact.save, "load": contact.load})
+                 {"accept": contact.commit, "save": contact.save, "load": contact.load,
+                  "orient": contact.orientation})
         return NonlinearParameterProblem(self.solver, set_parameter,
                                          check_step=self._step_check() if checked else None,
                                          metric=self._metric(), parameter=parameter, **hooks)
