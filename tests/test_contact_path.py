@@ -10,6 +10,8 @@ those of the path without the floor, and once the midspan rests on the floor (v 
 carries what the point force adds beyond the force that holds the free beam at v*, F_hold:
 F_floor = F_hold - F_point (the beam is held at v* by the two together), F_hold from the path
 without the floor where it passes v*.
+(b') A finger closing on a bottle, its tendon tension the path parameter: each point in
+contact agrees with `fe-beam finger` at the same tension.
 (c) A uniform load that would press a large part of a cantilever onto a plane in one step: the
 step is cut back until no step changes the contact state of more than [contact]
 max_active_change of the contact points (load stepping and arc length); with the limit off the
@@ -165,6 +167,47 @@ def test_snap_through_path_through_limit_points_is_stopped_by_a_floor(tmp_path):
     assert (tmp_path / "obstacles.vtu").is_file()
     header = (tmp_path / "path.csv").read_text().splitlines()[0].split(",")
     assert {"contact0_Fy", "contact0_max_penetration", "contact0_pressure_peak"} <= set(header)
+
+
+# --- (b') a finger closing on a bottle: parameter = tension ----------------------------------
+def _finger() -> dict:
+    config = tomllib.loads((EXAMPLES / "finger.toml").read_text())
+    config.pop("inverse")
+    config["mesh"]["elements"] = 20
+    config["loads"]["steps"] = 8
+    config["obstacles"] = [{"shape": "cylinder", "name": "bottle", "point": [0.09, 0.032],
+                            "radius": 0.015}]
+    config["contact"] = {"penetration_tolerance": 1e-7, "max_updates": 200}
+    config["output"] = {"xdmf": False, "plots": False}
+    return config
+
+
+@pytest.mark.mpi
+def test_finger_closing_on_a_bottle_along_the_tension_matches_fe_beam_finger():
+    config = _finger()
+    config["path"] = {"parameter": "tension", "arc_length": 0.1, "max_load_factor": 1.5}
+    summary = fe_beam.run("path", config)
+    assert summary["status"] == "converged", summary["message"]
+    _penetration_below_tolerance(summary, 1e-7)
+    pressed = [p for p in summary["path"] if p["contact"][0]["active"]]
+    assert len(pressed) >= 2 and summary["path"][0]["contact"][0]["force"] == [0.0, 0.0]
+    assert summary["path"][-1]["tension"] == pytest.approx(3.0, rel=1e-12)  # 1.5 x 2 N
+    worst = {"tip": 0.0, "force": 0.0}
+    for point in pressed:
+        finger = _finger()
+        finger["tendons"][0]["tension"] = point["tension"]
+        swept = fe_beam.run("finger", finger)
+        assert swept["status"] == "converged", swept["message"]
+        step = swept["steps"][-1]
+        for key in ("u", "v"):
+            assert point["tip"][key] == pytest.approx(step["tip"][key], abs=1e-7)
+            worst["tip"] = max(worst["tip"], abs(point["tip"][key] - step["tip"][key]))
+        assert point["tip"]["theta"] == pytest.approx(step["tip"]["theta"], abs=1e-5)
+        force, reference = (np.array(p["contact"][0]["force"]) for p in (point, step))
+        assert np.linalg.norm(force - reference) <= 1e-4 * np.linalg.norm(reference)
+        worst["force"] = max(worst["force"],
+                             np.linalg.norm(force - reference) / np.linalg.norm(reference))
+    print(f"finger on a bottle, path vs fe-beam finger: {worst}")
 
 
 # --- (c) a step that would press much of the rod onto a plane ----------------------------------
