@@ -104,6 +104,46 @@ def test_elastica_path_onto_a_floor_matches_closed_form_and_load_stepping():
                                                            rel=2e-4)
 
 
+def test_spatial_rod_path_onto_a_plane_keeps_the_touching_force_and_matches_load_stepping():
+    """A spatial cantilever (circular section, its contact tube) pushed by a dead tip force
+    onto a plane below it: once the tip rests on the plane the shape is that of the touching
+    force P_touch, so the plane carries P - P_touch (the same P_touch at every point in
+    contact), and the last point agrees with `fe-beam static` at the same load."""
+    force = 0.02
+    config = {
+        "beam": {"length": L},
+        "section": {"shape": "circle", "d": 0.01},
+        "material": {"E": 1e7, "nu": 0.3},
+        "model": {"law": "reissner", "kinematics": "spatial"},
+        "mesh": {"elements": 16, "degree": 2},
+        "loads": {"tip_force": [0.0, 0.0, -force], "steps": 5},
+        "obstacles": [{"shape": "plane", "point": [0.0, 0.0, -0.1],
+                       "normal": [0.0, 0.0, 1.0]}],
+        "contact": {"penetration_tolerance": 1e-7},
+        "path": {"arc_length": 0.1, "max_steps": 40},
+        "output": {"xdmf": False, "plots": False},
+    }
+    summary = fe_beam.run("path", config)
+    assert summary["status"] == "converged", summary["message"]
+    _penetration_below_tolerance(summary, 1e-7)
+    pressed = [p for p in summary["path"] if p["contact"][0]["active"]]
+    assert len(pressed) >= 3
+    touching = [force * p["load_factor"] - p["contact"][0]["force"][2] for p in pressed]
+    assert max(touching) - min(touching) <= 1e-6 * force, touching
+    for point in pressed:
+        assert point["contact"][0]["active"] == [[L, L]]
+        assert point["tip"]["w"] == pytest.approx(-0.1 + 0.005, abs=1e-7)
+    last = summary["path"][-1]
+    static = copy.deepcopy(config)
+    del static["path"]
+    static["loads"]["tip_force"] = [0.0, 0.0, -force * last["load_factor"]]
+    stepped = fe_beam.run("static", static)["steps"][-1]
+    for key in ("u", "v", "w"):  # both within the penetration tolerance of the plane
+        assert last["tip"][key] == pytest.approx(stepped["tip"][key], abs=1e-7)
+    assert last["contact"][0]["force"][2] == pytest.approx(stepped["contact"][0]["force"][2],
+                                                           rel=1e-5)
+
+
 # --- (b) through limit points onto a floor -------------------------------------------------------
 V_FLOOR = -0.07  # the midspan's rest on the floor: on the inverted, stable branch
 
