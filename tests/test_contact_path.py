@@ -144,6 +144,34 @@ def test_spatial_rod_path_onto_a_plane_keeps_the_touching_force_and_matches_load
                                                            rel=1e-5)
 
 
+def test_where_contact_begins_the_tangent_is_oriented_to_press_on():
+    """`ContactSet.orientation` at the elastica's first state on the floor: a tangent that
+    pushes the tip on (load up) presses (+1), its reverse lifts off (-1); no opinion once the
+    contact is the accepted state's (0)."""
+    from fe_beam.solvers.continuation import ArcLength
+    from fe_beam.solvers.newton import LoadStepping
+    from fe_beam.solvers.rod_static import StaticContinuation
+
+    config = _elastica()
+    del config["path"]
+    run = StaticContinuation(validate("static", config).parsed)
+    run.advance(0.6, LoadStepping(steps=3))  # P = 1.8 < P_touch = 2: clear of the floor
+    clear = run.contact.save()
+    run.advance(0.8, LoadStepping(steps=2))
+    assert run.contact.summary()[0]["force"][1] > 0
+    engine = run.engine()
+    engine.parameter = run.load_factor
+    engine.prepare_arc_length(ArcLength(increment=0.1))
+    tangent, along = engine._tangent
+    assert along > 0  # the load rises along it
+    assert run.contact.orientation(tangent) == 0  # the contact is the accepted state's
+    run.contact._pressed = clear[2]  # as if the step had come from the clear state
+    assert run.contact.orientation(tangent) == 1
+    tangent.scale(-1.0)
+    assert run.contact.orientation(tangent) == -1
+    run.destroy()
+
+
 # --- (b) through limit points onto a floor -------------------------------------------------------
 V_FLOOR = -0.07  # the midspan's rest on the floor: on the inverted, stable branch
 
