@@ -132,7 +132,14 @@ def parse_obstacle(index: int, given, model, dim: int = 2, solid: bool = False,
                           motion))
     if not solid:
         start = _wrap(obstacle.translation, 0.0)
-        check_clear_of_rod(translated(obstacle, start), model.section, model.length)
+        try:
+            check_clear_of_rod(translated(obstacle, start), model.section, model.length)
+        except ConfigError as error:
+            if motion is None:
+                raise
+            raise ConfigError(str(error).replace(
+                "intersects the undeformed rod", "intersects the undeformed rod at its start "
+                f"position ({motion.variable} = 0)", 1)) from None
     return obstacle
 
 
