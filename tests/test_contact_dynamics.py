@@ -372,3 +372,14 @@ def test_bad_motion_in_statics_exits_2(tmp_path, capsys, keys, words):
     err = dynamic_cli(tmp_path, with_floor(cantilever(disc), **keys), capsys, "static")
     for word in words:
         assert word in err, err
+
+
+def test_the_3d_solid_refuses_moving_obstacles():
+    from fe_beam.config.contact import parse_contact
+    from fe_beam.errors import ConfigError
+
+    wall = {"shape": "plane", "name": "wall", "point": [0.0, -0.1, 0.0],
+            "normal": [0.0, 1.0, 0.0], "velocity": [0.0, 1.0, 0.0]}
+    with pytest.raises(ConfigError, match=r"\[\[obstacles\]\] 'wall' velocity: moving "
+                                          "obstacles are available for the rods"):
+        parse_contact({"obstacles": [wall]}, None, solid=True)
