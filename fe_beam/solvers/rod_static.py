@@ -96,6 +96,8 @@ class StaticContinuation:
 
     def _set_load_factor(self, value: float) -> None:
         self.problem.set_load_factor(value)
+        if self.contact is not None:  # moving obstacles along the load path
+            self.contact.move(value)
         if self.tendons:
             self.tendons.set_tension_controlled(value)
             self.solver.set_load_factor(value)
