@@ -344,6 +344,7 @@ def test_a_step_that_presses_much_of_the_rod_at_once_is_cut_back():
     (lambda c: c["contact"].update(max_active_change=0.0), "max_active_change"),
     (lambda c: c["contact"].update(max_active_change=1.5), "max_active_change"),
     (lambda c: c["obstacles"][0].update(point=[0.5, 0.0]), "intersects"),
+    (lambda c: c["obstacles"][0].update(position=["0", "-0.1 * load_factor"]), "moves"),
 ])
 def test_bad_contact_inputs_of_the_path_are_one_sentence(change, needle):
     config = _elastica()

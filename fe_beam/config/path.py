@@ -146,13 +146,19 @@ def parse_path(config: dict):
 def _check_contact(static, settings: PathSettings) -> None:
     """What the rod's path with [[obstacles]] cannot follow: friction (the slip is measured
     from the last accepted point of a load path; the arc-length corrector does not hold the
-    stick/slip state) and branch switching (a bifurcation is not told apart from a change of
+    stick/slip state), moving obstacles and branch switching (a bifurcation is not told apart from a change of
     the contact state)."""
     rough = [o.name for o in static.obstacles if o.friction > 0]
     if rough:
         raise ConfigError(f"[[obstacles]] {rough[0]!r} has friction > 0: fe-beam path follows "
                           "frictionless contact only; leave friction out, or run fe-beam "
                           "static for frictional contact along a load path")
+    moving = [o.name for o in static.obstacles if getattr(o, "motion", None) is not None]
+    if moving:
+        raise ConfigError(f"[[obstacles]] {moving[0]!r} moves (velocity or position): fe-beam "
+                          "path follows fixed obstacles only (the arc length would move it "
+                          "with the path parameter); leave its motion out, or run fe-beam "
+                          "static for an obstacle moving along the load path")
     if settings.branch_switch != "none":
         raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r} with "
                           "[[obstacles]]: bifurcations are not located in contact (a change of "

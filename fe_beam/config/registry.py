@@ -98,7 +98,7 @@ _SPECS = (
                 ("tendons", "design", "inverse"), _parse_design, "design:run"),
     CommandSpec("dynamic", "nonlinear dynamics (generalised-alpha, or the paper's FD + "
                            "Runge-Kutta)",
-                ("time", "initial", "damping", "modes", "tendons"),
+                ("time", "initial", "damping", "modes", "tendons", "obstacles", "contact"),
                 lambda config, options: parse_dynamic(config), "dynamic:run", spatial=True),
     CommandSpec("modes", "natural frequencies and mode shapes (about the undeformed or a static "
                          "state)",
@@ -151,10 +151,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": ("fe-beam static, fe-beam finger, fe-beam path or fe-beam solid for contact "
-                  "with rigid obstacles"),
-    "contact": ("fe-beam static, fe-beam finger, fe-beam path or fe-beam solid for contact "
-                "with rigid obstacles"),
+    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam "
+                  "solid for contact with rigid obstacles"),
+    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam solid "
+                "for contact with rigid obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 

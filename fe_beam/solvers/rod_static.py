@@ -96,6 +96,8 @@ class StaticContinuation:
 
     def _set_load_factor(self, value: float) -> None:
         self.problem.set_load_factor(value)
+        if self.contact is not None:  # moving obstacles along the load path
+            self.contact.move(value)
         if self.tendons:
             self.tendons.set_tension_controlled(value)
             self.solver.set_load_factor(value)
@@ -166,7 +168,8 @@ class StaticContinuation:
         adapter = self.adapter(setter)
         adapter.arc_length_ready = not (self.tendons and any(
             t.controlled_by_pull_in for t in self.tendons.tendons)) and not (
-            self.contact is not None and self.contact.frictional)
+            self.contact is not None and (self.contact.frictional
+                                          or any(getattr(self.contact, "moving", ()))))
         return adapter
 
     def adapter(self, set_parameter, checked: bool = True, parameter: float = 0.0
