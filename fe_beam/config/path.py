@@ -146,8 +146,8 @@ def parse_path(config: dict):
 def _check_contact(static, settings: PathSettings) -> None:
     """What the rod's path with [[obstacles]] cannot follow: friction (the slip is measured
     from the last accepted point of a load path; the arc-length corrector does not hold the
-    stick/slip state), moving obstacles and branch switching (a bifurcation is not told apart from a change of
-    the contact state)."""
+    stick/slip state), moving obstacles and branch switching (a bifurcation is not told apart
+    from a change of the contact state)."""
     rough = [o.name for o in static.obstacles if o.friction > 0]
     if rough:
         raise ConfigError(f"[[obstacles]] {rough[0]!r} has friction > 0: fe-beam path follows "
