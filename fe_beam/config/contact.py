@@ -65,6 +65,10 @@ CONTACT_KEYS = {
                        "the step is cut back (active-set and multiplier updates)"),
     "quadrature_degree": Key((int,), None, "Gauss rule of the contact integral (default 4 x "
                              "the element degree: 2 degree + 1 points per element)"),
+    "max_active_change": Key(NUMBER, 0.2, "rods: largest share (0 < . <= 1) of an obstacle's "
+                             "contact points (quadrature points and the two ends) that may come "
+                             "into or out of contact in one load step or path point; a larger "
+                             "change is cut back (1: no limit)"),
 }
 
 
@@ -211,5 +215,8 @@ def parse_contact(config: dict, model, solid: bool = False, variable: str = "loa
     if twice:
         raise ConfigError(f"[[obstacles]] name {twice[0]!r} is given to two obstacles; names "
                           "must be unique")
+    if solid and "max_active_change" in (config.get("contact") or {}):
+        raise ConfigError("[contact] max_active_change limits the rod's load steps only (the 3D "
+                          "solid's steps are not limited by it); leave it out with [solid]")
     settings = _wrap(ContactSettings, **table(config, "contact", CONTACT_KEYS))
     return obstacles, settings

@@ -129,7 +129,8 @@ _SPECS = (
                 ("tendons", "solid", "buckling"), lambda config, options: parse_buckling(config),
                 "buckling:run", spatial=True),
     CommandSpec("path", "arc-length path following with limit and bifurcation points ([path])",
-                ("tendons", "solid", "path"), lambda config, options: parse_path(config),
+                ("tendons", "solid", "path", "obstacles", "contact"),
+                lambda config, options: parse_path(config),
                 "path:run", spatial=True),
 )
 
@@ -150,10 +151,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic or fe-beam solid for "
-                  "contact with rigid obstacles"),
-    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic or fe-beam solid for contact "
-                "with rigid obstacles"),
+    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam "
+                  "solid for contact with rigid obstacles"),
+    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam solid "
+                "for contact with rigid obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 

@@ -52,6 +52,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
@@ -502,6 +503,7 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
 
     def set_stiffness(self, k: float) -> None:
         """The augmentation stiffness k [N/m per m of gap] (the ends' k h_e): e.g. dynamics,
@@ -734,6 +736,112 @@ class ContactSet:
         self._set_references(state)
         self._positions = state["local"]
         self._positions_offsets = self.translations()
+        self._pressed = [(np.asarray(state["pressure"][i]) > 0,
+                          np.asarray(state["end_pressure"][i]) > 0)
+                         for i in range(len(self.obstacles))]
+
+    def save(self):
+        """The accepted contact state (multipliers, friction state, positions, pressed
+        points), for `load` (the continuation engine's snapshots)."""
+        if self._problem is None:
+            return None
+        return (self._committed, self._positions, self._pressed,
+                getattr(self, "_positions_offsets", None))
+
+    def load(self, saved) -> None:
+        """Back to a `save`d accepted state (its multipliers and active set in place)."""
+        if saved is None or self._problem is None:
+            return
+        self._committed, self._positions, self._pressed, offsets = saved
+        if offsets is not None:
+            self._positions_offsets = offsets
+        self.restore()
+
+    def orientation(self, tangent) -> int:
+        """The way on at a point where the rod came into contact (points pressed now that
+        were not at the last accepted state): +1 when moving the state along ``tangent`` (a
+        PETSc Vec of the state's layout, the path's unit tangent) presses the pressed points
+        further into the obstacle (their gaps shrink: the pressures grow), -1 when it lifts
+        them off (back toward the contact-free path it came from), 0 elsewhere or when the
+        gaps do not change (collective). The arc-length engine reverses a tangent with -1: at a
+        contact corner the path may turn by more than a right angle, where the predictor's
+        direction points the wrong way."""
+        state = self.evaluate(friction=False)
+        comm = self._problem.comm
+        now = [(np.asarray(p) > 0, np.asarray(e) > 0)
+               for p, e in zip(state["pressure"], state["end_pressure"], strict=True)]
+        before = self._pressed or [(np.zeros_like(p), np.zeros_like(e)) for p, e in now]
+        grew = any(np.any(p & ~q) or np.any(e & ~f)
+                   for (p, e), (q, f) in zip(now, before, strict=True))
+        if not comm.allreduce(bool(grew), op=MPI.LOR):
+            return 0
+        x = compat.vector_of(self._problem.w)
+        largest = tangent.norm(PETSc.NormType.NORM_INFINITY)
+        if not largest > 0:
+            return 0
+        eps = 1e-6 * self.model.length / largest
+        saved = compat.local_array(self._problem.w).copy()
+        x.axpy(eps, tangent)
+        if x.getType() != PETSc.Vec.Type.SEQ:
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        try:
+            moved = self.evaluate(friction=False)
+        finally:
+            compat.local_array(self._problem.w)[:] = saved
+        local = 0.0
+        for i, (pressed, ends) in enumerate(now):
+            local -= float(np.sum((moved["gap"][i] - state["gap"][i])[pressed]))
+            if comm.rank == 0:
+                local -= float(np.sum((moved["end_gap"][i] - state["end_gap"][i])[ends]))
+        rate = comm.allreduce(local, op=MPI.SUM)
+        scale = eps * largest * 1e-6
+        return 0 if abs(rate) <= scale else (1 if rate > 0 else -1)
+
+    def changed_between(self, first, second) -> bool:
+        """Do two `save`d states press different contact points (collective)?"""
+        def pressed(saved):
+            return None if saved is None else saved[2]
+
+        a, b = pressed(first), pressed(second)
+        local = False
+        if (a is None) != (b is None):
+            local = any(np.any(p) or np.any(e) for p, e in (a or b))
+        elif a is not None:
+            local = any(np.any(p != q) or np.any(e != f)
+                        for (p, e), (q, f) in zip(a, b, strict=True))
+        return bool(self._problem.comm.allreduce(bool(local), op=MPI.LOR))
+
+    def active_change(self, state: dict | None = None) -> list[float]:
+        """Per obstacle, the share of its contact points (the owned quadrature points of all
+        ranks and the two ends) pressed now and not in the last accepted state, or the
+        reverse (collective)."""
+        state = state or self.evaluate(friction=False)
+        comm = self._problem.comm
+        counts = np.zeros(len(self.obstacles))
+        for i in range(len(self.obstacles)):
+            now = np.asarray(state["pressure"][i]) > 0
+            ends = np.asarray(state["end_pressure"][i]) > 0
+            before, ends_before = (self._pressed[i] if self._pressed is not None
+                                   else (np.zeros_like(now), np.zeros_like(ends)))
+            counts[i] = np.count_nonzero(now != before)
+            if comm.rank == 0:  # the ends are global numbers: counted once
+                counts[i] += np.count_nonzero(ends != ends_before)
+        counts = comm.allreduce(counts, op=MPI.SUM)
+        total = comm.allreduce(len(self._dofs), op=MPI.SUM) + 2
+        return [float(c) / total for c in counts]
+
+    def large_change(self, state: dict | None = None) -> str | None:
+        """Why a converged step is rejected: its active set changed at more than
+        ``max_active_change`` of an obstacle's contact points (None: accepted). Collective."""
+        limit = self.settings.max_active_change
+        if limit >= 1:
+            return None
+        for obstacle, share in zip(self.obstacles, self.active_change(state), strict=True):
+            if share > limit:
+                return (f"contact: the step changed the contact state of {share:.0%} of the "
+                        f"contact points of obstacle {obstacle.name!r} (more than [contact] "
+                        f"max_active_change = {limit:g})")
+        return None
 
     def reset(self) -> None:
         """No contact: zero multipliers and friction states, the configured friction
@@ -757,6 +865,7 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
 
     def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and

@@ -280,12 +280,16 @@ class ContactSettings:
     rod's element bending stiffness, k = penalty * EI_min / h_e^4 per unit length (h_e the
     smallest element); ``max_updates``: augmented-Lagrangian (Uzawa) updates per load step
     before the step is rejected; ``quadrature_degree``: the contact integral's Gauss rule (None:
-    4 p, p the element degree: 2p + 1 points per element)."""
+    4 p, p the element degree: 2p + 1 points per element); ``max_active_change``: the largest
+    share of an obstacle's contact points (the rod's contact quadrature points and its two
+    ends) that may come into or out of contact in one accepted step of the rod (load step or
+    arc-length point): a step beyond it is cut back (1: no limit)."""
 
     penetration_tolerance: float | None = None
     penalty: float = 1.0
     max_updates: int = 50
     quadrature_degree: int | None = None
+    max_active_change: float = 0.2
 
     def __post_init__(self):
         tol = self.penetration_tolerance
@@ -297,6 +301,11 @@ class ContactSettings:
         if not (isinstance(self.max_updates, int) and 1 <= self.max_updates <= 1000):
             raise ValueError(f"[contact] max_updates must be an integer from 1 to 1000; got "
                              f"{self.max_updates!r}")
+        change = self.max_active_change
+        if isinstance(change, bool) or not (isinstance(change, (int, float))
+                                            and 0 < change <= 1):
+            raise ValueError(f"[contact] max_active_change must be a share in (0, 1] of the "
+                             f"contact points (1: no limit); got {change!r}")
         degree = self.quadrature_degree
         if degree is not None and not (isinstance(degree, int) and 1 <= degree <= 30):
             raise ValueError(f"[contact] quadrature_degree must be an integer from 1 to 30; got "
