@@ -95,7 +95,8 @@ _SPECS = (
                 "finger:run", spatial=True),
     CommandSpec("design", "optimise section sizes, tendon offsets, tensions or loads for a "
                           "target ([design])",
-                ("tendons", "design", "inverse"), _parse_design, "design:run"),
+                ("tendons", "design", "inverse", "obstacles", "contact"), _parse_design,
+                "design:run"),
     CommandSpec("dynamic", "nonlinear dynamics (generalised-alpha, or the paper's FD + "
                            "Runge-Kutta)",
                 ("time", "initial", "damping", "modes", "tendons", "obstacles", "contact"),
