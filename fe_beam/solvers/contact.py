@@ -56,6 +56,14 @@ class ContactSolver:
         self.solver.destroy()
 
     def solve(self) -> int:
+        """The fixed-multiplier solver's Newton inside the Uzawa and active-set updates."""
+        return self.solve_with(self.solver.solve, count_linear=True)
+
+    def solve_with(self, inner, count_linear: bool = False) -> int:
+        """The updates around any fixed-multiplier solve ``inner() -> iterations`` that
+        raises `SolveFailed` (e.g. the arc-length corrector of
+        `fe_beam.solvers.continuation.Continuation.step`, which then corrects again from its
+        current iterate at every update): the same acceptance and failures as `solve`."""
         contact = self.contact
         contact.restore()
         iterations, linear = 0, 0
@@ -63,8 +71,8 @@ class ContactSolver:
         limit = contact.settings.max_updates
         try:
             for update in range(limit + 1):
-                iterations += self.solver.solve()
-                linear += self.solver.linear_iterations
+                iterations += inner()
+                linear += self.solver.linear_iterations if count_linear else 0
                 state = contact.evaluate()
                 penetration = contact.max_penetration(state)
                 separation = contact.max_separation(state)
