@@ -147,6 +147,10 @@ def test_compare_in_contact_agrees_with_the_solid_the_rod_alone_and_the_xdmf(tmp
         header = (solid_out / "load_displacement.csv").read_text().splitlines()[0]
         assert "contact0_Fy" in header and "contact0_length" in header
         assert (solid_out / "backbone.png").exists()
+        import meshio
+
+        surface = meshio.read(solid_out / "obstacles.vtu")  # the roof: on the plane y = ROOF
+        assert np.abs(surface.points[:, 1] - ROOF).max() < 1e-12
 
     # the rod alone: fe-beam finger with the roof in 2D
     rod_config = {k: v for k, v in finger().items() if k != "solid"} | {

@@ -30,6 +30,7 @@ from fe_beam.exports import (
     indexed_columns,
     tip_columns,
 )
+from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import _pyplot, write_csv
 from fe_beam.exports.solid import DisplacementXDMF
 from fe_beam.exports.spatial import _draw_view_obstacles
@@ -213,7 +214,8 @@ def solid_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = Tr
     writes) the converged steps with ``status = "failed"`` and a ``message``. Collective on
     ``comm``; files are written by its rank 0. ``out`` receives ``summary.json``,
     ``load_displacement.csv``, ``solid.xdmf``/``.h5`` (3D displacement per load factor; in
-    contact also ``contact_gap_i`` and ``contact_pressure_i``, `DisplacementXDMF`),
+    contact also ``contact_gap_i`` and ``contact_pressure_i``, `DisplacementXDMF`, and the
+    obstacles' surfaces ``obstacles.vtu``),
     ``rod.xdmf`` (the rod in the same coordinates) and, with ``[output] plots``, ``backbone.png``
     and ``load_displacement.png``.
     """
@@ -337,6 +339,9 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
     if out is not None and config.output.xdmf:
         writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
         writer.write(0.0)
+        if config.obstacles and root:  # their surfaces, next to solid.xdmf (same coordinates)
+            write_obstacle_surfaces(config.obstacles, out / "obstacles.vtu",
+                                    *bounding_box([], config.length))
 
     def on_step(record: dict) -> None:
         summary["steps"].append(record)
