@@ -111,11 +111,12 @@ _SPECS = (
                 lambda config, options: parse_solid(config), "solid:run", spatial=True),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",
-                ("tendons", "solid", "compare"), lambda config, options: parse_compare(config),
+                ("tendons", "solid", "compare", "obstacles", "contact"),
+                lambda config, options: parse_compare(config),
                 "compare:run", spatial=True),
     CommandSpec("validity", "map of where the rod agrees with the 3D solid over two config keys "
                             "([validity])",
-                ("tendons", "solid", "compare", "validity"),
+                ("tendons", "solid", "compare", "validity", "obstacles", "contact"),
                 lambda config, options: parse_validity(config), "validity:run", spatial=True),
     CommandSpec("refine", "mesh-refinement study: observed order and Richardson extrapolation of "
                           "the tip",
@@ -152,10 +153,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam "
-                  "solid for contact with rigid obstacles"),
-    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path or fe-beam solid "
-                "for contact with rigid obstacles"),
+    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path, fe-beam "
+                  "solid or fe-beam compare for contact with rigid obstacles"),
+    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path, fe-beam solid "
+                "or fe-beam compare for contact with rigid obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 
