@@ -210,6 +210,10 @@ def test_snap_through_path_through_limit_points_is_stopped_by_a_floor(tmp_path):
               if p["stable"] and p["point"]["v"] < -0.06]
     v, lam = np.array(branch).T
     fit = np.polyfit(v, lam, 3)
+    # the reference is no better than the midspan's place: a state within the penetration
+    # tolerance of the floor holds F_hold(v) within |dF_hold/dv| tolerance (the fit's slope)
+    slope = np.polyval(np.polyder(fit), V_FLOOR) * force0
+    place_error = abs(slope) * tolerance
     pressed = [p for p in summary["path"] if p["contact"][0]["active"]]
     assert len(pressed) >= 3
     worst = 0.0
@@ -226,7 +230,7 @@ def test_snap_through_path_through_limit_points_is_stopped_by_a_floor(tmp_path):
         assert abs(entry["force"][0]) <= 1e-6
         assert entry["active"] == [[pytest.approx(0.497, abs=0.01),
                                     pytest.approx(0.503, abs=0.01)]]
-        assert entry["force"][1] == pytest.approx(carried, rel=5e-3)
+        assert entry["force"][1] == pytest.approx(carried, rel=5e-3, abs=place_error)
     print(f"snap-through onto a floor: {len(pressed)} points in contact, floor force vs "
           f"F_hold - F_point: {worst:.2e} relative")
     # the free beam would have gone below the floor at the last load factor

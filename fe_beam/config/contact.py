@@ -69,6 +69,10 @@ CONTACT_KEYS = {
                              "contact points (quadrature points and the two ends) that may come "
                              "into or out of contact in one load step or path point; a larger "
                              "change is cut back (1: no limit)"),
+    "force_tolerance": Key(NUMBER, 1e-3, "rods: largest estimated relative error (0 < . <= 1) "
+                           "of each obstacle's contact force a converged step may keep: the "
+                           "Uzawa updates go on until the multipliers have converged, not only "
+                           "the penetration"),
 }
 
 
@@ -215,8 +219,9 @@ def parse_contact(config: dict, model, solid: bool = False, variable: str = "loa
     if twice:
         raise ConfigError(f"[[obstacles]] name {twice[0]!r} is given to two obstacles; names "
                           "must be unique")
-    if solid and "max_active_change" in (config.get("contact") or {}):
-        raise ConfigError("[contact] max_active_change limits the rod's load steps only (the 3D "
-                          "solid's steps are not limited by it); leave it out with [solid]")
+    for rod_only in ("max_active_change", "force_tolerance"):
+        if solid and rod_only in (config.get("contact") or {}):
+            raise ConfigError(f"[contact] {rod_only} applies to the rod's contact only (the 3D "
+                              "solid's steps do not use it); leave it out with [solid]")
     settings = _wrap(ContactSettings, **table(config, "contact", CONTACT_KEYS))
     return obstacles, settings

@@ -444,7 +444,8 @@ class ContactSet:
         self.degree = degree
         import basix
 
-        self.points, _ = basix.make_quadrature(basix.CellType.interval, degree)
+        self.points, self._reference_weights = basix.make_quadrature(basix.CellType.interval,
+                                                                     degree)
         self.space = compat.function_space(mesh, compat.quadrature_element(mesh, degree))
         # own integration domain (tag 1) so that the quadrature coefficient sits in a kernel
         # with one rule (`fe_beam.solvers.energy_momentum`: FFCx 0.5 merges the integrals of one
@@ -464,6 +465,9 @@ class ContactSet:
         bending = float(model.material.E) * inertia
         h_e = float(problem.h_min)
         self.k_value = self.settings.penalty * bending / h_e**4
+        #: the rod's force scale EI_min / L^2 [N]: the floor of the contact forces' accuracy
+        #: (`fe_beam.solvers.contact.ContactSolver`: error <= force_tolerance (F + this))
+        self.force_scale = bending / float(model.length) ** 2
         self._base_k = self.k_value
         self.k = fem.Constant(mesh, self.k_value)
         self.k_end = fem.Constant(mesh, self.k_value * h_e)
@@ -630,6 +634,10 @@ class ContactSet:
         index_map = problem.mesh.topology.index_map(1)
         self._owned_cells = np.arange(index_map.size_local, dtype=np.int32)
         self._dofs = compat.cell_dofs(self.space)[: len(self._owned_cells)].ravel()
+        # each owned contact point's share of the reference length [m] (pressures times these
+        # are forces), in the order of ``_dofs``
+        lengths = np.ptp(compat.cell_vertex_x(problem.mesh)[: len(self._owned_cells)], axis=1)
+        self._weights = (lengths[:, None] * self._reference_weights[None, :]).ravel()
 
     def _densities(self, g, geometry) -> list:
         """Force and moment densities per unit traction on the coordinate g: dg/dr and
@@ -981,6 +989,29 @@ class ContactSet:
                 local = max(local, float(np.max(measure(gap, pressure))))
             local = max(local, float(np.max(measure(end, end_pressure))))
         return self._problem.comm.allreduce(max(local, 0.0), op=MPI.MAX)
+
+    def force_changes(self, state: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Per obstacle (global numbers, [N]): the normal contact force of the iterate (the
+        pressures integrated along the rod, the ends' point forces added) and the change the
+        next Uzawa update would make to the pressures (the integral of |p - lambda|, the ends'
+        |p - lambda| added): the convergence measure of the augmented-Lagrangian multipliers.
+        A penetration below the tolerance alone does not make the force accurate: where the rod
+        is stiff against the obstacle (a finger pushing along its axis), a few micrometres of
+        penetration at one contact point and as much separation at the next still carry a few
+        per cent of the force."""
+        comm = self._problem.comm
+        forces, changes = [], []
+        for i, function in enumerate(self.multipliers):
+            pressure = state["pressure"][i]
+            change = np.abs(pressure - function.x.array[self._dofs])
+            local = np.array([float(np.dot(self._weights, pressure)),
+                              float(np.dot(self._weights, change))])
+            total = comm.allreduce(local, op=MPI.SUM)
+            ends = np.asarray(state["end_pressure"][i], dtype=float)
+            end_multipliers = np.array([float(c.value) for c in self.end_multipliers[i]])
+            forces.append(total[0] + float(ends.sum()))
+            changes.append(total[1] + float(np.abs(ends - end_multipliers).sum()))
+        return np.array(forces), np.array(changes)
 
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
         """The active set chi <- [lambda - k g > 0] at every contact point and end and, with

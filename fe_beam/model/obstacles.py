@@ -283,13 +283,16 @@ class ContactSettings:
     4 p, p the element degree: 2p + 1 points per element); ``max_active_change``: the largest
     share of an obstacle's contact points (the rod's contact quadrature points and its two
     ends) that may come into or out of contact in one accepted step of the rod (load step or
-    arc-length point): a step beyond it is cut back (1: no limit)."""
+    arc-length point): a step beyond it is cut back (1: no limit); ``force_tolerance``: the
+    largest estimated relative error of each obstacle's contact force a converged step may keep
+    (the Uzawa updates go on until the multipliers, not only the penetration, have converged)."""
 
     penetration_tolerance: float | None = None
     penalty: float = 1.0
     max_updates: int = 50
     quadrature_degree: int | None = None
     max_active_change: float = 0.2
+    force_tolerance: float = 1e-3
 
     def __post_init__(self):
         tol = self.penetration_tolerance
@@ -306,6 +309,10 @@ class ContactSettings:
                                             and 0 < change <= 1):
             raise ValueError(f"[contact] max_active_change must be a share in (0, 1] of the "
                              f"contact points (1: no limit); got {change!r}")
+        rtol = self.force_tolerance
+        if isinstance(rtol, bool) or not (isinstance(rtol, (int, float)) and 0 < rtol <= 1):
+            raise ValueError(f"[contact] force_tolerance must be a relative error in (0, 1] "
+                             f"(1e-3: 0.1 %); got {rtol!r}")
         degree = self.quadrature_degree
         if degree is not None and not (isinstance(degree, int) and 1 <= degree <= 30):
             raise ValueError(f"[contact] quadrature_degree must be an integer from 1 to 30; got "

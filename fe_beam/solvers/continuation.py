@@ -342,6 +342,14 @@ class CallbackProblem(NonlinearParameterProblem):
         self.arc_length_ready = self.nonlinear is not None
 
 
+def _difficulty(solver, iterations: int) -> int:
+    """The Newton iterations that judge a step easy or hard: those of the hardest solve at
+    fixed contact multipliers when the solver wraps contact (`ContactSolver.hardest_solve`),
+    else all of them."""
+    hardest = getattr(solver, "hardest_solve", None)
+    return iterations if hardest is None else hardest
+
+
 def _snes_solver(solver):
     """The SNESSolver inside ``solver`` (itself, or its ``.solver`` / ``.inner``)."""
     seen = solver
@@ -743,7 +751,7 @@ class Continuation:
                 self._emit(point)
                 bar.update(lam * stepping.steps,
                            f"{label} factor {lam:.4f}, {iterations} Newton its")
-                size.converged(iterations)
+                size.converged(_difficulty(solver, iterations))
         finally:
             bar.close()
         return results
@@ -898,7 +906,7 @@ class Continuation:
                     bar.note(f"cut back to arc length {size.value:.3g} ({failure.reason})")
                     continue
                 failures.clear()
-                size.converged(point.iterations)
+                size.converged(_difficulty(self.problem.solver, point.iterations))
                 self.arc_length = size.value
                 beyond = (point.load_factor > settings.max_load_factor
                           or point.load_factor < settings.min_load_factor)
