@@ -193,7 +193,7 @@ def test_planar_friction_case_on_a_rotated_plane_matches_the_planar_rod(held):
     assert [r[0] for r in results["planar"]] == [r[0] for r in results["spatial"]]
     worst = {"force": 0.0, "friction": 0.0, "u": 0.0, "lateral": 0.0}
     slipped = 0
-    for (pulled, a, tip_a), (_, b, tip_b) in zip(results["planar"], results["spatial"],
+    for (_, a, tip_a), (_, b, tip_b) in zip(results["planar"], results["spatial"],
                                                  strict=True):
         assert a["slip"] == b["slip"]
         slipped += a["slip"] != []

@@ -378,12 +378,6 @@ def section_facing(R, normal):
     return ufl.as_vector([0, m[1] / size, m[2] / size])
 
 
-def unit_direction(vector, eps):
-    """vector / |vector| (UFL), regularised by eps (a slipping point's trial traction is never
-    near zero: |trial| > mu p_n)."""
-    return vector / ufl.sqrt(ufl.dot(vector, vector) + eps**2)
-
-
 def spatial_stick_density(multiplier, stick, slip, k):
     """The 2D `stick_density`: stick/(2k) (|lambda_t - k s|^2 - |lambda_t|^2), lambda_t and s
     2-vectors in the tangent basis."""
@@ -391,11 +385,15 @@ def spatial_stick_density(multiplier, stick, slip, k):
     return stick * (ufl.dot(trial, trial) - ufl.dot(multiplier, multiplier)) / (2 * k)
 
 
-def spatial_slip_traction(multiplier, slip, k, mu, pressure, eps):
-    """The traction of a slipping point (UFL 2-vector): Coulomb's return map of the trial
-    traction lambda_t - k s onto the disc |p_t| <= mu p_n, mu p_n (lambda_t - k s)/|.|; at
-    the Uzawa fixed point lambda_t = p_t it is opposite to the slip."""
-    return mu * pressure * unit_direction(multiplier - k * slip, eps)
+def spatial_slip_traction(direction, slip, k, mu, pressure, eps):
+    """The traction of a slipping point (UFL 2-vector): Coulomb's return map
+    mu p_n t/|t| of the trial traction t = mu p_n e - k s, e the unit ``direction`` of the
+    last update (the slipping point's multiplier is mu p_n e); regularised by ``eps`` (a
+    slipping point's |t| is about mu p_n or more). The updates repeat until e is t/|t|
+    again: there the slip is opposite to the friction."""
+    bound = mu * pressure
+    trial = bound * direction - k * slip
+    return bound * trial / ufl.sqrt(ufl.dot(trial, trial) + eps**2)
 
 
 def coulomb_state_2d(trial, slip, pressure, mu, stick, direction, slack: float = 0.0):
@@ -959,7 +957,7 @@ class ContactSet:
         point in contact there (3), at every contact point and end."""
         mesh = self._problem.mesh
         if not hasattr(self, "_eps"):
-            self._eps = fem.Constant(mesh, 1e-12 * self.k_value * self.tolerance)
+            self._eps = fem.Constant(mesh, 1e-9 * self.k_value * self.tolerance)
         storage = {n: fem.Function(self.space, name=f"friction_{n}_{i}") for n in self._names}
         storage["reference"] = [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
                                 for c in range(3)]
@@ -995,9 +993,9 @@ class ContactSet:
                 point = ufl.variable(point)
             slip = spatial_slip(obstacle, point, reference)
             multiplier = self._vector(flags, "multiplier")
-            slipping = (1 - flags["stick"]) * (flags["direction_0"] ** 2
-                                               + flags["direction_1"] ** 2)
-            traction = spatial_slip_traction(multiplier, slip, k, f["mu"], pressure, self._eps)
+            slipping = 1 - flags["stick"]  # the direction is zero unless the point slips
+            traction = spatial_slip_traction(self._vector(flags, "direction"), slip, k,
+                                             f["mu"], pressure, self._eps)
             terms.append({"measure": measure, "slip": slip, "stick": flags["stick"],
                           "slipping": slipping, "slip_traction": traction,
                           "multiplier": multiplier, "k": k, "point": point})
@@ -1079,25 +1077,29 @@ class ContactSet:
         points = values[:, where["point"]:where["point"] + 3]
         stick = f["stick"].x.array[self._dofs]
         direction, multiplier = pair(f, "direction"), pair(f, "multiplier")
+        multiplier = self._slipping_multiplier(stick, direction, multiplier,
+                                               mu * state["pressure"][i])
         stuck, new_direction, traction = coulomb_state_2d(
             multiplier - k * slip, slip, state["pressure"][i], mu, stick, direction,
             1e-3 * tolerance)
         changes = self._spatial_friction_changes(stick, direction, multiplier, stuck,
-                                                 new_direction, slip, state["pressure"][i],
-                                                 tolerance)
+                                                 new_direction, slip,
+                                                 mu * state["pressure"][i], tolerance)
         end_slip = np.array([[global_sum(comm, fem.assemble_scalar(form)) for form in forms]
                              for forms in self._end_forms[i]["slip"]])
         end_point = [self._assemble_end_point(i, e) for e in range(2)]
         end_stick = np.array([float(e["stick"].value) for e in f["ends"]])
         end_direction = np.array([pair(e, "direction") for e in f["ends"]])
-        end_multiplier = np.array([pair(e, "multiplier") for e in f["ends"]])
+        end_multiplier = self._slipping_multiplier(
+            end_stick, end_direction, np.array([pair(e, "multiplier") for e in f["ends"]]),
+            mu * state["end_pressure"][i])
         end_stuck, end_new_direction, end_traction = coulomb_state_2d(
             end_multiplier - k_end * end_slip, end_slip, state["end_pressure"][i], mu,
             end_stick, end_direction, 1e-3 * tolerance)
         if comm.rank == 0:  # the ends are global numbers: counted once
             changes += self._spatial_friction_changes(
                 end_stick, end_direction, end_multiplier, end_stuck, end_new_direction,
-                end_slip, state["end_pressure"][i], tolerance)
+                end_slip, mu * state["end_pressure"][i], tolerance)
         state["friction"][i] = {"slip": slip, "point": points, "traction": traction,
                                 "stuck": stuck, "direction": new_direction,
                                 "end_slip": end_slip, "end_point": end_point,
@@ -1106,17 +1108,24 @@ class ContactSet:
         return changes
 
     @staticmethod
+    def _slipping_multiplier(stick, direction, multiplier, bound):
+        """The multipliers the solve used: a slipping point's mu p_n e (its direction e,
+        `spatial_slip_traction`), a stuck one's own."""
+        slipping = (np.asarray(stick) < 0.5) & (np.linalg.norm(direction, axis=1) > 0.5)
+        return np.where(slipping[:, None], np.asarray(bound)[:, None] * direction, multiplier)
+
+    @staticmethod
     def _spatial_friction_changes(stick, direction, multiplier, stuck, new_direction, slip,
-                                  pressure, tolerance) -> int:
-        """Points whose stick/slip state must change, slipping points whose traction's
-        direction is not yet the trial's (the slip not yet opposite to the friction, 1e-6),
-        or stuck points that slipped more than the tolerance."""
+                                  bound, tolerance) -> int:
+        """Points whose stick/slip state must change, slipping points (with a friction bound
+        mu p_n > 0) whose direction (held in the solve) or multiplier's is not yet the
+        trial's (the slip not yet opposite to the friction, 1e-6), or stuck points that
+        slipped more than the tolerance."""
         used_stuck = np.asarray(stick) > 0.5
-        slipping = (pressure > 0) & ~stuck
-        size = np.linalg.norm(multiplier, axis=1)
-        unit = multiplier / np.maximum(size, 1e-300)[:, None]
-        turned = (np.linalg.norm(np.asarray(direction), axis=1) < 0.5) | (
-            np.linalg.norm(new_direction - unit, axis=1) > 1e-6)
+        slipping = (bound > 0) & ~stuck
+        direction = np.asarray(direction)
+        turned = ((np.linalg.norm(direction, axis=1) < 0.5)
+                  | (np.linalg.norm(new_direction - direction, axis=1) > 1e-6))
         bad = (used_stuck != stuck) | (slipping & turned)
         bad |= stuck & (np.linalg.norm(slip, axis=1) > tolerance)
         return int(np.count_nonzero(bad))
