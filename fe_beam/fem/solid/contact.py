@@ -50,7 +50,10 @@ from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, 
 from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.model.obstacles import ContactSettings
 
-__all__ = ["SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
+__all__ = ["MAX_GROWTH", "SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
+
+#: the largest penalty growth of one solve (`SolidContact.update`)
+MAX_GROWTH = 4.0**6
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -96,6 +99,10 @@ class SolidContact:
                                                  lambda x: np.full(x.shape[1], True))
         self._boundary, self._owned = self._masks(self.Q, facets)
         self._boundary_nodes, self._owned_nodes = self._masks(self.Q_nodes, facets)
+        #: the gap between the vertices: at the nodes of P3 on the exterior facets (the
+        #: vertices, two points on each edge, each facet's centroid)
+        self.Q_between = compat.function_space(mesh, compat.element(mesh, "Lagrange", 3))
+        self._boundary_between, self._owned_between = self._masks(self.Q_between, facets)
         self.ds = ufl.Measure("ds", domain=mesh,
                               metadata={"quadrature_degree": self.quadrature_degree})
         X = ufl.SpatialCoordinate(mesh)
@@ -107,8 +114,14 @@ class SolidContact:
         self._node_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
                                                                self.Q_nodes)
                                for o in self.obstacles]
+        self._between_gaps = [fem.Function(self.Q_between) for _ in obstacles]
+        self._between_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
+                                                                  self.Q_between)
+                                  for o in self.obstacles]
         k = fem.Constant(mesh, float(self.k))
         self._k = k
+        #: the penalty's growth beyond ``k`` in the current solve (`update`)
+        self.growth = 1.0
         self.energy = sum(solid_contact_density(o, X, u, lam, k) * self.ds
                           for o, lam in zip(self.obstacles, self.multipliers, strict=True))
         self._force = [[fem.form(solid_traction(o, X, u, lam, k)[i] * self.ds)
@@ -134,17 +147,24 @@ class SolidContact:
         return [compat.local_array(lam).copy() for lam in self.multipliers]
 
     def restore(self) -> None:
-        """Multipliers back to those of the last accepted state (`commit`)."""
+        """Multipliers back to those of the last accepted state (`commit`), the penalty back
+        to ``k`` (every solve starts from them)."""
         for lam, saved in zip(self.multipliers, self._committed, strict=True):
             compat.local_array(lam)[:] = saved
+        self._set_growth(1.0)
+
+    def _set_growth(self, growth: float) -> None:
+        self.growth = float(growth)
+        self._k.value = self.k * self.growth
 
     def commit(self) -> None:
         self._committed = self._copy()
 
-    def _nodal_gaps(self, nodes: bool = False) -> list[np.ndarray]:
+    def _nodal_gaps(self, nodes: bool | str = False) -> list[np.ndarray]:
         values = []
-        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes else
-                                  (self._gaps, self._gap_expr))
+        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes is True else
+                                  (self._between_gaps, self._between_gap_expr)
+                                  if nodes == "between" else (self._gaps, self._gap_expr))
         for gap, expr in zip(functions, expressions, strict=True):
             gap.interpolate(expr)
             values.append(compat.local_array(gap).copy())
@@ -165,16 +185,24 @@ class SolidContact:
 
     def evaluate(self) -> dict:
         """Gaps, pressures and the largest penetration at the exterior-facet vertices (the
-        multipliers'; owned nodes, MPI-reduced)."""
+        multipliers'; owned nodes, MPI-reduced), and the largest penetration between them
+        (``between``: at the P3 nodes of the exterior facets); ``penetration`` is the larger
+        of the two."""
         gaps = self._nodal_gaps()
+        k = self.k * self.growth
         pressures = [np.where(self._boundary, np.maximum(
-            compat.local_array(lam) - self.k * g, 0.0), 0.0)
+            compat.local_array(lam) - k * g, 0.0), 0.0)
                      for lam, g in zip(self.multipliers, gaps, strict=True)]
-        penetration = [global_max(self.comm, float(np.max(
+        vertices = [global_max(self.comm, float(np.max(
             np.where(self._boundary & self._owned, -g, 0.0), initial=0.0))) for g in gaps]
+        between = [global_max(self.comm, float(np.max(
+            np.where(self._boundary_between & self._owned_between, -g, 0.0), initial=0.0)))
+                   for g in self._nodal_gaps("between")]
+        penetration = [max(a, b) for a, b in zip(vertices, between, strict=True)]
         peak = [global_max(self.comm, float(np.max(np.where(self._owned, p, 0.0),
                                                       initial=0.0))) for p in pressures]
         return {"gaps": gaps, "pressures": pressures, "penetration": penetration,
+                "vertex_penetration": vertices, "between": between,
                 "pressure_peak": peak, "active_changes": 0, "friction_changes": 0}
 
     def max_penetration(self, state: dict | None = None) -> float:
@@ -186,10 +214,17 @@ class SolidContact:
         return 0.0
 
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
-        """Uzawa: lambda <- <lambda - k g>_+ at the exterior-facet nodes."""
+        """Uzawa: lambda <- <lambda - k g>_+ at the exterior-facet nodes; when the vertices
+        are within the tolerance and the points between them are not (a curved obstacle
+        pressed into a facet, the residual p / k between the vertices of a P1 multiplier),
+        the penalty grows 4 x (up to MAX_GROWTH x k in one solve; then the step is rejected
+        as before)."""
         state = self.evaluate() if state is None else state
         for lam, p in zip(self.multipliers, state["pressures"], strict=True):
             compat.local_array(lam)[:] = p
+        if (max(state["vertex_penetration"], default=0.0) <= self.tolerance
+                < max(state["between"], default=0.0) and self.growth < MAX_GROWTH):
+            self._set_growth(min(4.0 * self.growth, MAX_GROWTH))
 
     def summary(self, state: dict | None = None) -> list[dict]:
         """One entry per obstacle: force [N] (on the solid), active_area [m^2, reference],
