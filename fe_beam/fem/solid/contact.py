@@ -48,12 +48,34 @@ from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, point_gap
 from fe_beam.fem.mpi import assemble_scalar, global_max
-from fe_beam.model.obstacles import ContactSettings
+from fe_beam.model.obstacles import ContactSettings, Sphere
 
 __all__ = ["MAX_GROWTH", "SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
 
 #: the largest penalty growth of one solve (`SolidContact.update`)
 MAX_GROWTH = 4.0**6
+
+
+def triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The distance (numpy) of ``point`` (3,) to each flat triangle of ``triangles`` (n, 3, 3):
+    to its projection on the triangle's plane when that falls inside, else to the nearest
+    edge."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    normal = np.cross(b - a, c - a)
+    area2 = np.einsum("ij,ij->i", normal, normal)
+    unit = normal / np.sqrt(np.maximum(area2, 1e-300))[:, None]
+    height = np.einsum("ij,ij->i", point - a, unit)
+    foot = point - height[:, None] * unit
+    inside = np.ones(len(triangles), dtype=bool)
+    for p, q in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ij,ij->i", np.cross(q - p, foot - p), normal) >= 0
+    edges = []
+    for p, q in ((a, b), (b, c), (c, a)):
+        d = q - p
+        t = np.clip(np.einsum("ij,ij->i", point - p, d)
+                    / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
+        edges.append(np.linalg.norm(point - (p + t[:, None] * d), axis=1))
+    return np.where(inside, np.abs(height), np.min(edges, axis=0))
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -103,6 +125,28 @@ class SolidContact:
         #: vertices, two points on each edge, each facet's centroid)
         self.Q_between = compat.function_space(mesh, compat.element(mesh, "Lagrange", 3))
         self._boundary_between, self._owned_between = self._masks(self.Q_between, facets)
+        #: a sphere can press into a facet between all its sample points: its deepest
+        #: penetration into the deformed boundary, the flat triangles through the P_p nodes
+        #: of each exterior facet (P2: 4 per facet, through its vertices and edge midpoints;
+        #: `triangle_distance`)
+        self._spheres = [i for i, o in enumerate(self.obstacles) if isinstance(o, Sphere)]
+        if self._spheres:
+            owned = facets[facets < mesh.topology.index_map(fdim).size_local]
+            a, b, c = np.moveaxis(compat.facet_vertex_coordinates(mesh, owned), 1, 0)
+            if degree >= 2:
+                ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+                pieces = [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+            else:
+                pieces = [(a, b, c)]
+            self._triangles = np.concatenate([np.stack(p, axis=1) for p in pieces])
+            from scipy.spatial import cKDTree
+
+            coordinates = self.Q_nodes.tabulate_dof_coordinates()
+            _, index = cKDTree(coordinates).query(self._triangles.reshape(-1, 3))
+            self._triangle_dofs = index.reshape(-1, 3)
+            self._vertex_u = fem.Function(self.Q_nodes)
+            self._vertex_u_expr = [compat.interpolation_expression(u[c], self.Q_nodes)
+                                   for c in range(3)]
         self.ds = ufl.Measure("ds", domain=mesh,
                               metadata={"quadrature_degree": self.quadrature_degree})
         X = ufl.SpatialCoordinate(mesh)
@@ -195,9 +239,19 @@ class SolidContact:
                      for lam, g in zip(self.multipliers, gaps, strict=True)]
         vertices = [global_max(self.comm, float(np.max(
             np.where(self._boundary & self._owned, -g, 0.0), initial=0.0))) for g in gaps]
-        between = [global_max(self.comm, float(np.max(
-            np.where(self._boundary_between & self._owned_between, -g, 0.0), initial=0.0)))
-                   for g in self._nodal_gaps("between")]
+        between = [float(np.max(np.where(self._boundary_between & self._owned_between, -g, 0.0),
+                                initial=0.0)) for g in self._nodal_gaps("between")]
+        if self._spheres:
+            deformed = self._triangles.copy()
+            for c, expr in enumerate(self._vertex_u_expr):
+                self._vertex_u.interpolate(expr)
+                deformed[:, :, c] += compat.local_array(self._vertex_u)[self._triangle_dofs]
+            for i in self._spheres:
+                sphere = self.obstacles[i]
+                if len(deformed):
+                    inside = sphere.radius - triangle_distance(np.array(sphere.center), deformed)
+                    between[i] = max(between[i], float(np.max(inside)))
+        between = [global_max(self.comm, b) for b in between]
         penetration = [max(a, b) for a, b in zip(vertices, between, strict=True)]
         peak = [global_max(self.comm, float(np.max(np.where(self._owned, p, 0.0),
                                                       initial=0.0))) for p in pressures]
