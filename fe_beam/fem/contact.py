@@ -956,8 +956,6 @@ class ContactSet:
         point of the last accepted state (3) and the body-frame direction of the section's
         point in contact there (3), at every contact point and end."""
         mesh = self._problem.mesh
-        if not hasattr(self, "_eps"):
-            self._eps = fem.Constant(mesh, 1e-9 * self.k_value * self.tolerance)
         storage = {n: fem.Function(self.space, name=f"friction_{n}_{i}") for n in self._names}
         storage["reference"] = [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
                                 for c in range(3)]
@@ -994,8 +992,10 @@ class ContactSet:
             slip = spatial_slip(obstacle, point, reference)
             multiplier = self._vector(flags, "multiplier")
             slipping = 1 - flags["stick"]  # the direction is zero unless the point slips
+            # regularised below a trial traction of k x the tolerance (a slip within the
+            # tolerance): Newton at a grazing first touch, where mu p_n and s are both ~0
             traction = spatial_slip_traction(self._vector(flags, "direction"), slip, k,
-                                             f["mu"], pressure, self._eps)
+                                             f["mu"], pressure, k * self.tolerance)
             terms.append({"measure": measure, "slip": slip, "stick": flags["stick"],
                           "slipping": slipping, "slip_traction": traction,
                           "multiplier": multiplier, "k": k, "point": point})
