@@ -1,10 +1,14 @@
-"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction for the
-planar rod (docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
+"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction
+(docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
 UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
 holds the multipliers and stick/slip states and measures the contact state.
 
 Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
-`fe_beam.model.obstacles.section_circumradius`); the rest below is the same.
+`fe_beam.model.obstacles.section_circumradius`); the rest below is the same. Their friction
+(planes and infinite cylinders) acts at the tube's material point facing the obstacle
+(`section_facing`), with 2-vector slips in the tangent plane (`spatial_slip`), tangential
+multipliers and slip directions (`spatial_stick_density`, `spatial_slip_traction`,
+`coulomb_state_2d`).
 
 Friction (planar): the slip s of a contact point since the last accepted step
 (`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
@@ -71,8 +75,11 @@ from fe_beam.model.obstacles import (
 
 __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
            "contact_point", "contact_pressure", "director", "coulomb_state",
-           "friction_return_map", "outward_normal", "point_gap", "positive_part",
-           "segment_gap", "slip_traction", "stick_density", "tangential_slip", "tube_gap"]
+           "coulomb_state_2d", "friction_return_map", "outward_normal", "plane_tangent_basis",
+           "point_gap", "positive_part", "section_facing", "segment_gap", "slip_traction",
+           "spatial_friction_supported", "spatial_outward_normal", "spatial_slip",
+           "spatial_slip_traction", "spatial_stick_density", "stick_density",
+           "tangential_slip", "tube_gap"]
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -1118,9 +1125,9 @@ class ContactSet:
     def _spatial_friction_changes(stick, direction, multiplier, stuck, new_direction, slip,
                                   bound, tolerance) -> int:
         """Points whose stick/slip state must change, slipping points (with a friction bound
-        mu p_n > 0) whose direction (held in the solve) or multiplier's is not yet the
-        trial's (the slip not yet opposite to the friction, 1e-6), or stuck points that
-        slipped more than the tolerance."""
+        mu p_n > 0) whose direction e (`spatial_slip_traction`) is not yet the trial's t/|t|
+        (the slip not yet opposite to the friction, 1e-6), or stuck points that slipped more
+        than the tolerance."""
         used_stuck = np.asarray(stick) > 0.5
         slipping = (bound > 0) & ~stuck
         direction = np.asarray(direction)

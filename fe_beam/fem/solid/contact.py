@@ -29,13 +29,16 @@ element size (``[solid] mesh_size``): a pressure mu squeezes a layer of one elem
 Measured per obstacle (`SolidContact.summary`): the force the obstacle exerts on the solid
 F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative of g), the
 active area int [p > 0] dA (reference), the peak pressure max p at the vertices of the
-exterior facets (where lambda lives) and the largest penetration max(-g) there: a converged
-step is accepted only with max_penetration <= the tolerance. Between the vertices (the P2 edge
-midpoints, the quadrature points) the surface is held by the penalty alone: a P1 multiplier
-cannot cancel a midpoint's own penetration, which stays about p / k (on a short block with
-nu = 0.3 the midpoints' residual 1e-6 m stalled the Uzawa updates when they were measured
-there), and a contact patch smaller than the boundary elements (a ball touching a coarse mesh
-between its vertices) is held by k alone and not seen by the check.
+exterior facets (where lambda lives) and the largest penetration max(-g) at the vertices and
+between them: at the P3 nodes of the exterior facets and, for a sphere, its depth into the
+deformed facets (flat triangles through their P2 nodes, `triangle_distance`); a converged
+step is accepted only with max_penetration <= the tolerance. Between the vertices the surface
+is held by the penalty alone (a P1 multiplier cannot cancel a midpoint's own penetration, which
+stays about p / k): when only those points are above the tolerance, `SolidContact.update`
+grows k (4 x per update, up to MAX_GROWTH x in one solve); where the mesh cannot follow the
+obstacle at all (a ball touching a coarse mesh inside a facet: its sagitta between the
+quadrature points) the step is rejected, never accepted with a penetration above the
+tolerance (docs/theory.md, Contact of the 3D solid: Between the vertices).
 """
 
 from __future__ import annotations
@@ -50,7 +53,8 @@ from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, 
 from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.model.obstacles import ContactSettings, Sphere
 
-__all__ = ["MAX_GROWTH", "SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
+__all__ = ["MAX_GROWTH", "SolidContact", "solid_contact_density", "solid_gap", "solid_traction",
+           "triangle_distance"]
 
 #: the largest penalty growth of one solve (`SolidContact.update`)
 MAX_GROWTH = 4.0**6
