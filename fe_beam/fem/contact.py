@@ -1257,7 +1257,8 @@ class ContactSet:
         line pressure at the contact points) [N/m], end_forces (the normal point forces at
         x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
         force) [N], slip (intervals of slipping points) [m] and end_friction (the tangential
-        point forces at the ends, along t = (-n_y, n_x)) [N]. Collective."""
+        point forces at the ends, along t = (-n_y, n_x); spatial: the two ends' friction
+        forces as world vectors [[Fx, Fy, Fz], [Fx, Fy, Fz]]) [N]. Collective."""
         state = state or self.evaluate()
         comm = self._problem.comm
         x_all = np.concatenate(comm.allgather(state["local"]["x"]))
