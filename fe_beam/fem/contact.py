@@ -785,6 +785,8 @@ class ContactSet:
     def restore(self) -> None:
         """Multipliers back to those of the last accepted state (`commit`)."""
         self._set(self._committed)
+        if self.spatial and self._friction:  # a solve starts with the wide regularisation
+            self._regularisation.value = float(self.tolerance)
 
     def commit(self) -> None:
         """The current state is accepted: its pressures and friction tractions start the next
@@ -963,6 +965,8 @@ class ContactSet:
         point of the last accepted state (3) and the body-frame direction of the section's
         point in contact there (3), at every contact point and end."""
         mesh = self._problem.mesh
+        if not hasattr(self, "_regularisation"):
+            self._regularisation = fem.Constant(mesh, float(self.tolerance))
         storage = {n: fem.Function(self.space, name=f"friction_{n}_{i}") for n in self._names}
         storage["reference"] = [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
                                 for c in range(3)]
@@ -1000,9 +1004,10 @@ class ContactSet:
             multiplier = self._vector(flags, "multiplier")
             slipping = 1 - flags["stick"]  # the direction is zero unless the point slips
             # regularised below a trial traction of k x the tolerance (a slip within the
-            # tolerance): Newton at a grazing first touch, where mu p_n and s are both ~0
+            # tolerance) in the first solve of a step: Newton at a grazing first touch, where
+            # mu p_n and s are both ~0; then 1e-9 of that (`_regularisation`)
             traction = spatial_slip_traction(self._vector(flags, "direction"), slip, k,
-                                             f["mu"], pressure, k * self.tolerance)
+                                             f["mu"], pressure, self._regularisation * k)
             terms.append({"measure": measure, "slip": slip, "stick": flags["stick"],
                           "slipping": slipping, "slip_traction": traction,
                           "multiplier": multiplier, "k": k, "point": point})
@@ -1092,6 +1097,8 @@ class ContactSet:
         changes = self._spatial_friction_changes(stick, direction, multiplier, stuck,
                                                  new_direction, slip,
                                                  mu * state["pressure"][i], tolerance)
+        changes += self._regularisation_deficit(multiplier - k * slip, k,
+                                                mu * state["pressure"][i], stuck)
         end_slip = np.array([[global_sum(comm, fem.assemble_scalar(form)) for form in forms]
                              for forms in self._end_forms[i]["slip"]])
         end_point = [self._assemble_end_point(i, e) for e in range(2)]
@@ -1107,12 +1114,23 @@ class ContactSet:
             changes += self._spatial_friction_changes(
                 end_stick, end_direction, end_multiplier, end_stuck, end_new_direction,
                 end_slip, mu * state["end_pressure"][i], tolerance)
+            changes += self._regularisation_deficit(end_multiplier - k_end * end_slip, k_end,
+                                                    mu * state["end_pressure"][i], end_stuck)
         state["friction"][i] = {"slip": slip, "point": points, "traction": traction,
                                 "stuck": stuck, "direction": new_direction,
                                 "end_slip": end_slip, "end_point": end_point,
                                 "end_traction": end_traction, "end_stuck": end_stuck,
                                 "end_direction": end_new_direction}
         return changes
+
+    def _regularisation_deficit(self, trial, k, bound, stuck) -> int:
+        """Slipping points whose traction in the solve, mu p_n |t| / sqrt(|t|^2 + eps^2)
+        (`spatial_slip_traction`), fell short of mu p_n by more than 1e-9 of it: they need a
+        solve with the sharp regularisation (`update` sets it)."""
+        eps = float(self._regularisation.value) * k
+        size = np.linalg.norm(trial, axis=1)
+        deficit = 1 - size / np.sqrt(size**2 + eps**2)
+        return int(np.count_nonzero((bound > 0) & ~stuck & (deficit > 1e-9)))
 
     @staticmethod
     def _slipping_multiplier(stick, direction, multiplier, bound):
@@ -1177,6 +1195,8 @@ class ContactSet:
                 flag.value = 1.0 if trial > 0 else 0.0
                 if multipliers:
                     constant.value = float(state["end_pressure"][i][e])
+        if self.spatial and self._friction:  # the sharp return map from now on
+            self._regularisation.value = 1e-9 * float(self.tolerance)
         for i, f in self._friction.items():
             entry = state["friction"][i]
             chosen = {name: values for name, values in self._state_values(entry).items()
