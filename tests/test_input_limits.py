@@ -221,6 +221,10 @@ def test_unused_tables_are_noted_not_silently_ignored():
     ("spatial_finger.toml", ("finger",)),
     ("bathe_bolourchi.toml", ("static",)),
     ("lateral_torsional.toml", ("buckling",)),
+    ("finger_grasp.toml", ("finger",)),
+    ("pinch.toml", ("finger",)),
+    ("finger_wrap.toml", ("finger",)),
+    ("finger_grasp_design.toml", ("design",)),
 ])
 def test_examples_pass_the_new_checks_silently(example, commands):
     config = load_config(EXAMPLES / example)

@@ -163,7 +163,8 @@ def test_fe_beam_solid_writes_the_contact_entries_per_step(tmp_path):
     entries = [step["contact"] for step in summary["steps"]]
     assert len(entries) == 2 and all(len(e) == 1 for e in entries)
     last = entries[-1][0]
-    assert set(last) == {"name", "force", "active_area", "max_penetration", "pressure_peak"}
+    assert set(last) == {"name", "force", "active_area", "max_penetration", "pressure_peak",
+                         "extent", "contact_length"}
     assert -last["force"][0] == pytest.approx(P_TOUCH, rel=2e-3)
     assert last["max_penetration"] <= TOLERANCE
 

@@ -31,6 +31,18 @@ through a quaternion: exact near 0), R_rod the rod's tip frame (planar rod: the 
 about z) and R_solid the best-fit rotation of the solid's tip face. A spatial rod's ``tip`` is
 {u, v, w, R, rotation_vector, position} plus ``theta`` (the in-plane angle of its tangent, as the
 solid's), and compare.csv adds ``solid_tip_w`` and ``<law>_tip_w``.
+
+In contact (``[[obstacles]]``, 3D coordinates, frictionless, and ``[contact]``: the solid's,
+`fe_beam.fem.solid.contact`), the rods are solved against the same obstacles: the spatial rod
+against the 3D ones, the planar rod against their sections by z = 0
+(`fe_beam.config.solid.planar_obstacles`: obstacles the same in every plane z = const across the
+finger; any other is a configuration error). Per sweep point the solid's ``contact`` entries
+(force, active_area, max_penetration, pressure_peak, extent, contact_length) and each rod's
+(force, moment, active, max_penetration, pressure_peak, contact_length) are in the table, with
+per obstacle ``contact_force_difference`` = |F_rod - F_solid| / max(|F_rod|, |F_solid|) (0 when
+neither touches; the planar rod's F_z is 0) and the contact lengths: the rod's is the total
+length of its active intervals, the solid's the extent along the reference x of its contact
+patch (the exterior-facet vertices that carry pressure). See `CONTACT_MEASURE`.
 """
 
 from __future__ import annotations
@@ -43,7 +55,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
-from fe_beam.analyses.solid import SolidRun
+from fe_beam.analyses.solid import SolidRun, draw_obstacles_in_view
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_distance, tip_frame
 from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
     COMPARE_KEYS,
@@ -66,6 +78,43 @@ TIP_FRAME_MEASURE = (
     "(planar rod: the rotation by theta about z), R_solid the best-fit rotation of the solid's "
     "tip face; tip_distance_over_L = |r_rod(L) - r_solid(L)| / L"
 )
+
+
+CONTACT_MEASURE = (
+    "contact_force_difference = |F_rod - F_solid| / max(|F_rod|, |F_solid|) per obstacle (0 when "
+    "neither touches it; F the force the obstacle exerts on the body, a planar rod's F_z = 0); "
+    "contact_length: the rod's total length of its active intervals, the solid's the extent "
+    "(max - min) of the reference x of its exterior-facet vertices that carry pressure"
+)
+
+
+def force_difference(rod_force, solid_force) -> float:
+    """|F_rod - F_solid| / max(|F_rod|, |F_solid|) over three components (a planar rod's
+    [Fx, Fy] gets Fz = 0); 0 when both vanish."""
+    rod = np.zeros(3)
+    rod[:len(rod_force)] = rod_force
+    solid = np.asarray(solid_force, dtype=float)
+    scale = max(float(np.linalg.norm(rod)), float(np.linalg.norm(solid)))
+    return 0.0 if scale == 0 else float(np.linalg.norm(rod - solid)) / scale
+
+
+def active_length(intervals) -> float:
+    """The total length of a rod's contact intervals [[s0, s1], ...]."""
+    return float(sum(b - a for a, b in intervals))
+
+
+def rod_contact(entries: list[dict], solid: list[dict]) -> dict:
+    """A rod's contact entries at a sweep point (``contact_length`` added) and, per obstacle,
+    the relative force difference to the solid's and the contact lengths' difference."""
+    rod = [{k: e[k] for k in ("name", "force", "moment", "active", "max_penetration",
+                              "pressure_peak") if k in e}
+           | {"contact_length": active_length(e["active"])} for e in entries]
+    differences = [force_difference(r["force"], s["force"]) for r, s in zip(rod, solid,
+                                                                          strict=True)]
+    return {"contact": rod, "contact_force_difference": differences,
+            "max_contact_force_difference": max(differences, default=0.0),
+            "contact_length_difference": [r["contact_length"] - s["contact_length"]
+                                          for r, s in zip(rod, solid, strict=True)]}
 
 
 def crossing(factors, distances, threshold: float) -> dict | None:
@@ -125,6 +174,9 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
         "notes": list(config.notes),
         "tip_frame_measure": TIP_FRAME_MEASURE,
     }
+    if solid.obstacles:
+        summary["contact_measure"] = CONTACT_MEASURE
+        summary["obstacles"] = [{"name": o.name, "shape": o.shape} for o in solid.obstacles]
     if "hyperelastic" in config.laws:
         law = matched_law(solid)
         summary["model"]["rod"]["hyperelastic"] = {
@@ -162,7 +214,8 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
             row = {"load_factor": factor}
             row |= {k: last[k] for k in ("tension", "tensions") if k in last}
             row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch",
-                                                 "max_principal_stretch_bulk")}
+                                                 "max_principal_stretch_bulk", "contact")
+                            if k in last}
             row["rod"] = {}
             for law in config.laws:
                 rod = run_rod(rod_at(solid.rod, law, factor, solid), solid.stations, comm)
@@ -182,6 +235,8 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
                         "tip_frame_angle": frame["angle"],
                         "tip_frame_rotation_vector": frame["rotation_vector"],
                     }
+                    if "contact" in last:
+                        entry |= rod_contact(rod["steps"][-1]["contact"], last["contact"])
                 row["rod"][law] = entry
             summary["table"].append(row)
             files.on_step(row)
@@ -228,6 +283,17 @@ def _departures(rows: list[dict], config: CompareConfig, scale: float | None) ->
             f"rod ({law}) vs 3D solid, d = max_x |r_rod - r_solid| / L: " + "; ".join(words)
             + (f" (largest d in the sweep: {100 * biggest:.3g} %)" if biggest is not None else "")
         )
+        if getattr(config.solid, "obstacles", ()):
+            found = [(r["rod"][law]["max_contact_force_difference"], r["load_factor"])
+                     for r in rows if "max_contact_force_difference" in r["rod"][law]]
+            top = max(found, default=None)
+            entry["max_contact_force_difference"] = None if top is None else top[0]
+            entry["contact_statement"] = (
+                f"rod ({law}) vs 3D solid in contact: " + (
+                    "no sweep point with a result" if top is None else
+                    f"largest |F_rod - F_solid| / max(|F_rod|, |F_solid|) over the obstacles "
+                    f"{100 * top[0]:.3g} % (at {sweep_label(top[1] * (scale or 1.0), bool(scale))})"
+                ))
         result[law] = entry
     return result
 
@@ -243,9 +309,11 @@ def _sentence(threshold: float, found: dict | None, scale: float | None) -> str:
             f"point above: {found['first_sweep_point_above']:.4g})")
 
 
-def _columns(first: dict | None, laws, spatial: bool = False) -> list[exports.Column]:
+def _columns(first: dict | None, laws, spatial: bool = False, obstacles: int = 0
+             ) -> list[exports.Column]:
     """compare.csv: the sweep point, the solid's tip, each rod's tip, distance and tip frame
-    angle (empty cells where the rod did not converge); a spatial rod adds the tips' w."""
+    angle (empty cells where the rod did not converge); a spatial rod adds the tips' w; per
+    obstacle i the contact forces and lengths (`_contact_columns`)."""
     count = len(first.get("tensions", [])) if first else 0
 
     def rod_tip(row: dict, law: str) -> dict:
@@ -267,6 +335,42 @@ def _columns(first: dict | None, laws, spatial: bool = False) -> list[exports.Co
                                           lambda r, law=law: rod_tip(r, law).get("w", "")))
         columns.append(exports.Column(
             f"{law}_tip_frame_angle", lambda r, law=law: r["rod"][law].get("tip_frame_angle", "")))
+    return columns + _contact_columns(obstacles, laws, spatial)
+
+
+def _contact_columns(count: int, laws, spatial: bool) -> list[exports.Column]:
+    """Per obstacle i: ``solid_contact<i>_F{x,y,z}``, ``solid_contact<i>_length`` and per law
+    ``<law>_contact<i>_F{x,y(,z)}``, ``<law>_contact<i>_length``,
+    ``<law>_contact<i>_force_difference`` (empty where the rod did not converge)."""
+    columns = []
+
+    def solid(row, i):
+        return row["solid"]["contact"][i]
+
+    def rod(row, law, i, key, k=None):
+        entry = row["rod"][law]
+        if "contact" not in entry:
+            return ""
+        value = (entry["contact_force_difference"][i] if key == "force_difference"
+                 else entry["contact"][i][key])
+        return value if k is None else value[k]
+
+    rod_axes = "xyz" if spatial else "xy"
+    for i in range(count):
+        columns += [exports.Column(f"solid_contact{i}_F{a}",
+                                   lambda r, i=i, k=k: solid(r, i)["force"][k])
+                    for k, a in enumerate("xyz")]
+        columns.append(exports.Column(f"solid_contact{i}_length",
+                                      lambda r, i=i: solid(r, i)["contact_length"]))
+        for law in laws:
+            columns += [exports.Column(f"{law}_contact{i}_F{a}",
+                                       lambda r, law=law, i=i, k=k: rod(r, law, i, "force", k))
+                        for k, a in enumerate(rod_axes)]
+            columns += [exports.Column(f"{law}_contact{i}_length",
+                                       lambda r, law=law, i=i: rod(r, law, i, "contact_length")),
+                        exports.Column(f"{law}_contact{i}_force_difference",
+                                       lambda r, law=law, i=i: rod(r, law, i,
+                                                                   "force_difference"))]
     return columns
 
 
@@ -274,7 +378,9 @@ def _exports(out: Path, config: CompareConfig, content, every_step: bool = True)
     """summary.json, compare.csv and the pictures (``every_step``: redrawn after each point)."""
     return [exports.SummaryExport(out / "summary.json", content),
             exports.CSVExport(out / "compare.csv",
-                              lambda first: _columns(first, config.laws, config.spatial)),
+                              lambda first: _columns(first, config.laws, config.spatial,
+                                                     len(getattr(config.solid, "obstacles",
+                                                                 ())))),
             exports.PlotExport(lambda summary: _plot(out, summary, config)
                                if summary["table"] and config.solid.output.plots else None,
                                content, every_step)]
@@ -308,6 +414,7 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
     axis_values = [r.get("tension", r["load_factor"]) if tensions else r["load_factor"]
                    for r in rows]
     length = config.solid.length
+    obstacles = getattr(config.solid, "obstacles", ())
 
     views = ((("v", "y + v [m]"), ("w", "z + w [m]")) if getattr(config, "spatial", False)
              else (("v", "y + v [m]"),))
@@ -328,9 +435,14 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
                               backbone.get(key, np.zeros(len(backbone["x"]))), style,
                               color=colour, lw=1.6,
                               label=f"{text}, {sweep_label(value, bool(tensions))}")
+            if obstacles:  # the obstacles (3D) seen along the remaining axis
+                geometry = config.solid.geometry
+                draw_obstacles_in_view(axis, obstacles, 1 if key == "v" else 2,
+                                       geometry.height_base if key == "v" else geometry.width)
             axis.set_xlabel("x + u [m]")
             axis.set_ylabel(text_y)
             axis.set_title("Backbones: 3D solid (solid lines) vs rod laws (dashed, dotted)"
+                           + (": section centroids, obstacles in grey" if obstacles else "")
                            + (f" ({text_y[0]} view)" if getattr(config, "spatial", False) else ""),
                              fontsize=9)
             axis.grid(alpha=0.3)
@@ -366,6 +478,37 @@ def _plot(out: Path, summary: dict, config: CompareConfig) -> None:
         axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
         axis.grid(alpha=0.3)
         axis.legend(fontsize=7)
+    if obstacles:
+        _plot_contact(out, rows, axis_values, label, config)
+
+
+def _plot_contact(out: Path, rows: list[dict], axis_values, label: str,
+                  config: CompareConfig) -> None:
+    """contact.png: per obstacle, |F| of the solid and of each rod and the contact lengths
+    against the sweep."""
+    names = [o.name for o in config.solid.obstacles]
+    with exports.figure(out / "contact.png", 1, 2, figsize=(11, 3.8)) as (_, (left, right)):
+        for i, name in enumerate(names):
+            models = [("solid", lambda r, i=i: r["solid"]["contact"][i])]
+            models += [(law, lambda r, law=law, i=i: r["rod"][law]["contact"][i]
+                        if "contact" in r["rod"][law] else None) for law in config.laws]
+            for model, entry_of in models:
+                style, text = STYLES[model]
+                points = [(v, entry_of(r)) for r, v in zip(rows, axis_values, strict=True)]
+                points = [(v, e) for v, e in points if e is not None]
+                xs = [v for v, _ in points]
+                left.plot(xs, [float(np.linalg.norm(e["force"])) for _, e in points], style,
+                          marker="o", ms=3, color=COLOURS[model], label=f"{text}, {name}")
+                right.plot(xs, [1e3 * e["contact_length"] for _, e in points], style,
+                           marker="o", ms=3, color=COLOURS[model], label=f"{text}, {name}")
+        for axis, text in ((left, "|contact force| [N]"), (right, "contact length [mm]")):
+            axis.set_xlabel(label)
+            axis.set_ylabel(text)
+            axis.grid(alpha=0.3)
+            axis.legend(fontsize=7)
+        left.set_title("Contact force: 3D solid vs rods", fontsize=9)
+        right.set_title("Contact length (rod: active intervals; solid: extent of the patch "
+                        "along x)", fontsize=8)
 
 
 def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
@@ -391,7 +534,18 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
             else:
                 parts.append(f"{law} {rod['status']}")
         report.out(f"{where}: " + "; ".join(parts))
+        for i, solid_entry in enumerate(row["solid"].get("contact", [])):
+            force = np.linalg.norm(solid_entry["force"])
+            words = [f"3D |F| {force:.4g} N, length {solid_entry['contact_length']:.4g} m"]
+            for law, rod in row["rod"].items():
+                if "contact" in rod:
+                    words.append(f"{law} |F| {np.linalg.norm(rod['contact'][i]['force']):.4g} N "
+                                 f"({100 * rod['contact_force_difference'][i]:.3g} % apart), "
+                                 f"length {rod['contact'][i]['contact_length']:.4g} m")
+            report.out(f"  contact with {solid_entry['name']!r}: " + "; ".join(words))
     for entry in summary["departures"].values():
         report.out(entry["statement"])
+        if "contact_statement" in entry:
+            report.out(entry["contact_statement"])
     report.out(f"{summary['wall_time_s']:.2f} s; results in {out}")
     return Result("compare", summary, exit_code(report, summary, "fe-beam"), report.lines)

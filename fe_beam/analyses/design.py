@@ -17,6 +17,8 @@ The configuration is a rod's (`fe-beam static`) or, with ``[[tendons]]``, a fing
     #           loads.tip_moment, loads.tip_force.<k>) with the tip angle held at tip_angle
     max_fibre_strain = 0.05       # optional constraint: |eps| + h/2 |kappa| <= this everywhere
     max_iterations = 100
+    # grasp_force (with [[obstacles]]): one variable, target = {obstacle = "<name>", force = F}
+    #           (or normal = F) [N] at load factor 1, tolerance [N] (default 1e-3 F)
 
 Objectives are made dimensionless: tip_pose = sum over the given components of
 ((value - target) / scale)^2, scale L for u, v and 1 rad for theta; backbone = the mean of
@@ -35,6 +37,20 @@ dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``ev
 ``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
 shapes, targets).
 
+Grasp force (``objective = "grasp_force"``, `grasp_design`): no gradient. The grasp force of
+a trial is that of the converged contact state of the load stepping of ``fe-beam finger`` (or
+``static``) from the straight rod (`GraspEvaluator`: `solve_static`), a non-smooth function of
+the one variable (active sets, Uzawa stops); the bounds (or 6 points across them) bracket
+F - target, Brent's method finds a trial within ``tolerance``; the answer is re-solved with
+the penetration tolerance / GRASP_TIGHTER and must meet the target there too (the force moves
+with the penetration the contact keeps). A target outside the forces reached, a force
+jumping across it, or one met at the given penetration tolerance only, is status "not
+converged" (exit 3). summary.json then
+has ``grasp`` ({obstacle, component, target, tolerance, value, initial, contact,
+contact_check}),
+``kkt_residual``/``kkt`` null and ``gradient`` "none (bracketing root solve)". The other
+objectives refuse ``[[obstacles]]`` (exit 2): their gradients do not see contact.
+
 Validation (`fe_beam.config.design.parse_design`, imported back here) imports no FE code: a bad
 [design] table is a ConfigError (exit 2, one sentence).
 """
@@ -45,12 +61,14 @@ import copy
 import math
 import re
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from fe_beam import analyses
 from fe_beam.analyses.result import Report, Result, failed, fit_report, world
+from fe_beam.analyses.static import solve_static
 from fe_beam.config.design import (
     DesignProblem,
     parse_design,
@@ -58,7 +76,7 @@ from fe_beam.config.design import (
 from fe_beam.config.finger import parse_finger, with_defaults
 from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError, UpdateFailed
-from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json
+from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, draw_obstacles
 from fe_beam.solvers.realtime import RealtimeSolver, max_fibre_strain, set_parameters, structure_key
 
 __all__ = ["run", "DesignProblem", "parse_design", "run_design"]
@@ -449,7 +467,8 @@ def _shape(evaluator: Evaluator):
         writer.close()
 
 
-def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float) -> None:
+def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float,
+          obstacles=()) -> None:
 
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6, 5))
@@ -464,16 +483,226 @@ def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float
     if design.objective == "tip_pose" and {"u", "v"} <= set(design.target):
         axis.plot(length + design.target["u"], design.target["v"], "kx", ms=8,
                   label="target tip")
+    if obstacles:
+        draw_obstacles(axis, obstacles, [(None, s) for s in shapes if s is not None], length)
     axis.set_aspect("equal", adjustable="datalim")
     axis.set_xlabel("x [m]")
     axis.set_ylabel("y [m]")
     text = "\n".join(f"{k} = {v:.4g}" for k, v in summary["variables"].items())
+    if "grasp" in summary:
+        grasp = summary["grasp"]
+        text += (f"\ngrasp force on {grasp['obstacle']!r}: {grasp['value']:.4g} N "
+                 f"(target {grasp['target']:.4g} N)")
     axis.set_title(f"design optimum ({summary['status']}):\n{text}", fontsize=8)
     axis.grid(alpha=0.3)
     axis.legend(fontsize=8)
     figure.tight_layout()
     figure.savefig(out / "design.png", dpi=130)
     plt.close(figure)
+
+
+# --- grasp force: a bracketing root solve on converged contact states -------------------------
+GRASP_SCAN = 6  # points across the bounds (bounds included) searched for a bracket
+GRASP_TIGHTER = 10  # the accuracy check re-solves the design with the tolerance / this
+
+
+class _GraspMet(Exception):
+    """Raised inside the root solve when a trial meets the target to the tolerance."""
+
+
+def grasp_value(entry: dict, component: str) -> float:
+    """The grasp force of an obstacle's contact entry (`fe_beam.fem.contact.ContactSet.summary`):
+    |force| (``component`` "force"), or the magnitude of its normal part, force minus its
+    friction part ("normal") [N]."""
+    force = np.asarray(entry["force"], dtype=float)
+    if component == "normal" and "friction_force" in entry:
+        force = force - np.asarray(entry["friction_force"], dtype=float)
+    return float(np.linalg.norm(force))
+
+
+class GraspEvaluator:
+    """The grasp force of a trial design: the configuration with the one variable set
+    (`fe_beam.solvers.realtime.set_parameters`) solved by the load stepping of ``fe-beam
+    finger`` / ``fe-beam static`` from the unloaded state (`solve_static`: the same steps, the
+    same contact iterations, so a re-run of the designed configuration gives the same force),
+    the grasp force read at load factor 1."""
+
+    def __init__(self, design: DesignProblem, config, comm):
+        self.design, self.config, self.comm = design, config, comm
+        self.key = design.variables[0]
+        self.history: list[dict] = []
+        self._cache: dict = {}
+
+    def trial(self, x: float):
+        return set_parameters(self.config, {self.key: float(x)})
+
+    def evaluate(self, x: float) -> dict:
+        """{"grasp": F [N], "miss": F - target, "tip", "contact": the obstacle's entry}."""
+        x = float(x)
+        if x in self._cache:
+            return self._cache[x]
+        result = solve_static(self.trial(x), None, self.comm, progress=False,
+                              record_shapes=False, stability=False)
+        if result.status != "converged":
+            reached = result.steps[-1]["load_factor"] if result.steps else 0.0
+            raise UpdateFailed(f"{self.key} = {x:.6g}: {result.message}", reached)
+        target = self.design.target
+        step = result.steps[-1]
+        entry = step["contact"][target["index"]]
+        grasp = grasp_value(entry, target["component"])
+        value = {"x": x, "grasp": grasp, "miss": grasp - target["value"], "tip": step["tip"],
+                 "contact": entry}
+        self._cache[x] = value
+        self.history.append({"variables": {self.key: x}, "grasp_force": grasp,
+                             "active": entry["active"]})
+        return value
+
+    def tighter(self, x: float, factor: float = GRASP_TIGHTER) -> float:
+        """The grasp force of the trial x with the penetration tolerance divided by
+        ``factor`` (the same penalty and steps): how far the force is from the exact contact
+        (it moves with the penetration the tolerance allows)."""
+        config = self.trial(x)
+        tolerance = config.contact.tolerance(config.model.section)
+        tight = replace(config, contact=replace(config.contact,
+                                                penetration_tolerance=tolerance / factor))
+        result = solve_static(tight, None, self.comm, progress=False, record_shapes=False,
+                              stability=False)
+        if result.status != "converged":
+            raise UpdateFailed(f"{self.key} = {x:.6g} with [contact] penetration_tolerance = "
+                               f"{tolerance / factor:.3g} m (the accuracy check of the grasp "
+                               f"force): {result.message}",
+                               result.steps[-1]["load_factor"] if result.steps else 0.0)
+        entry = result.steps[-1]["contact"][self.design.target["index"]]
+        return grasp_value(entry, self.design.target["component"]), tolerance
+
+    def shape(self, x: float):
+        """The deformed shape (vertex values) of the trial design at load factor 1 (rank 0)."""
+        result = solve_static(self.trial(x), None, self.comm, progress=False,
+                              record_shapes=True, stability=False)
+        return result.shapes[-1][1] if result.shapes else None
+
+
+def _bracket(evaluator: GraspEvaluator, low: float, high: float, tolerance: float):
+    """(a, b) whose misses have opposite signs, (x, None) for a trial that meets the target,
+    or None: the bounds first, then GRASP_SCAN points across them, in order."""
+    ends = [evaluator.evaluate(x) for x in (low, high)]
+    for value in ends:
+        if abs(value["miss"]) <= tolerance:
+            return value["x"], None
+    if ends[0]["miss"] * ends[1]["miss"] < 0:
+        return low, high
+    previous = ends[0]
+    for x in np.linspace(low, high, GRASP_SCAN)[1:]:
+        value = evaluator.evaluate(x)
+        if abs(value["miss"]) <= tolerance:
+            return value["x"], None
+        if previous["miss"] * value["miss"] < 0:
+            return previous["x"], value["x"]
+        previous = value
+    return None
+
+
+def grasp_design(design: DesignProblem, config, comm) -> dict:
+    """The one variable's value within its bounds whose grasp force is the target to the
+    tolerance: a bracket from the bounds (or a scan across them), then Brent's method on the
+    miss F(x) - target, each evaluation a converged contact state (`GraspEvaluator`). A target
+    outside the forces the bounds reach, or a force that jumps across it, is not met:
+    status "not converged" (exit 3), never a design that misses it."""
+    from scipy.optimize import brentq
+
+    started = time.perf_counter()
+    evaluator = GraspEvaluator(design, config, comm)
+    key, target, tolerance = evaluator.key, design.target, design.tolerance
+    (low, high), x0 = design.bounds[0], float(design.initial[0])
+    initial = evaluator.evaluate(x0)
+    found = _bracket(evaluator, float(low), float(high), tolerance) \
+        if abs(initial["miss"]) > tolerance else (x0, None)
+    iterations, met = 0, None
+    if found is not None and found[1] is None:
+        met = evaluator.evaluate(found[0])
+    elif found is not None:
+        a, b = found
+
+        def miss(x: float) -> float:
+            value = evaluator.evaluate(x)
+            if abs(value["miss"]) <= tolerance:
+                raise _GraspMet(x)
+            return value["miss"]
+
+        before = len(evaluator.history)
+        try:
+            x = brentq(miss, a, b, xtol=1e-12 * (high - low), maxiter=design.max_iterations)
+            best = evaluator.evaluate(x)
+        except _GraspMet as stop:
+            met = evaluator.evaluate(stop.args[0])
+        except RuntimeError:  # brentq's iteration limit
+            best = None
+        iterations = len(evaluator.history) - before  # Brent's evaluations
+    forces = [h["grasp_force"] for h in evaluator.history]
+    what = f"the {'normal ' if target['component'] == 'normal' else ''}grasp force of " \
+           f"{target['obstacle']!r}"
+    if met is not None:
+        final, status = met, "converged"
+        message = (f"{what} is {met['grasp']:.6g} N at {key} = {met['x']:.6g} (target "
+                   f"{target['value']:g} N, tolerance {tolerance:g} N)")
+    else:
+        tried = min(evaluator._cache.values(), key=lambda v: abs(v["miss"]))
+        final, status = tried, "not converged"
+        if found is None:
+            message = (f"the target is not met: {what} stays between {min(forces):.6g} and "
+                       f"{max(forces):.6g} N for {key} in [{low:g}, {high:g}] (target "
+                       f"{target['value']:g} N)"
+                       + ("; the obstacle is not touched at some of them" if min(forces) == 0
+                          else "") + ": widen the bounds or move the obstacle")
+        elif best is None:
+            message = (f"the target is not met: Brent's method stopped after "
+                       f"{design.max_iterations} iterations between {key} = {found[0]:.6g} "
+                       f"and {found[1]:.6g} (closest {tried['grasp']:.6g} N at "
+                       f"{tried['x']:.6g}; tolerance {tolerance:g} N)")
+        else:
+            message = (f"the target is not met: {what} jumps across {target['value']:g} N "
+                       f"at {key} = {best['x']:.8g} (closest {tried['grasp']:.6g} N at "
+                       f"{tried['x']:.8g}; tolerance {tolerance:g} N): the contact state "
+                       "changes there; a larger tolerance or other bounds")
+    # the grasp force of the discrete contact moves with the penetration the tolerance allows:
+    # the design is met only if it holds with a 10x tighter tolerance too
+    tight, penetration = evaluator.tighter(final["x"])
+    check = {"penetration_tolerance": penetration,
+             "tighter_tolerance": penetration / GRASP_TIGHTER, "value": tight,
+             "difference": abs(tight - final["grasp"])}
+    if status == "converged" and abs(tight - target["value"]) > tolerance:
+        status = "not converged"
+        message = (f"the target is met to the tolerance only for [contact] "
+                   f"penetration_tolerance = {penetration:.3g} m: with "
+                   f"{penetration / GRASP_TIGHTER:.3g} m {what} at {key} = {final['x']:.6g} is "
+                   f"{tight:.6g} N, {abs(tight - target['value']):.3g} N from the target "
+                   f"(tolerance {tolerance:g} N): set a smaller [contact] "
+                   "penetration_tolerance (and a larger penalty) or a larger [design] "
+                   "tolerance")
+    return {
+        "status": status,
+        "message": message,
+        "variables": {key: final["x"]},
+        "initial": {key: x0},
+        "bounds": {key: [float(low), float(high)]},
+        "objective": {"kind": "grasp_force", "value": final["miss"],
+                      "initial": initial["miss"]},
+        "grasp": {"obstacle": target["obstacle"], "component": target["component"],
+                  "target": target["value"], "tolerance": tolerance,
+                  "value": final["grasp"], "initial": initial["grasp"],
+                  "contact": final["contact"], "contact_check": check},
+        "constraints": {},
+        "kkt_residual": None,
+        "kkt": None,
+        "iterations": iterations,
+        "evaluations": len(evaluator.history),
+        "gradient": "none (bracketing root solve)",
+        "tip": final["tip"],
+        "history": evaluator.history,
+        "wall_time_s": time.perf_counter() - started,
+        "notes": [],
+        "_shapes": (x0, final["x"], evaluator),
+    }
 
 
 def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> dict:
@@ -496,13 +725,19 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)
-    summary = optimise(design, parsed, comm, rest)
-    shapes = summary.pop("_shapes")
+    if design.objective == "grasp_force":
+        summary = grasp_design(design, parsed, comm)
+        start, end, evaluator = summary.pop("_shapes")
+        drawn = out is not None and parsed.output.plots
+        shapes = (evaluator.shape(start), evaluator.shape(end)) if drawn else (None, None)
+    else:
+        summary = optimise(design, parsed, comm, rest)
+        shapes = summary.pop("_shapes")
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         atomic_write_json(out / "summary.json", summary)
         if parsed.output.plots:
-            _plot(out, summary, shapes, design, parsed.model.length)
+            _plot(out, summary, shapes, design, parsed.model.length, parsed.obstacles)
     return summary
 
 
@@ -519,6 +754,15 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
         return failed("design", out, comm, f"no equilibrium for a trial design: {failure}",
                       report)
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
+    if "grasp" in summary:
+        grasp = summary["grasp"]
+        code = fit_report(report, "design", summary,
+                          f"design {summary['status']}: {values}; "
+                          f"{'normal ' if grasp['component'] == 'normal' else ''}grasp force on "
+                          f"{grasp['obstacle']!r} {grasp['value']:.6g} N (target "
+                          f"{grasp['target']:.6g} N, tolerance {grasp['tolerance']:.2g} N), "
+                          f"{summary['evaluations']} contact solves; results in {out}")
+        return Result("design", summary, code, report.lines)
     objective = summary["objective"]["value"]
     minimised = summary["objective"].get("minimised")
     shown = (f"{objective:.6g}" if minimised is None else  # the tension, not tension / bound

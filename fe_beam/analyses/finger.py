@@ -278,7 +278,7 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
             axis.plot(shape["x"] + shape["u"], shape["v"],
                       label=f"tension {step['tensions'][0]:.3g} N")
         if config.obstacles:
-            draw_obstacles(axis, config.obstacles, [s for s, _ in shapes],
+            draw_obstacles(axis, result.obstacles or config.obstacles, [s for s, _ in shapes],
                            config.model.length)
         axis.set_aspect("equal", adjustable="datalim")
         axis.set_xlabel("x [m]")
@@ -338,7 +338,7 @@ def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -
         zip(result.shapes, result.steps, strict=True))[every - 1:: every]]
     plot_spatial_shapes(shapes, out / "fig3_9_backbone.png",
                         "Backbone (cf. chapter Fig. 3.9)", config.model.length,
-                        obstacles=config.obstacles)
+                        obstacles=result.obstacles or config.obstacles)
     tensions = [s["tensions"][0] for s in result.steps]
     tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w", "rotation_vector")}
     plot_spatial_load_displacement(tensions, tips, out / "tension_tip.png",

@@ -14,12 +14,14 @@ from fe_beam.analyses.static import (
     StaticContinuation,
     beam_dofs_estimate,
     check_beam_work,
+    contact_columns,
 )
 from fe_beam.config.path import parse_path
 from fe_beam.errors import ConfigError
-from fe_beam.exports.outputs import BeamXDMFWriter, figure
+from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
+from fe_beam.exports.outputs import BeamXDMFWriter, figure, plot_deformed_shapes
 from fe_beam.exports.solid import DisplacementXDMF
-from fe_beam.exports.spatial import SpatialXDMFWriter
+from fe_beam.exports.spatial import SpatialXDMFWriter, plot_spatial_shapes
 from fe_beam.fem import compat
 from fe_beam.model.loads import given
 from fe_beam.progress import ProgressBar
@@ -27,7 +29,6 @@ from fe_beam.solvers.continuation import (
     ArcLength,
     Continuation,
     ContinuationFailed,
-    NonlinearParameterProblem,
 )
 from fe_beam.solvers.critical import (
     CriticalPoint,
@@ -50,6 +51,8 @@ class PathResult:
     critical_points: list[CriticalPoint] = field(default_factory=list)
     status: str = "running"
     message: str = ""
+    #: what the path could not decide (e.g. a stability change across a contact change)
+    notes: list[str] = field(default_factory=list)
 
 
 def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: float = 1e-6,
@@ -63,12 +66,18 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
     follow it; "both": the positive branch, then the negative one, with ``max_steps`` more
     points). ``on_point(record, result)`` after every accepted point. Stops at
     ``settings.max_steps`` points or beyond ``settings.max_load_factor``; a failure sets
-    status "failed" with the last good state kept."""
+    status "failed" with the last good state kept.
+
+    With obstacles (``run.contact``) every point records its ``contact`` (`fe_beam.fem.contact.
+    ContactSet.summary`); a change of the unstable count across a step whose contact state
+    changed is not located as a bifurcation (the penalised contact stiffness of the points
+    that came into or out of contact changes the count too): a note says so."""
     engine = run.engine()
     engine.parameter = float(run.load_factor)
     engine.prepare_arc_length(settings)
     result = PathResult()
     one = replace(settings, max_steps=1)
+    contact = getattr(run, "contact", None)
     branch = 0
 
     def record(point_parameter: float) -> dict:
@@ -80,6 +89,8 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
             "energy_decreasing_directions": None if found is None else found.unstable,
             "branch": branch,
         }
+        if contact is not None:
+            entry["contact"] = contact.summary()
         result.path.append(entry)
         if on_point is not None:
             on_point(entry, result)
@@ -103,8 +114,17 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
                         and before.tangent[1] * point.tangent_parameter < 0):
                     found.append(locate_limit(run, engine, before, point.arc_length, tol))
                 current = spectrum(run)
-                if (current is not None and previous_count is not None
-                        and current.unstable != previous_count and not found):
+                changed = (current is not None and previous_count is not None
+                           and current.unstable != previous_count and not found)
+                if changed and contact is not None and contact.changed_between(
+                        before.extra, entry_after.extra):
+                    changed = False
+                    result.notes.append(
+                        f"the count of energy-decreasing directions changed from "
+                        f"{previous_count} to {current.unstable} between load factors "
+                        f"{before.parameter:.6g} and {engine.parameter:.6g}, where the contact "
+                        "state changed too: not located as a bifurcation")
+                if changed:
                     # a step may cross several: each change of the count is located
                     for crossing in range(abs(current.unstable - previous_count)):
                         found.append(locate_bifurcation(run, engine, before, entry_after,
@@ -171,10 +191,9 @@ def point_force_control(run, static, progress: bool = False, prestate: bool = Tr
     others = (any(t.tension for t in static.tendons or ()) or given(loads, ("point_forces",))
               or any(supports.prescribed_x0.values()) or any(supports.prescribed_xL.values()))
     if prestate and others:  # the state without the point forces, from the undeformed one
-        Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
+        Continuation(run.adapter(hold, checked=False), 0.0).load_control(
             1.0, static.stepping, progress=progress, label="path pre-state")
-    run._engine = Continuation(NonlinearParameterProblem(
-        run.solver, push, check_step=run._step_check(), metric=run._metric()), 0.0)
+    run._engine = Continuation(run.adapter(push), 0.0)
     run.load_factor = 0.0
     push(0.0)
     return push
@@ -260,18 +279,27 @@ def _interrupted(summary: dict, stop) -> None:
     summary["status"], summary["message"] = status["status"], status["message"]
 
 
-def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
+def _path_files(out, writer, summary: dict, started: float, plots: bool, comm,
+                spatial: bool | None = None, extra_columns=(), draw=None):
     """The export objects of a path run (rod or solid), started: path.xdmf (``writer``, by
-    point index), path.csv, summary.json and path.png, each after every point; nothing but
-    the XDMF writer when ``out`` is None. Returns (files, content): ``content()`` is the
-    summary with its wall time brought up to date."""
+    point index), path.csv (``extra_columns`` after the path's: e.g. the contact's),
+    summary.json and path.png (and ``draw(summary)``'s pictures), each after every point;
+    nothing but the XDMF writer when ``out`` is None. Returns (files, content): ``content()``
+    is the summary with its wall time brought up to date."""
     import time
 
 
-    spatial = getattr(getattr(writer, "problem", None), "spatial", False)  # the solid: planar CSV
+    if spatial is None:  # the solid: planar CSV
+        spatial = getattr(getattr(writer, "problem", None), "spatial", False)
     columns = [exports.Column(name, (lambda r, n=name: r[n] if n[:4] != "tip_"
                                      else _tip_value(r, n[4:])))
-               for name in (SPATIAL_PATH_CSV if spatial else PATH_CSV)]
+               for name in (SPATIAL_PATH_CSV if spatial else PATH_CSV)] + list(extra_columns)
+
+    def pictures(summary: dict) -> None:
+        if plots:
+            _path_plot(out, summary)
+            if draw is not None:
+                draw(summary)
 
     def content() -> dict:
         summary["wall_time_s"] = time.perf_counter() - started
@@ -281,7 +309,7 @@ def _path_files(out, writer, summary: dict, started: float, plots: bool, comm):
         ([exports.XDMFExport(writer, "index")] if writer is not None else [])
         + ([exports.CSVExport(out / "path.csv", columns),
             exports.SummaryExport(out / "summary.json", content),
-            exports.PlotExport(lambda s: _path_plot(out, s) if plots else None)]
+            exports.PlotExport(pictures)]
            if out is not None else []), comm, throttle=False)
     files.start(content())
     return files, content
@@ -341,10 +369,28 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()
     xdmf = writing and static.output.xdmf
-    writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-        problem, out / "path.xdmf") if xdmf else None
+    kind_of_writer = SpatialXDMFWriter if problem.spatial else BeamXDMFWriter
+    writer = kind_of_writer(problem, out / "path.xdmf", contact=run.contact) if xdmf else None
+    obstacles = static.obstacles
+    # the deformed shapes with the obstacles (path points, every point's shape on rank 0)
+    drawing = writing and static.output.plots and bool(obstacles)
+    shaper = (writer or kind_of_writer(problem, None, contact=run.contact)) if drawing else None
+    shapes: list = []
+    if obstacles:
+        notes.append("contact: each point's equilibrium satisfies the contact conditions to "
+                     "[contact] penetration_tolerance (active-set and Uzawa updates around the "
+                     "arc-length corrector); the stability count includes the augmented-"
+                     "Lagrangian stiffness of the pressed points, and a change of the count "
+                     "across a change of the contact state is not reported as a bifurcation")
+
+    def draw_shapes(_summary: dict) -> None:
+        if shapes:
+            _path_shapes(out, shapes, static)
+
     files, content = _path_files(out if writing else None, writer, summary, started,
-                                 static.output.plots, comm)
+                                 static.output.plots, comm, spatial=problem.spatial,
+                                 extra_columns=contact_columns(len(obstacles), problem.spatial),
+                                 draw=draw_shapes if drawing else None)
     bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
 
     def on_point(entry: dict, result: PathResult) -> None:
@@ -358,7 +404,12 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         at = loads.point_forces[0][0] if settings.parameter == "point_force" else None
         summary["critical_points"] = [_critical_summary(c, problem, at)
                                       for c in result.critical_points]
+        summary["notes"] = notes + [n for n in result.notes if n not in notes]
         files.on_step(record)
+        if shaper is not None:  # after the XDMF export: its fields are this point's
+            shape = shaper.vertex_values(update=shaper is not writer)
+            if comm.rank == 0:
+                shapes.append((f"load factor {entry['load_factor']:.3g}", shape))
         bar.update(min(len(summary["path"]) - 1, settings.max_steps),
                    f"load factor {entry['load_factor']:.4g}")
 
@@ -378,13 +429,12 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
                   or given(loads))
         if others:  # the state with the tendon slack: load-stepped from the undeformed one
             try:
-                Continuation(NonlinearParameterProblem(run.solver, hold), 0.0).load_control(
+                Continuation(run.adapter(hold, checked=False), 0.0).load_control(
                     1.0, static.stepping, progress=progress, label="path pre-state")
             except ContinuationFailed as failure:  # exit 3 with the reason, not a traceback
                 unreached = ("the state with the other loads and this tendon slack was not "
                              f"reached: {failure}")
-        run._engine = Continuation(NonlinearParameterProblem(
-            run.solver, pull, check_step=run._step_check(), metric=run._metric()), 0.0)
+        run._engine = Continuation(run.adapter(pull), 0.0)
         pull(0.0)
     if settings.parameter == "point_force":
         try:
@@ -424,9 +474,29 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
                                                              "index": number}
             modes_writer.close()
             compat.local_array(problem.w)[:] = state
+        if writing and obstacles and comm.rank == 0:
+            write_obstacle_surfaces(obstacles, out / "obstacles.vtu",
+                                    *bounding_box(shapes, static.model.length))
         files.finish(content())
         run.destroy()
     return summary
+
+
+def _path_shapes(out, shapes: list, static) -> None:
+    """deformed_shapes.png of a path with obstacles: about ten of its points' shapes (the
+    last one always) with the obstacles drawn."""
+    every = max(1, len(shapes) // 10)
+    chosen = shapes[every - 1 :: every]
+    if chosen[-1] is not shapes[-1]:
+        chosen.append(shapes[-1])
+    model = static.model
+    title = f"path: {model.options.law} law, constraint {model.options.constraint}"
+    if getattr(model, "kinematics", "planar") == "spatial":
+        plot_spatial_shapes(chosen, out / "deformed_shapes.png", title, model.length,
+                            obstacles=static.obstacles)
+    else:
+        plot_deformed_shapes(chosen, out / "deformed_shapes.png", title, model.length,
+                             obstacles=static.obstacles)
 
 
 def _run_solid_path(config, settings, out, comm, progress, started) -> dict:

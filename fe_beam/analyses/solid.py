@@ -30,8 +30,10 @@ from fe_beam.exports import (
     indexed_columns,
     tip_columns,
 )
+from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import _pyplot, write_csv
 from fe_beam.exports.solid import DisplacementXDMF
+from fe_beam.exports.spatial import _draw_view_obstacles
 from fe_beam.fem.solid.geometry import create_finger_mesh
 from fe_beam.solvers.continuation import ContinuationFailed
 from fe_beam.solvers.newton import LoadStepping, LoadSteppingFailed
@@ -211,7 +213,9 @@ def solid_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = Tr
     Raises ConfigError for a mistake in ``raw``; an analysis that stops early returns (and
     writes) the converged steps with ``status = "failed"`` and a ``message``. Collective on
     ``comm``; files are written by its rank 0. ``out`` receives ``summary.json``,
-    ``load_displacement.csv``, ``solid.xdmf``/``.h5`` (3D displacement per load factor),
+    ``load_displacement.csv``, ``solid.xdmf``/``.h5`` (3D displacement per load factor; in
+    contact also ``contact_gap_i`` and ``contact_pressure_i``, `DisplacementXDMF`, and the
+    obstacles' surfaces ``obstacles.vtu``),
     ``rod.xdmf`` (the rod in the same coordinates) and, with ``[output] plots``, ``backbone.png``
     and ``load_displacement.png``.
     """
@@ -264,7 +268,25 @@ def _csv_columns(record: dict | None) -> list[Column]:
         *(Column(key, lambda s, key=key: s[key]) for key in (
             "newton_iterations", "linear_iterations", "max_principal_stretch",
             "max_principal_stretch_bulk")),
+        *solid_contact_columns(len(record.get("contact", [])) if record else 0),
     ]
+
+
+def solid_contact_columns(count: int) -> list[Column]:
+    """Per obstacle i (the order of [[obstacles]]): ``contact<i>_F{x,y,z}`` (the force the
+    obstacle exerts on the solid [N]), ``contact<i>_active_area`` [m^2], ``contact<i>_length``
+    (the patch's extent along x [m]), ``contact<i>_max_penetration`` [m] and
+    ``contact<i>_pressure_peak`` [Pa]."""
+    columns = []
+    for i in range(count):
+        columns += [Column(f"contact{i}_F{a}", lambda s, i=i, k=k: s["contact"][i]["force"][k])
+                    for k, a in enumerate("xyz")]
+        columns += [Column(f"contact{i}_{name}", lambda s, i=i, key=key: s["contact"][i][key])
+                    for name, key in (("active_area", "active_area"),
+                                      ("length", "contact_length"),
+                                      ("max_penetration", "max_penetration"),
+                                      ("pressure_peak", "pressure_peak"))]
+    return columns
 
 
 def solid_exports(out: Path, config: SolidConfig, content) -> list:
@@ -317,6 +339,9 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
     if out is not None and config.output.xdmf:
         writer = DisplacementXDMF(run.problem, out / "solid.xdmf")
         writer.write(0.0)
+        if config.obstacles and root:  # their surfaces, next to solid.xdmf (same coordinates)
+            write_obstacle_surfaces(config.obstacles, out / "obstacles.vtu",
+                                    *bounding_box([], config.length))
 
     def on_step(record: dict) -> None:
         summary["steps"].append(record)
@@ -364,6 +389,17 @@ def _write_tables(out: Path, summary: dict) -> None:
               [[c.get(s) for c in columns] for s in steps])
 
 
+def draw_obstacles_in_view(axis, obstacles, j: int, thickness: float) -> None:
+    """The 3D ``obstacles`` in grey in the view (x, component ``j``) of backbones (the section
+    centroids): the view widened by the body's ``thickness`` in that direction on both sides
+    (an obstacle the surface touches lies within half of it), then kept."""
+    (x0, x1), (y0, y1) = axis.get_xlim(), axis.get_ylim()
+    y0, y1 = y0 - thickness, y1 + thickness
+    _draw_view_obstacles(axis, obstacles, 0, j, np.array([x0, y0]), np.array([x1, y1]))
+    axis.set_xlim(x0, x1)
+    axis.set_ylim(y0, y1)
+
+
 def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
     """backbone.png (deformed backbones, 3D and rod) and load_displacement.png (tip u, v, theta
     against the load factor) of ``summary`` (with at least one step)."""
@@ -386,6 +422,8 @@ def _plot_solid(out: Path, summary: dict, config: SolidConfig) -> None:
             axis.plot(np.add(b["x"], b["u"]), b["v"], "k:", lw=1.5,
                       label=f"rod ({rod['law']}), load factor "
                       f"{rod['steps'][-1]['load_factor']:.3g}")
+        if config.obstacles:  # seen along z (backbones: the section centroids)
+            draw_obstacles_in_view(axis, config.obstacles, 1, config.geometry.height_base)
         axis.set_xlabel("x + u [m]")
         axis.set_ylabel("y + v [m]")
         axis.set_title(f"Backbone: 3D {config.material_name} vs rod")

@@ -67,7 +67,8 @@ def tip_distance(rod_tip: dict, solid_tip: dict) -> float:
 def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool = False) -> dict:
     """Run the 1D rod (`fe_beam.analyses.static.solve_static`, nothing written) and return plain
     data:
-    status, steps (load factor, tip, tensions), the final backbone at ``stations`` and, on rank
+    status, steps (load factor, tip, tensions; with [[obstacles]] the contact entries), the
+    final backbone at ``stations`` and, on rank
     0, the nodal shapes of every step (``frames``, for the rod XDMF). A spatial rod's tip is
     {u, v, w, R, rotation_vector, position} plus ``theta``, the in-plane angle of its frame
     (`planar_angle`: the solid's ``theta``, so that the planar columns stay filled)."""
@@ -89,7 +90,7 @@ def run_rod(static: StaticConfig, stations, comm=MPI.COMM_WORLD, progress: bool 
         "dofs": result.dofs,
         "wall_time_s": result.wall_time_s,
         "steps": [
-            {k: s[k] for k in ("load_factor", "tip", "tensions", "pull_ins") if k in s}
+            {k: s[k] for k in ("load_factor", "tip", "tensions", "pull_ins", "contact") if k in s}
             | ({"tip": s["tip"] | {"theta": planar_angle(s["tip"]["R"])}} if "R" in s["tip"]
                else {})
             for s in result.steps

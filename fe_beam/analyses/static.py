@@ -49,6 +49,8 @@ class StaticResult:
     strain_range: dict | None = None
     #: what the driver adds to the summary (the model, set-up notes, the finger's tendons ...)
     extra: dict = field(default_factory=dict)
+    #: the obstacles at their place in the last state (moving obstacles: translated)
+    obstacles: tuple = ()
 
     def summary(self, extra: dict | None = None) -> dict:
         """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's;
@@ -188,13 +190,15 @@ def solve_static(
         result.status, result.message = status["status"], status["message"]
         raise
     finally:
+        if run.contact is not None:  # the moving obstacles where the last state has them
+            result.obstacles = tuple(run.contact.placed())
         realtime.release(run)
         result.notes = run.watch.notes() + run.notes + compressed_tendon_notes(tendons,
                                                                              result.steps)
         result.strain_range = run.watch.summary()
         result.wall_time_s = time.perf_counter() - started
         if writing and root and config.obstacles:
-            write_obstacle_surfaces(config.obstacles, out / "obstacles.vtu",
+            write_obstacle_surfaces(result.obstacles or config.obstacles, out / "obstacles.vtu",
                                     *bounding_box(result.shapes, config.model.length))
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
@@ -314,14 +318,14 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
         plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                            obstacles=config.obstacles)
+                            obstacles=result.obstacles or config.obstacles)
         factors = [s["load_factor"] for s in result.steps]
         tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w",
                                                                   "rotation_vector")}
         plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
         return
     plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                         obstacles=config.obstacles)
+                         obstacles=result.obstacles or config.obstacles)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)

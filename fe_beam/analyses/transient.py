@@ -27,7 +27,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
-from fe_beam.analyses.static import StaticContinuation, check_beam_work
+from fe_beam.analyses.static import StaticContinuation, check_beam_work, contact_columns
 from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     DAMPING_KEYS,
@@ -47,14 +47,17 @@ from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     parse_modes,
 )
 from fe_beam.errors import ConfigError
+from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import (
     BeamXDMFWriter,
     _pyplot,
     atomic_write_json,
     atomic_write_text,
+    draw_obstacles,
 )
 from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
+from fe_beam.fem.contact import ContactSet
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
 from fe_beam.fem.tendons import TendonSet
 from fe_beam.model.laws import LAW_KINDS
@@ -227,9 +230,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                     config.motion_function, config.static.solver,
                                     tendons=tendons)
     else:
+        obstacles = config.static.obstacles
+        contact = (ContactSet(obstacles, config.static.contact, config.static.model)
+                   if obstacles else None)
         integrator = GeneralizedAlpha(problem, config.time, config.damping,
                                       config.load_function, config.motion_function,
-                                      config.static.solver, tendons=tendons)
+                                      config.static.solver, tendons=tendons, contact=contact)
     integrator.watch = watch
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
@@ -237,12 +243,13 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         out.mkdir(parents=True, exist_ok=True)
     result = DynamicResult([], {}, status="running", dofs=problem.space.dofmap.index_map.size_global
                            * problem.space.dofmap.index_map_bs, notes=notes)
-    writer = _writer(problem, xdmf)
+    contact = getattr(integrator, "contact", None)
+    writer = _writer(problem, xdmf, contact)
     shapes = []
     files = exports.Exports(_history_exports(
         out, config, writer,
         lambda: dynamic_summary(result, config, time.perf_counter() - started),
-        lambda _: _plot_dynamic(out, result, shapes, config)
+        lambda _: _plot_dynamic(out, result, shapes, config, contact)
         if config.static.output.plots and result.history else None), comm)
     files.start(dynamic_summary(result, config, 0.0))  # status "running"
 
@@ -257,6 +264,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
             result.history[-1]["tendons"] = {"tensions": tensions.tolist(),
                                              "pull_ins": pull_ins.tolist()}
             _note_pushing_tendons(tendons, tensions, t, notes, comm)
+        if contact is not None:  # the contact state of the accepted step (obstacles at t)
+            result.history[-1]["contact"] = contact.summary()
+            result.history[-1]["contact_updates"] = integrator.solver.updates
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         files.on_step(result.history[-1])
         if config.static.output.plots:
@@ -280,6 +290,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         integrator.solver.destroy()
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
+        if contact is not None and writing and root:  # the obstacles at the last state
+            write_obstacle_surfaces(contact.placed(), out / "obstacles.vtu",
+                                    *bounding_box(shapes, config.static.model.length))
         files.finish(dynamic_summary(result, config, result.info["wall_time_s"]))
     return result
 
@@ -417,9 +430,11 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def _writer(problem, path):
-    """The XDMF writer of a rod problem (the spatial rod's has the directors)."""
-    return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(problem, path)
+def _writer(problem, path, contact=None):
+    """The XDMF writer of a rod problem (the spatial rod's has the directors); with
+    ``contact`` (a `fe_beam.fem.contact.ContactSet`) the contact fields."""
+    return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
+        problem, path, contact=contact if path is not None else None)
 
 
 SPATIAL_MOMENTA = tuple(f"momentum_{k}" for k in "xyz") + tuple(
@@ -464,6 +479,9 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         spatial = getattr(config.static.model, "kinematics", "planar") == "spatial"
         columns = (spatial_history_columns if spatial else history_columns)(
             len(config.static.tendons))
+        obstacles = len(config.static.obstacles)
+        if obstacles:  # each obstacle's force, moment, penetration and peak pressure
+            columns = columns + contact_columns(obstacles, spatial)
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -494,7 +512,8 @@ def _write_dynamic(out: Path | None, result: DynamicResult, config: DynamicConfi
     files.finish(dynamic_summary(result, config, wall))
 
 
-def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig) -> None:
+def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfig,
+                  contact=None) -> None:
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
     with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
@@ -503,6 +522,13 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
         left.set_xlabel("tip x [m]")
         left.set_ylabel("tip y [m]")
         left.set_title("tip trajectory")
+        if contact is not None and not contact.spatial:  # where the last state has them
+            last = [shapes[-1]] if shapes else []
+            if last:
+                left.plot(last[0][1]["x"] + last[0][1]["u"], last[0][1]["v"], lw=1.5,
+                          color="k", label=f"t = {last[0][0]:.4g} s")
+            draw_obstacles(left, contact.placed(), last, length)
+            left.set_title("tip trajectory, last shape and obstacles")
         left.set_aspect("equal", adjustable="datalim")
         for key in ENERGIES:
             right.plot(t, [h["energies"][key] for h in result.history], label=key)

@@ -18,7 +18,13 @@ Per point, with L the length of that point's finger:
 - with ``[model] kinematics = "spatial"`` the rod is the spatial one (``fe-beam compare``): the
   distances are over the three components, the CSV adds ``solid_tip_w`` and ``<law>_tip_w``,
 - the solid's ``discretisation_error`` = {``tip``, ``backbone`` (distances / L), ``rotation``
-  [rad]} of the configured mesh, or None without a second mesh.
+  [rad]} of the configured mesh, or None without a second mesh,
+- with ``[[obstacles]]`` (the rod and the solid in contact, as ``fe-beam compare``):
+  ``contact_force_difference`` = the largest over the obstacles of |F_rod - F_solid| /
+  max(|F_rod|, |F_solid|), with the solid's and each rod's ``contact`` entries.
+
+``[validity] metric`` chooses what validity.png and the statements' 1 % / 5 % counts show:
+``backbone_distance`` (default) or ``contact_force_difference``.
 
 Resumable: every point is written to ``DIR/points/<i>_<j>.json`` (atomically) when it finishes,
 with a fingerprint of its configuration; a rerun reuses the finished points whose configuration
@@ -151,7 +157,8 @@ def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
             record["solid"] = {k: row["solid"][k] for k in ("tip", "backbone",
                                                              "max_principal_stretch")} | {
                 "dofs": compared["dofs"], "mesh_size": point.parsed.solid.sizes.size,
-                "discretisation_error": None}
+                "discretisation_error": None} | (
+                {"contact": row["solid"]["contact"]} if "contact" in row["solid"] else {})
             for law, rod in row["rod"].items():
                 entry = {"status": rod["status"], "message": rod["message"]}
                 if "tip" in rod:
@@ -160,6 +167,10 @@ def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
                               "backbone_distance": rod["distance_over_L"],
                               "backbone_distance_x": rod["distance_x"],
                               "tip_frame_angle": rod["tip_frame_angle"]}
+                    if "contact" in rod:
+                        entry |= {"contact_force_difference":
+                                  rod["max_contact_force_difference"],
+                                  "contact": rod["contact"]}
                 elif record["status"] == "converged":
                     record |= {"status": "failed",
                                "message": f"rod ({law}): {rod['message'] or rod['status']}"}
@@ -194,7 +205,8 @@ def _summary_point(record: dict) -> dict:
     entry = {k: record.get(k) for k in ("i", "j", "x", "y", "status", "message")}
     solid = record.get("solid")
     entry["solid"] = None if solid is None else {
-        k: solid[k] for k in ("tip", "dofs", "mesh_size", "discretisation_error")}
+        k: solid[k] for k in ("tip", "dofs", "mesh_size", "discretisation_error", "contact")
+        if k in solid}
     entry["rod"] = {law: {k: v for k, v in rod.items() if k != "backbone"}
                     for law, rod in record.get("rod", {}).items()}
     return entry
@@ -213,28 +225,53 @@ def _collect(out: Path, config: ValidityConfig) -> list[dict]:
 def _statements(points: list[dict], config: ValidityConfig, total: int) -> dict:
     """Per law: the points below 1 % and 5 % and the largest departure."""
     result = {}
+    metric = config.metric
     for law in config.laws:
-        values = [(p["rod"][law]["backbone_distance"], p) for p in points
-                  if p["status"] == "converged" and "backbone_distance" in p["rod"].get(law, {})]
-        entry = {"points": len(values)}
+        values = [(p["rod"][law][metric], p) for p in points
+                  if p["status"] == "converged" and metric in p["rod"].get(law, {})]
+        entry = {"points": len(values), "metric": metric}
+        if _contact(config):
+            forces = [p["rod"][law]["contact_force_difference"] for p in points
+                      if p["status"] == "converged"
+                      and "contact_force_difference" in p["rod"].get(law, {})]
+            entry["max_contact_force_difference"] = max(forces, default=None)
         for threshold in THRESHOLDS:
             entry[f"below_{round(threshold * 100)}_percent"] = sum(d < threshold
                                                                    for d, _ in values)
+        distances = [p["rod"][law]["backbone_distance"] for p in points
+                     if p["status"] == "converged"
+                     and "backbone_distance" in p["rod"].get(law, {})]
+        entry["max_backbone_distance"] = max(distances, default=None)
         if values:
             d, p = max(values, key=lambda item: item[0])
-            entry["max_backbone_distance"] = d
             entry["max_at"] = {"x": p["x"], "y": p["y"]}
             where = f"{config.x} = {p['x']:g}" + (
                 f", {config.y} = {p['y']:g}" if config.y is not None else "")
             entry["statement"] = (
-                f"rod ({law}) vs 3D solid, d = max_x |r_rod - r_solid| / L: d < 1 % at "
+                f"rod ({law}) vs 3D solid, {METRIC_TEXT[metric]}: d < 1 % at "
                 f"{entry['below_1_percent']} and d < 5 % at {entry['below_5_percent']} of "
                 f"{len(values)} points (of {total}); largest d = {100 * d:.3g} % at {where}")
         else:
-            entry["max_backbone_distance"] = None
             entry["statement"] = f"rod ({law}): no point with a result"
         result[law] = entry
     return result
+
+
+#: the statements' and the pictures' words for each [validity] metric
+METRIC_TEXT = {
+    "backbone_distance": "d = max_x |r_rod - r_solid| / L",
+    "contact_force_difference": "d = max over the obstacles of |F_rod - F_solid| / "
+                                "max(|F_rod|, |F_solid|)",
+}
+METRIC_AXIS = {
+    "backbone_distance": "max_x |r_rod - r_solid| / L [%]",
+    "contact_force_difference": "contact force difference [%]",
+}
+
+
+def _contact(config: ValidityConfig) -> bool:
+    """The map's rods and solid are in contact ([[obstacles]])."""
+    return bool(config.points) and bool(config.points[0].parsed.solid.obstacles)
 
 
 def run_validity(raw: dict, out: Path, comm=MPI.COMM_WORLD, progress: bool = True,
@@ -390,7 +427,10 @@ def _write(out: Path, config: ValidityConfig, started: float, status: str | None
         "measure": "backbone_distance = max over the backbone stations x of |r_rod(x) - "
                    "r_solid(x)| / L; tip_error = |r_rod(L) - r_solid(L)| / L and |theta_rod - "
                    "theta_solid| [rad]; tip_frame_angle = |rotation vector of R_rod^T R_solid| "
-                   "[rad] (the tip frames)",
+                   "[rad] (the tip frames)" + (
+                       "; contact_force_difference = max over the obstacles of |F_rod - "
+                       "F_solid| / max(|F_rod|, |F_solid|)" if _contact(config) else ""),
+        "metric": config.metric,
         "kinematics": config.kinematics,
         "thresholds": list(THRESHOLDS),
         "second_mesh_ratio": config.second_mesh_ratio,
@@ -423,6 +463,7 @@ def _write_csv(path: Path, points: list[dict], config: ValidityConfig) -> None:
                    f"{law}_rotation_error", f"{law}_backbone_distance"]
         header += [f"{law}_tip_w"] if spatial else []
         header.append(f"{law}_tip_frame_angle")
+        header += [f"{law}_contact_force_difference"] if _contact(config) else []
     header.append("message")
     rows = []
     for p in points:
@@ -444,16 +485,18 @@ def _write_csv(path: Path, points: list[dict], config: ValidityConfig) -> None:
                     rod.get("backbone_distance", "")]
             row += [rod_tip.get("w", "")] if spatial else []
             row.append(tip_error.get("frame_angle", ""))
+            row += [rod.get("contact_force_difference", "")] if _contact(config) else []
         row.append(p["message"])
         rows.append(row)
     write_csv(path, header, rows)
 
 
-def _distance(point: dict, law: str) -> float:
+def _distance(point: dict, law: str, metric: str = "backbone_distance") -> float:
+    """The mapped quantity ([validity] metric) of ``law`` at ``point`` [%] (NaN: none)."""
     rod = point["rod"].get(law, {})
-    if point["status"] != "converged" or "backbone_distance" not in rod:
+    if point["status"] != "converged" or metric not in rod:
         return math.nan
-    return 100 * rod["backbone_distance"]
+    return 100 * rod[metric]
 
 
 def _solid_error(point: dict) -> float:
@@ -473,21 +516,22 @@ def _plot(path: Path, points: list[dict], config: ValidityConfig) -> None:
     if nx == 1 and ny == 1:
         with figure(path, figsize=(5, 4)) as (_, axis):
             p = points[0]
-            values = [_distance(p, law) for law in laws]
+            values = [_distance(p, law, config.metric) for law in laws]
             error = _solid_error(p)
             axis.bar(range(len(laws)), values, yerr=None if math.isnan(error) else error,
                      color=[f"C{k}" for k in range(len(laws))], capsize=4)
             axis.set_xticks(range(len(laws)), laws)
             axis.set_yscale("log")
             _threshold_lines(axis)
-            axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
+            axis.set_ylabel(METRIC_AXIS[config.metric])
             axis.set_title(_point_title(config, p) + _error_note(error), fontsize=8)
         return
     key, values, attribute = ((config.x, config.x_values, "x") if nx >= 2
                               else (config.y, config.y_values, "y"))
     with figure(path, figsize=(7, 4.5)) as (_, axis):
         for k, law in enumerate(laws):
-            pairs = sorted((p[attribute], _distance(p, law), _solid_error(p)) for p in points)
+            pairs = sorted((p[attribute], _distance(p, law, config.metric), _solid_error(p))
+                           for p in points)
             xs = [a for a, _, _ in pairs]
             ds = [d for _, d, _ in pairs]
             es = [0.0 if math.isnan(e) else e for _, _, e in pairs]
@@ -498,7 +542,7 @@ def _plot(path: Path, points: list[dict], config: ValidityConfig) -> None:
             axis.plot(failed, [1.0] * len(failed), "kx", ms=8, label="failed point")
         _threshold_lines(axis)
         axis.set_xlabel(key)
-        axis.set_ylabel("max_x |r_rod - r_solid| / L [%]")
+        axis.set_ylabel(METRIC_AXIS[config.metric])
         axis.set_yscale("log")
         other = "" if config.y is None else (
             f" at {config.x if attribute == 'y' else config.y} = "
@@ -537,7 +581,7 @@ def _plot_map(path: Path, points: list[dict], config: ValidityConfig) -> None:
         for axis, law in zip(axes[0], laws, strict=True):
             grid = np.full((len(ys), len(xs)), np.nan)
             for (i, j), p in by_index.items():
-                grid[j, i] = _distance(p, law)
+                grid[j, i] = _distance(p, law, config.metric)
             grid = grid[np.ix_(iy, ix)]
             finite = grid[np.isfinite(grid) & (grid > 0)]
             X, Y = np.meshgrid(xs[ix], ys[iy])
@@ -547,7 +591,7 @@ def _plot_map(path: Path, points: list[dict], config: ValidityConfig) -> None:
                 mesh = axis.pcolormesh(X, Y, np.ma.masked_invalid(grid), shading="gouraud"
                                        if np.isfinite(grid).all() else "nearest",
                                        cmap="viridis", norm=norm)
-                axis.figure.colorbar(mesh, ax=axis, label="max_x |r_rod - r_solid| / L [%]")
+                axis.figure.colorbar(mesh, ax=axis, label=METRIC_AXIS[config.metric])
                 with warnings.catch_warnings():  # (no contour where d stays on one side)
                     warnings.simplefilter("ignore")
                     lines = axis.contour(X, Y, np.ma.masked_invalid(grid),

@@ -117,7 +117,7 @@ def parse_compare(raw: dict) -> CompareConfig:
         if steps < 1:
             raise ConfigError(f"[compare] steps must be an integer >= 1; got {steps!r}")
         factors = tuple((k + 1) / steps for k in range(steps))
-    solid = parse_solid(raw)
+    solid = parse_solid(raw, planar_contact_rod=True)
     if solid.rod is None and solid.tip_force[2] != 0:
         raise ConfigError("[loads] tip_force must be planar ([Px, Py]) for fe-beam compare with "
                           "the planar rod (or set [model] kinematics = \"spatial\"); got "

@@ -3,20 +3,26 @@ a ConfigError (exit 2, one sentence). The optimisation is `fe_beam.analyses.desi
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from fe_beam.config.finger import with_defaults
+from fe_beam.config.finger import parse_finger, with_defaults
+from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError
 
-__all__ = ["DesignProblem", "parse_design"]
+__all__ = ["DesignProblem", "parse_design", "with_value"]
 
-OBJECTIVES = ("tip_pose", "backbone", "tension")
+OBJECTIVES = ("tip_pose", "backbone", "tension", "grasp_force")
 DESIGN_KEYS = ("variables", "bounds", "objective", "target", "points", "tip_angle",
-               "max_fibre_strain", "max_iterations")
+               "max_fibre_strain", "max_iterations", "tolerance")
+#: what a grasp_force target may name: the force's magnitude or its normal part [N]
+GRASP_COMPONENTS = ("force", "normal")
+#: the grasp force's default tolerance, relative to the target
+GRASP_RTOL = 1e-3
 MATERIAL_KEYS = ("E", "nu", "G", "rho")
 SECTION_DIMS = {"rectangle": ("b", "h"), "circle": ("d",), "tube": ("d", "t"),
                 "t-section": ("b", "h", "tf", "tw"), "custom": ("A", "I", "I3", "I4")}
@@ -37,6 +43,8 @@ class DesignProblem:
     tip_angle: float | None = None
     max_fibre_strain: float | None = None
     max_iterations: int = 100
+    #: grasp_force: the allowed |grasp force - target| [N]
+    tolerance: float | None = None
 
     @property
     def force_variable(self) -> int | None:
@@ -181,6 +189,13 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
         raise ConfigError(f"[design] objective must be one of {', '.join(OBJECTIVES)}; got "
                           f"{objective!r}")
     problem = DesignProblem(list(variables), bounds, objective, np.array(initial))
+    if rest.get("obstacles") is not None and objective != "grasp_force":
+        raise ConfigError(f"[design] objective = {objective!r} is not available with "
+                          "[[obstacles]] (its gradients do not see contact); with obstacles "
+                          "the design targets objective = \"grasp_force\"")
+    if objective != "grasp_force" and "tolerance" in given:
+        raise ConfigError("[design] tolerance is the grasp force's tolerance [N]: it goes with "
+                          "objective = \"grasp_force\" only")
     if objective == "tip_pose":
         target = given.get("target")
         if not (isinstance(target, dict) and target
@@ -196,6 +211,8 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
             raise ConfigError("[design] objective = \"backbone\" needs points = [[s, x, y], "
                               "...] (reference arclength s, target position x, y; numbers)")
         problem.points = [tuple(float(x) for x in p) for p in points]
+    elif objective == "grasp_force":
+        _parse_grasp(problem, given, rest)
     else:
         angle = given.get("tip_angle")
         if not _is_number(angle):
@@ -220,3 +237,97 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
                           f"{iterations!r}")
     problem.max_iterations = iterations
     return problem, rest
+
+
+def _parse_grasp(problem: DesignProblem, given: dict, rest: dict) -> None:
+    """objective = "grasp_force": target = {obstacle = "<name>", force = F} (|the force the
+    obstacle exerts on the rod| at load factor 1 [N]) or {obstacle = .., normal = F} (its
+    normal part, without friction), one design variable, tolerance [N] > 0 (default
+    GRASP_RTOL x F); the configuration parsed at both bounds (a tendon out of the section or
+    an obstacle in the undeformed rod at a bound is a ConfigError naming the bound)."""
+    obstacles = rest.get("obstacles")
+    if not isinstance(obstacles, list) or not obstacles:
+        raise ConfigError("[design] objective = \"grasp_force\" needs [[obstacles]]: the "
+                          "grasp force is the force an obstacle exerts on the rod")
+    names = [o.get("name", f"obstacle{i + 1}") if isinstance(o, dict) else f"obstacle{i + 1}"
+             for i, o in enumerate(obstacles)]
+    target = given.get("target")
+    usage = ("[design] objective = \"grasp_force\" needs target = {obstacle = \"<name>\", "
+             "force = <N>} (or normal = <N>: the normal part alone), the force > 0")
+    if not isinstance(target, dict):
+        raise ConfigError(usage)
+    unknown = [k for k in target if k not in ("obstacle",) + GRASP_COMPONENTS]
+    components = [k for k in GRASP_COMPONENTS if k in target]
+    if unknown or len(components) != 1:
+        raise ConfigError(f"{usage}; got target keys {', '.join(map(repr, target)) or 'none'}")
+    component = components[0]
+    value = target[component]
+    if not (_is_number(value) and value > 0):
+        raise ConfigError(f"[design] target {component} must be a number > 0 [N] (the grasp "
+                          f"force to reach); got {value!r}")
+    name = target.get("obstacle")
+    if name is None:
+        if len(names) != 1:
+            raise ConfigError(f"[design] target obstacle must name one of the [[obstacles]] "
+                              f"({', '.join(map(repr, names))})")
+        name = names[0]
+    if name not in names:
+        raise ConfigError(f"[design] target obstacle {name!r} is not an obstacle; the "
+                          f"[[obstacles]] are {', '.join(map(repr, names))}")
+    if len(problem.variables) != 1:
+        raise ConfigError(f"[design] objective = \"grasp_force\" takes exactly one variable "
+                          f"(a bracketing root solve on the converged contact states); got "
+                          f"{len(problem.variables)}")
+    if given.get("max_fibre_strain") is not None:
+        raise ConfigError("[design] max_fibre_strain is not available with objective = "
+                          "\"grasp_force\" (a root solve of one variable has no room for a "
+                          "constraint); leave it out")
+    tolerance = given.get("tolerance", GRASP_RTOL * value)
+    if not (_is_number(tolerance) and 0 < tolerance < value):
+        raise ConfigError(f"[design] tolerance must be a force [N] > 0 and below the target "
+                          f"{value:g} N; got {tolerance!r}")
+    problem.target = {"obstacle": name, "index": names.index(name), "component": component,
+                      "value": float(value)}
+    problem.tolerance = float(tolerance)
+    key = problem.variables[0]
+    finger = bool(rest.get("tendons"))
+    base = with_defaults(rest) if finger else rest  # the finger's default tables written out
+    for bound, edge in zip(problem.bounds[0], ("low", "high"), strict=True):
+        changed = with_value(base, key, float(bound))
+        try:
+            parse_finger(changed) if finger else parse_static(changed)
+        except ConfigError as error:
+            raise ConfigError(f"[design] bounds of {key!r}: at its {edge} bound {bound:g}, "
+                              f"{error}") from None
+
+
+def with_value(config: dict, key: str, value: float) -> dict:
+    """A copy of the configuration's tables (without [design]) with the design variable
+    ``key`` (a key `_initial_value` accepts) set to ``value``."""
+    changed = {k: (copy.deepcopy(v) if k in ("section", "material", "loads", "tendons") else v)
+               for k, v in config.items()}
+    parts = key.split(".")
+    head = parts[0]
+    if head in ("section", "material"):
+        changed.setdefault(head, {})[parts[1]] = value
+    elif head == "loads":
+        loads = changed.setdefault("loads", {})
+        if len(parts) == 2:
+            loads[parts[1]] = value
+        else:
+            pair = list(loads.get(parts[1], [0.0, 0.0]))
+            pair[int(parts[2])] = value
+            loads[parts[1]] = pair
+    elif head == "tendons":
+        if not changed.get("tendons"):  # the chapter's default tendon
+            changed["tendons"] = with_defaults(changed)["tendons"]
+        tendon = changed["tendons"][int(parts[1])]
+        if parts[2] == "path":
+            path = [list(p) for p in tendon["path"]]
+            path[int(parts[3])][1] = value
+            tendon["path"] = path
+        else:
+            tendon[parts[2]] = value
+    else:
+        raise KeyError(key)
+    return changed

@@ -86,6 +86,10 @@ def parse_path(config: dict):
     settings = PathSettings(**table(config, "path", PATH_KEYS))
     rest = {key: value for key, value in config.items() if key != "path"}
     if "solid" in rest:
+        if "obstacles" in rest:
+            raise ConfigError("[[obstacles]] with [solid]: fe-beam path follows the 3D solid "
+                              "without contact; run fe-beam solid for the solid in contact, "
+                              "or leave out [solid] for the rod's path with obstacles")
         return "solid", _solid(rest, settings), settings
     if rest.get("tendons"):
         static, _ = parse_finger({k: v for k, v in rest.items() if k != "inverse"})
@@ -99,6 +103,8 @@ def parse_path(config: dict):
                           "give the tendon a tension instead of pull_in")
     model = static.model
     loads = model.loads
+    if static.obstacles:
+        _check_contact(static, settings)
     if loads.follower and settings.branch_switch != "none":
         raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r}: with [loads] "
                           "follower = true the stability is not checked, so no bifurcation is "
@@ -135,6 +141,29 @@ def parse_path(config: dict):
         raise ConfigError("[loads] are all zero: fe-beam path needs a load to follow "
                           "(tip_force, point_forces, end_displacement, ... or tendon tensions)")
     return "rod", static, settings
+
+
+def _check_contact(static, settings: PathSettings) -> None:
+    """What the rod's path with [[obstacles]] cannot follow: friction (the slip is measured
+    from the last accepted point of a load path; the arc-length corrector does not hold the
+    stick/slip state), moving obstacles and branch switching (a bifurcation is not told apart
+    from a change of the contact state)."""
+    rough = [o.name for o in static.obstacles if o.friction > 0]
+    if rough:
+        raise ConfigError(f"[[obstacles]] {rough[0]!r} has friction > 0: fe-beam path follows "
+                          "frictionless contact only; leave friction out, or run fe-beam "
+                          "static for frictional contact along a load path")
+    moving = [o.name for o in static.obstacles if getattr(o, "motion", None) is not None]
+    if moving:
+        raise ConfigError(f"[[obstacles]] {moving[0]!r} moves (velocity or position): fe-beam "
+                          "path follows fixed obstacles only (the arc length would move it "
+                          "with the path parameter); leave its motion out, or run fe-beam "
+                          "static for an obstacle moving along the load path")
+    if settings.branch_switch != "none":
+        raise ConfigError(f"[path] branch_switch = {settings.branch_switch!r} with "
+                          "[[obstacles]]: bifurcations are not located in contact (a change of "
+                          "the contact state also changes the stability count); use "
+                          "branch_switch = \"none\"")
 
 
 def _solid(rest: dict, settings: PathSettings):

@@ -95,10 +95,11 @@ _SPECS = (
                 "finger:run", spatial=True),
     CommandSpec("design", "optimise section sizes, tendon offsets, tensions or loads for a "
                           "target ([design])",
-                ("tendons", "design", "inverse"), _parse_design, "design:run"),
+                ("tendons", "design", "inverse", "obstacles", "contact"), _parse_design,
+                "design:run"),
     CommandSpec("dynamic", "nonlinear dynamics (generalised-alpha, or the paper's FD + "
                            "Runge-Kutta)",
-                ("time", "initial", "damping", "modes", "tendons"),
+                ("time", "initial", "damping", "modes", "tendons", "obstacles", "contact"),
                 lambda config, options: parse_dynamic(config), "dynamic:run", spatial=True),
     CommandSpec("modes", "natural frequencies and mode shapes (about the undeformed or a static "
                          "state)",
@@ -110,11 +111,12 @@ _SPECS = (
                 lambda config, options: parse_solid(config), "solid:run", spatial=True),
     CommandSpec("compare", "tension sweep: 3D solid vs the rod with the non-standard and "
                            "Reissner laws",
-                ("tendons", "solid", "compare"), lambda config, options: parse_compare(config),
+                ("tendons", "solid", "compare", "obstacles", "contact"),
+                lambda config, options: parse_compare(config),
                 "compare:run", spatial=True),
     CommandSpec("validity", "map of where the rod agrees with the 3D solid over two config keys "
                             "([validity])",
-                ("tendons", "solid", "compare", "validity"),
+                ("tendons", "solid", "compare", "validity", "obstacles", "contact"),
                 lambda config, options: parse_validity(config), "validity:run", spatial=True),
     CommandSpec("refine", "mesh-refinement study: observed order and Richardson extrapolation of "
                           "the tip",
@@ -129,7 +131,8 @@ _SPECS = (
                 ("tendons", "solid", "buckling"), lambda config, options: parse_buckling(config),
                 "buckling:run", spatial=True),
     CommandSpec("path", "arc-length path following with limit and bifurcation points ([path])",
-                ("tendons", "solid", "path"), lambda config, options: parse_path(config),
+                ("tendons", "solid", "path", "obstacles", "contact"),
+                lambda config, options: parse_path(config),
                 "path:run", spatial=True),
 )
 
@@ -150,10 +153,10 @@ REFUSED_UNUSED = ("tendons", "inverse", "obstacles", "contact")
 REFUSED_HINTS = {
     "tendons": "fe-beam finger for a rod pulled by tendons",
     "inverse": "fe-beam finger for the tension that reaches a target",
-    "obstacles": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
-                 "obstacles"),
-    "contact": ("fe-beam static, fe-beam finger or fe-beam solid for contact with rigid "
-               "obstacles"),
+    "obstacles": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path, fe-beam "
+                  "solid or fe-beam compare for contact with rigid obstacles"),
+    "contact": ("fe-beam static, fe-beam finger, fe-beam dynamic, fe-beam path, fe-beam solid "
+                "or fe-beam compare for contact with rigid obstacles"),
 }
 DYNAMIC_LOAD_KEYS = ("time_function", "time_table", "motion_function")
 

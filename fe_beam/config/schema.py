@@ -12,7 +12,7 @@ import stat
 import tomllib
 from pathlib import Path
 
-from fe_beam.config.contact import parse_contact
+from fe_beam.config.contact import check_motions, parse_contact
 from fe_beam.config.keys import (
     NUMBER,
     OTHER_TABLES,
@@ -304,9 +304,11 @@ def _spec(support) -> str:
     return "[" + ", ".join(f'"{c}"' for c in support) + "]"
 
 
-def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConfig:
+def parse_static(config: dict, rigid_motion_allowed: bool = False,
+                 motion_variable: str = "load_factor") -> StaticConfig:
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
-    beam free to move as a rigid body (free-free, flying) is meaningful."""
+    beam free to move as a rigid body (free-free, flying) is meaningful; ``motion_variable``:
+    the variable of moving obstacles' position formulas ("t" in dynamics)."""
     check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
     model = parse_model(config)
     settings, stepping, jump = parse_solver(config)
@@ -326,7 +328,9 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False) -> StaticConf
             "xL = \"roller\")"
         )
     output = OutputOptions(**table(config, "output"))
-    obstacles, contact = parse_contact(config, model)
+    obstacles, contact = parse_contact(config, model, variable=motion_variable)
+    if motion_variable == "load_factor":
+        check_motions(obstacles, 1.0, model)
     return StaticConfig(model, settings, stepping, jump, output, raw=config,
                         obstacles=obstacles, contact=contact)
 

@@ -53,6 +53,7 @@ __all__ = [
     "SOLID_KEYS",
     "SolidConfig",
     "parse_solid",
+    "planar_obstacles",
     "solid_dofs_estimate",
     "solid_law",
     "spatial_rod",
@@ -242,6 +243,35 @@ def spatial_rod(raw: dict) -> bool:
     return isinstance(model, dict) and model.get("kinematics") == "spatial"
 
 
+def planar_obstacles(obstacles, width: float) -> list[dict]:
+    """The [[obstacles]] tables of the planar rod from the solid's 3D obstacles: their sections
+    by the plane z = 0, for obstacles that are the same in every plane z = const across the
+    finger (|z| <= ``width`` / 2): a plane whose normal has no z component, a cylinder along z
+    (infinite, or spanning the width), a box spanning the width. ConfigError for any other (a
+    sphere, a tilted plane or cylinder, a narrower box), naming it."""
+    half = width / 2
+    tables = []
+    for o in obstacles:
+        entry = None
+        if o.shape == "plane" and abs(o.normal[2]) < 1e-12:
+            entry = {"point": list(o.point[:2]), "normal": list(o.normal[:2])}
+        elif o.shape == "cylinder" and max(abs(o.axis[0]), abs(o.axis[1])) < 1e-12 and (
+                o.length is None
+                or (o.point[2] - o.length / 2 <= -half and o.point[2] + o.length / 2 >= half)):
+            entry = {"point": list(o.point[:2]), "radius": o.radius}
+        elif o.shape == "box" and o.min[2] <= -half and o.max[2] >= half:
+            entry = {"min": list(o.min[:2]), "max": list(o.max[:2])}
+        if entry is None:
+            raise ConfigError(
+                f"{o.where} the planar rod reads only obstacles that are the same in every "
+                f"plane z = const across the finger (|z| <= {half:g} m: a plane whose normal "
+                "has no z component, a cylinder along z, a box spanning the width), which a "
+                f"{o.shape} placed so is not; set [model] kinematics = \"spatial\" to compare "
+                "with the spatial rod")
+        tables.append({"shape": o.shape, "name": o.name} | entry)
+    return tables
+
+
 def _rod_static(raw: dict, law: HyperelasticLaw, section, tip_force) -> StaticConfig:
     """The rod's StaticConfig: the same tables, E and G from the 3D law's small-strain limit
     (the spatial rod, ``[model] kinematics = "spatial"``, takes the tip force's z component)."""
@@ -301,8 +331,13 @@ def _cables(static: StaticConfig, width: float, element: float):
     return tuple(paths), tuple(loads), tuple(owners), tuple(names)
 
 
-def parse_solid(raw: dict) -> SolidConfig:
-    """Validate a configuration for ``fe-beam solid`` (raises ConfigError naming the key)."""
+def parse_solid(raw: dict, planar_contact_rod: bool = False) -> SolidConfig:
+    """Validate a configuration for ``fe-beam solid`` (raises ConfigError naming the key).
+
+    ``planar_contact_rod`` (``fe-beam compare``): with [[obstacles]] and the planar rod, the rod
+    runs against the obstacles' sections by the plane z = 0 (`planar_obstacles`: each must be
+    the same in every plane z = const across the finger, else ConfigError); without it the
+    planar rod is left out in contact (``rod_note`` says why)."""
     if not isinstance(raw, dict):
         raise ConfigError("the configuration must be a table")
     if "inverse" in raw:
@@ -376,6 +411,9 @@ def parse_solid(raw: dict) -> SolidConfig:
     planar_contact = bool(obstacles) and not spatial_rod(raw)
     rod_raw = ({k: v for k, v in raw.items() if k not in ("obstacles", "contact")}
                if planar_contact else raw)
+    if planar_contact and planar_contact_rod:
+        rod_raw = dict(raw) | {"obstacles": planar_obstacles(obstacles, b)}
+        planar_contact = False
     tube_note = ""
     try:
         rod = _rod_static(rod_raw, law, section, tip_force)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from fe_beam.config.contact import check_motions
 from fe_beam.config.finger import (
     TENDON_KEYS,
     check_tendon_inside,
@@ -155,9 +156,12 @@ def parse_dynamic(config: dict) -> DynamicConfig:
     initial = table(config, "initial", INITIAL_KEYS)
     damping = _wrap(Damping, **table(config, "damping", DAMPING_KEYS))
     settings = _wrap(TimeSettings, **time_table)
-    static = parse_static(config, rigid_motion_allowed=not initial["from_static"])
+    static = parse_static(config, rigid_motion_allowed=not initial["from_static"],
+                          motion_variable="t")
     if static.model.material.rho <= 0:
         raise ConfigError("[material] rho must be > 0 for dynamics")
+    if static.obstacles:
+        _check_contact_dynamics(static, settings, initial)
     spatial = getattr(static.model, "kinematics", "planar") == "spatial"
     if spatial:
         _check_spatial_dynamics(settings, damping)
@@ -186,6 +190,21 @@ def parse_dynamic(config: dict) -> DynamicConfig:
     return DynamicConfig(static, settings, damping, initial["from_static"],
                          _velocity(initial, spatial),
                          load, motion, tendon_functions, _unused_time_keys(config, settings))
+
+
+def _check_contact_dynamics(static: StaticConfig, settings: TimeSettings,
+                            initial: dict) -> None:
+    """What fe-beam dynamic does not do with [[obstacles]]: ConfigError; and the moving
+    obstacles' positions over [0, t_end]."""
+    if settings.scheme != "generalized-alpha":
+        raise ConfigError(f"[time] scheme = \"{settings.scheme}\" does not take [[obstacles]] "
+                          "(contact in dynamics is solved with scheme = \"generalized-alpha\"); "
+                          "use it, or remove [[obstacles]]")
+    if initial["from_static"]:
+        raise ConfigError("[initial] from_static = true does not take [[obstacles]] yet (the "
+                          "static pre-state is solved without contact); start from the "
+                          "undeformed rod (from_static = false), or remove [[obstacles]]")
+    check_motions(static.obstacles, settings.t_end, static.model)
 
 
 def _check_spatial_dynamics(settings: TimeSettings, damping: Damping) -> None:

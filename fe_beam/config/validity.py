@@ -30,6 +30,7 @@ from fe_beam.config.solid import MATERIAL_KEYS, SOLID_KEYS, spatial_rod
 
 __all__ = [
     "DEFAULT_LAWS",
+    "METRICS",
     "VALIDITY_KEYS",
     "GridPoint",
     "ValidityConfig",
@@ -54,7 +55,13 @@ VALIDITY_KEYS = {
                  "Richardson estimate"),
     "workers": Key((int,), 1, "points solved at once in separate processes (serial runs; "
                    "under mpirun the ranks share the points)"),
+    "metric": Key((str,), "backbone_distance", "the quantity the map shows (validity.png, the "
+                  "statements' 1 % and 5 % counts): backbone_distance (max_x |r_rod - r_solid| / "
+                  "L), or contact_force_difference (with [[obstacles]]: the largest over the "
+                  "obstacles of |F_rod - F_solid| / max(|F_rod|, |F_solid|))"),
 }
+#: the quantities a map can show ([validity] metric)
+METRICS = ("backbone_distance", "contact_force_difference")
 MAX_WORKERS = 64
 #: the most points a map may have (every point is a 3D solve; refused before any is parsed)
 MAX_POINTS = 1000
@@ -93,6 +100,7 @@ class ValidityConfig:
     order: float
     points: tuple[GridPoint, ...]
     workers: int = 1
+    metric: str = "backbone_distance"
 
     @property
     def kinematics(self) -> str:
@@ -283,6 +291,14 @@ def parse_validity(raw: dict) -> ValidityConfig:
     order = given["order"]
     if not 0.5 <= order <= 8:
         raise ConfigError(f"[validity] order must be in [0.5, 8]; got {order!r}")
+    metric = given["metric"]
+    if metric not in METRICS:
+        raise ConfigError(f"[validity] metric must be one of {', '.join(METRICS)}; got "
+                          f"{metric!r}")
+    if metric == "contact_force_difference" and not raw.get("obstacles"):
+        raise ConfigError("[validity] metric = \"contact_force_difference\" needs "
+                          "[[obstacles]] (the rod and the solid in contact); without them map "
+                          "backbone_distance")
     workers = given["workers"]
     if not 1 <= workers <= MAX_WORKERS:
         raise ConfigError(f"[validity] workers must be an integer from 1 to {MAX_WORKERS}; "
@@ -308,7 +324,7 @@ def parse_validity(raw: dict) -> ValidityConfig:
                                         "second_mesh_ratio": ratio, "order": order}})))
     return ValidityConfig(given["x"], x_values, y, y_values, tuple(laws),
                           None if ratio is None else float(ratio), float(order), tuple(points),
-                          workers)
+                          workers, metric)
 
 
 def second_mesh(point: dict, parsed: CompareConfig, ratio: float) -> dict:

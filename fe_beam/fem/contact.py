@@ -56,6 +56,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
@@ -71,6 +72,7 @@ from fe_beam.model.obstacles import (
     section_circumradius,
     section_extents,
     segment_distance,
+    translated,
 )
 
 __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
@@ -452,6 +454,9 @@ class ContactSet:
                        if self.spatial else ("multiplier", "stick", "direction"))
         self.tolerance = self.settings.tolerance(model.section)
         self._problem = None
+        #: the time or load factor of the moving obstacles' translations (`move`)
+        self.parameter = 0.0
+        self.moving = [o.motion is not None for o in self.obstacles]
 
     @property
     def frictional(self) -> list[int]:
@@ -464,9 +469,10 @@ class ContactSet:
         state)."""
         if self._problem is not problem:
             self._attach(problem)
-        geometry = self._geometry(parts)
+        world = self._geometry(parts)
         total = 0
         for i, obstacle in enumerate(self.obstacles):
+            geometry = self._relative(world, i)
             gap = self._gap_of(obstacle, geometry)
             total += active_set_density(self.multipliers[i], self.active[i], gap,
                                         self.k) * self.dx
@@ -493,10 +499,11 @@ class ContactSet:
         subtracted from the residual (a non-potential force: the tangent is not symmetric)."""
         if self._problem is not problem:
             self._attach(problem)
-        geometry = self._geometry(parts)
+        world = self._geometry(parts)
         total = 0
         for i, f in self._friction.items():
             obstacle = self.obstacles[i]
+            geometry = self._relative(world, i)
             gap = self._gap_of(obstacle, geometry)
             if self.spatial:
                 total += self._spatial_slip_work(i, geometry, gap, problem, test)
@@ -534,6 +541,15 @@ class ContactSet:
         below, above = self._extents()
         return {"r": r, "theta": theta, "d": director(theta), "below": below, "above": above}
 
+    def _relative(self, geometry: dict, i: int) -> dict:
+        """The rod's surface data in the frame of obstacle i: a moving obstacle's translation
+        c (a Constant: no recompilation as it moves) subtracted from the centreline, so that
+        its gap, contact point and slip (relative to the obstacle) are those of the fixed
+        shape."""
+        if not self.moving[i]:
+            return geometry
+        return dict(geometry, r=geometry["r"] - self.offsets[i])
+
     def _gap_of(self, obstacle, geometry):
         if self.spatial:
             return tube_gap(obstacle, geometry["r"], geometry["radius"])
@@ -551,7 +567,8 @@ class ContactSet:
         self.degree = degree
         import basix
 
-        self.points, _ = basix.make_quadrature(basix.CellType.interval, degree)
+        self.points, self._reference_weights = basix.make_quadrature(basix.CellType.interval,
+                                                                     degree)
         self.space = compat.function_space(mesh, compat.quadrature_element(mesh, degree))
         # own integration domain (tag 1) so that the quadrature coefficient sits in a kernel
         # with one rule (`fe_beam.solvers.energy_momentum`: FFCx 0.5 merges the integrals of one
@@ -571,6 +588,10 @@ class ContactSet:
         bending = float(model.material.E) * inertia
         h_e = float(problem.h_min)
         self.k_value = self.settings.penalty * bending / h_e**4
+        #: the rod's force scale EI_min / L^2 [N]: the floor of the contact forces' accuracy
+        #: (`fe_beam.solvers.contact.ContactSolver`: error <= force_tolerance (F + this))
+        self.force_scale = bending / float(model.length) ** 2
+        self._base_k = self.k_value
         self.k = fem.Constant(mesh, self.k_value)
         self.k_end = fem.Constant(mesh, self.k_value * h_e)
         count = len(self.obstacles)
@@ -601,6 +622,8 @@ class ContactSet:
                           "direction": fem.Constant(mesh, 0.0),
                           "reference": fem.Constant(mesh, np.zeros(self.dim))}
                          for _ in range(2)]}
+        self.offsets = [fem.Constant(mesh, np.asarray(o.translation(self.parameter), dtype=float))
+                        if self.moving[i] else None for i, o in enumerate(self.obstacles)]
         x = ufl.SpatialCoordinate(mesh)[0]
         self._s = x / model.length
         if self.spatial:
@@ -610,6 +633,42 @@ class ContactSet:
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
+
+    def set_stiffness(self, k: float) -> None:
+        """The augmentation stiffness k [N/m per m of gap] (the ends' k h_e): e.g. dynamics,
+        whose time step stiffens the rod by its mass / (beta dt^2). The multipliers are
+        pressures (independent of k): the converged state does not depend on it."""
+        self.k_value = float(k)
+        self.k.value = self.k_value
+        self.k_end.value = self.k_value * float(self._problem.h_min)
+
+    @property
+    def base_stiffness(self) -> float:
+        """k of the settings: penalty EI_min / h_e^4."""
+        return self._base_k
+
+    def move(self, value: float) -> None:
+        """The moving obstacles to their place at time / load factor ``value`` (the
+        translation Constants of the compiled forms)."""
+        self.parameter = float(value)
+        if self._problem is None:
+            return
+        for i, obstacle in enumerate(self.obstacles):
+            if self.moving[i]:
+                self.offsets[i].value[:] = obstacle.translation(self.parameter)
+
+    def translations(self) -> list[np.ndarray]:
+        """Each obstacle's current translation from its configured place [m]."""
+        return [np.array(self.offsets[i].value, dtype=float) if self.moving[i]
+                and self._problem is not None else o.translation(self.parameter)
+                for i, o in enumerate(self.obstacles)]
+
+    def placed(self) -> list:
+        """The obstacles at their current place (`fe_beam.model.obstacles.translated`): for
+        the outputs of moving obstacles."""
+        return [translated(o, c) for o, c in zip(self.obstacles, self.translations(),
+                                                  strict=True)]
 
     def set_friction(self, index: int, mu: float) -> None:
         """Change the friction coefficient of obstacle ``index`` (one built with friction > 0)
@@ -629,8 +688,9 @@ class ContactSet:
     def _build_measures(self, problem, x) -> None:
         """Compiled expressions at the contact points and forms of the resultants."""
         parts = problem.state_parts() if self.spatial else problem.fields()[:3]
-        geometry = self._geometry(parts, variables=True)
-        r = geometry["r"]
+        world = self._geometry(parts, variables=True)
+        r = world["r"]
+        geometry = world
         columns = [x] + [r[c] for c in range(self.dim)]
         if self.spatial:
             columns += [geometry["radius"]]
@@ -641,6 +701,7 @@ class ContactSet:
         self._obstacle_columns = []
         resultant_forms, end_forms = [], []
         for i, obstacle in enumerate(self.obstacles):
+            geometry = self._relative(world, i)
             gap = self._gap_of(obstacle, geometry)
             where = {"gap": len(columns)}
             columns.append(gap)
@@ -689,7 +750,7 @@ class ContactSet:
                 totals = None
                 for p, g, measure in [(interior, inner, self.dx)] + [
                         (ends[e], end_coordinates[e], self._end_measures[e]) for e in range(2)]:
-                    densities = self._densities(g, geometry)
+                    densities = self._densities(g, world)
                     terms = [p * density * measure for density in densities]
                     totals = terms if totals is None else [a + b for a, b in
                                                            zip(totals, terms, strict=True)]
@@ -704,6 +765,10 @@ class ContactSet:
         index_map = problem.mesh.topology.index_map(1)
         self._owned_cells = np.arange(index_map.size_local, dtype=np.int32)
         self._dofs = compat.cell_dofs(self.space)[: len(self._owned_cells)].ravel()
+        # each owned contact point's share of the reference length [m] (pressures times these
+        # are forces), in the order of ``_dofs``
+        lengths = np.ptp(compat.cell_vertex_x(problem.mesh)[: len(self._owned_cells)], axis=1)
+        self._weights = (lengths[:, None] * self._reference_weights[None, :]).ravel()
 
     def _densities(self, g, geometry) -> list:
         """Force and moment densities per unit traction on the coordinate g: dg/dr and
@@ -814,6 +879,113 @@ class ContactSet:
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
         self._set_references(state)
         self._positions = state["local"]
+        self._positions_offsets = self.translations()
+        self._pressed = [(np.asarray(state["pressure"][i]) > 0,
+                          np.asarray(state["end_pressure"][i]) > 0)
+                         for i in range(len(self.obstacles))]
+
+    def save(self):
+        """The accepted contact state (multipliers, friction state, positions, pressed
+        points), for `load` (the continuation engine's snapshots)."""
+        if self._problem is None:
+            return None
+        return (self._committed, self._positions, self._pressed,
+                getattr(self, "_positions_offsets", None))
+
+    def load(self, saved) -> None:
+        """Back to a `save`d accepted state (its multipliers and active set in place)."""
+        if saved is None or self._problem is None:
+            return
+        self._committed, self._positions, self._pressed, offsets = saved
+        if offsets is not None:
+            self._positions_offsets = offsets
+        self.restore()
+
+    def orientation(self, tangent) -> int:
+        """The way on at a point where the rod came into contact (points pressed now that
+        were not at the last accepted state): +1 when moving the state along ``tangent`` (a
+        PETSc Vec of the state's layout, the path's unit tangent) presses the pressed points
+        further into the obstacle (their gaps shrink: the pressures grow), -1 when it lifts
+        them off (back toward the contact-free path it came from), 0 elsewhere or when the
+        gaps do not change (collective). The arc-length engine reverses a tangent with -1: at a
+        contact corner the path may turn by more than a right angle, where the predictor's
+        direction points the wrong way."""
+        state = self.evaluate(friction=False)
+        comm = self._problem.comm
+        now = [(np.asarray(p) > 0, np.asarray(e) > 0)
+               for p, e in zip(state["pressure"], state["end_pressure"], strict=True)]
+        before = self._pressed or [(np.zeros_like(p), np.zeros_like(e)) for p, e in now]
+        grew = any(np.any(p & ~q) or np.any(e & ~f)
+                   for (p, e), (q, f) in zip(now, before, strict=True))
+        if not comm.allreduce(bool(grew), op=MPI.LOR):
+            return 0
+        x = compat.vector_of(self._problem.w)
+        largest = tangent.norm(PETSc.NormType.NORM_INFINITY)
+        if not largest > 0:
+            return 0
+        eps = 1e-6 * self.model.length / largest
+        saved = compat.local_array(self._problem.w).copy()
+        x.axpy(eps, tangent)
+        if x.getType() != PETSc.Vec.Type.SEQ:
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        try:
+            moved = self.evaluate(friction=False)
+        finally:
+            compat.local_array(self._problem.w)[:] = saved
+        local = 0.0
+        for i, (pressed, ends) in enumerate(now):
+            local -= float(np.sum((moved["gap"][i] - state["gap"][i])[pressed]))
+            if comm.rank == 0:
+                local -= float(np.sum((moved["end_gap"][i] - state["end_gap"][i])[ends]))
+        rate = comm.allreduce(local, op=MPI.SUM)
+        scale = eps * largest * 1e-6
+        return 0 if abs(rate) <= scale else (1 if rate > 0 else -1)
+
+    def changed_between(self, first, second) -> bool:
+        """Do two `save`d states press different contact points (collective)?"""
+        def pressed(saved):
+            return None if saved is None else saved[2]
+
+        a, b = pressed(first), pressed(second)
+        local = False
+        if (a is None) != (b is None):
+            local = any(np.any(p) or np.any(e) for p, e in (a or b))
+        elif a is not None:
+            local = any(np.any(p != q) or np.any(e != f)
+                        for (p, e), (q, f) in zip(a, b, strict=True))
+        return bool(self._problem.comm.allreduce(bool(local), op=MPI.LOR))
+
+    def active_change(self, state: dict | None = None) -> list[float]:
+        """Per obstacle, the share of its contact points (the owned quadrature points of all
+        ranks and the two ends) pressed now and not in the last accepted state, or the
+        reverse (collective)."""
+        state = state or self.evaluate(friction=False)
+        comm = self._problem.comm
+        counts = np.zeros(len(self.obstacles))
+        for i in range(len(self.obstacles)):
+            now = np.asarray(state["pressure"][i]) > 0
+            ends = np.asarray(state["end_pressure"][i]) > 0
+            before, ends_before = (self._pressed[i] if self._pressed is not None
+                                   else (np.zeros_like(now), np.zeros_like(ends)))
+            counts[i] = np.count_nonzero(now != before)
+            if comm.rank == 0:  # the ends are global numbers: counted once
+                counts[i] += np.count_nonzero(ends != ends_before)
+        counts = comm.allreduce(counts, op=MPI.SUM)
+        total = comm.allreduce(len(self._dofs), op=MPI.SUM) + 2
+        return [float(c) / total for c in counts]
+
+    def large_change(self, state: dict | None = None) -> str | None:
+        """Why a converged step is rejected: its active set changed at more than
+        ``max_active_change`` of an obstacle's contact points (None: accepted). Collective."""
+        limit = self.settings.max_active_change
+        if limit >= 1:
+            return None
+        for obstacle, share in zip(self.obstacles, self.active_change(state), strict=True):
+            if share > limit:
+                return (f"contact: the step changed the contact state of {share:.0%} of the "
+                        f"contact points of obstacle {obstacle.name!r} (more than [contact] "
+                        f"max_active_change = {limit:g})")
+        return None
 
     def reset(self) -> None:
         """No contact: zero multipliers and friction states, the configured friction
@@ -833,9 +1005,11 @@ class ContactSet:
             for end in f["ends"]:
                 for name in self._names:
                     end[name].value = 0.0
+        self.move(0.0)
         self._set_references(None)
         self._committed = self._copy()
         self._positions = None
+        self._pressed = None
 
     def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and
@@ -1055,7 +1229,9 @@ class ContactSet:
             traction = (t["stick"] * (t["multiplier"] - t["k"] * t["slip"])
                         + t["slipping"] * t["slip_traction"])
             force = sum(traction[c] * ufl.diff(t["slip"][c], t["point"]) for c in range(2))
-            moment = ufl.cross(t["point"], force)
+            # about the world origin (the point is in a moving obstacle's frame)
+            world = t["point"] + self.offsets[i] if self.moving[i] else t["point"]
+            moment = ufl.cross(world, force)
             densities = [force[c] for c in range(3)] + [moment[c] for c in range(3)]
             terms_here = [d * t["measure"] for d in densities]
             totals = terms_here if totals is None else [a + b for a, b in zip(
@@ -1175,6 +1351,29 @@ class ContactSet:
             local = max(local, float(np.max(measure(end, end_pressure))))
         return self._problem.comm.allreduce(max(local, 0.0), op=MPI.MAX)
 
+    def force_changes(self, state: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Per obstacle (global numbers, [N]): the normal contact force of the iterate (the
+        pressures integrated along the rod, the ends' point forces added) and the change the
+        next Uzawa update would make to the pressures (the integral of |p - lambda|, the ends'
+        |p - lambda| added): the convergence measure of the augmented-Lagrangian multipliers.
+        A penetration below the tolerance alone does not make the force accurate: where the rod
+        is stiff against the obstacle (a finger pushing along its axis), a few micrometres of
+        penetration at one contact point and as much separation at the next still carry a few
+        per cent of the force."""
+        comm = self._problem.comm
+        forces, changes = [], []
+        for i, function in enumerate(self.multipliers):
+            pressure = state["pressure"][i]
+            change = np.abs(pressure - function.x.array[self._dofs])
+            local = np.array([float(np.dot(self._weights, pressure)),
+                              float(np.dot(self._weights, change))])
+            total = comm.allreduce(local, op=MPI.SUM)
+            ends = np.asarray(state["end_pressure"][i], dtype=float)
+            end_multipliers = np.array([float(c.value) for c in self.end_multipliers[i]])
+            forces.append(total[0] + float(ends.sum()))
+            changes.append(total[1] + float(np.abs(ends - end_multipliers).sum()))
+        return np.array(forces), np.array(changes)
+
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
         """The active set chi <- [lambda - k g > 0] at every contact point and end and, with
         ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+; with friction the
@@ -1218,6 +1417,9 @@ class ContactSet:
         step back."""
         after = self.evaluate(friction=False)["local"]
         before = self._positions
+        now = self.translations()
+        then = (getattr(self, "_positions_offsets", None) if before is not None
+                else [o.translation(0.0) for o in self.obstacles])
         if before is None:  # the undeformed rod
             r = np.zeros((len(after["x"]), self.dim))
             r[:, 0] = after["x"]
@@ -1230,10 +1432,12 @@ class ContactSet:
         thinnest = min([thickness] + [min(np.array(o.max) - np.array(o.min))
                                       for o in self.obstacles if isinstance(o, Box)])
         moved = float(np.max(np.linalg.norm(after["r"] - before["r"], axis=1)))
+        moved += max(float(np.linalg.norm(a - b)) for a, b in zip(now, then, strict=True))
         samples = int(min(2000, max(8, np.ceil(2 * moved / thinnest))))
         depth = max(10 * self.tolerance, 0.25 * thickness)
-        for obstacle in self.obstacles:
+        for index, fixed in enumerate(self.obstacles):
             for t in np.linspace(0.0, 1.0, samples + 1)[1:-1]:
+                obstacle = translated(fixed, (1 - t) * then[index] + t * now[index])
                 r = (1 - t) * before["r"] + t * after["r"]
                 if self.spatial:
                     gap = distance(obstacle, r) - after["radius"]
@@ -1257,7 +1461,7 @@ class ContactSet:
             self._attach(problem)
         parts = problem.state_parts() if self.spatial else problem.fields()[:3]
         geometry = self._geometry(parts)
-        return {f"contact_gap_{i}": self._gap_of(obstacle, geometry)
+        return {f"contact_gap_{i}": self._gap_of(obstacle, self._relative(geometry, i))
                 for i, obstacle in enumerate(self.obstacles)}
 
     def cell_pressures(self, state: dict | None = None) -> list[np.ndarray]:
@@ -1310,6 +1514,8 @@ class ContactSet:
             dim = self.dim
             entry = {
                 "name": obstacle.name,
+                **({"translation": [float(c) for c in self.offsets[i].value]}
+                   if self.moving[i] else {}),
                 "force": [float(c) for c in resultants[:dim]],
                 "moment": ([float(c) for c in resultants[dim:]] if self.spatial
                            else float(resultants[dim])),

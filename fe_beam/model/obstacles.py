@@ -22,15 +22,16 @@ Signed distance convention: ``distance(p) >= 0`` outside the obstacle (admissibl
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from fe_beam.errors import ConfigError
+from fe_beam.timefunctions import TimeFunctionError, parse_formula
 
-__all__ = ["OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Obstacle", "Plane",
-           "Sphere", "check_clear_of_rod", "distance", "section_circumradius", "section_extents",
-           "segment_distance"]
+__all__ = ["MOTION_VARIABLES", "OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Motion",
+           "Obstacle", "Plane", "Sphere", "check_clear_of_rod", "distance",
+           "section_circumradius", "section_extents", "segment_distance", "translated"]
 
 
 def _vector(name: str, value, dim: int, where: str) -> tuple[float, ...]:
@@ -50,13 +51,90 @@ def _positive(name: str, value, where: str) -> float:
     return float(value)
 
 
+#: the variable of a moving obstacle's ``position`` formulas: the time in dynamics, the load
+#: factor along the load path of statics (fe-beam static, fe-beam finger)
+MOTION_VARIABLES = {"time": "t", "load": "load_factor"}
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A rigid translation of an obstacle from its configured place: ``velocity`` (numbers,
+    [m/s]: c = velocity t) or ``position`` (numbers or formulas in ``variable``, "t" in dynamics
+    or "load_factor" in statics, [m]: c = position(variable)); exactly one of them. The
+    formulas are the safe ones of `fe_beam.timefunctions`."""
+
+    velocity: tuple | None = None
+    position: tuple | None = None
+    variable: str = "t"
+    dim: int = 2
+
+    def __post_init__(self):
+        where = "[[obstacles]]"
+        if (self.velocity is None) == (self.position is None):
+            raise ValueError(f"{where} give velocity or position (a motion), not both")
+        if self.variable not in MOTION_VARIABLES.values():
+            raise ValueError(f"{where} the motion's variable must be one of "
+                             f"{', '.join(MOTION_VARIABLES.values())}; got {self.variable!r}")
+        if self.velocity is not None:
+            if self.variable != "t":
+                raise ValueError(f"{where} velocity is a rate in time (fe-beam dynamic only); "
+                                 f"along a load path give position = formulas in "
+                                 f"{self.variable}")
+            object.__setattr__(self, "velocity",
+                               _vector("velocity", self.velocity, self.dim, where))
+            return
+        given = self.position
+        names = "x, y" if self.dim == 2 else "x, y, z"
+        if not isinstance(given, (list, tuple)) or len(given) != self.dim:
+            raise ValueError(f"{where} position must be a list of {self.dim} numbers or "
+                             f"formulas in {self.variable} (the translation's {names}); got "
+                             f"{given!r}")
+        parts = []
+        for value in given:
+            if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+                raise ValueError(f"{where} position entries must be numbers or formulas in "
+                                 f"{self.variable}; got {value!r}")
+            if isinstance(value, str):
+                try:
+                    parse_formula(value, variable=self.variable)
+                except TimeFunctionError as error:
+                    raise ValueError(f"{where} position: {error}") from None
+            elif not math.isfinite(value):
+                raise ValueError(f"{where} position must be finite; got {given!r}")
+            parts.append(value if isinstance(value, str) else float(value))
+        object.__setattr__(self, "position", tuple(parts))
+
+    def _functions(self):
+        cached = self.__dict__.get("_compiled")
+        if cached is None:
+            cached = tuple(parse_formula(v, variable=self.variable) if isinstance(v, str)
+                           else (lambda _, c=v: c) for v in self.position)
+            object.__setattr__(self, "_compiled", cached)
+        return cached
+
+    def translation(self, value: float) -> np.ndarray:
+        """The translation c [m] at the time or load factor ``value``."""
+        if self.velocity is not None:
+            return np.array(self.velocity) * float(value)
+        return np.array([f(float(value)) for f in self._functions()])
+
+
 @dataclass(frozen=True)
 class Obstacle:
-    """Base of the shapes: ``name`` (label in outputs), ``dim`` (2: planar rod, 3: spatial)."""
+    """Base of the shapes: ``name`` (label in outputs), ``dim`` (2: planar rod, 3: spatial),
+    ``friction`` (Coulomb's mu), ``motion`` (a `Motion`, None: fixed)."""
 
     name: str = ""
     dim: int = 2
     friction: float = 0.0
+    motion: Motion | None = None
+
+    def translation(self, value: float) -> np.ndarray:
+        """The obstacle's translation from its configured place at time / load factor
+        ``value`` (zero when it does not move)."""
+        if self.motion is None:
+            return np.zeros(self.dim)
+        return self.motion.translation(value)
 
     @property
     def where(self) -> str:
@@ -163,14 +241,14 @@ class Box(Obstacle):
 
     @classmethod
     def from_center(cls, center, size, name: str = "", dim: int = 2,
-                    friction: float = 0.0) -> Box:
+                    friction: float = 0.0, motion: Motion | None = None) -> Box:
         where = f"[[obstacles]] {name!r}:" if name else "[[obstacles]]"
         c = np.array(_vector("center", center, dim, where))
         s = np.array(_vector("size", size, dim, where))
         if not np.all(s > 0):
             raise ValueError(f"{where} size must be > 0 in every component; got {list(size)!r}")
         return cls(name=name, dim=dim, min=tuple(c - s / 2), max=tuple(c + s / 2),
-                   friction=friction)
+                   friction=friction, motion=motion)
 
     @property
     def center(self) -> tuple:
@@ -202,12 +280,19 @@ class ContactSettings:
     rod's element bending stiffness, k = penalty * EI_min / h_e^4 per unit length (h_e the
     smallest element); ``max_updates``: augmented-Lagrangian (Uzawa) updates per load step
     before the step is rejected; ``quadrature_degree``: the contact integral's Gauss rule (None:
-    4 p, p the element degree: 2p + 1 points per element)."""
+    4 p, p the element degree: 2p + 1 points per element); ``max_active_change``: the largest
+    share of an obstacle's contact points (the rod's contact quadrature points and its two
+    ends) that may come into or out of contact in one accepted step of the rod (load step or
+    arc-length point): a step beyond it is cut back (1: no limit); ``force_tolerance``: the
+    largest estimated relative error of each obstacle's contact force a converged step may keep
+    (the Uzawa updates go on until the multipliers, not only the penetration, have converged)."""
 
     penetration_tolerance: float | None = None
     penalty: float = 1.0
     max_updates: int = 50
     quadrature_degree: int | None = None
+    max_active_change: float = 0.2
+    force_tolerance: float = 1e-3
 
     def __post_init__(self):
         tol = self.penetration_tolerance
@@ -219,6 +304,15 @@ class ContactSettings:
         if not (isinstance(self.max_updates, int) and 1 <= self.max_updates <= 1000):
             raise ValueError(f"[contact] max_updates must be an integer from 1 to 1000; got "
                              f"{self.max_updates!r}")
+        change = self.max_active_change
+        if isinstance(change, bool) or not (isinstance(change, (int, float))
+                                            and 0 < change <= 1):
+            raise ValueError(f"[contact] max_active_change must be a share in (0, 1] of the "
+                             f"contact points (1: no limit); got {change!r}")
+        rtol = self.force_tolerance
+        if isinstance(rtol, bool) or not (isinstance(rtol, (int, float)) and 0 < rtol <= 1):
+            raise ValueError(f"[contact] force_tolerance must be a relative error in (0, 1] "
+                             f"(1e-3: 0.1 %); got {rtol!r}")
         degree = self.quadrature_degree
         if degree is not None and not (isinstance(degree, int) and 1 <= degree <= 30):
             raise ValueError(f"[contact] quadrature_degree must be an integer from 1 to 30; got "
@@ -230,6 +324,20 @@ class ContactSettings:
             return float(self.penetration_tolerance)
         below, above = section_extents(section, np.array([0.0, 1.0]))
         return 1e-3 * float(np.min(below + above))
+
+
+def translated(obstacle: Obstacle, offset) -> Obstacle:
+    """The obstacle moved rigidly by ``offset`` (its point, centre or corners), for the
+    numpy checks and the outputs of a moving obstacle at one time / load factor."""
+    c = np.asarray(offset, dtype=float)
+    if not np.any(c):
+        return obstacle
+    shift = lambda p: tuple(float(a) for a in np.asarray(p) + c)  # noqa: E731
+    if isinstance(obstacle, Sphere):
+        return replace(obstacle, center=shift(obstacle.center))
+    if isinstance(obstacle, Box):
+        return replace(obstacle, min=shift(obstacle.min), max=shift(obstacle.max))
+    return replace(obstacle, point=shift(obstacle.point))
 
 
 # --- geometry (numpy; the same formulas in UFL live in fe_beam.fem.contact) ---------------------

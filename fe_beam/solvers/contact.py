@@ -12,6 +12,8 @@ step whose penetration stays above the tolerance after ``max_updates`` updates r
 
 from __future__ import annotations
 
+import numpy as np
+
 from fe_beam.fem.contact import ContactSet
 from fe_beam.solvers.newton import SolveFailed
 
@@ -31,6 +33,10 @@ class ContactSolver:
         self.linear_iterations = 0
         self.updates = 0  # Uzawa updates of the last solve
         self.penetration = 0.0  # the largest penetration after the last solve [m]
+        #: the most Newton iterations one solve at fixed multipliers took in the last
+        #: `solve`: the step's difficulty for the step-size control (`iterations` sums the
+        #: Uzawa updates' solves, which grow with the force accuracy, not with the step)
+        self.hardest_solve = 0
 
     @property
     def load_factor(self):
@@ -56,25 +62,47 @@ class ContactSolver:
         self.solver.destroy()
 
     def solve(self) -> int:
+        """The fixed-multiplier solver's Newton inside the Uzawa and active-set updates."""
+        return self.solve_with(self.solver.solve, count_linear=True)
+
+    def solve_with(self, inner, count_linear: bool = False) -> int:
+        """The updates around any fixed-multiplier solve ``inner() -> iterations`` that
+        raises `SolveFailed` (e.g. the arc-length corrector of
+        `fe_beam.solvers.continuation.Continuation.step`, which then corrects again from its
+        current iterate at every update): the same acceptance and failures as `solve`."""
         contact = self.contact
         contact.restore()
         iterations, linear = 0, 0
         tolerance = contact.tolerance
         limit = contact.settings.max_updates
+        forces_of = getattr(contact, "force_changes", None)
+        inaccurate = False
         try:
+            self.hardest_solve = 0
             for update in range(limit + 1):
-                iterations += self.solver.solve()
-                linear += self.solver.linear_iterations
+                solved = inner()
+                iterations += solved
+                self.hardest_solve = max(self.hardest_solve, solved)
+                linear += self.solver.linear_iterations if count_linear else 0
                 state = contact.evaluate()
                 penetration = contact.max_penetration(state)
                 separation = contact.max_separation(state)
                 changes = state["active_changes"]
                 sliding = state["friction_changes"]
                 self.updates, self.penetration = update, penetration
-                if (penetration <= tolerance and separation <= tolerance and changes == 0
-                        and sliding == 0):
+                geometric = (penetration <= tolerance and separation <= tolerance
+                             and changes == 0 and sliding == 0)
+                accurate = True
+                if forces_of is not None and changes == 0:
+                    # the next update would change the pressures by less than force_tolerance
+                    # of the force (the rod's force scale EI / L^2 the floor near first touch)
+                    forces, change = forces_of(state)
+                    accurate = bool(np.all(change <= contact.settings.force_tolerance
+                                           * (forces + contact.force_scale)))
+                if geometric and accurate:
                     self.linear_iterations = linear
                     return iterations
+                inaccurate = geometric
                 if update == limit:
                     break
                 # a new active set first; the multipliers once the set is consistent
@@ -91,6 +119,10 @@ class ContactSolver:
             raise SolveFailed(f"contact: the stick/slip state or the friction traction was "
                               f"still inconsistent at {sliding} contact points after {limit} "
                               "updates")
+        if inaccurate:
+            raise SolveFailed(f"contact: the contact force was still changing by more than "
+                              f"{contact.settings.force_tolerance:.3g} of itself after {limit} "
+                              "augmented-Lagrangian updates (raise [contact] penalty)")
         if penetration > tolerance:
             raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
                               f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")

@@ -109,6 +109,9 @@ class Snapshot:
     parameter: float
     tangent: tuple[np.ndarray, float] | None
     arc_length: float | None
+    #: the problem's own state beside x (`NonlinearParameterProblem.save_state`: e.g. the
+    #: committed contact multipliers), None without one
+    extra: object = None
 
 
 @dataclass
@@ -224,15 +227,25 @@ class NonlinearParameterProblem:
     h = ``step`` max(1, |lambda|), second-order accurate.
     ``metric``: diagonal weights of the arc metric (e.g. 1/L on displacements, 1 on rotations,
     0 on multipliers and pressures); ``check_step(previous, current)`` vetoes converged steps.
+    ``orient(tangent) -> int``: see `orient_tangent`.
+    ``accept()``, ``save() -> object`` and ``load(saved)``: the problem's state beside x (e.g.
+    the contact multipliers and active set of `fe_beam.fem.contact.ContactSet`): ``accept`` when
+    the engine accepts a point (every strategy), ``save`` / ``load`` with the engine's
+    `Continuation.snapshot` / `Continuation.restore` (critical-point bisections, landings).
     """
 
     def __init__(self, solver, set_parameter: Callable[[float], None],
                  check_step: Callable[[np.ndarray, np.ndarray], str | None] | None = None,
                  metric: PETSc.Vec | None = None, affine: bool = True, step: float = 1e-6,
-                 parameter: float = 0.0):
+                 parameter: float = 0.0, accept: Callable[[], None] | None = None,
+                 save: Callable[[], object] | None = None,
+                 load: Callable[[object], None] | None = None,
+                 orient: Callable[[PETSc.Vec], int] | None = None):
         self.solver = solver
         self._set = set_parameter
         self._check = check_step
+        self._accept, self._save, self._load = accept, save, load
+        self._orient = orient
         self.affine = affine
         self.step = step
         self.metric = metric
@@ -256,6 +269,27 @@ class NonlinearParameterProblem:
 
     def check_step(self, previous, current):
         return None if self._check is None else self._check(previous, current)
+
+    def accept_state(self) -> None:
+        """The engine accepted the current point."""
+        if getattr(self, "_accept", None) is not None:
+            self._accept()
+
+    def save_state(self):
+        """The problem's state beside x (None without one)."""
+        return None if getattr(self, "_save", None) is None else self._save()
+
+    def orient_tangent(self, tangent: PETSc.Vec) -> int:
+        """-1: the new point's unit tangent (its x part ``tangent``) must be reversed, +1:
+        kept, 0: no opinion (then it continues the predictor's direction). E.g. at a point
+        where the rod came into contact, the direction that presses on (the path turns at a
+        contact corner: `fe_beam.fem.contact.ContactSet.orientation`)."""
+        orient = getattr(self, "_orient", None)
+        return 0 if orient is None else int(orient(tangent))
+
+    def load_state(self, saved) -> None:
+        if getattr(self, "_load", None) is not None and saved is not None:
+            self._load(saved)
 
     def residual(self, x, b):
         self.nonlinear.residual(None, x, b)
@@ -306,6 +340,14 @@ class CallbackProblem(NonlinearParameterProblem):
         except AttributeError:
             self.snes_solver = self.nonlinear = None
         self.arc_length_ready = self.nonlinear is not None
+
+
+def _difficulty(solver, iterations: int) -> int:
+    """The Newton iterations that judge a step easy or hard: those of the hardest solve at
+    fixed contact multipliers when the solver wraps contact (`ContactSolver.hardest_solve`),
+    else all of them."""
+    hardest = getattr(solver, "hardest_solve", None)
+    return iterations if hardest is None else hardest
 
 
 def _snes_solver(solver):
@@ -572,13 +614,18 @@ class Continuation:
         tangent = None
         if self._tangent is not None:
             tangent = (self._tangent[0].getArray().copy(), self._tangent[1])
-        return Snapshot(self.state.copy(), self.parameter, tangent, self.arc_length)
+        save = getattr(self.problem, "save_state", None)
+        return Snapshot(self.state.copy(), self.parameter, tangent, self.arc_length,
+                        None if save is None else save())
 
     def restore(self, snapshot: Snapshot) -> None:
         """Back to a snapshot (state, parameter applied to the problem, tangent)."""
         self.state[:] = snapshot.state
         self.parameter = snapshot.parameter
         self.problem.set_parameter(snapshot.parameter)
+        load = getattr(self.problem, "load_state", None)
+        if load is not None:
+            load(snapshot.extra)
         self.arc_length = snapshot.arc_length
         if snapshot.tangent is None:
             self._tangent = None
@@ -694,6 +741,7 @@ class Continuation:
                 previous = state.copy()
                 lam = target_fraction
                 self.parameter = value(lam)
+                self._accept_state()
                 point = ContinuationPoint(
                     len(results) + 1, self.parameter, iterations, solver.linear_iterations,
                     time.perf_counter() - started, fraction=lam, state=previous.copy())
@@ -703,7 +751,7 @@ class Continuation:
                 self._emit(point)
                 bar.update(lam * stepping.steps,
                            f"{label} factor {lam:.4f}, {iterations} Newton its")
-                size.converged(iterations)
+                size.converged(_difficulty(solver, iterations))
         finally:
             bar.close()
         return results
@@ -800,8 +848,10 @@ class Continuation:
         started = time.perf_counter()
         direction = self._direction or self._tangent
         try:
-            iterations = self._corrector(direction, size, settings)
+            iterations = self._wrapped_corrector(direction, size, settings, start)
             reason = _agreed(self.comm, self.problem.check_step(start.state, self.state))
+            if reason is None and _wrapped(self.problem):
+                reason = self._left_the_step(start, size)
             if reason is not None:
                 raise SolveFailed(reason)
         except SolveFailed as error:
@@ -814,6 +864,11 @@ class Continuation:
         reference = direction
         self._direction = None
         self._tangent = self._unit_tangent(reference)
+        orient = getattr(self.problem, "orient_tangent", None)
+        if orient is not None and orient(self._tangent[0]) < 0:
+            # a corner of the path (e.g. contact began): the problem knows the way on
+            self._tangent[0].scale(-1.0)
+            self._tangent = (self._tangent[0], -self._tangent[1])
         return self._accept(iterations, started, size, emit)
 
     def arc_length_path(self, settings: ArcLength | None = None,
@@ -851,7 +906,7 @@ class Continuation:
                     bar.note(f"cut back to arc length {size.value:.3g} ({failure.reason})")
                     continue
                 failures.clear()
-                size.converged(point.iterations)
+                size.converged(_difficulty(self.problem.solver, point.iterations))
                 self.arc_length = size.value
                 beyond = (point.load_factor > settings.max_load_factor
                           or point.load_factor < settings.min_load_factor)
@@ -892,8 +947,14 @@ class Continuation:
         landed.arc_length = point.arc_length
         return landed
 
+    def _accept_state(self) -> None:
+        accept = getattr(self.problem, "accept_state", None)
+        if accept is not None:
+            accept()
+
     def _accept(self, iterations: int, started: float, size: float,
                 emit: bool = True) -> ContinuationPoint:
+        self._accept_state()
         self._count += 1
         t_lam = None if self._tangent is None else self._tangent[1]
         point = ContinuationPoint(self._count, self.parameter, iterations,
@@ -972,15 +1033,57 @@ class Continuation:
             t_lam = -t_lam
         return t, t_lam
 
-    def _corrector(self, direction, size: float, settings: ArcLength) -> int:
+    def _left_the_step(self, start: Snapshot, size: float) -> str | None:
+        """Veto of a wrapped corrector's point farther than `WRAPPED_REACH` arc lengths from
+        the start (arc metric): the wrapper's updates (e.g. contact that stops the path) change
+        the equations under a fixed Riks plane, which may then meet the path again far away
+        (e.g. back on the branch the step came along)."""
+        n = self.problem.state_vector.getLocalSize()
+        metric = self.problem.metric
+        weights = 1.0 if metric is None else metric.getArray(readonly=True)[:n]
+        change = self.state[:n] - start.state[:n]
+        squared = self.comm.allreduce(float(np.sum(weights * change**2)), op=MPI.SUM)
+        distance = math.sqrt(squared + self.psi**2 * (self.parameter - start.parameter) ** 2)
+        if distance > WRAPPED_REACH * size:
+            return (f"arc length: the corrector ended {distance / size:.3g} arc lengths from the "
+                    f"step's start (more than {WRAPPED_REACH:g}: it left the step)")
+        return None
+
+    def _wrapped_corrector(self, direction, size: float, settings: ArcLength,
+                           start: Snapshot) -> int:
+        """The corrector, inside the problem's solver wrapper when it has one (``solve_with``:
+        e.g. `fe_beam.solvers.contact.ContactSolver`, whose active-set and Uzawa updates then
+        wrap the corrector as they wrap Newton under load control): the first call predicts
+        from the start, every later one corrects again from the current iterate on the same
+        arc constraint (x_n, lambda_n of ``start``) at the wrapper's updated active set and
+        multipliers."""
+        wrapper = getattr(getattr(self.problem, "solver", None), "solve_with", None)
+        if wrapper is None:
+            return self._corrector(direction, size, settings)
+        calls = []
+
+        def corrector() -> int:
+            origin = start if calls else None
+            calls.append(1)
+            return self._corrector(direction, size, settings, origin)
+
+        return wrapper(corrector)
+
+    def _corrector(self, direction, size: float, settings: ArcLength,
+                   origin: Snapshot | None = None) -> int:
         """Predictor x_n + size t, lambda_n + size t_lambda, then Newton on
-        R(x, lambda) = 0 and the arc constraint, each iteration one `bordered_solve`."""
+        R(x, lambda) = 0 and the arc constraint, each iteration one `bordered_solve`.
+        ``origin``: (x_n, lambda_n) of the constraint when the corrector starts again from
+        the current iterate (no predictor); None: they are the current state."""
         problem = self.problem
         t, t_lam = direction
         psi2 = self.psi**2
         x = problem.state_vector
         x0 = x.copy()
         lam0 = self.parameter
+        if origin is not None:
+            x0.getArray()[:] = origin.state[: x0.getLocalSize()]
+            lam0 = origin.parameter
         solver = getattr(problem, "snes_solver", None)
         snes_settings = getattr(solver, "settings", None)
         rtol = getattr(snes_settings, "rtol", 1e-9)
@@ -994,8 +1097,11 @@ class Continuation:
         row = self._weighted(t)
         delta = self._new_vector()
         try:
-            self._axpy_state(size, t)
-            lam = lam0 + size * t_lam
+            if origin is None:
+                self._axpy_state(size, t)
+                lam = lam0 + size * t_lam
+            else:
+                lam = self.parameter
             self.parameter = lam
             problem.set_parameter(lam)
             problem.parameter_derivative(x, derivative)
@@ -1052,6 +1158,15 @@ class Continuation:
 def _ghost_update(x: PETSc.Vec) -> None:
     if x.getType() != PETSc.Vec.Type.SEQ:
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+
+#: a wrapped corrector's point (`Continuation._wrapped_corrector`: e.g. with contact) farther
+#: than this many arc lengths from the step's start is rejected (cut back)
+WRAPPED_REACH = 2.0
+
+
+def _wrapped(problem) -> bool:
+    return getattr(getattr(problem, "solver", None), "solve_with", None) is not None
 
 
 def _has_arc_interface(problem) -> bool:

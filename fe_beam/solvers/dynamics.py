@@ -19,6 +19,14 @@ The problem supplies the inertia (`BeamProblem.mass_work`, `velocity_inertia_wor
 treated as a vector of R^3) the Lagrangian inertia M(theta) a + g(theta, v) of the exact
 kinetic energy, at q_{n+1-alpha_f}, v_{n+1-alpha_f}, a_{n+1-alpha_m} (docs/theory.md, Spatial
 rods: inertia, modes and generalised-alpha on the rotation vector).
+
+Contact with rigid obstacles (``contact``, a `fe_beam.fem.contact.ContactSet`): the gap is a
+constraint of the state at t_{n+1}, like the multiplier fields (the accepted state meets the
+penetration tolerance), with the obstacles at their place at t_{n+1}; the augmented-Lagrangian
+pressure (and the planar friction traction) enter the residual at q_{n+1}, and the Uzawa /
+active-set wrapper `fe_beam.solvers.contact.ContactSolver` wraps the step's Newton solve as it
+wraps a static load step; friction's slip is that of the step, the reference points being the
+contact points of the last accepted step (docs/theory.md, Contact in dynamics).
 """
 
 from __future__ import annotations
@@ -37,11 +45,16 @@ from fe_beam.fem.mpi import assemble_scalar, global_max
 from fe_beam.fem.rod import BeamProblem, StrainWatch
 from fe_beam.model.settings import SCHEMES, Damping, TimeSettings  # noqa: F401
 from fe_beam.progress import ProgressBar
+from fe_beam.solvers.contact import ContactSolver
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 from fe_beam.solvers.pull_in import PullInSolver
 
 __all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
            "alpha_parameters"]
+
+#: the dynamic contact stiffness k relative to the step's inertia stiffness rho A / (beta dt^2)
+CONTACT_INERTIA_FACTOR = 10.0
+
 
 class DynamicsFailed(RuntimeError):
     """Time stepping gave up (the state of ``last_time`` is kept)."""
@@ -178,9 +191,11 @@ class GeneralizedAlpha(StepDriver):
     def __init__(self, problem: BeamProblem, settings: TimeSettings, damping: Damping = Damping(),  # noqa: B008
                  load_function: Callable[[float], float] = lambda t: 1.0,
                  motion_function: Callable[[float], float] | None = None,
-                 solver_settings: SolverSettings | None = None, tendons=None):
+                 solver_settings: SolverSettings | None = None, tendons=None, contact=None):
         """``tendons``: the problem's `fe_beam.fem.tendons.TendonSet` (its energy hook is in the
-        problem's stored energy), tensions tension_i f_i(t) (``set_time_functions``)."""
+        problem's stored energy), tensions tension_i f_i(t) (``set_time_functions``);
+        ``contact``: a `fe_beam.fem.contact.ContactSet` of obstacles (not in the problem's
+        stored energy: its terms are added here, at t_{n+1})."""
         if problem.model.material.rho <= 0:
             raise ValueError("dynamics needs material.rho > 0")
         self.problem = problem
@@ -189,6 +204,10 @@ class GeneralizedAlpha(StepDriver):
         self.load_function = load_function
         self.motion_function = motion_function or load_function
         self.tendons = tendons
+        self.contact = contact
+        section = problem.model.section
+        self._line_mass = float(problem.model.material.rho) * max(
+            float(section.properties(s).A) for s in (0.0, 1.0))
         space, mesh = problem.space, problem.mesh
         self.q_old, self.v_old, self.a_old = (fem.Function(space) for _ in range(3))
         params = alpha_parameters(settings.rho_inf)
@@ -227,6 +246,8 @@ class GeneralizedAlpha(StepDriver):
         )
         if problem.nonpotential_loads:
             self.residual -= problem.nonconservative_work(q_mid, test)
+        if contact is not None:
+            self.residual += self._contact_residual(test)
         self.solver = SNESSolver(NonlinearProblem(self.residual, problem.w, problem.bcs),
                                  (solver_settings or SolverSettings()).for_problem(
                                      problem.saddle_point, problem.comm),
@@ -236,9 +257,21 @@ class GeneralizedAlpha(StepDriver):
             # pull-in control: the tensions (applied at t_{n+1-alpha_f}) are unknowns that make
             # the tendon lengths at t_{n+1} the prescribed ones (Newton with the dynamic tangent)
             self.solver = PullInSolver(self.solver, tendons)
+        if contact is not None:
+            self.solver = ContactSolver(self.solver, contact)
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
+    def _contact_residual(self, direction):
+        """The contact terms at the state q_{n+1} (``problem.w``) along ``direction`` (the test
+        function, or a displacement for the work): -(the contact forces' virtual work)."""
+        p, contact = self.problem, self.contact
+        state = p.state_parts() if p.spatial else p.fields()[:3]
+        term = ufl.derivative(contact.energy(p, state), p.w, direction)
+        if contact.frictional:
+            term -= contact.work(p, state, direction)
+        return term
+
     @property
     def dx_mass(self):
         return self.problem.dx_mass
@@ -297,6 +330,8 @@ class GeneralizedAlpha(StepDriver):
         if p.nonpotential_loads:  # the nonconservative load the step applied times the increment
             self.forms["follower_work"] = fem.form(p.nonconservative_work(
                 p.motion_parts(ufl.split(self._step_state)), self._step_increment))
+        if self.contact is not None:  # the contact forces of the accepted state times the step
+            self.forms["contact_work"] = fem.form(-self._contact_residual(self._step_increment))
 
     # --- state --------------------------------------------------------------------------------
     def initialise(self, velocity: Callable | None = None) -> None:
@@ -324,6 +359,7 @@ class GeneralizedAlpha(StepDriver):
         self._initial_acceleration()
         self._work = 0.0
         self._dissipated = 0.0
+        self._contact_work = 0.0
         self._load_energy = self._unit_load_energy()
         self._tendon_work = 0.0
         self._tendon_lengths = self.tendons.lengths() if self.tendons is not None else None
@@ -359,6 +395,8 @@ class GeneralizedAlpha(StepDriver):
         alpha_f = self.params["alpha_f"]
         p.load_factor.value = ((1 - alpha_f) * self.load_function(t_new)
                                + alpha_f * self.load_function(t_old))
+        if self.contact is not None:  # the obstacles' gap is a constraint at t_{n+1}
+            self.contact.move(t_new)
         if self.tendons is not None:  # tensions at t_{n+1-alpha_f}, like the loads
             self.tendons.set_time(t_new, t_old, alpha_f)
             if isinstance(self.solver, PullInSolver):  # pull-ins at t_{n+1}, like motions
@@ -369,6 +407,11 @@ class GeneralizedAlpha(StepDriver):
         t_old, t_new = self.time, self.time + dt
         self.dt.value = dt
         self._set_time_values(t_new, t_old)
+        if self.contact is not None:
+            # augmentation well above the step's inertia stiffness rho A / (beta dt^2): a few
+            # Uzawa updates reach the tolerance (the converged state does not depend on k)
+            self.contact.set_stiffness(max(self.contact.base_stiffness, CONTACT_INERTIA_FACTOR
+                                           * self._line_mass / (self.params["beta"] * dt**2)))
         w = compat.local_array(self.problem.w)
         q, v, a = (compat.local_array(f) for f in (self.q_old, self.v_old, self.a_old))
         w[:] = q  # same-displacement predictor: robust when accelerations jump (releases)
@@ -376,6 +419,9 @@ class GeneralizedAlpha(StepDriver):
         # a state with 1 + e <= 0 anywhere is not one of a real beam: a failed step (cut back)
         self._trial_range = self.problem.strain_range()  # collective: on every rank
         reason = self._trial_range.inadmissible()
+        if reason is None and self.contact is not None:  # through a thin obstacle: cut back
+            flags = self.problem.comm.allgather(self.contact.tunnelled())
+            reason = next((r for r in flags if r), None)
         if reason is not None:
             raise SolveFailed(reason)
         beta, gamma = self.params["beta"], self.params["gamma"]
@@ -405,6 +451,11 @@ class GeneralizedAlpha(StepDriver):
         self._dissipated += assemble_scalar(self.forms["damping_work"])
         if "follower_work" in self.forms:  # at the step's load factor (still set)
             self._work += assemble_scalar(self.forms["follower_work"])
+        if self.contact is not None:  # the step's contact forces (at t_{n+1}), then commit
+            work = assemble_scalar(self.forms["contact_work"])
+            self._contact_work += work
+            self._work += work
+            self.contact.commit()
         load_mid = ((1 - alpha_f) * self.load_function(t_new)
                     + alpha_f * self.load_function(t_old))
         compat.local_array(self.q_old)[:] = w
@@ -438,6 +489,8 @@ class GeneralizedAlpha(StepDriver):
                   "dissipated": self._dissipated}
         if self.tendons is not None:
             values["tendon_work"] = self._tendon_work
+        if self.contact is not None:
+            values["contact_work"] = self._contact_work
         start = getattr(self, "energy0", None)
         initial = start["kinetic"] + start["strain"] if start else kinetic + strain
         values["balance_residual"] = (kinetic + strain + self._dissipated - self._work - initial)

@@ -543,6 +543,12 @@ class RealtimeSolver:
         self.run.snes._beam_problem = self.run.problem
         # serial dense problems: chord predictor before Newton (`_chord_step`)
         self.predictor = bool(dense) if predictor is None else bool(predictor and dense)
+        # contact: every solve goes through the contact solver's active-set and Uzawa loop
+        # (`fe_beam.solvers.contact.ContactSolver`), never the bare dense Newton, and each
+        # accepted state is committed (friction is load-path dependent)
+        self.contact = getattr(self.run, "contact", None)
+        if self.contact is not None:
+            self.predictor = False
         if self.predictor:
             self._work_x = self.run.snes.problem.b.duplicate()
             self._work_f = self.run.snes.problem.b.duplicate()
@@ -718,6 +724,8 @@ class RealtimeSolver:
                     for i, t in enumerate(tendon_set.tendons))
             else:
                 self.config = config
+            if self.contact is not None:
+                self.contact.commit()
             self.last_iterations = iterations
             self.statistics["newton_iterations"] += iterations
             return self.tip()
@@ -737,6 +745,8 @@ class RealtimeSolver:
         def converged(step: StepResult) -> None:
             reached[0] = step.load_factor
             self.statistics["newton_iterations"] += step.iterations
+            if self.contact is not None:
+                self.contact.commit()
 
         stepping = replace(self.config.stepping, adaptive=True)
         try:

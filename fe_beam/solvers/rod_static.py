@@ -96,6 +96,8 @@ class StaticContinuation:
 
     def _set_load_factor(self, value: float) -> None:
         self.problem.set_load_factor(value)
+        if self.contact is not None:  # moving obstacles along the load path
+            self.contact.move(value)
         if self.tendons:
             self.tendons.set_tension_controlled(value)
             self.solver.set_load_factor(value)
@@ -118,9 +120,8 @@ class StaticContinuation:
                             label=label)
 
     def _accepted(self, step: StepResult, on_converged=None) -> None:
-        """An accepted step: the contact state committed, the strain range observed."""
-        if self.contact is not None:
-            self.contact.commit()
+        """An accepted step: the strain range observed (the contact state was committed by
+        the engine: `adapter`)."""
         if self._trial_range is not None:
             self.watch.observe(self._trial_range)
         if on_converged is not None:
@@ -134,9 +135,7 @@ class StaticContinuation:
         and the contact state committed at every accepted step (friction is load-path
         dependent: pressing first, then pulling). Raises `LoadSteppingFailed` with the last
         converged state kept."""
-        adapter = NonlinearParameterProblem(self.solver, set_parameter,
-                                            check_step=self._step_check(),
-                                            metric=self._metric(), parameter=start)
+        adapter = self.adapter(set_parameter, parameter=start)
         adapter.arc_length_ready = False
         engine = Continuation(adapter, start)
         engine.load_control(target, stepping,
@@ -166,11 +165,27 @@ class StaticContinuation:
                 constant.value = float(value)
         else:
             raise ValueError(f"parameter must be 'load_factor' or 'tension', got {parameter!r}")
-        adapter = NonlinearParameterProblem(self.solver, setter, check_step=self._step_check(),
-                                            metric=self._metric())
+        adapter = self.adapter(setter)
         adapter.arc_length_ready = not (self.tendons and any(
-            t.controlled_by_pull_in for t in self.tendons.tendons)) and self.contact is None
+            t.controlled_by_pull_in for t in self.tendons.tendons)) and not (
+            self.contact is not None and (self.contact.frictional
+                                          or any(getattr(self.contact, "moving", ()))))
         return adapter
+
+    def adapter(self, set_parameter, checked: bool = True, parameter: float = 0.0
+                ) -> NonlinearParameterProblem:
+        """A `fe_beam.solvers.continuation.ParameterProblem` of this problem whose parameter
+        ``set_parameter(value)`` moves: the arc metric, the step checks (``checked``) and, with
+        obstacles, the contact state committed at every accepted point and kept in the
+        engine's snapshots. Frictionless contact: load control and arc length (the contact
+        updates wrap the corrector, `fe_beam.solvers.contact.ContactSolver.solve_with`)."""
+        contact = self.contact
+        hooks = ({} if contact is None else
+                 {"accept": contact.commit, "save": contact.save, "load": contact.load,
+                  "orient": contact.orientation})
+        return NonlinearParameterProblem(self.solver, set_parameter,
+                                         check_step=self._step_check() if checked else None,
+                                         metric=self._metric(), parameter=parameter, **hooks)
 
     def engine(self) -> Continuation:
         """The continuation engine of the load factor (built once; its state is this problem's)."""
@@ -202,8 +217,9 @@ class StaticContinuation:
             if note and note not in self.notes:
                 self.notes.append(note)
             reason = reason or self._trial_range.inadmissible()
-            if reason is None and self.contact is not None:
-                reason = self.contact.tunnelled()
+            if self.contact is not None:  # collective: on every rank, whatever its reason
+                tunnel, change = self.contact.tunnelled(), self.contact.large_change()
+                reason = reason or tunnel or change
             return reason
 
         return check

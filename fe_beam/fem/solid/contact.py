@@ -286,15 +286,75 @@ class SolidContact:
 
     def summary(self, state: dict | None = None) -> list[dict]:
         """One entry per obstacle: force [N] (on the solid), active_area [m^2, reference],
-        max_penetration [m], pressure_peak [Pa, nominal] (collective)."""
+        max_penetration [m], pressure_peak [Pa, nominal], extent ([x0, x1]: the reference x
+        range of the exterior-facet vertices that carry pressure, None without any: the contact
+        patch along the backbone, `contact_extent`) and contact_length = x1 - x0 [m]
+        (collective)."""
         state = self.evaluate() if state is None else state
         entries = []
         for i, obstacle in enumerate(self.obstacles):
+            extent = self.contact_extent(state["pressures"][i])
             entries.append({
                 "name": obstacle.name,
                 "force": [assemble_scalar(f) for f in self._force[i]],
                 "active_area": assemble_scalar(self._area[i]),
                 "max_penetration": state["penetration"][i],
                 "pressure_peak": state["pressure_peak"][i],
+                "extent": extent,
+                "contact_length": 0.0 if extent is None else extent[1] - extent[0],
             })
         return entries
+
+    def contact_extent(self, pressure: np.ndarray) -> list[float] | None:
+        """[min x, max x] of the reference positions of the owned exterior-facet vertices
+        where ``pressure`` (local P1 values) is > 0, over the ranks; None when none is."""
+        if not hasattr(self, "_x_nodes"):
+            self._x_nodes = self.Q.tabulate_dof_coordinates()[:, 0].copy()
+        pressed = self._x_nodes[:len(pressure)][(pressure > 0) & self._boundary & self._owned]
+        low = -global_max(self.comm, -float(pressed.min()) if len(pressed) else -np.inf)
+        high = global_max(self.comm, float(pressed.max()) if len(pressed) else -np.inf)
+        return [low, high] if np.isfinite(low) and np.isfinite(high) else None
+
+    def output_fields(self, state: dict | None = None) -> tuple[list[np.ndarray],
+                                                                list[np.ndarray]]:
+        """(gaps, pressures) for the XDMF: per obstacle the local P1 values (the multiplier
+        space, ``Q``) of the signed gap [m] at every vertex and of the nominal contact pressure
+        [Pa] at the exterior-facet vertices (0 elsewhere), the lumped L2 projection of the
+        quadrature-point pressure p = <lambda - k g>_+ on the boundary,
+        p_i = int p phi_i dA / int phi_i dA (`lumped_pressures`): its surface integral is int p
+        dA, the force's (a plane: F = n int p dA), also for a patch narrower than the
+        elements (there the vertices' <lambda - k g>_+, whose maximum is pressure_peak, spread
+        over whole elements would overstate it). Collective."""
+        state = self.evaluate() if state is None else state
+        return state["gaps"], self.lumped_pressures()
+
+    def lumped_pressures(self) -> list[np.ndarray]:
+        """Per obstacle, the local P1 values int p phi_i dA / int phi_i dA at the vertices of
+        the exterior facets (0 elsewhere); forms compiled on the first call. Collective."""
+        from petsc4py import PETSc
+
+        if getattr(self, "_lumped", None) is None:
+            v = ufl.TestFunction(self.Q)
+            X = ufl.SpatialCoordinate(self.mesh)
+            self._lumped = (
+                [fem.form(contact_pressure(lam, solid_gap(o, X, self.u), self._k) * v * self.ds)
+                 for o, lam in zip(self.obstacles, self.multipliers, strict=True)],
+                fem.form(v * self.ds))
+
+        def local(form) -> np.ndarray:
+            vector = compat.assemble_vector(form)
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            with vector.localForm() as values:
+                array = np.array(values.array, dtype=float)
+            vector.destroy()
+            return array
+
+        forms, mass_form = self._lumped
+        mass = local(mass_form)
+        carries = mass > 0
+        result = []
+        for form in forms:
+            force = local(form)
+            result.append(np.where(carries, force / np.where(carries, mass, 1.0), 0.0))
+        return result
