@@ -288,3 +288,20 @@ def test_capstan_over_a_cylinder_with_an_oblique_axis():
     assert np.abs(force + np.array(drum["force"]) + down).max() <= 1e-6
     friction = np.array(drum["friction_force"])
     assert abs(friction @ axis) <= 1e-6 * np.linalg.norm(friction)
+
+
+def test_spatial_friction_outside_statics_is_refused():
+    """Friction of a spatial rod: statics only (fe-beam dynamic: exit 2), planes and infinite
+    cylinders only (a sphere: exit 2)."""
+    from fe_beam.errors import ConfigError
+
+    config = pressed_tip([0.0, 1.0, 0.0])
+    config["material"]["rho"] = 1000.0
+    config["model"]["constraint"] = "none"
+    dynamic = config | {"time": {"t_end": 0.1, "dt": 0.01, "scheme": "generalized-alpha"}}
+    with pytest.raises(ConfigError, match="statics only"):
+        validate("dynamic", dynamic)
+    ball = {"shape": "sphere", "name": "ball", "center": [0.5, 0.3, 0.0], "radius": 0.1,
+            "friction": MU}
+    with pytest.raises(ConfigError, match="plane or an infinite cylinder"):
+        validate("static", config | {"obstacles": [ball]})
