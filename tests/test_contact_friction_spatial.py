@@ -154,7 +154,6 @@ def test_oblique_pull_sticks_below_mu_n_and_slips_against_the_friction():
           f"first slip {first_slip:.6g}); {worst}")
 
 
-@pytest.mark.mpi
 @pytest.mark.parametrize("held", [True, False])
 def test_planar_friction_case_on_a_rotated_plane_matches_the_planar_rod(held):
     """With the tip's rotation held the section meets the plane square (theta = 0), where the
