@@ -86,7 +86,8 @@ SPATIAL_FLOOR = {"shape": "plane", "point": [0.0, -0.01, 0.0], "normal": [0.0, 1
 
 
 @pytest.mark.parametrize("obstacle, words", [
-    ({**SPATIAL_FLOOR, "friction": 0.3}, ("friction", "planar rods only")),
+    ({"shape": "sphere", "center": [0.5, 0.3, 0.0], "radius": 0.1, "friction": 0.3},
+     ("friction", "plane or an infinite cylinder")),
     (FLOOR, ("point", "3 numbers")),
     # the tube of the circumradius (half-diagonal 0.00707 m) reaches y = -0.00707
     ({**SPATIAL_FLOOR, "point": [0.0, -0.007, 0.0]}, ("intersects the undeformed rod",)),

@@ -39,7 +39,8 @@ OBSTACLE_KEYS = {
     "max": Key((list,), None, "box: highest corner [m]"),
     "size": Key((list,), None, "box: edge lengths [m] (with center)"),
     "friction": Key(NUMBER, 0.0, "Coulomb friction coefficient mu >= 0 (0: frictionless; "
-                    "planar rods)"),
+                    "rods: planar on any shape, spatial on a plane or an infinite cylinder; "
+                    "not the 3D solid)"),
     "velocity": Key((list,), None, "a moving obstacle: constant velocity [m/s] ([vx, vy] planar, "
                     "[vx, vy, vz] spatial; fe-beam dynamic)"),
     "position": Key((list,), None, "a moving obstacle: its translation from the configured "
@@ -108,10 +109,15 @@ def parse_obstacle(index: int, given, model, dim: int = 2, solid: bool = False,
                           f"{', '.join(required + optional)})")
     motion = _motion(values, where, dim, solid, variable)
     mu = values["friction"]
-    if dim == 3 and mu != 0:
-        body = "the 3D solid's" if solid else "a spatial rod's"
-        raise ConfigError(f"{where} friction is available for planar rods only ({body} "
+    if solid and mu != 0:
+        raise ConfigError(f"{where} friction is available for rods only (the 3D solid's "
                           "contact is frictionless: leave friction out)")
+    if dim == 3 and mu != 0 and (shape not in ("plane", "cylinder")
+                                 or values["length"] is not None):
+        raise ConfigError(f"{where} friction of a spatial rod is available on a plane or an "
+                          f"infinite cylinder only (not on a {shape}"
+                          f"{' of finite length' if shape == 'cylinder' else ''}: leave "
+                          "friction out)")
     if shape == "plane":
         obstacle = _wrap(Plane, name=name, dim=dim, point=values["point"],
                          normal=values["normal"], friction=mu, motion=motion)

@@ -204,6 +204,11 @@ def _check_contact_dynamics(static: StaticConfig, settings: TimeSettings,
         raise ConfigError("[initial] from_static = true does not take [[obstacles]] yet (the "
                           "static pre-state is solved without contact); start from the "
                           "undeformed rod (from_static = false), or remove [[obstacles]]")
+    rough = [o.name for o in static.obstacles if o.friction > 0]
+    if rough and getattr(static.model, "kinematics", "planar") == "spatial":
+        raise ConfigError(f"[[obstacles]] {rough[0]!r}: friction of a spatial rod is available "
+                          "in statics only (fe-beam static, finger); leave friction out for "
+                          "fe-beam dynamic")
     check_motions(static.obstacles, settings.t_end, static.model)
 
 

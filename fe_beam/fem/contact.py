@@ -1,10 +1,14 @@
-"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction for the
-planar rod (docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
+"""Contact of the planar and the spatial rod with rigid obstacles, with Coulomb friction
+(docs/theory.md, Contact with rigid obstacles): gaps, contact points and slips as
 UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
 holds the multipliers and stick/slip states and measures the contact state.
 
 Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
-`fe_beam.model.obstacles.section_circumradius`); the rest below is the same.
+`fe_beam.model.obstacles.section_circumradius`); the rest below is the same. Their friction
+(planes and infinite cylinders) acts at the tube's material point facing the obstacle
+(`section_facing`), with 2-vector slips in the tangent plane (`spatial_slip`), tangential
+multipliers and slip directions (`spatial_stick_density`, `spatial_slip_traction`,
+`coulomb_state_2d`).
 
 Friction (planar): the slip s of a contact point since the last accepted step
 (`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
@@ -56,6 +60,7 @@ from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
+from fe_beam.fem.rotations import rotation
 from fe_beam.model.obstacles import (
     Box,
     ContactSettings,
@@ -72,8 +77,11 @@ from fe_beam.model.obstacles import (
 
 __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
            "contact_point", "contact_pressure", "director", "coulomb_state",
-           "friction_return_map", "outward_normal", "point_gap", "positive_part",
-           "segment_gap", "slip_traction", "stick_density", "tangential_slip", "tube_gap"]
+           "coulomb_state_2d", "friction_return_map", "outward_normal", "plane_tangent_basis",
+           "point_gap", "positive_part", "section_facing", "segment_gap", "slip_traction",
+           "spatial_friction_supported", "spatial_outward_normal", "spatial_slip",
+           "spatial_slip_traction", "spatial_stick_density", "stick_density",
+           "tangential_slip", "tube_gap"]
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -317,6 +325,111 @@ def coulomb_state(trial, slip, pressure, mu, stick, direction, slack: float = 0.
     return stuck, new_direction, traction
 
 
+# --- friction of the spatial rod (the tube's tangent plane) -----------------------------------
+def spatial_friction_supported(obstacle: Obstacle) -> bool:
+    """Friction of a spatial rod is available on planes and infinite cylinders (their tangent
+    planes have a global basis and an exact slip measure; `spatial_slip`)."""
+    return isinstance(obstacle, Plane) or (isinstance(obstacle, Cylinder)
+                                           and obstacle.length is None)
+
+
+def plane_tangent_basis(normal) -> tuple[np.ndarray, np.ndarray]:
+    """(t1, t2): an orthonormal basis of the plane of unit ``normal`` (3D, numpy): t1 the
+    coordinate axis least aligned with n, made orthogonal to it; t2 = n x t1."""
+    n = np.asarray(normal, dtype=float)
+    e = np.eye(3)[int(np.argmin(np.abs(n)))]
+    t1 = e - (e @ n) * n
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(n, t1)
+
+
+def _radial(obstacle: Cylinder, p):
+    rel = p - ufl.as_vector(obstacle.point)
+    axis = ufl.as_vector(obstacle.axis)
+    return rel - ufl.dot(rel, axis) * axis
+
+
+def spatial_outward_normal(obstacle: Obstacle, p):
+    """The unit outward normal (UFL) of a plane or a cylinder at (near) the 3D point p."""
+    if isinstance(obstacle, Plane):
+        return ufl.as_vector(obstacle.normal)
+    if isinstance(obstacle, Cylinder):
+        a = _radial(obstacle, p)
+        return a / ufl.sqrt(ufl.dot(a, a))
+    raise TypeError(f"friction of a spatial rod needs a plane or a cylinder: {obstacle!r}")
+
+
+def spatial_slip(obstacle: Obstacle, p, p_reference):
+    """The slip s (UFL 2-vector) of a spatial rod's contact point: the increment of its
+    position on the obstacle's surface from ``p_reference`` (the contact point of the last
+    accepted state) to p, in the tangent basis (t1, t2): a plane ((p - p0).t1, (p - p0).t2)
+    with the fixed basis of `plane_tangent_basis` (exact); a cylinder of axis a and radius R
+    ((p - p0).a, R atan2(a0 x a1 . a, a0 . a1)), a0 and a1 the radial parts of p0 and p
+    (the axial and the arc length, exact; t2 = a x n, counterclockwise about a)."""
+    if isinstance(obstacle, Plane):
+        t1, t2 = plane_tangent_basis(obstacle.normal)
+        step = p - p_reference
+        return ufl.as_vector([ufl.dot(step, ufl.as_vector(t1)), ufl.dot(step, ufl.as_vector(t2))])
+    if isinstance(obstacle, Cylinder):
+        axis = ufl.as_vector(obstacle.axis)
+        a, a0 = _radial(obstacle, p), _radial(obstacle, p_reference)
+        turn = compat.atan2(ufl.dot(ufl.cross(a0, a), axis), ufl.dot(a0, a))
+        return ufl.as_vector([ufl.dot(p - p_reference, axis), obstacle.radius * turn])
+    raise TypeError(f"friction of a spatial rod needs a plane or a cylinder: {obstacle!r}")
+
+
+def section_facing(R, normal):
+    """The body-frame unit vector m of the section's (d2, d3) plane pointing toward the
+    obstacle (UFL): R^T (-n) without its d1 part, normalised. The material point of the tube
+    at r + rho R m is the contact point friction acts on."""
+    m = ufl.dot(ufl.transpose(R), -normal)
+    size = ufl.sqrt(m[1] ** 2 + m[2] ** 2 + 1e-300)
+    return ufl.as_vector([0, m[1] / size, m[2] / size])
+
+
+def spatial_stick_density(multiplier, stick, slip, k):
+    """The 2D `stick_density`: stick/(2k) (|lambda_t - k s|^2 - |lambda_t|^2), lambda_t and s
+    2-vectors in the tangent basis."""
+    trial = multiplier - k * slip
+    return stick * (ufl.dot(trial, trial) - ufl.dot(multiplier, multiplier)) / (2 * k)
+
+
+def spatial_slip_traction(direction, slip, k, mu, pressure, eps):
+    """The traction of a slipping point (UFL 2-vector): Coulomb's return map
+    mu p_n t/|t| of the trial traction t = mu p_n e - k s, e the unit ``direction`` of the
+    last update (the slipping point's multiplier is mu p_n e); regularised by ``eps`` (a
+    slipping point's |t| is about mu p_n or more). The updates repeat until e is t/|t|
+    again: there the slip is opposite to the friction."""
+    bound = mu * pressure
+    trial = bound * direction - k * slip
+    return bound * trial / ufl.sqrt(ufl.dot(trial, trial) + eps**2)
+
+
+def coulomb_state_2d(trial, slip, pressure, mu, stick, direction, slack: float = 0.0):
+    """`coulomb_state` with 2-vector tractions and slips (numpy, shape (n, 2)): (stuck,
+    direction (n, 2), traction (n, 2)). A point that slipped in the last solve keeps slipping
+    while it slides against its traction (slip . direction <= slack), its direction the trial
+    traction's; any other pressed point sticks while |trial| <= mu p_n, else slips along
+    trial/|trial|; stuck points' traction is the trial (scaled back onto the disc if it passed
+    it), slipping points' mu p_n direction."""
+    trial, slip = (np.asarray(a, dtype=float).reshape(-1, 2) for a in (trial, slip))
+    direction = np.asarray(direction, dtype=float).reshape(-1, 2)
+    pressure = np.asarray(pressure, dtype=float)
+    bound = mu * pressure
+    pressed = pressure > 0
+    size = np.linalg.norm(trial, axis=1)
+    unit = trial / np.maximum(size, 1e-300)[:, None]
+    was_slipping = (np.asarray(stick) < 0.5) & (np.linalg.norm(direction, axis=1) > 0.5)
+    keeps = was_slipping & (np.sum(slip * direction, axis=1) <= slack)
+    stuck = pressed & np.where(was_slipping, ~keeps, (size <= bound) & (bound > 0))
+    slipping = pressed & ~stuck
+    new_direction = np.where(slipping[:, None], unit, 0.0)
+    scale = np.where(size > bound, bound / np.maximum(size, 1e-300), 1.0)
+    traction = np.where(stuck[:, None], trial * scale[:, None],
+                        new_direction * bound[:, None])
+    return stuck, new_direction, traction
+
+
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
@@ -332,8 +445,13 @@ class ContactSet:
         self.spatial = getattr(model, "kinematics", "planar") == "spatial"
         self.dim = 3 if self.spatial else 2
         self.friction = [float(getattr(o, "friction", 0.0) or 0.0) for o in self.obstacles]
-        if self.spatial and any(self.friction):
-            raise ValueError("contact: friction of spatial rods is not available yet")
+        if self.spatial and any(mu > 0 and not spatial_friction_supported(o)
+                                for o, mu in zip(self.obstacles, self.friction, strict=True)):
+            raise ValueError("contact: friction of spatial rods is available on planes and "
+                             "infinite cylinders only")
+        #: the friction state's per-point names (the spatial rod's 2-vectors by component)
+        self._names = (("multiplier_0", "multiplier_1", "stick", "direction_0", "direction_1")
+                       if self.spatial else ("multiplier", "stick", "direction"))
         self.tolerance = self.settings.tolerance(model.section)
         self._problem = None
         #: the time or load factor of the moving obstacles' translations (`move`)
@@ -361,7 +479,9 @@ class ContactSet:
             for e, measure in enumerate(self._end_measures):
                 total += active_set_density(self.end_multipliers[i][e], self.end_active[i][e],
                                             gap, self.k_end) * measure
-            if i in self._friction:
+            if i in self._friction and self.spatial:
+                total += self._spatial_stick_energy(i, geometry)
+            elif i in self._friction:
                 f = self._friction[i]
                 point = self._point_of(obstacle, geometry)
                 slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
@@ -385,6 +505,9 @@ class ContactSet:
             obstacle = self.obstacles[i]
             geometry = self._relative(world, i)
             gap = self._gap_of(obstacle, geometry)
+            if self.spatial:
+                total += self._spatial_slip_work(i, geometry, gap, problem, test)
+                continue
             point = self._point_of(obstacle, geometry)
             pressure = self.active[i] * (self.multipliers[i] - self.k * gap)
             slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
@@ -406,11 +529,11 @@ class ContactSet:
         ``variables``: r and theta as UFL variables (for the resultants' densities)."""
         x = ufl.SpatialCoordinate(self._problem.mesh)[0]
         if self.spatial:
-            d, _ = parts
+            d, theta = parts
             r = ufl.as_vector([x + d[0], d[1], d[2]])
             if variables:
                 r = ufl.variable(r)
-            return {"r": r, "radius": self._radius}
+            return {"r": r, "radius": self._radius, "theta": theta}
         u, v, theta = parts
         r = ufl.as_vector([x + u, v])
         if variables:
@@ -484,6 +607,9 @@ class ContactSet:
         # the last accepted state, at every contact point and end
         self._friction = {}
         for i in self.frictional:
+            if self.spatial:
+                self._friction[i] = self._spatial_friction_storage(i)
+                continue
             self._friction[i] = {
                 "multiplier": fem.Function(self.space, name=f"friction_multiplier_{i}"),
                 "stick": fem.Function(self.space, name=f"friction_stick_{i}"),
@@ -586,7 +712,10 @@ class ContactSet:
             # the force p dg/dr, the moment about the origin r x that (+ p dg/dtheta planar)
             parts_of = [(pressure, end_pressures, gap, "normal")]
             ends_of = {"gap": [fem.form(gap * m) for m in self._end_measures]}
-            if i in self._friction:
+            if i in self._friction and self.spatial:
+                self._spatial_friction_measures(i, geometry, columns, where, pressure,
+                                                end_pressures, ends_of)
+            elif i in self._friction:
                 f = self._friction[i]
                 point = self._point_of(obstacle, geometry)
                 slip = tangential_slip(obstacle, point, ufl.as_vector(f["reference"]))
@@ -613,6 +742,8 @@ class ContactSet:
                 ends_of["point"] = [[fem.form(point[c] * m) for c in range(self.dim)]
                                     for m in self._end_measures]
             forms = {}
+            if "friction_forms" in ends_of:
+                forms["friction"] = ends_of.pop("friction_forms")
             for interior, ends, coordinate, label in parts_of:
                 inner, end_coordinates = (coordinate if isinstance(coordinate, tuple)
                                           else (coordinate, [coordinate, coordinate]))
@@ -652,12 +783,9 @@ class ContactSet:
     # --- state -------------------------------------------------------------------------------
     def _copy(self):
         """The multipliers and flags (the state a solve starts from)."""
-        friction = {i: {"multiplier": f["multiplier"].x.array.copy(),
-                        "stick": f["stick"].x.array.copy(),
-                        "direction": f["direction"].x.array.copy(),
-                        "ends": [{n: float(end[n].value) for n in ("multiplier", "stick",
-                                                                   "direction")}
-                                 for end in f["ends"]]}
+        friction = {i: {n: f[n].x.array.copy() for n in self._names}
+                    | {"ends": [{n: float(end[n].value) for n in self._names}
+                                for end in f["ends"]]}
                     for i, f in self._friction.items()}
         return ([m.x.array.copy() for m in self.multipliers],
                 [[float(c.value) for c in ends] for ends in self.end_multipliers], friction)
@@ -677,11 +805,11 @@ class ContactSet:
                 constant.value = value
                 flag.value = 1.0 if value > 0 else 0.0
         for i, f in self._friction.items():
-            for name in ("multiplier", "stick", "direction"):
+            for name in self._names:
                 f[name].x.array[:] = friction[i][name]
                 f[name].x.scatter_forward()
             for end, values in zip(f["ends"], friction[i]["ends"], strict=True):
-                for name in ("multiplier", "stick", "direction"):
+                for name in self._names:
                     end[name].value = values[name]
 
     def _set_references(self, state: dict | None) -> None:
@@ -704,6 +832,16 @@ class ContactSet:
                 function.x.scatter_forward()
             for end, point in zip(f["ends"], ends, strict=True):
                 end["reference"].value[:] = point
+            if self.spatial:  # the material points facing the obstacle now
+                where = self._obstacle_columns[i]["facing"]
+                raw = values["raw"] if state is None else state["raw"]
+                for c, function in enumerate(f["body"]):
+                    function.x.array[self._dofs] = raw[:, where + c]
+                    function.x.scatter_forward()
+                for e, end in enumerate(f["ends"]):
+                    end["body"].value[:] = [global_sum(self._problem.comm,
+                                                       fem.assemble_scalar(form))
+                                            for form in self._end_forms[i]["facing"][e]]
 
     def _assemble_end_point(self, i, e) -> np.ndarray:
         return np.array([global_sum(self._problem.comm, fem.assemble_scalar(form))
@@ -712,6 +850,8 @@ class ContactSet:
     def restore(self) -> None:
         """Multipliers back to those of the last accepted state (`commit`)."""
         self._set(self._committed)
+        if self.spatial and self._friction:  # a solve starts with the wide regularisation
+            self._regularisation.value = float(self.tolerance)
 
     def commit(self) -> None:
         """The current state is accepted: its pressures and friction tractions start the next
@@ -729,16 +869,12 @@ class ContactSet:
         for i, f in self._friction.items():
             entry = state["friction"][i]
             copies = {}
-            for name, values in (("multiplier", entry["traction"]),
-                                 ("stick", entry["stuck"].astype(float)),
-                                 ("direction", entry["direction"])):
+            for name, values in self._state_values(entry).items():
                 array = f[name].x.array.copy()
                 array[self._dofs] = values
                 copies[name] = array
-            copies["ends"] = [{"multiplier": float(entry["end_traction"][e]),
-                               "stick": float(entry["end_stuck"][e]),
-                               "direction": float(entry["end_direction"][e])}
-                              for e in range(2)]
+            copies["ends"] = [{name: float(values[e]) for name, values in
+                               self._state_values(entry, "end_").items()} for e in range(2)]
             friction[i] = copies
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
         self._set_references(state)
@@ -864,10 +1000,10 @@ class ContactSet:
         for i, f in self._friction.items():  # the configured coefficient again
             self.friction[i] = float(self.obstacles[i].friction)
             f["mu"].value = self.friction[i]
-            for name in ("multiplier", "stick", "direction"):
+            for name in self._names:
                 f[name].x.array[:] = 0.0
             for end in f["ends"]:
-                for name in ("multiplier", "stick", "direction"):
+                for name in self._names:
                     end[name].value = 0.0
         self.move(0.0)
         self._set_references(None)
@@ -928,6 +1064,9 @@ class ContactSet:
         tolerance = self.tolerance
         changes = 0
         for i, f in self._friction.items():
+            if self.spatial:
+                changes += self._evaluate_spatial_friction(i, state, values)
+                continue
             mu, where = float(f["mu"].value), self._obstacle_columns[i]
             slip = values[:, where["slip"]]
             points = values[:, where["point"]:where["point"] + self.dim]
@@ -968,6 +1107,228 @@ class ContactSet:
         bad = (used_stuck != stuck) | ((~stuck) & (np.asarray(direction) != new_direction)
                                        & (pressure > 0))
         bad |= stuck & (np.abs(slip) > tolerance)
+        return int(np.count_nonzero(bad))
+
+    # --- friction of the spatial rod (2-vectors in the tangent plane) --------------------------
+    def _direction_size(self, flags):
+        """|direction| of the stored slip directions (arrays of the owned points, or a float
+        for an end's constants): 1 where the point slipped in the last solve, else 0."""
+        if isinstance(flags["stick"], fem.Function):
+            if not self.spatial:
+                return np.abs(flags["direction"].x.array[self._dofs])
+            return np.hypot(flags["direction_0"].x.array[self._dofs],
+                            flags["direction_1"].x.array[self._dofs])
+        if not self.spatial:
+            return abs(float(flags["direction"].value))
+        return float(np.hypot(float(flags["direction_0"].value),
+                              float(flags["direction_1"].value)))
+
+    def _state_values(self, entry: dict, prefix: str = "") -> dict:
+        """The per-point friction state of an evaluated ``entry`` by storage name (``prefix``
+        "end_": the two ends')."""
+        traction = np.asarray(entry[prefix + "traction"], dtype=float)
+        direction = np.asarray(entry[prefix + "direction"], dtype=float)
+        stick = np.asarray(entry[prefix + "stuck"]).astype(float)
+        if not self.spatial:
+            return {"multiplier": traction, "stick": stick, "direction": direction}
+        return {"multiplier_0": traction[:, 0], "multiplier_1": traction[:, 1], "stick": stick,
+                "direction_0": direction[:, 0], "direction_1": direction[:, 1]}
+
+    def _spatial_friction_storage(self, i: int) -> dict:
+        """Tangential multiplier (2 components), stick flag, slip direction (2), the contact
+        point of the last accepted state (3) and the body-frame direction of the section's
+        point in contact there (3), at every contact point and end."""
+        mesh = self._problem.mesh
+        if not hasattr(self, "_regularisation"):
+            self._regularisation = fem.Constant(mesh, float(self.tolerance))
+        storage = {n: fem.Function(self.space, name=f"friction_{n}_{i}") for n in self._names}
+        storage["reference"] = [fem.Function(self.space, name=f"friction_reference_{i}_{c}")
+                                for c in range(3)]
+        storage["body"] = [fem.Function(self.space, name=f"friction_body_{i}_{c}")
+                           for c in range(3)]
+        storage["mu"] = fem.Constant(mesh, self.friction[i])
+        storage["ends"] = [{n: fem.Constant(mesh, 0.0) for n in self._names}
+                           | {"reference": fem.Constant(mesh, np.zeros(3)),
+                              "body": fem.Constant(mesh, np.zeros(3))} for _ in range(2)]
+        return storage
+
+    @staticmethod
+    def _vector(flags, name: str):
+        return ufl.as_vector([flags[f"{name}_0"], flags[f"{name}_1"]])
+
+    def _spatial_point(self, geometry, body):
+        """The tube's material point r + rho R m (m the body-frame direction ``body``)."""
+        return geometry["r"] + geometry["radius"] * ufl.dot(rotation(geometry["theta"]), body)
+
+    def _spatial_friction_terms(self, i: int, geometry, pressures, variable: bool = False):
+        """Per contact point (interior, then the two ends): (measure, slip 2-vector, stick,
+        slipping flag, the slip traction, the point)."""
+        f, obstacle = self._friction[i], self.obstacles[i]
+        interior = (self.dx, ufl.as_vector(f["body"]), ufl.as_vector(f["reference"]), f,
+                    self.k)
+        ends = [(measure, end["body"], end["reference"], end, self.k_end)
+                for measure, end in zip(self._end_measures, f["ends"], strict=True)]
+        terms = []
+        for (measure, body, reference, flags, k), pressure in zip([interior] + ends, pressures,
+                                                                  strict=True):
+            point = self._spatial_point(geometry, body)
+            if variable:
+                point = ufl.variable(point)
+            slip = spatial_slip(obstacle, point, reference)
+            multiplier = self._vector(flags, "multiplier")
+            slipping = 1 - flags["stick"]  # the direction is zero unless the point slips
+            # regularised below a trial traction of k x the tolerance (a slip within the
+            # tolerance) in the first solve of a step: Newton at a grazing first touch, where
+            # mu p_n and s are both ~0; then 1e-9 of that (`_regularisation`)
+            traction = spatial_slip_traction(self._vector(flags, "direction"), slip, k,
+                                             f["mu"], pressure, self._regularisation * k)
+            terms.append({"measure": measure, "slip": slip, "stick": flags["stick"],
+                          "slipping": slipping, "slip_traction": traction,
+                          "multiplier": multiplier, "k": k, "point": point})
+        return terms
+
+    def _pressures(self, i: int, gap) -> list:
+        """The fixed-active-set pressures chi (lambda - k g) of the interior and the ends."""
+        return [self.active[i] * (self.multipliers[i] - self.k * gap)] + [
+            self.end_active[i][e] * (self.end_multipliers[i][e] - self.k_end * gap)
+            for e in range(2)]
+
+    def _spatial_stick_energy(self, i: int, geometry):
+        gap = self._gap_of(self.obstacles[i], geometry)
+        return sum(spatial_stick_density(t["multiplier"], t["stick"], t["slip"], t["k"])
+                   * t["measure"] for t in self._spatial_friction_terms(
+                       i, geometry, self._pressures(i, gap)))
+
+    def _spatial_slip_work(self, i: int, geometry, gap, problem, test):
+        return sum(t["slipping"] * ufl.dot(t["slip_traction"],
+                                           ufl.derivative(t["slip"], problem.w, test))
+                   * t["measure"] for t in self._spatial_friction_terms(
+                       i, geometry, self._pressures(i, gap)))
+
+    def _spatial_friction_measures(self, i, geometry, columns, where, pressure,
+                                   end_pressures, ends_of) -> None:
+        """The spatial friction's columns (slip 2, facing point 3, facing body direction 3)
+        and forms (the resultant's force and moment, the ends' slips, facing points and
+        directions, friction forces)."""
+        obstacle = self.obstacles[i]
+        R = rotation(geometry["theta"])
+        facing = section_facing(R, spatial_outward_normal(obstacle, geometry["r"]))
+        facing_point = geometry["r"] + geometry["radius"] * ufl.dot(R, facing)
+        terms = self._spatial_friction_terms(i, geometry, [pressure] + list(end_pressures),
+                                             variable=True)
+        where["slip"] = len(columns)
+        columns += [terms[0]["slip"][c] for c in range(2)]
+        where["point"] = len(columns)
+        columns += [facing_point[c] for c in range(3)]
+        where["facing"] = len(columns)
+        columns += [facing[c] for c in range(3)]
+        totals, end_forces = None, []
+        for t in terms:
+            # the traction p_t (stuck: lambda_t - k s; slipping: the return map) on the
+            # coordinates s: the force p_t . ds/dp at the point p, its moment p x that
+            traction = (t["stick"] * (t["multiplier"] - t["k"] * t["slip"])
+                        + t["slipping"] * t["slip_traction"])
+            force = sum(traction[c] * ufl.diff(t["slip"][c], t["point"]) for c in range(2))
+            # about the world origin (the point is in a moving obstacle's frame)
+            world = t["point"] + self.offsets[i] if self.moving[i] else t["point"]
+            moment = ufl.cross(world, force)
+            densities = [force[c] for c in range(3)] + [moment[c] for c in range(3)]
+            terms_here = [d * t["measure"] for d in densities]
+            totals = terms_here if totals is None else [a + b for a, b in zip(
+                totals, terms_here, strict=True)]
+            if t["measure"] is not self.dx:
+                end_forces.append([fem.form(force[c] * t["measure"]) for c in range(3)])
+        ends_of["friction_forms"] = [fem.form(total) for total in totals]
+        ends_of["end_friction"] = end_forces
+        ends_of["slip"] = [[fem.form(t["slip"][c] * t["measure"]) for c in range(2)]
+                           for t in terms[1:]]
+        ends_of["point"] = [[fem.form(facing_point[c] * m) for c in range(3)]
+                            for m in self._end_measures]
+        ends_of["facing"] = [[fem.form(facing[c] * m) for c in range(3)]
+                             for m in self._end_measures]
+
+    def _evaluate_spatial_friction(self, i: int, state: dict, values) -> int:
+        """`_evaluate_friction` of one obstacle of a spatial rod: 2-vector slips and
+        tractions, `coulomb_state_2d`; returns the inconsistent points (counted once)."""
+        comm = self._problem.comm
+        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        f, where, tolerance = self._friction[i], self._obstacle_columns[i], self.tolerance
+        mu = float(f["mu"].value)
+
+        def pair(flags, name):
+            if isinstance(flags[f"{name}_0"], fem.Function):
+                return np.column_stack([flags[f"{name}_{c}"].x.array[self._dofs]
+                                        for c in range(2)])
+            return np.array([float(flags[f"{name}_{c}"].value) for c in range(2)])
+
+        slip = values[:, where["slip"]:where["slip"] + 2]
+        points = values[:, where["point"]:where["point"] + 3]
+        stick = f["stick"].x.array[self._dofs]
+        direction, multiplier = pair(f, "direction"), pair(f, "multiplier")
+        multiplier = self._slipping_multiplier(stick, direction, multiplier,
+                                               mu * state["pressure"][i])
+        stuck, new_direction, traction = coulomb_state_2d(
+            multiplier - k * slip, slip, state["pressure"][i], mu, stick, direction,
+            1e-3 * tolerance)
+        changes = self._spatial_friction_changes(stick, direction, multiplier, stuck,
+                                                 new_direction, slip,
+                                                 mu * state["pressure"][i], tolerance)
+        changes += self._regularisation_deficit(multiplier - k * slip, k,
+                                                mu * state["pressure"][i], stuck)
+        end_slip = np.array([[global_sum(comm, fem.assemble_scalar(form)) for form in forms]
+                             for forms in self._end_forms[i]["slip"]])
+        end_point = [self._assemble_end_point(i, e) for e in range(2)]
+        end_stick = np.array([float(e["stick"].value) for e in f["ends"]])
+        end_direction = np.array([pair(e, "direction") for e in f["ends"]])
+        end_multiplier = self._slipping_multiplier(
+            end_stick, end_direction, np.array([pair(e, "multiplier") for e in f["ends"]]),
+            mu * state["end_pressure"][i])
+        end_stuck, end_new_direction, end_traction = coulomb_state_2d(
+            end_multiplier - k_end * end_slip, end_slip, state["end_pressure"][i], mu,
+            end_stick, end_direction, 1e-3 * tolerance)
+        if comm.rank == 0:  # the ends are global numbers: counted once
+            changes += self._spatial_friction_changes(
+                end_stick, end_direction, end_multiplier, end_stuck, end_new_direction,
+                end_slip, mu * state["end_pressure"][i], tolerance)
+            changes += self._regularisation_deficit(end_multiplier - k_end * end_slip, k_end,
+                                                    mu * state["end_pressure"][i], end_stuck)
+        state["friction"][i] = {"slip": slip, "point": points, "traction": traction,
+                                "stuck": stuck, "direction": new_direction,
+                                "end_slip": end_slip, "end_point": end_point,
+                                "end_traction": end_traction, "end_stuck": end_stuck,
+                                "end_direction": end_new_direction}
+        return changes
+
+    def _regularisation_deficit(self, trial, k, bound, stuck) -> int:
+        """Slipping points whose traction in the solve, mu p_n |t| / sqrt(|t|^2 + eps^2)
+        (`spatial_slip_traction`), fell short of mu p_n by more than 1e-9 of it: they need a
+        solve with the sharp regularisation (`update` sets it)."""
+        eps = float(self._regularisation.value) * k
+        size = np.linalg.norm(trial, axis=1)
+        deficit = 1 - size / np.sqrt(size**2 + eps**2)
+        return int(np.count_nonzero((bound > 0) & ~stuck & (deficit > 1e-9)))
+
+    @staticmethod
+    def _slipping_multiplier(stick, direction, multiplier, bound):
+        """The multipliers the solve used: a slipping point's mu p_n e (its direction e,
+        `spatial_slip_traction`), a stuck one's own."""
+        slipping = (np.asarray(stick) < 0.5) & (np.linalg.norm(direction, axis=1) > 0.5)
+        return np.where(slipping[:, None], np.asarray(bound)[:, None] * direction, multiplier)
+
+    @staticmethod
+    def _spatial_friction_changes(stick, direction, multiplier, stuck, new_direction, slip,
+                                  bound, tolerance) -> int:
+        """Points whose stick/slip state must change, slipping points (with a friction bound
+        mu p_n > 0) whose direction e (`spatial_slip_traction`) is not yet the trial's t/|t|
+        (the slip not yet opposite to the friction, 1e-6), or stuck points that slipped more
+        than the tolerance."""
+        used_stuck = np.asarray(stick) > 0.5
+        slipping = (bound > 0) & ~stuck
+        direction = np.asarray(direction)
+        turned = ((np.linalg.norm(direction, axis=1) < 0.5)
+                  | (np.linalg.norm(new_direction - direction, axis=1) > 1e-6))
+        bad = (used_stuck != stuck) | (slipping & turned)
+        bad |= stuck & (np.linalg.norm(slip, axis=1) > tolerance)
         return int(np.count_nonzero(bad))
 
     def max_penetration(self, state: dict | None = None) -> float:
@@ -1033,19 +1394,19 @@ class ContactSet:
                 flag.value = 1.0 if trial > 0 else 0.0
                 if multipliers:
                     constant.value = float(state["end_pressure"][i][e])
+        if self.spatial and self._friction:  # the sharp return map from now on
+            self._regularisation.value = 1e-9 * float(self.tolerance)
         for i, f in self._friction.items():
             entry = state["friction"][i]
-            names = [("stick", entry["stuck"].astype(float)), ("direction", entry["direction"])]
-            if multipliers:
-                names.append(("multiplier", entry["traction"]))
-            for name, values in names:
+            chosen = {name: values for name, values in self._state_values(entry).items()
+                      if multipliers or not name.startswith("multiplier")}
+            for name, values in chosen.items():
                 f[name].x.array[self._dofs] = values
                 f[name].x.scatter_forward()
             for e, end in enumerate(f["ends"]):
-                end["stick"].value = float(entry["end_stuck"][e])
-                end["direction"].value = float(entry["end_direction"][e])
-                if multipliers:
-                    end["multiplier"].value = float(entry["end_traction"][e])
+                for name, values in self._state_values(entry, "end_").items():
+                    if multipliers or not name.startswith("multiplier"):
+                        end[name].value = float(values[e])
 
     def tunnelled(self) -> str | None:
         """Why the step from the last accepted state (the undeformed rod before the first) to
@@ -1120,7 +1481,8 @@ class ContactSet:
         line pressure at the contact points) [N/m], end_forces (the normal point forces at
         x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
         force) [N], slip (intervals of slipping points) [m] and end_friction (the tangential
-        point forces at the ends, along t = (-n_y, n_x)) [N]. Collective."""
+        point forces at the ends, along t = (-n_y, n_x); spatial: the two ends' friction
+        forces as world vectors [[Fx, Fy, Fz], [Fx, Fy, Fz]]) [N]. Collective."""
         state = state or self.evaluate()
         comm = self._problem.comm
         x_all = np.concatenate(comm.allgather(state["local"]["x"]))
@@ -1166,10 +1528,10 @@ class ContactSet:
                 f, flags = state["friction"][i], self._friction[i]
                 # the stick/slip state of the last solve (committed with an accepted step)
                 used = (flags["stick"].x.array[self._dofs] < 0.5) \
-                    & (flags["direction"].x.array[self._dofs] != 0)
+                    & (self._direction_size(flags) > 0.5)
                 slipping = (pressure > 0) & np.concatenate(comm.allgather(used))
                 end_slipping = (np.asarray(ends) > 0) & np.array(
-                    [float(e["stick"].value) < 0.5 and float(e["direction"].value) != 0
+                    [float(e["stick"].value) < 0.5 and self._direction_size(e) > 0.5
                      for e in flags["ends"]])
                 entry["friction_force"] = [float(c) for c in friction[:dim]]
                 # slipping runs joined across touching points that carry no pressure
@@ -1178,7 +1540,10 @@ class ContactSet:
                 entry["slip"] = _intervals(
                     x_line, np.concatenate([[end_slipping[0]], slipping[order],
                                             [end_slipping[1]]]), touching & ~pressed)
-                entry["end_friction"] = [float(t) for t in f["end_traction"]]
+                entry["end_friction"] = (
+                    [[global_sum(comm, fem.assemble_scalar(form)) for form in forms]
+                     for forms in self._end_forms[i]["end_friction"]] if self.spatial
+                    else [float(t) for t in f["end_traction"]])
             result.append(entry)
         return result
 

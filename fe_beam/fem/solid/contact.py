@@ -29,13 +29,16 @@ element size (``[solid] mesh_size``): a pressure mu squeezes a layer of one elem
 Measured per obstacle (`SolidContact.summary`): the force the obstacle exerts on the solid
 F = int p grad g dA (grad g the obstacle's outward normal at x, UFL's derivative of g), the
 active area int [p > 0] dA (reference), the peak pressure max p at the vertices of the
-exterior facets (where lambda lives) and the largest penetration max(-g) there: a converged
-step is accepted only with max_penetration <= the tolerance. Between the vertices (the P2 edge
-midpoints, the quadrature points) the surface is held by the penalty alone: a P1 multiplier
-cannot cancel a midpoint's own penetration, which stays about p / k (on a short block with
-nu = 0.3 the midpoints' residual 1e-6 m stalled the Uzawa updates when they were measured
-there), and a contact patch smaller than the boundary elements (a ball touching a coarse mesh
-between its vertices) is held by k alone and not seen by the check.
+exterior facets (where lambda lives) and the largest penetration max(-g) at the vertices and
+between them: at the P3 nodes of the exterior facets and, for a sphere, its depth into the
+deformed facets (flat triangles through their P2 nodes, `triangle_distance`); a converged
+step is accepted only with max_penetration <= the tolerance. Between the vertices the surface
+is held by the penalty alone (a P1 multiplier cannot cancel a midpoint's own penetration, which
+stays about p / k): when only those points are above the tolerance, `SolidContact.update`
+grows k (4 x per update, up to MAX_GROWTH x in one solve); where the mesh cannot follow the
+obstacle at all (a ball touching a coarse mesh inside a facet: its sagitta between the
+quadrature points) the step is rejected, never accepted with a penetration above the
+tolerance (docs/theory.md, Contact of the 3D solid: Between the vertices).
 """
 
 from __future__ import annotations
@@ -48,9 +51,35 @@ from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.contact import augmented_lagrangian_density, contact_pressure, point_gap
 from fe_beam.fem.mpi import assemble_scalar, global_max
-from fe_beam.model.obstacles import ContactSettings
+from fe_beam.model.obstacles import ContactSettings, Sphere
 
-__all__ = ["SolidContact", "solid_contact_density", "solid_gap", "solid_traction"]
+__all__ = ["MAX_GROWTH", "SolidContact", "solid_contact_density", "solid_gap", "solid_traction",
+           "triangle_distance"]
+
+#: the largest penalty growth of one solve (`SolidContact.update`)
+MAX_GROWTH = 4.0**6
+
+
+def triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The distance (numpy) of ``point`` (3,) to each flat triangle of ``triangles`` (n, 3, 3):
+    to its projection on the triangle's plane when that falls inside, else to the nearest
+    edge."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    normal = np.cross(b - a, c - a)
+    area2 = np.einsum("ij,ij->i", normal, normal)
+    unit = normal / np.sqrt(np.maximum(area2, 1e-300))[:, None]
+    height = np.einsum("ij,ij->i", point - a, unit)
+    foot = point - height[:, None] * unit
+    inside = np.ones(len(triangles), dtype=bool)
+    for p, q in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ij,ij->i", np.cross(q - p, foot - p), normal) >= 0
+    edges = []
+    for p, q in ((a, b), (b, c), (c, a)):
+        d = q - p
+        t = np.clip(np.einsum("ij,ij->i", point - p, d)
+                    / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0.0, 1.0)
+        edges.append(np.linalg.norm(point - (p + t[:, None] * d), axis=1))
+    return np.where(inside, np.abs(height), np.min(edges, axis=0))
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
@@ -96,6 +125,32 @@ class SolidContact:
                                                  lambda x: np.full(x.shape[1], True))
         self._boundary, self._owned = self._masks(self.Q, facets)
         self._boundary_nodes, self._owned_nodes = self._masks(self.Q_nodes, facets)
+        #: the gap between the vertices: at the nodes of P3 on the exterior facets (the
+        #: vertices, two points on each edge, each facet's centroid)
+        self.Q_between = compat.function_space(mesh, compat.element(mesh, "Lagrange", 3))
+        self._boundary_between, self._owned_between = self._masks(self.Q_between, facets)
+        #: a sphere can press into a facet between all its sample points: its deepest
+        #: penetration into the deformed boundary, the flat triangles through the P_p nodes
+        #: of each exterior facet (P2: 4 per facet, through its vertices and edge midpoints;
+        #: `triangle_distance`)
+        self._spheres = [i for i, o in enumerate(self.obstacles) if isinstance(o, Sphere)]
+        if self._spheres:
+            owned = facets[facets < mesh.topology.index_map(fdim).size_local]
+            a, b, c = np.moveaxis(compat.facet_vertex_coordinates(mesh, owned), 1, 0)
+            if degree >= 2:
+                ab, bc, ca = (a + b) / 2, (b + c) / 2, (c + a) / 2
+                pieces = [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+            else:
+                pieces = [(a, b, c)]
+            self._triangles = np.concatenate([np.stack(p, axis=1) for p in pieces])
+            from scipy.spatial import cKDTree
+
+            coordinates = self.Q_nodes.tabulate_dof_coordinates()
+            _, index = cKDTree(coordinates).query(self._triangles.reshape(-1, 3))
+            self._triangle_dofs = index.reshape(-1, 3)
+            self._vertex_u = fem.Function(self.Q_nodes)
+            self._vertex_u_expr = [compat.interpolation_expression(u[c], self.Q_nodes)
+                                   for c in range(3)]
         self.ds = ufl.Measure("ds", domain=mesh,
                               metadata={"quadrature_degree": self.quadrature_degree})
         X = ufl.SpatialCoordinate(mesh)
@@ -107,8 +162,14 @@ class SolidContact:
         self._node_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
                                                                self.Q_nodes)
                                for o in self.obstacles]
+        self._between_gaps = [fem.Function(self.Q_between) for _ in obstacles]
+        self._between_gap_expr = [compat.interpolation_expression(solid_gap(o, X, u),
+                                                                  self.Q_between)
+                                  for o in self.obstacles]
         k = fem.Constant(mesh, float(self.k))
         self._k = k
+        #: the penalty's growth beyond ``k`` in the current solve (`update`)
+        self.growth = 1.0
         self.energy = sum(solid_contact_density(o, X, u, lam, k) * self.ds
                           for o, lam in zip(self.obstacles, self.multipliers, strict=True))
         self._force = [[fem.form(solid_traction(o, X, u, lam, k)[i] * self.ds)
@@ -134,17 +195,24 @@ class SolidContact:
         return [compat.local_array(lam).copy() for lam in self.multipliers]
 
     def restore(self) -> None:
-        """Multipliers back to those of the last accepted state (`commit`)."""
+        """Multipliers back to those of the last accepted state (`commit`), the penalty back
+        to ``k`` (every solve starts from them)."""
         for lam, saved in zip(self.multipliers, self._committed, strict=True):
             compat.local_array(lam)[:] = saved
+        self._set_growth(1.0)
+
+    def _set_growth(self, growth: float) -> None:
+        self.growth = float(growth)
+        self._k.value = self.k * self.growth
 
     def commit(self) -> None:
         self._committed = self._copy()
 
-    def _nodal_gaps(self, nodes: bool = False) -> list[np.ndarray]:
+    def _nodal_gaps(self, nodes: bool | str = False) -> list[np.ndarray]:
         values = []
-        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes else
-                                  (self._gaps, self._gap_expr))
+        functions, expressions = ((self._node_gaps, self._node_gap_expr) if nodes is True else
+                                  (self._between_gaps, self._between_gap_expr)
+                                  if nodes == "between" else (self._gaps, self._gap_expr))
         for gap, expr in zip(functions, expressions, strict=True):
             gap.interpolate(expr)
             values.append(compat.local_array(gap).copy())
@@ -165,16 +233,34 @@ class SolidContact:
 
     def evaluate(self) -> dict:
         """Gaps, pressures and the largest penetration at the exterior-facet vertices (the
-        multipliers'; owned nodes, MPI-reduced)."""
+        multipliers'; owned nodes, MPI-reduced), and the largest penetration between them
+        (``between``: at the P3 nodes of the exterior facets); ``penetration`` is the larger
+        of the two."""
         gaps = self._nodal_gaps()
+        k = self.k * self.growth
         pressures = [np.where(self._boundary, np.maximum(
-            compat.local_array(lam) - self.k * g, 0.0), 0.0)
+            compat.local_array(lam) - k * g, 0.0), 0.0)
                      for lam, g in zip(self.multipliers, gaps, strict=True)]
-        penetration = [global_max(self.comm, float(np.max(
+        vertices = [global_max(self.comm, float(np.max(
             np.where(self._boundary & self._owned, -g, 0.0), initial=0.0))) for g in gaps]
+        between = [float(np.max(np.where(self._boundary_between & self._owned_between, -g, 0.0),
+                                initial=0.0)) for g in self._nodal_gaps("between")]
+        if self._spheres:
+            deformed = self._triangles.copy()
+            for c, expr in enumerate(self._vertex_u_expr):
+                self._vertex_u.interpolate(expr)
+                deformed[:, :, c] += compat.local_array(self._vertex_u)[self._triangle_dofs]
+            for i in self._spheres:
+                sphere = self.obstacles[i]
+                if len(deformed):
+                    inside = sphere.radius - triangle_distance(np.array(sphere.center), deformed)
+                    between[i] = max(between[i], float(np.max(inside)))
+        between = [global_max(self.comm, b) for b in between]
+        penetration = [max(a, b) for a, b in zip(vertices, between, strict=True)]
         peak = [global_max(self.comm, float(np.max(np.where(self._owned, p, 0.0),
                                                       initial=0.0))) for p in pressures]
         return {"gaps": gaps, "pressures": pressures, "penetration": penetration,
+                "vertex_penetration": vertices, "between": between,
                 "pressure_peak": peak, "active_changes": 0, "friction_changes": 0}
 
     def max_penetration(self, state: dict | None = None) -> float:
@@ -186,10 +272,17 @@ class SolidContact:
         return 0.0
 
     def update(self, state: dict | None = None, multipliers: bool = True) -> None:
-        """Uzawa: lambda <- <lambda - k g>_+ at the exterior-facet nodes."""
+        """Uzawa: lambda <- <lambda - k g>_+ at the exterior-facet nodes; when the vertices
+        are within the tolerance and the points between them are not (a curved obstacle
+        pressed into a facet, the residual p / k between the vertices of a P1 multiplier),
+        the penalty grows 4 x (up to MAX_GROWTH x k in one solve; then the step is rejected
+        as before)."""
         state = self.evaluate() if state is None else state
         for lam, p in zip(self.multipliers, state["pressures"], strict=True):
             compat.local_array(lam)[:] = p
+        if (max(state["vertex_penetration"], default=0.0) <= self.tolerance
+                < max(state["between"], default=0.0) and self.growth < MAX_GROWTH):
+            self._set_growth(min(4.0 * self.growth, MAX_GROWTH))
 
     def summary(self, state: dict | None = None) -> list[dict]:
         """One entry per obstacle: force [N] (on the solid), active_area [m^2, reference],
