@@ -115,12 +115,14 @@ def point_gap(obstacle: Obstacle, p):
                                else obstacle.point)
         rel = p - centre
         if isinstance(obstacle, Cylinder) and obstacle.dim == 3:
-            axis = ufl.as_vector(obstacle.axis)
-            axial = ufl.dot(rel, axis)
-            rel = rel - axial * axis
+            # the radial distance as sqrt(|rel|^2 - axial^2), not |rel - axial a|: an axis
+            # along a coordinate axis would leave literal zeros in the projected vector, whose
+            # derivatives FFCx 0.5 cannot generate code for
+            axial = ufl.dot(rel, ufl.as_vector(obstacle.axis))
+            radial = ufl.sqrt(positive_part(ufl.dot(rel, rel) - axial**2) + 1e-300)
             if obstacle.length is not None:
-                return _finite_cylinder_gap(axial, ufl.sqrt(ufl.dot(rel, rel)),
-                                            obstacle.radius, obstacle.length)
+                return _finite_cylinder_gap(axial, radial, obstacle.radius, obstacle.length)
+            return radial - obstacle.radius
         return ufl.sqrt(ufl.dot(rel, rel)) - obstacle.radius
     if isinstance(obstacle, Box):
         gaps = [ufl.dot(p - ufl.as_vector(point), ufl.as_vector(normal))
