@@ -85,6 +85,18 @@ __all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
 
 
 # --- pure functions returning UFL ---------------------------------------------------------------
+def _feature_size(obstacle: Obstacle) -> float:
+    """The obstacle's narrowest extent [m] (a plane: infinite)."""
+    if isinstance(obstacle, (Sphere, Cylinder)):
+        size = 2 * obstacle.radius
+        if isinstance(obstacle, Cylinder) and obstacle.length is not None:
+            size = min(size, obstacle.length)
+        return float(size)
+    if isinstance(obstacle, Box):
+        return float(min(np.array(obstacle.max) - np.array(obstacle.min)))
+    return float("inf")
+
+
 def positive_part(value):
     """<value>_+ = max(value, 0) (its derivative is the Heaviside step: C1 energy)."""
     return ufl.conditional(ufl.gt(value, 0), value, 0)
@@ -762,6 +774,17 @@ class ContactSet:
             self._obstacle_columns.append(where)
         self._columns = len(columns)
         self._expression = compat.expression(ufl.as_vector(columns), self.points)
+        # the rod's geometry at points dense enough that no obstacle fits between two of them
+        # (`between_points`): an obstacle narrower than the contact points' spacing
+        lengths = np.ptp(compat.cell_vertex_x(problem.mesh), axis=1)
+        longest = problem.comm.allreduce(float(np.max(lengths)) if len(lengths) else 0.0,
+                                         op=MPI.MAX)
+        narrowest = min([_feature_size(o) for o in self.obstacles] + [np.inf])
+        count = 9 if not np.isfinite(narrowest) else int(np.clip(
+            np.ceil(8 * longest / narrowest) + 1, 9, 513))
+        self._narrowest = narrowest
+        self._dense_expression = compat.expression(
+            ufl.as_vector(columns[:self._base_columns]), np.linspace(0.0, 1.0, count)[:, None])
         self._resultant_forms = resultant_forms
         self._end_forms = end_forms
         index_map = problem.mesh.topology.index_map(1)
@@ -880,7 +903,7 @@ class ContactSet:
             friction[i] = copies
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
         self._set_references(state)
-        self._positions = state["local"]
+        self._positions = self._dense_local()
         self._positions_offsets = self.translations()
         self._pressed = [(np.asarray(state["pressure"][i]) > 0,
                           np.asarray(state["end_pressure"][i]) > 0)
@@ -1410,14 +1433,54 @@ class ContactSet:
                     if multipliers or not name.startswith("multiplier"):
                         end[name].value = float(values[e])
 
+    def _dense_local(self) -> dict:
+        """The rod's geometry (x, r and d, below, above (planar) or radius (spatial)) at the
+        dense points of `between_points` of the owned cells."""
+        values = compat.evaluate_expression(self._dense_expression, self._problem.mesh,
+                                            self._owned_cells)
+        values = np.asarray(values).reshape(-1, self._base_columns)
+        local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
+        if self.spatial:
+            local["radius"] = values[:, 4]
+        else:
+            local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
+        return local
+
+    def between_points(self) -> str | None:
+        """Why the current state is rejected: an obstacle reaching deeper than a quarter of
+        the section or of the narrowest obstacle into the rod between the contact points (an
+        obstacle narrower than their spacing, e.g. a thin peg), measured at points 1/8 of the
+        narrowest obstacle apart (at least 9 per element, the element's ends included).
+        Local (the caller agrees over ranks)."""
+        local = self._dense_local()
+        if not len(local["x"]):
+            return None
+        x, r = local["x"], local["r"]
+        thickness = 2 * local["radius"] if self.spatial else local["below"] + local["above"]
+        depth = max(10 * self.tolerance, 0.25 * min(float(np.min(thickness)), self._narrowest))
+        for obstacle in self.placed():
+            if self.spatial:
+                gap = distance(obstacle, r) - local["radius"]
+            else:
+                gap = segment_distance(obstacle, r, local["d"], local["below"], local["above"])
+            if np.min(gap) < -depth:
+                j = int(np.argmin(gap))
+                return (f"contact: obstacle {obstacle.name!r} reaches {-gap[j]:.3g} m into the "
+                        f"rod near x = {x[j]:.4g} m, between the contact points (it is "
+                        "narrower than their spacing): refine the mesh or raise [contact] "
+                        "quadrature_degree")
+        return None
+
     def tunnelled(self) -> str | None:
         """Why the step from the last accepted state (the undeformed rod before the first) to
         the current one is rejected: a contact point whose straight path between the two
         passes deeper than a quarter of the section into an obstacle (a load step that jumped
-        through a thin one), sampled finer than half the thinnest section or box. Local (the
+        through a thin one), sampled finer than half the thinnest section or obstacle, at the
+        dense points of `between_points` (which also rejects an obstacle left inside the rod
+        between the contact points). Local (the
         caller agrees over ranks); a false alarm (a path cutting a disc's chord) only cuts the
         step back."""
-        after = self.evaluate(friction=False)["local"]
+        after = self._dense_local()
         before = self._positions
         now = self.translations()
         then = (getattr(self, "_positions_offsets", None) if before is not None
@@ -1429,14 +1492,16 @@ class ContactSet:
             before = {"r": r, "d": d}
         if not len(after["x"]):
             return None
+        inside = self.between_points()
+        if inside is not None:
+            return inside
         thickness = float(np.min(2 * after["radius"] if self.spatial
                                  else after["below"] + after["above"]))
-        thinnest = min([thickness] + [min(np.array(o.max) - np.array(o.min))
-                                      for o in self.obstacles if isinstance(o, Box)])
+        thinnest = min([thickness] + [_feature_size(o) for o in self.obstacles])
         moved = float(np.max(np.linalg.norm(after["r"] - before["r"], axis=1)))
         moved += max(float(np.linalg.norm(a - b)) for a, b in zip(now, then, strict=True))
         samples = int(min(2000, max(8, np.ceil(2 * moved / thinnest))))
-        depth = max(10 * self.tolerance, 0.25 * thickness)
+        depth = max(10 * self.tolerance, 0.25 * thinnest)
         for index, fixed in enumerate(self.obstacles):
             for t in np.linspace(0.0, 1.0, samples + 1)[1:-1]:
                 obstacle = translated(fixed, (1 - t) * then[index] + t * now[index])
