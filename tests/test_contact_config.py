@@ -41,6 +41,10 @@ def test_bad_obstacle_exits_2(tmp_path, capsys, obstacle, words):
 @pytest.mark.parametrize("contact, key", [
     ({"penetration_tolerance": -1.0}, "penetration_tolerance"),
     ({"penalty": 0.0}, "penalty"),
+    ({"penalty": 1e12}, "at most 1e+06"),
+    ({"penetration_tolerance": 1.0}, "more than a tenth of its thinnest section"),
+    ({"force_tolerance": 0.0}, "force_tolerance"),
+    ({"force_tolerance": 2.0}, "force_tolerance"),
     ({"max_updates": 0}, "max_updates"),
     ({"typo": 1}, "typo"),
 ])

@@ -8,7 +8,6 @@ points cannot hold the peg, the run stops with exit 3 and says why."""
 import json
 import math
 
-import pytest
 from tomlio import dump_toml
 
 from fe_beam.analyses.static import solve_static

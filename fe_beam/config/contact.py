@@ -230,4 +230,6 @@ def parse_contact(config: dict, model, solid: bool = False, variable: str = "loa
             raise ConfigError(f"[contact] {rod_only} applies to the rod's contact only (the 3D "
                               "solid's steps do not use it); leave it out with [solid]")
     settings = _wrap(ContactSettings, **table(config, "contact", CONTACT_KEYS))
+    if not solid:
+        _wrap(settings.check_tolerance, model.section)
     return obstacles, settings

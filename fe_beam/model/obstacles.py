@@ -271,6 +271,11 @@ class Box(Obstacle):
 OBSTACLE_SHAPES = {"plane": Plane, "cylinder": Cylinder, "sphere": Sphere, "box": Box}
 
 
+#: the largest `ContactSettings.penalty`: k = 1e6 EI / h_e^4 is already stiffer than the rod
+#: at any contact by orders of magnitude; beyond, the Newton systems lose their digits
+MAX_PENALTY = 1e6
+
+
 @dataclass(frozen=True)
 class ContactSettings:
     """How contact is enforced (augmented Lagrangian with Uzawa updates: `fe_beam.fem.contact`).
@@ -299,8 +304,10 @@ class ContactSettings:
         if tol is not None and (isinstance(tol, bool) or not math.isfinite(tol) or tol <= 0):
             raise ValueError(f"[contact] penetration_tolerance must be a length > 0 [m]; got "
                              f"{tol!r}")
-        if not (math.isfinite(self.penalty) and self.penalty > 0):
-            raise ValueError(f"[contact] penalty must be > 0; got {self.penalty!r}")
+        if not (math.isfinite(self.penalty) and 0 < self.penalty <= MAX_PENALTY):
+            raise ValueError(f"[contact] penalty must be > 0 and at most {MAX_PENALTY:g} (larger "
+                             "values leave the Newton systems to round-off); got "
+                             f"{self.penalty!r}")
         if not (isinstance(self.max_updates, int) and 1 <= self.max_updates <= 1000):
             raise ValueError(f"[contact] max_updates must be an integer from 1 to 1000; got "
                              f"{self.max_updates!r}")
@@ -322,8 +329,24 @@ class ContactSettings:
         """The penetration tolerance [m] for a rod of ``section``."""
         if self.penetration_tolerance is not None:
             return float(self.penetration_tolerance)
-        below, above = section_extents(section, np.array([0.0, 1.0]))
-        return 1e-3 * float(np.min(below + above))
+        return 1e-3 * thinnest_height(section)
+
+    def check_tolerance(self, section) -> None:
+        """ValueError when the penetration tolerance lets a converged step keep the rod more
+        than a tenth of its thinnest section inside an obstacle (a contact that holds nothing)."""
+        tol, limit = self.penetration_tolerance, 0.1 * thinnest_height(section)
+        if tol is not None and tol > limit:
+            raise ValueError(f"[contact] penetration_tolerance = {tol:.3g} m would let a "
+                             f"converged step keep the rod that deep inside an obstacle, more "
+                             f"than a tenth of its thinnest section; allowed: up to {limit:.3g} "
+                             "m (default: 1e-3 of the section)")
+
+
+def thinnest_height(section) -> float:
+    """The smallest height of the rod's section over its length [m] (tapered: the thinner
+    end)."""
+    below, above = section_extents(section, np.array([0.0, 1.0]))
+    return float(np.min(below + above))
 
 
 def translated(obstacle: Obstacle, offset) -> Obstacle:
