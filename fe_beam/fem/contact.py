@@ -75,7 +75,8 @@ from fe_beam.model.obstacles import (
     translated,
 )
 
-__all__ = ["ContactSet", "active_set_density", "augmented_lagrangian_density",
+__all__ = ["EDGE_ANGLE", "ContactSet", "active_set_density", "augmented_lagrangian_density",
+           "box_edge_contact",
            "contact_point", "contact_pressure", "director", "coulomb_state",
            "coulomb_state_2d", "friction_return_map", "outward_normal", "plane_tangent_basis",
            "point_gap", "positive_part", "section_facing", "segment_gap", "slip_traction",
@@ -444,6 +445,49 @@ def coulomb_state_2d(trial, slip, pressure, mu, stick, direction, slack: float =
     return stuck, new_direction, traction
 
 
+#: the largest angle [degrees] between a pressed box face's normal and the rod's surface normal
+#: that `box_edge_contact` accepts near an edge or corner
+EDGE_ANGLE = 5.0
+
+
+def box_edge_contact(box: Box, r, tangent, below, above, d=None, spacing: float = 0.0):
+    """(flags, angles) per contact point (numpy): is the section at the centreline point r
+    (shape (n, dim)) in contact with an edge or corner of the box rather than a face? Planar
+    (d given, the section director): the section segment r + eta d, eta in [-below, above];
+    spatial (d None): the tube of radius ``below`` (= ``above``). The face whose plane gap is
+    the largest (the one `segment_gap` / `tube_gap` measures) is at an edge when another,
+    adjacent face's plane gap is within one section thickness (below + above) plus twice
+    the ``spacing`` of the contact points too (an edge may pass between two of them); such a
+    point is flagged when that face's normal n is more than `EDGE_ANGLE` off the rod's
+    surface normal, i.e. |n . t| > sin(EDGE_ANGLE) with t the rod's ``tangent`` (the section
+    normal). ``angles``: asin |n . t| [degrees]. A rod flat on a face near its edge, and a rod's
+    end corner on a face's interior, are face contacts (not flagged)."""
+    r = np.asarray(r, dtype=float)
+    below = np.broadcast_to(np.asarray(below, dtype=float), r.shape[:1])
+    above = np.broadcast_to(np.asarray(above, dtype=float), r.shape[:1])
+    faces = [(np.asarray(p, dtype=float), np.asarray(n, dtype=float)) for p, n in box.faces()]
+    gaps = []
+    for point, normal in faces:
+        plane = (r - point) @ normal
+        if d is None:
+            gaps.append(plane - below)
+        else:
+            dn = np.asarray(d, dtype=float) @ normal
+            gaps.append(plane + np.minimum(above * dn, -below * dn))
+    gaps = np.stack(gaps, axis=1)
+    chosen = np.argmax(gaps, axis=1)
+    normals = np.stack([n for _, n in faces])
+    selected = normals[chosen]
+    width = below + above + 2 * spacing
+    near = np.zeros(len(r), dtype=bool)
+    for f, (_, normal) in enumerate(faces):
+        adjacent = np.abs(selected @ normal) < 0.5  # neither the face itself nor its opposite
+        near |= adjacent & (gaps[:, f] > -width)
+    along = np.abs(np.sum(selected * np.asarray(tangent, dtype=float), axis=1))
+    angles = np.degrees(np.arcsin(np.clip(along, 0.0, 1.0)))
+    return near & (angles > EDGE_ANGLE), angles
+
+
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
@@ -707,7 +751,9 @@ class ContactSet:
         geometry = world
         columns = [x] + [r[c] for c in range(self.dim)]
         if self.spatial:
-            columns += [geometry["radius"]]
+            # the section normal d1 = R e1 (the centreline's tangent): `edge_contact`
+            tangent = ufl.dot(rotation(geometry["theta"]), ufl.as_vector([1.0, 0.0, 0.0]))
+            columns += [geometry["radius"]] + [tangent[c] for c in range(3)]
         else:
             columns += [geometry["d"][0], geometry["d"][1], geometry["below"],
                         geometry["above"]]
@@ -794,6 +840,12 @@ class ContactSet:
         # are forces), in the order of ``_dofs``
         lengths = np.ptp(compat.cell_vertex_x(problem.mesh)[: len(self._owned_cells)], axis=1)
         self._weights = (lengths[:, None] * self._reference_weights[None, :]).ravel()
+        # the largest distance between neighbouring contact points [m] (within an element
+        # and across its ends): a box edge can pass between two of them (`edge_contact`)
+        rule = np.sort(np.asarray(self.points, dtype=float).ravel())
+        steps = np.concatenate([np.diff(rule), [rule[0] + 1.0 - rule[-1]]])
+        self._spacing = float(np.max(lengths, initial=0.0)) * float(np.max(steps))
+        self._spacing = float(problem.comm.allreduce(self._spacing, op=MPI.MAX))
 
     def _densities(self, g, geometry) -> list:
         """Force and moment densities per unit traction on the coordinate g: dg/dr and
@@ -1073,6 +1125,7 @@ class ContactSet:
         local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
         if self.spatial:
             local["radius"] = values[:, 4]
+            local["tangent"] = values[:, 5:8]
         else:
             local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
         changes = int(comm.allreduce(changes, op=MPI.SUM))
@@ -1517,6 +1570,43 @@ class ContactSet:
                     return (f"contact: the load step moved the rod through obstacle "
                             f"{obstacle.name!r} (near x = {after['x'][j]:.4g} m)")
         return None
+
+    def edge_contact(self, state: dict) -> str | None:
+        """Why the converged contact state ``state`` cannot be accepted: a pressed contact
+        point of a box in the region of an edge or corner (`box_edge_contact`), where the
+        face-plane gap would push the rod along a face normal that is not the rod's surface
+        normal (a spurious axial force). None where every box contact is a face contact.
+        Collective (the ranks agree)."""
+        reasons = []
+        local = state["local"]
+        for i, obstacle in enumerate(self.placed()):
+            if not isinstance(obstacle, Box) or not len(local["x"]):
+                continue
+            pressed = state["pressure"][i] > 0
+            if not np.any(pressed):
+                continue
+            if self.spatial:
+                flags, angles = box_edge_contact(obstacle, local["r"], local["tangent"],
+                                                 local["radius"], local["radius"],
+                                                 spacing=self._spacing)
+            else:
+                d = local["d"]
+                tangent = np.stack([d[:, 1], -d[:, 0]], axis=1)
+                flags, angles = box_edge_contact(obstacle, local["r"], tangent,
+                                                 local["below"], local["above"], d,
+                                                 spacing=self._spacing)
+            flags &= pressed
+            if np.any(flags):
+                j = int(np.flatnonzero(flags)[np.argmax(angles[flags])])
+                reasons.append(
+                    f"contact: the rod presses on an edge or corner of box {obstacle.name!r}, "
+                    f"which the contact model cannot represent (the force would not be normal "
+                    f"to the rod): near x = {local['x'][j]:.4g} m the box face's normal is "
+                    f"{angles[j]:.3g} degrees off the rod's surface normal")
+                break
+        gathered = [r for r in self._problem.comm.allgather(reasons[0] if reasons else None)
+                    if r]
+        return gathered[0] if gathered else None
 
     def output_expressions(self, problem) -> dict:
         """Fields for the result files, per obstacle i (in the order of [[obstacles]]):

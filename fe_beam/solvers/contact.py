@@ -76,7 +76,7 @@ class ContactSolver:
         tolerance = contact.tolerance
         limit = contact.settings.max_updates
         forces_of = getattr(contact, "force_changes", None)
-        inaccurate = False
+        inaccurate, edge_reason = False, None
         try:
             self.hardest_solve = 0
             for update in range(limit + 1):
@@ -100,6 +100,12 @@ class ContactSolver:
                     accurate = bool(np.all(change <= contact.settings.force_tolerance
                                            * (forces + contact.force_scale)))
                 if geometric and accurate:
+                    # a converged contact on a box's edge or corner: its force would not be
+                    # normal to the rod (`ContactSet.edge_contact`): never accepted
+                    edge = getattr(contact, "edge_contact", None)
+                    edge_reason = edge(state) if edge is not None else None
+                    if edge_reason:
+                        break
                     self.linear_iterations = linear
                     return iterations
                 inaccurate = geometric
@@ -112,6 +118,8 @@ class ContactSolver:
             raise SolveFailed(f"{error} (contact: after {update} augmented-Lagrangian "
                               "updates)") from None
         contact.restore()
+        if edge_reason:
+            raise SolveFailed(edge_reason)
         if changes:
             raise SolveFailed(f"contact: the active set still changed at {changes} contact "
                               f"points after {limit} updates")
