@@ -384,3 +384,16 @@ def test_the_3d_solid_refuses_moving_obstacles():
     with pytest.raises(ConfigError, match=r"\[\[obstacles\]\] 'wall' velocity: moving "
                                           "obstacles are available for the rods"):
         parse_contact({"obstacles": [wall]}, None, solid=True)
+
+
+def test_spatial_dynamic_contact_draws_the_obstacles(tmp_path):
+    """A spatial rod's dynamics with obstacles draws its last state with the obstacles in
+    three views and 3D (deformed_shapes.png), besides the tip trajectory."""
+    config = free_rod(0.0, velocity=(1.0, 0.0, 0.0, 0.0, 0.0, 0.0), t_end=0.01, spatial=True)
+    config["output"] = {"xdmf": False, "plots": True}
+    path = tmp_path / "s.toml"
+    path.write_text(dump_toml(config))
+    out = tmp_path / "out"
+    assert main(["dynamic", str(path), "--out", str(out), "--quiet"]) == 0
+    for name in ("deformed_shapes.png", "dynamics.png", "obstacles.vtu"):
+        assert (out / name).stat().st_size > 1000, name

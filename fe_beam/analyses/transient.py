@@ -55,7 +55,7 @@ from fe_beam.exports.outputs import (
     atomic_write_text,
     draw_obstacles,
 )
-from fe_beam.exports.spatial import SpatialXDMFWriter
+from fe_beam.exports.spatial import SpatialXDMFWriter, plot_spatial_shapes
 from fe_beam.fem import compat
 from fe_beam.fem.contact import ContactSet
 from fe_beam.fem.rod import BeamProblem, StrainRange, StrainWatch
@@ -538,6 +538,11 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
         right.legend(fontsize=8)
         for axis in (left, right):
             axis.grid(alpha=0.3)
+    if contact is not None and contact.spatial and shapes:  # the last state in 3D, obstacles
+        t_last, last = shapes[-1]
+        plot_spatial_shapes([(f"t = {t_last:.4g} s", last)], out / "deformed_shapes.png",
+                            "last state and the obstacles", length,
+                            obstacles=contact.placed())
     if shapes and config.static.output.gif:
         _write_gif(out / "beam.gif", shapes, length)
 
