@@ -12,6 +12,7 @@ import pytest
 from mpi4py import MPI
 from tomlio import dump_toml
 
+import fe_beam
 from fe_beam.analytic import elastica_clamped_free
 from fe_beam.cli import main
 from fe_beam.config.schema import load_config
@@ -387,3 +388,18 @@ def test_limit_point_of_the_nonstandard_law_is_reported(tmp_path):
     assert beyond and not any(p["stable"] for p in beyond)
     assert all(p["stable"] for p in summary["path"] if p not in beyond)
     assert (out / "path.png").is_file()
+
+
+def test_a_path_ended_by_max_steps_below_max_load_factor_says_so():
+    """max_steps reached before max_load_factor: the status stays "converged" (a path study
+    ends where the user bounded it), and the message says where and how to go on."""
+    config = {"beam": {"length": 1.0}, "section": {"shape": "rectangle", "b": 0.01, "h": 0.01},
+              "material": {"E": 2e11, "nu": 0.3}, "mesh": {"elements": 4, "degree": 2},
+              "loads": {"tip_force": [0.0, -100.0]},
+              "path": {"arc_length": 0.05, "max_arc_length": 1.0, "max_steps": 3},
+              "output": {"xdmf": False, "plots": False}}
+    summary = fe_beam.run("path", config)
+    assert summary["status"] == "converged"
+    last = summary["path"][-1]["load_factor"]
+    assert last < 1.0
+    assert "max_steps = 3" in summary["message"] and f"{last:.6g}" in summary["message"]

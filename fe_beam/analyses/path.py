@@ -454,6 +454,13 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
             return summary
         result = follow_path(run, arc, settings.branch_switch, settings.tolerance, on_point)
         summary["status"], summary["message"] = result.status, result.message
+        last = summary["path"][-1]["load_factor"] if summary["path"] else 0.0
+        if (result.status == "converged" and not result.message
+                and abs(last) < settings.max_load_factor * (1 - 1e-9)):
+            summary["message"] = (f"the path ended after [path] max_steps = "
+                                  f"{settings.max_steps} points at load factor {last:.6g}, "
+                                  f"before max_load_factor = {settings.max_load_factor:g}: "
+                                  "raise max_steps or arc_length to go on")
         if result.status == "failed":
             summary["message"] = (f"path stopped at load factor {run.load_factor:.6g}: "
                                   f"{result.message}")
