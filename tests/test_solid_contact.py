@@ -182,6 +182,18 @@ def test_fe_beam_solid_refuses_bad_obstacles_with_exit_2(tmp_path, changes, frag
     assert fragment in stderr and "Traceback" not in stderr
 
 
+def test_a_small_ball_inside_the_solid_with_no_node_in_it_is_refused(tmp_path):
+    """A ball smaller than the elements, inside the block away from every node (the node
+    check alone let it through, then it pushed on nothing): exit 2, its centre in the body."""
+    config = json.loads(json.dumps(BLOCK))
+    size = BLOCK["solid"]["mesh_size"]
+    config["obstacles"] = [{"shape": "sphere", "name": "ball", "radius": 0.05 * size,
+                            "center": [0.5 * L + 0.13 * size, 0.11 * size, 0.07 * size]}]
+    code, _, stderr, _ = cli(tmp_path, config)
+    assert code == 2, stderr
+    assert "lies inside the undeformed solid" in stderr and "Traceback" not in stderr
+
+
 # --- the solid finger against the rod, both pressing on the same plane -------------------------
 def test_solid_finger_and_rod_press_on_the_same_roof_alike():
     """The tendon finger of tests/solid/test_solid_driver.py bends up into a roof y = 11 mm

@@ -230,6 +230,22 @@ class SolidContact:
                     f"{obstacle.where} the {obstacle.shape} intersects the undeformed solid "
                     f"(a node of the mesh is {-worst:.4g} m inside it); move it clear of the "
                     "body (0 <= x <= L, |y| <= h(x)/2, |z| <= b/2)")
+        # an obstacle smaller than the elements can sit inside the body with no node inside
+        # it: its centre (a cylinder's axis point, a box's centre) in a cell of the mesh
+        tree = compat.bounding_box_tree(self.mesh, self.mesh.topology.dim)
+        for obstacle in self.obstacles:
+            centre = getattr(obstacle, "center", None)
+            if centre is None and obstacle.shape == "cylinder":
+                centre = obstacle.point
+            if centre is None:  # a plane: its half-space holds a node when it cuts the body
+                continue
+            inside = int(np.any(compat.first_colliding_cells(self.mesh, tree,
+                                                             np.asarray(centre)) >= 0))
+            if self.comm.allreduce(inside) > 0:
+                raise ConfigError(
+                    f"{obstacle.where} the {obstacle.shape} lies inside the undeformed solid "
+                    f"(its centre {tuple(float(c) for c in centre)} is in the body); move it "
+                    "clear of the body (0 <= x <= L, |y| <= h(x)/2, |z| <= b/2)")
 
     def evaluate(self) -> dict:
         """Gaps, pressures and the largest penetration at the exterior-facet vertices (the
