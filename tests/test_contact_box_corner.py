@@ -68,8 +68,11 @@ def test_a_rod_pressed_onto_a_box_corner_stops_with_exit_3(tmp_path, spatial):
     code, summary = run(tmp_path, text)
     assert code == 3
     assert summary["status"] == "failed"
-    assert "edge or corner of box 'block'" in summary["message"]
-    assert "not be normal to the rod" in summary["message"]
+    # refused as an edge contact, or (where the corner sits between two contact points, the
+    # planar case) as an obstacle reaching into the rod between the contact points
+    message = summary["message"]
+    assert ("edge or corner of box 'block'" in message and "not be normal to the rod" in message
+            or "'block' reaches" in message and "between the contact points" in message), message
     # the last good state: before the rod reached the corner
     assert summary["steps"][-1]["load_factor"] < 1.0
     assert all(max(abs(f) for f in step["contact"][0]["force"]) == 0.0

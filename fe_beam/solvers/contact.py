@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from fe_beam.fem.contact import ContactSet
+from fe_beam.model.obstacles import MAX_PENALTY
 from fe_beam.solvers.newton import SolveFailed
 
 __all__ = ["ContactSolver"]
@@ -128,9 +129,11 @@ class ContactSolver:
                               f"still inconsistent at {sliding} contact points after {limit} "
                               "updates")
         if inaccurate:
+            hint = ("raise [contact] penalty" if contact.settings.penalty < MAX_PENALTY
+                    else "raise [contact] max_updates or force_tolerance")
             raise SolveFailed(f"contact: the contact force was still changing by more than "
                               f"{contact.settings.force_tolerance:.3g} of itself after {limit} "
-                              "augmented-Lagrangian updates (raise [contact] penalty)")
+                              f"augmented-Lagrangian updates ({hint})")
         if penetration > tolerance:
             raise SolveFailed(f"contact: penetration {penetration:.3g} m above the tolerance "
                               f"{tolerance:.3g} m after {limit} augmented-Lagrangian updates")
