@@ -21,6 +21,7 @@ import traceback
 from pathlib import Path
 
 from fe_beam import analyses, runctl
+from fe_beam.certify import strict_of
 from fe_beam.config.calibrate import check_data
 from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
 from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
@@ -365,6 +366,9 @@ def execute(args, validated, config: dict, comm, on_session=None, on_result=None
                      echo=echo if echo is not None else (
                          lambda stream, text: report_line(comm, stream, text)))
         runctl.check(comm, runctl.AFTER)
+        result = analysis("result").settle_checks(
+            result, strict_of(config), args.out, comm,
+            echo if echo is not None else (lambda stream, text: report_line(comm, stream, text)))
         if on_result is not None:
             on_result(result)
         return result.exit_code

@@ -110,6 +110,12 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "allow_large": Key((bool,), False, "run work beyond the up-front limits (steps, dofs, "
                            "memory; fe_beam.runctl)"),
     },
+    "checks": {
+        "strict": Key((bool,), True, "a failed run-time check (equilibrium, energy balance, "
+                      "confirmed critical point, penetration ...) stops the run with exit code 3 "
+                      "(true) or is reported as a warning in notes (false); summary.json's "
+                      "checks lists them either way"),
+    },
     "output": {
         "xdmf": Key((bool,), True, "write XDMF for ParaView"),
         "plots": Key((bool,), True, "write PNG plots"),

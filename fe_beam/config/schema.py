@@ -392,6 +392,8 @@ def check_values(config: dict) -> None:
                               f"numbers of magnitude {low:g} to {high:g} (SI units), or 0")
     _check_ranges(config)
     _check_pairs(config)
+    if "checks" in config:  # [checks] is read by the CLI for every command
+        table(config, "checks")
 
 
 # Lengths below this are beyond what the mesh generator and point location resolve (they work
