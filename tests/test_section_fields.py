@@ -159,3 +159,63 @@ def test_spatial_cantilever_fields_are_the_closed_forms(tmp_path, law, degree):
     assert np.allclose(EA * strain, S, rtol=1e-9, atol=0), stretch
     for name in ("v2", "v3", "twist", "curvature_y", "curvature_z"):
         assert np.max(np.abs(f[name])) < 1e-12
+
+
+def law_moment(law: str, f: dict) -> np.ndarray:
+    """The law's moment of the written strains (exact for Reissner, and for one Gauss point)."""
+    if law == "reissner":
+        return EI * f["kappa"]
+    return nonstandard_moment(f["eps"], f["gamma"], f["kappa"])
+
+
+def check_moments(steps: list, law: str, scale: float) -> None:
+    assert len(steps) >= 3
+    bent = 0
+    for f in steps:
+        assert set(SECTION) <= set(f)
+        assert np.max(np.abs(f["M"] - law_moment(law, f))) < 1e-10 * scale, f["M"]
+        bent += np.max(np.abs(f["M"])) > 1e-3 * scale
+    assert bent >= 2  # the moment is not trivially zero
+
+
+@pytest.mark.parametrize("law,degree", [("reissner", 2), ("nonstandard", 1)])
+def test_dynamic_fields_carry_the_moment_of_the_law(tmp_path, law, degree):
+    """A suddenly loaded cantilever, a few steps: M at every written step is the law's moment
+    of the written strains (was 1e6..1e18 off); the first step (at rest) is zero."""
+    P = 0.5 * EI / L**2
+    raw = config(law, degree, [0.0, -P])
+    raw["time"] = {"t_end": 4e-4, "dt": 1e-4, "output_every": 1}
+    summary = fe_beam.run("dynamic", raw, tmp_path / "dyn")
+    assert summary["status"] == "completed", summary["message"]
+    steps = read_steps(tmp_path / "dyn" / "beam.h5")
+    assert all(np.max(np.abs(steps[0][n])) == 0 for n in ("M", "T", "kappa"))
+    check_moments(steps, law, P * L)
+
+
+@pytest.mark.parametrize("law,degree", [("reissner", 2), ("nonstandard", 1)])
+def test_path_fields_carry_the_moment_of_the_law(tmp_path, law, degree):
+    """path.xdmf: at every path point the law's moment of the written strains."""
+    P = 1.0 * EI / L**2
+    raw = config(law, degree, [0.0, -P])
+    raw["path"] = {"arc_length": 0.3, "max_steps": 6}
+    summary = fe_beam.run("path", raw, tmp_path / "path")
+    assert summary["status"] == "converged", summary["message"]
+    steps = read_steps(tmp_path / "path" / "path.h5")
+    check_moments(steps, law, P * L)
+
+
+def test_mode_files_hold_shapes_only(tmp_path):
+    """buckling_modes.xdmf and modes.xdmf: the normalised shapes, no strains or forces."""
+    raw = config("reissner", 2, [-1e-3 * EI / L**2, 0.0])
+    raw["supports"] = {"x0": "clamped", "xL": "free"}
+    raw["buckling"] = {"count": 2}
+    summary = fe_beam.run("buckling", raw, tmp_path / "buckling")
+    assert summary["status"] in ("converged", "completed"), summary["message"]
+    raw = config("nonstandard", 2, [0.0, 0.0])
+    raw["modes"] = {"count": 2}
+    summary = fe_beam.run("modes", raw, tmp_path / "modes")
+    for path in (tmp_path / "buckling" / "buckling_modes.h5", tmp_path / "modes" / "modes.h5"):
+        steps = read_steps(path)
+        assert len(steps) == 2
+        assert {"u", "v", "theta", "displacement"} <= set(steps[0])
+        assert not set(SECTION) & set(steps[0]), sorted(steps[0])

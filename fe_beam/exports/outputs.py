@@ -416,11 +416,15 @@ class SectionFields:
         self._cells = np.arange(owned, dtype=np.int32)
         self._dofs = compat.cell_dofs(space)[:owned, 0]
         self._mesh = mesh
+        self.reference = np.asarray(reference, dtype=float).ravel()
+        #: the values at the Gauss points of the last update: (owned cells, points, names)
+        self.values = np.zeros((owned, len(self.weights), len(self.names)))
 
     def update(self, functions: list) -> None:
         """Put the recovered values into ``functions`` (DG0, in the order of the names)."""
         values = compat.evaluate_expression(self._compiled, self._mesh, self._cells)
         values = np.asarray(values).reshape(len(self._cells), len(self.weights), len(self.names))
+        self.values = values
         means = np.einsum("q,cqf->cf", self.weights, values)
         for i, function in enumerate(functions):
             function.x.array[self._dofs] = means[:, i]
@@ -478,6 +482,42 @@ class BeamXDMFWriter:
                 for section in self.section_names:
                     self.functions[section] = fem.Function(cellwise, name=section)
         self._file = XDMFSeries(mesh, path) if path is not None else None
+
+    def end_moment(self, x_end: float, tolerance: float) -> float | None:
+        """The moment at the rod's end ``x_end`` that the written fields M, T, eps imply
+        (collective; None without the planar section fields), for a certificate against the
+        support's reaction moment (`BeamProblem.end_reaction`, assembled from the residual).
+
+        The rotation row of the end's vertex is the discrete moment equilibrium of the element
+        at the end: with phi the degree-p Lagrange basis function of the end vertex and the
+        values at the energy's Gauss points (the ones the fields are the means of),
+
+            R_theta = sum_q w_q h (M_q phi'(x_q) - lambda_q T_q phi(x_q)),
+
+        since dW/dtheta = -(r' x F).e_z = -lambda T for every objective law (lambda = |r'| =
+        sqrt(1 + 2 eps), T = F.n). Equal to the reaction when no other load acts on the end
+        element's rotations (tendons, contact: the caller decides)."""
+        if self._sections is None or not {"M", "T", "eps"} <= set(self.section_names):
+            return None
+        sections = self._sections
+        x = compat.cell_vertex_x(self.problem.mesh)[: len(sections.values)]
+        local = 0.0
+        degree = len(sections.weights)
+        for cell in np.flatnonzero(np.min(np.abs(x - x_end), axis=1) <= tolerance):
+            a, b = x[cell]
+            nodes = a + (b - a) * np.linspace(0.0, 1.0, degree + 1)
+            end = int(np.argmin(np.abs(nodes - x_end)))
+            others = np.delete(nodes, end)
+            points = a + (b - a) * sections.reference
+            phi = np.prod([(points - o) / (nodes[end] - o) for o in others], axis=0)
+            dphi = sum(np.prod([(points - o) / (nodes[end] - o) for o in others if o != skip],
+                               axis=0) / (nodes[end] - skip) for skip in others)
+            values = sections.values[cell]
+            column = {n: values[:, i] for i, n in enumerate(sections.names)}
+            stretch = np.sqrt(1 + 2 * column["eps"])
+            local += abs(b - a) * float(np.sum(sections.weights * (
+                column["M"] * dphi - stretch * column["T"] * phi)))
+        return float(self.problem.comm.allreduce(local))
 
     @property
     def contact_names(self) -> tuple[list[str], list[str]]:
