@@ -219,3 +219,91 @@ def test_mode_files_hold_shapes_only(tmp_path):
         assert len(steps) == 2
         assert {"u", "v", "theta", "displacement"} <= set(steps[0])
         assert not set(SECTION) & set(steps[0]), sorted(steps[0])
+
+
+# --- the run-time certificate moment_field_<end> --------------------------------------------
+def clamped_both(law: str, degree: int) -> dict:
+    """Clamped at both ends, a point force and a distributed load: two reaction moments."""
+    raw = config(law, degree, [0.0, 0.0])
+    raw["supports"] = {"x0": "clamped", "xL": "clamped"}
+    P = 20 * EI / L**2
+    raw["loads"] = {"distributed": [0.1 * P / L, -P / L], "point_forces": [[0.4 * L, 0.0, P]],
+                    "steps": 2}
+    return raw
+
+
+@pytest.mark.parametrize("law,degree", [("reissner", 2), ("nonstandard", 1)])
+def test_moment_field_certificate_passes_at_both_clamps(tmp_path, law, degree):
+    summary = fe_beam.run("static", clamped_both(law, degree), tmp_path / "run")
+    assert summary["status"] == "converged", summary["message"]
+    checks = {c["name"]: c for c in summary["checks"]}
+    for end in ("x0", "xL"):
+        check = checks[f"moment_field_{end}"]
+        assert check["passed"] and check["value"] < 1e-12, check
+
+
+def test_moment_field_certificate_catches_a_wrong_moment(tmp_path, monkeypatch):
+    """The Gauss values of M 1 % off (as a wrong compile of the output expressions makes
+    them): the run is "failed" (strict) or converged with the failed check (lenient)."""
+    from fe_beam.exports import outputs
+
+    original = outputs.SectionFields.update
+
+    def wrong(self, functions):
+        original(self, functions)
+        self.values[..., self.names.index("M")] *= 1.01
+
+    monkeypatch.setattr(outputs.SectionFields, "update", wrong)
+    raw = clamped_both("reissner", 2)
+    summary = fe_beam.run("static", raw, tmp_path / "run")
+    assert summary["status"] == "failed", summary
+    assert "moment_field_x0" in summary["message"]
+    lenient = fe_beam.run("static", raw, tmp_path / "lenient", **{"checks.strict": False})
+    assert lenient["status"] == "converged" and lenient["checks_passed"] is False
+
+
+def test_moment_field_certificate_exit_code(tmp_path, monkeypatch):
+    """Through the CLI: the check broken on purpose (a 1e-6 error in the implied moment) is
+    exit code 3 and status "failed"; the check is left out for spatial rods (no moment)."""
+    import json
+
+    from tomlio import dump_toml
+
+    from fe_beam import cli
+    from fe_beam.exports.outputs import BeamXDMFWriter
+
+    original = BeamXDMFWriter.end_moment
+    monkeypatch.setattr(BeamXDMFWriter, "end_moment",
+                        lambda self, x, tol: original(self, x, tol) * (1 + 1e-6))
+    path = tmp_path / "case.toml"
+    path.write_text(dump_toml(clamped_both("nonstandard", 1)))
+    code = cli.main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert code == 3 and summary["status"] == "failed", summary["message"]
+    spatial = fe_beam.run("static", config("reissner", 1, [0.0, 0.0, -1.0], spatial=True))
+    assert not any(c["name"].startswith("moment_field") for c in spatial.get("checks", []))
+
+
+def test_compiled_expressions_keep_their_constants_in_place():
+    """A ``fem.Constant`` that differentiation removes (the stiffness of a term without the
+    variable) must not shift the others (dolfinx 0.5.2 with FFCx 0.5 did: item 5's root).
+    d/dk (a x + b c k^2 / 2) = b c k, for interpolation and for point evaluation."""
+    import ufl
+    from dolfinx import fem, mesh
+    from mpi4py import MPI
+
+    from fe_beam.fem import compat
+
+    msh = mesh.create_unit_interval(MPI.COMM_SELF, 3)
+    a, b, c = (fem.Constant(msh, value) for value in (2.0, 3.0, 5.0))
+    x = ufl.SpatialCoordinate(msh)[0]
+    k = ufl.variable(7.0 + 0 * x)
+    rate = ufl.diff(a * x + b * c * k**2 / 2 + a * b * x**2, k)  # a drops out
+    space = compat.function_space(msh, compat.element(msh, "DG", 0))
+    result = fem.Function(space)
+    result.interpolate(compat.interpolation_expression(rate, space))
+    assert np.allclose(result.x.array, 3.0 * 5.0 * 7.0, rtol=1e-14)
+    values = compat.evaluate_expression(compat.expression(ufl.as_vector([rate, rate * c]),
+                                                          np.array([[0.25], [0.5]])),
+                                        msh, np.arange(3, dtype=np.int32))
+    assert np.allclose(np.asarray(values).reshape(3, 2, 2), [105.0, 525.0], rtol=1e-14)
