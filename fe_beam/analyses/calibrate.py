@@ -365,7 +365,8 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "identifiability": identifiability,
             "checks": checks,
             "wall_time_s": time.perf_counter() - started,
-            "notes": start_notes + certificate_notes + bound_notes + ([] if errors is not None or len(free) == 0 else [
+            "notes": start_notes + certificate_notes + bound_notes + ([] if (
+                errors is not None or len(free) == 0) else [
                 "no standard errors: as many data as parameters, or parameters the data cannot "
                 "tell apart (J^T J singular)"]) + ([
                 f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]
@@ -384,10 +385,11 @@ BEST_TOLERANCE = 1e-6
 #: the returned point's residuals continued from the accepted point and solved from the
 #: reference state agree to this (relative to their norm, at least 1e-3 of the data's)
 BRANCH_TOLERANCE = 1e-6
-#: largest condition number of J^T J in relative parameters (dp/p) of an identifiable fit: a
-#: relative change of the data of 1e-5 (below any measurement's noise) moves the weakest
-#: combination of the parameters by O(1) beyond it
-IDENTIFIABLE_TOLERANCE = 1e10
+#: largest condition number of J^T J in relative parameters (dp/p) of an identifiable fit:
+#: beyond it a relative error of the data of 1e-4 (below a good measurement's) can move the
+#: weakest combination of the parameters by O(1) (e.g. E and h of a slender rod whose data
+#: fix only E h^3: 6.5e9; E and a tendon's offset of a soft finger: 2e4)
+IDENTIFIABLE_TOLERANCE = 1e8
 
 
 def _certified_fit(residuals: _Residuals, q0: np.ndarray, size: int, bounds,
@@ -451,10 +453,15 @@ def _identifiability(jac_p: np.ndarray, scale: np.ndarray, names: list) -> dict 
         # p1^u1 p2^u2 with u orthogonal to the weakest direction (in ln p) is what they fix
         u = np.array([direction[1], -direction[0]])
         u = u / u[np.argmax(np.abs(u))]
-        sentence += (f": only {names[0]}^{u[0]:.3g} * {names[1]}^{u[1]:.3g} is determined "
-                     f"(changing {names[0]} by {direction[0]:+.3g} and {names[1]} by "
-                     f"{direction[1]:+.3g} times a small relative amount leaves every "
-                     "residual unchanged)")
+        if np.min(np.abs(u)) < 1e-3:
+            kept = int(np.argmax(np.abs(u)))
+            sentence += (f": only {names[kept]} is determined (the data barely depend on "
+                         f"{names[1 - kept]})")
+        else:
+            sentence += (f": only {names[0]}^{u[0]:.3g} * {names[1]}^{u[1]:.3g} is "
+                         f"determined (changing {names[0]} by {direction[0]:+.3g} and "
+                         f"{names[1]} by {direction[1]:+.3g} times a small relative amount "
+                         "leaves every residual unchanged)")
     elif len(names) == 1:
         sentence = f"the data barely depend on {names[0]}"
     return {"condition_number": condition if math.isfinite(condition) else None,
