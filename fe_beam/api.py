@@ -30,6 +30,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fe_beam import cli, runctl
+from fe_beam.config.finger import override_defaults
 from fe_beam.config.registry import REGISTRY
 from fe_beam.config.schema import apply_overrides, load_config
 from fe_beam.errors import ConfigError
@@ -101,9 +102,12 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
     """
     if isinstance(config, Mapping):
         raw = copy.deepcopy(dict(config))
-    else:
+    elif isinstance(config, (str, os.PathLike)):
         raw = load_config(config)
-    raw = apply_overrides(raw, _overrides(keys))
+    else:
+        raise ConfigError(f"fe_beam.run: config must be a TOML file's path or a dict of tables "
+                          f"as the TOML would parse; got {type(config).__name__}")
+    raw = apply_overrides(raw, _overrides(keys), override_defaults(command, raw))
     if command == "calibrate" and data is None:
         raise ConfigError("fe_beam.run('calibrate', ...) needs data= (the measurements CSV, the "
                           "CLI's --data)")

@@ -649,8 +649,9 @@ def test_returned_point_is_never_worse_than_an_evaluated_one(finger_model, monke
     """An optimiser that ends at a point worse than one it evaluated (the issue's fit ended at
     residual 1.29 after scoring 0.0437): the best evaluated point is returned, re-solved from
     the reference state, with a note; the checks pass."""
-    import fe_beam.analyses.calibrate as module
     from scipy.optimize import OptimizeResult
+
+    import fe_beam.analyses.calibrate as module
 
     clean = synthetic(finger_model, TRUTH, TENSIONS)
     good = TRUTH * [1.02, 0.99]
