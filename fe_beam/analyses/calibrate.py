@@ -1,7 +1,16 @@
 """``fe-beam calibrate``: fit rod or finger parameters to measured tip poses and backbone points
 by Gauss-Newton / Levenberg-Marquardt (scipy.optimize.least_squares, trust-region reflective)
 with the exact adjoint Jacobian of `fe_beam.analyses.sensitivity.RodSensitivity`; each new parameter
-set is solved from the last equilibrium at each load level (continuation).
+set is solved from the equilibria of the accepted point (the best evaluated so far) at each load
+level, never from the last trial's (a far trial leaves states from which Newton can land on a
+kinked, non-physical branch), and the returned point is re-solved from the reference state.
+
+Run-time checks (summary ``checks``, `_certified_fit`, `_identifiability`):
+``calibrate_best_evaluated`` (the returned point is the best evaluated one),
+``calibrate_reference_path`` (its residuals continued from earlier trials equal a fresh load
+stepping's) and ``calibrate_identifiable`` (the condition number of J^T J in relative parameters
+below `IDENTIFIABLE_TOLERANCE`; beyond it summary ``identifiability`` names the combination the
+data determine).
 
 Configuration::
 
