@@ -219,7 +219,7 @@ def test_command_writes_summary_and_plot(tmp_path, finger_model):
     checks = {c["name"]: c for c in summary["checks"]}
     assert set(checks) == {"calibrate_best_evaluated", "calibrate_reference_path",
                            "calibrate_identifiable"}
-    assert all(c["passed"] for c in checks.values())
+    assert all(c["passed"] for c in checks.values()) and summary["checks_passed"] is True
     assert 1 < checks["calibrate_identifiable"]["value"] < 1e6
 
 
