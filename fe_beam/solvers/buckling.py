@@ -174,8 +174,12 @@ def geometric_stiffness(problem: LinearisedProblem, w1: fem.Function, jacobian) 
     return G
 
 
-def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
-    """The ``count`` smallest buckling load factors above the current one, and their modes."""
+def buckling_modes(problem: LinearisedProblem, count: int, verify: bool = True) -> Buckling:
+    """The ``count`` smallest buckling load factors above the current one, and their modes.
+    ``verify``: keep only the positive factors that are crossings of the inertia of
+    K_T + lambda K_geo (conservative loads); False keeps the pencil's eigenvalues as they are
+    (about a nearly critical state the inertia cannot resolve a factor mu ~ 1e-5 x p: the
+    estimates that `confirm_on_path` checks on the path itself)."""
     from slepc4py import SLEPc
 
     if count < 1:
@@ -207,7 +211,7 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         extra *= 2
     positive.sort(key=lambda pair: pair[0])
     negative = sorted((mu for mu, _ in pairs if mu < 0), key=abs)
-    if problem.conservative:
+    if problem.conservative and verify:
         try:
             positive = _verified_positive(SLEPc, K, G, B, positive, pairs, count, fixed,
                                           problem, notes)
@@ -218,7 +222,7 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         for matrix in (K, G, B):
             matrix.destroy()
     chosen = positive[:count]
-    if len(chosen) < count and not problem.conservative:
+    if len(chosen) < count and not (problem.conservative and verify):
         notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
                      "factor(s) found (the loads may not compress the structure enough)")
     p = problem.load_factor
@@ -454,14 +458,14 @@ def _rod_linearised(run) -> LinearisedProblem:
 
 
 def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
-                 progress: bool = False) -> Buckling:
+                 progress: bool = False, verify: bool = True) -> Buckling:
     """Buckling of the rod of ``run`` (a `fe_beam.analyses.static.StaticContinuation`): the state is
     first loaded to ``prestress`` (load stepping; `LoadSteppingFailed` if it is not reached)."""
     if prestress != run.load_factor:
         run.advance(prestress, stepping or run.config.stepping, progress=progress,
                     label="buckling pre-state")
     run._set_load_factor(float(run.load_factor))
-    return buckling_modes(_rod_linearised(run), count)
+    return buckling_modes(_rod_linearised(run), count, verify)
 
 
 # --- the 3D solid -------------------------------------------------------------------------------
@@ -512,7 +516,7 @@ BRACKET_MARGIN = 0.02
 #: ... and at least this multiple of the distance from the prestress already walked (an
 #: estimate that keeps running ahead of the path, as about a bent cantilever, is overtaken)
 WALK_GROWTH = 2.0
-MAX_PATH_TRIALS = 60
+MAX_PATH_TRIALS = 80
 #: the default largest load factor checked: max(1, SEARCH_MULTIPLE x the count-th linearised
 #: factor about the prestress, SEARCH_MULTIPLE_FIRST x the first)
 SEARCH_MULTIPLE = 2.0
@@ -615,7 +619,7 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
     def estimate(wanted: int = 1) -> Buckling | None:
         """The linearised factors above the current state (the first ``wanted``)."""
         try:
-            result = rod_buckling(run, max(1, wanted), float(run.load_factor))
+            result = rod_buckling(run, max(1, wanted), float(run.load_factor), verify=False)
         except BucklingFailed:
             return None
         return result if result.load_factors else None
@@ -658,10 +662,12 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
             break
         # 2. narrow the bracket: probes about the estimate linearised at its stable end
         back_to(lo_state)
-        linear = estimate()
-        stale = False
+        linear = estimate(2)
+        stale, slow = False, 0
         while hi - lo > tolerance * abs(hi) and trials < MAX_PATH_TRIALS and failure is None:
-            guess = linear.load_factors[0] if linear is not None else math.nan
+            width = hi - lo
+            guess = min((f for f in (linear.load_factors if linear is not None else [])
+                         if lo < f < hi), default=math.nan)
             if stale or not lo < guess < hi:
                 points = [0.5 * (lo + hi)]
             else:
@@ -688,9 +694,12 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
                     break  # the estimate about the new stable end is better
             back_to(lo_state)
             if failure is None:
-                stale = not moved
+                # estimates that do not halve the bracket twice in a row give way to a
+                # bisection (the bracket then shrinks at least geometrically)
+                slow = slow + 1 if hi - lo > 0.5 * width else 0
+                stale = not moved or slow >= 2
                 if moved:
-                    linear = estimate()
+                    linear = estimate(2)
         if failure is not None:
             break
         if hi - lo > tolerance * abs(hi):
