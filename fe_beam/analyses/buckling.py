@@ -89,7 +89,8 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         prestate_tip = problem.end_values("xL")
         checks, extra = [], {}
         if _confirmable(run):
-            result, checks, extra = _confirmed(run, linear, settings, static, progress)
+            result, checks, extra = _confirmed(run, linear, settings, static.stepping,
+                                               progress)
         else:
             result = linear
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
@@ -141,14 +142,13 @@ def _confirmable(run) -> bool:
                 or not getattr(run.problem, "conservative", True))
 
 
-def _confirmed(run, linear: Buckling, settings, static, progress):
+def _confirmed(run, linear: Buckling, settings, stepping, progress):
     """The linearised factors about the prestress checked on the nonlinear path
     (`fe_beam.solvers.buckling.confirm_on_path`): the Buckling of the confirmed critical
     factors only, the checks, and the summary's extra keys (docs/notes/commands/buckling.md)."""
     limit = (settings.max_load_factor if settings.max_load_factor is not None
              else default_search_limit(linear, settings.count))
-    path = confirm_on_path(run, linear, settings.count, limit, static.stepping,
-                           progress=progress)
+    path = confirm_on_path(run, linear, settings.count, limit, stepping, progress=progress)
     factors, shapes, checks, points = [], [], [], []
     for point in path.confirmed:
         lo, hi = point.bracket
@@ -229,8 +229,20 @@ def _run_solid(config, settings, out, comm, progress) -> dict:
     except LoadSteppingFailed as failure:
         return _failed(failure, settings.prestress, run.dofs, started,
                        {"load_factor": float(run.load_factor)}, out, comm)
+    checks, extra = [], {}
+    try:
+        result, checks, extra = _confirmed(run, result, settings, config.stepping, progress)
+    except LoadSteppingFailed as failure:  # the path's start could not be restored
+        return _failed(failure, settings.prestress, run.dofs, started,
+                       {"load_factor": float(run.load_factor)}, out, comm)
     critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
     summary = _summary(result, settings, run.dofs, started, critical)
+    message = extra.pop("message", None)
+    summary.update(extra)
+    if message:
+        summary["message"] = message
+    if checks:
+        summary["checks"] = checks
     summary["notes"] = work_notes + summary["notes"]
     summary["model"] = "solid"
     if out is not None:

@@ -42,7 +42,7 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_max, global_sum
 from fe_beam.model.loads import scaled
-from fe_beam.solvers.inertia import inertia, rod_unstable_count
+from fe_beam.solvers.inertia import inertia, rod_unstable_count, solid_unstable_count
 from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, LoadStepping, LoadSteppingFailed
 
 __all__ = ["Buckling", "LinearisedProblem", "PathCheck", "PathCritical", "buckling_modes",
@@ -470,7 +470,7 @@ def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
 
 # --- the 3D solid -------------------------------------------------------------------------------
 def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
-                   progress: bool = False) -> Buckling:
+                   progress: bool = False, verify: bool = True) -> Buckling:
     """Buckling of the 3D solid of ``run`` (a `fe_beam.analyses.solid.SolidRun`, tip force only:
     its cables' contributions are outside the UFL residual) about the state at ``prestress``."""
     if prestress > run.load_factor:
@@ -492,7 +492,7 @@ def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
         set_load_factor=problem.set_load_factor, set_prescribed_factor=lambda value: None,
         load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
         saddle_point=problem.p is not None)
-    return buckling_modes(lin, count)
+    return buckling_modes(lin, count, verify)
 
 
 # --- the command ------------------------------------------------------------------------------
@@ -598,33 +598,31 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
     probe = LoadStepping(steps=1, min_increment=1e-4, max_increment=1.0,
                          cut_factor=stepping.cut_factor, grow_factor=stepping.grow_factor,
                          easy_iterations=stepping.easy_iterations, adaptive=True)
-    engine = run.engine()
-    engine.parameter = float(run.load_factor)
-    start = float(run.load_factor)
+    path = _SolidPath(run) if not hasattr(run, "engine") else _RodPath(run)
+    start = path.load_factor
     trials = 0
 
     def state():
-        return engine.snapshot()
+        return path.snapshot()
 
     def back_to(snapshot) -> None:
-        engine.restore(snapshot)
-        run.load_factor = snapshot.parameter
+        path.restore(snapshot)
 
     def reach(target: float, how) -> int:
         nonlocal trials
         trials += 1
-        run.advance(target, how, progress=progress, label="path check")
-        return rod_unstable_count(run)
+        path.advance(target, how, progress)
+        return path.unstable()
 
     def estimate(wanted: int = 1) -> Buckling | None:
         """The linearised factors above the current state (the first ``wanted``)."""
         try:
-            result = rod_buckling(run, max(1, wanted), float(run.load_factor), verify=False)
+            result = path.estimate(max(1, wanted))
         except BucklingFailed:
             return None
         return result if result.load_factors else None
 
-    lo, n_lo, lo_state = start, rod_unstable_count(run), state()
+    lo, n_lo, lo_state = start, path.unstable(), state()
     result = PathCheck([], start, limit, n_lo, n_lo)
     linear = first if first.load_factors else None
     failure = None
@@ -644,7 +642,7 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
             except LoadSteppingFailed as stopped:
                 failure = (f"the path could not be followed from load factor {lo:.8g} to "
                            f"{target:.8g} ({stopped}); last converged load factor "
-                           f"{float(run.load_factor):.8g}")
+                           f"{path.load_factor:.8g}")
                 back_to(lo_state)
                 break
             if n > n_lo:
@@ -727,3 +725,55 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
     result.failure = failure
     result.trials = trials
     return result
+
+
+class _RodPath:
+    """`confirm_on_path` on a `fe_beam.solvers.rod_static.StaticContinuation`."""
+
+    def __init__(self, run):
+        self.run = run
+        self.engine = run.engine()
+        self.engine.parameter = float(run.load_factor)
+
+    @property
+    def load_factor(self) -> float:
+        return float(self.run.load_factor)
+
+    def snapshot(self):
+        return self.engine.snapshot()
+
+    def restore(self, snapshot) -> None:
+        self.engine.restore(snapshot)
+        self.run.load_factor = snapshot.parameter
+
+    def advance(self, target: float, stepping, progress: bool) -> None:
+        self.run.advance(target, stepping, progress=progress, label="path check")
+
+    def unstable(self) -> int:
+        return rod_unstable_count(self.run)
+
+    def estimate(self, count: int) -> Buckling:
+        return rod_buckling(self.run, count, self.load_factor, verify=False)
+
+
+class _SolidPath(_RodPath):
+    """`confirm_on_path` on a `fe_beam.analyses.solid.SolidRun` (tip force only)."""
+
+    def __init__(self, run):
+        self.run = run
+        self.engine = run.problem.engine()
+        self.engine.parameter = float(run.load_factor)
+
+    def restore(self, snapshot) -> None:
+        self.engine.restore(snapshot)
+        self.run.load_factor = snapshot.parameter
+        self.run.problem.set_load_factor(snapshot.parameter)
+
+    def unstable(self) -> int:
+        count = solid_unstable_count(self.run.problem)
+        if count is None:
+            raise BucklingFailed("the solid's stability is not available (a tensioned cable)")
+        return count
+
+    def estimate(self, count: int) -> Buckling:
+        return solid_buckling(self.run, count, self.load_factor, verify=False)
