@@ -324,8 +324,12 @@ SOLID_COLUMN = {"beam": {"length": 0.2}, "section": {"shape": "rectangle", "b": 
 def solid_factor(comm=MPI.COMM_WORLD) -> float:
     from fe_beam.analyses.buckling import run_buckling
 
-    return run_buckling(json.loads(json.dumps(SOLID_COLUMN)), None, comm,
-                        progress=False)["load_factors"][0]
+    summary = run_buckling(json.loads(json.dumps(SOLID_COLUMN)), None, comm, progress=False)
+    # issue 28: confirmed on the 3D path, a double root (the square section's two planes)
+    [point] = summary["critical_points"]
+    assert (point["unstable_below"], point["unstable_above"]) == (0, 2)
+    assert all(check["passed"] for check in summary["checks"])
+    return summary["load_factors"][0]
 
 
 def rod_factor(law: str) -> float:

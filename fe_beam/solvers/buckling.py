@@ -511,11 +511,14 @@ def load_scale_record(model, factor: float) -> dict:
 #: a confirmed critical factor's bracket on the path: stable at lo, one more energy-decreasing
 #: direction at hi, (hi - lo) <= CONFIRM_TOLERANCE * hi
 CONFIRM_TOLERANCE = 1e-4
-#: the search for a crossing probes the path this far above the linearised estimate ...
-BRACKET_MARGIN = 0.02
+#: the search for a crossing walks toward the linearised estimate about the last state: this
+#: fraction of the way while it is farther than APPROACH_GAP (relative) ...
+APPROACH, APPROACH_GAP = 0.8, 0.1
+#: ... then past it by this fraction of the gap (at least 1e-3 relative) ...
+BRACKET_MARGIN = 0.5
 #: ... and at least this multiple of the distance from the prestress already walked (an
 #: estimate that keeps running ahead of the path, as about a bent cantilever, is overtaken)
-WALK_GROWTH = 2.0
+WALK_GROWTH = 0.5
 MAX_PATH_TRIALS = 80
 #: the default largest load factor checked: max(1, SEARCH_MULTIPLE x the count-th linearised
 #: factor about the prestress, SEARCH_MULTIPLE_FIRST x the first)
@@ -577,10 +580,11 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
     `fe_beam.solvers.rod_static.StaticContinuation` at the state ``first`` was linearised
     about, conservative loads), up to ``count`` of them below ``limit``.
 
-    From the prestress state, the path is followed by load stepping to just above the
-    linearised estimate about the last state reached (BRACKET_MARGIN; at least WALK_GROWTH
-    times farther than the distance walked), and the energy-decreasing directions of the
-    tangent are counted there (the sparse inertia, `fe_beam.solvers.inertia`). A state with
+    From the prestress state, the path is followed by load stepping toward the linearised
+    estimate about the last state reached (APPROACH of the way while it is far, then just past
+    it: BRACKET_MARGIN; at least WALK_GROWTH times the distance already walked), and the
+    energy-decreasing directions of the tangent are counted there (the sparse inertia,
+    `fe_beam.solvers.inertia`; the 3D solid's: a `fe_beam.analyses.solid.SolidRun`). A state with
     more of them than the last one brackets a critical point; the bracket is narrowed by probes
     on either side of the estimate linearised about its stable end (quadratic convergence) or,
     when that estimate leaves the bracket, by bisection, to ``tolerance`` (relative). The
@@ -614,25 +618,39 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
         path.advance(target, how, progress)
         return path.unstable()
 
-    def estimate(wanted: int = 1) -> Buckling | None:
-        """The linearised factors above the current state (the first ``wanted``)."""
+    cache: dict[float, Buckling | None] = {}
+
+    def estimate(wanted: int = 2) -> Buckling | None:
+        """The linearised factors above the current state (at least the first ``wanted``;
+        one solve per state)."""
+        here = path.load_factor
+        known = cache.get(here, False)
+        if known is not False and (known is None or len(known.load_factors) >= wanted):
+            return known
         try:
-            result = path.estimate(max(1, wanted))
+            found = path.estimate(max(2, wanted))
         except BucklingFailed:
-            return None
-        return result if result.load_factors else None
+            found = None
+        cache[here] = found if found is not None and found.load_factors else None
+        return cache[here]
 
     lo, n_lo, lo_state = start, path.unstable(), state()
     result = PathCheck([], start, limit, n_lo, n_lo)
     linear = first if first.load_factors else None
+    if first.prestress == start:
+        cache[start] = linear
     failure = None
     while len(result.confirmed) < count and failure is None:
         # 1. bracket: walk up the path until the count of energy-decreasing directions grows
         hi = None
         while trials < MAX_PATH_TRIALS:
             guess = linear.load_factors[0] if linear is not None else math.inf
-            target = max(guess * (1 + BRACKET_MARGIN),
-                         lo + WALK_GROWTH * max(lo - start, 0.0),
+            gap = guess - lo
+            if gap > APPROACH_GAP * abs(guess):  # far: toward the estimate, stopping short
+                target = lo + APPROACH * gap
+            else:  # near: just past it (its error is quadratic in the gap)
+                target = guess + max(BRACKET_MARGIN * gap, 1e-3 * abs(guess))
+            target = max(target, lo + WALK_GROWTH * max(lo - start, 0.0),
                          lo + 1e-3 * max(abs(lo), abs(limit)))
             target = min(target, limit)
             if not target > lo:
@@ -721,7 +739,8 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
         lo, n_lo, lo_state = hi, n_hi, hi_state
         result.checked_to, result.unstable_at_end = lo, n_lo
         start = lo
-        linear = estimate()
+        if len(result.confirmed) < count:
+            linear = estimate()
     result.failure = failure
     result.trials = trials
     return result
