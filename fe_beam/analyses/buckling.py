@@ -184,6 +184,13 @@ def _confirmed(run, linear: Buckling, settings, stepping, progress):
             remedy="follow the path with fe-beam path (a limit point is passed by arc length), "
                    "or lower [buckling] count or max_load_factor"))
     elif len(factors) < settings.count:
+        if path.left_branch is not None:
+            lo, x, before, after = path.left_branch
+            notes.append(f"the path search stopped: between load factors {lo:.6g} and {x:.6g} "
+                         f"the energy-decreasing directions went from {before} to {after} (the "
+                         "load stepping left the branch, e.g. onto the buckled one of a slightly "
+                         "imperfect structure): critical factors above are not confirmed; "
+                         "fe-beam path follows the branches")
         gained = path.unstable_at_end - path.unstable_at_start - sum(
             p.multiplicity for p in path.confirmed)
         checks.append(certify.entry(

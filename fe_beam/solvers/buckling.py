@@ -561,6 +561,9 @@ class PathCheck:
     unstable_at_end: int
     failure: str | None = None
     trials: int = 0
+    #: (lo, x, count at lo, count at x < it): the search stopped where the path lost an
+    #: energy-decreasing direction (it left the branch), None otherwise
+    left_branch: tuple | None = None
 
 
 def default_search_limit(first: Buckling, count: int) -> float:
@@ -666,13 +669,18 @@ def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=Non
             if n > n_lo:
                 hi, n_hi, hi_state = target, n, state()
                 break
+            if n < n_lo:  # restabilised: the load stepping left the branch (an imperfect or
+                # a jumped path); what lies above is not the continuation of this branch
+                result.left_branch = (lo, target, n_lo, n)
+                back_to(lo_state)
+                break
             lo, n_lo, lo_state = target, n, state()
             result.checked_to, result.unstable_at_end = lo, n_lo
             if lo >= limit:
                 break
             linear = estimate()
         if hi is None:
-            if trials >= MAX_PATH_TRIALS and failure is None:
+            if trials >= MAX_PATH_TRIALS and failure is None and result.left_branch is None:
                 failure = (f"no crossing bracketed in {MAX_PATH_TRIALS} path trials (the "
                            f"path was followed to load factor {lo:.8g})")
             break
