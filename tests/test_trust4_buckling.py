@@ -240,3 +240,16 @@ def test_lenient_run_keeps_the_failure_visible(tmp_path, monkeypatch):
     assert code == 0 and summary["status"] == "completed"
     assert summary["checks_passed"] is False
     assert any("critical_point_confirmed" in note for note in summary["notes"])
+
+
+@pytest.mark.mpi
+def test_confirmed_factors_on_two_ranks_equal_serial():
+    """The path's counts (sparse inertia) and the estimate about the bracket's stable end give
+    the same confirmed factors on the ranks of COMM_WORLD as on one rank; likewise no buckling."""
+    raw = column(count=2)
+    together = driver.run_buckling(copy.deepcopy(raw), None, MPI.COMM_WORLD, progress=False)
+    alone = driver.run_buckling(copy.deepcopy(raw), None, MPI.COMM_SELF, progress=False)
+    assert len(together["load_factors"]) == 2
+    assert together["load_factors"] == pytest.approx(alone["load_factors"], rel=1e-8)
+    bent = driver.run_buckling(strip(), None, MPI.COMM_WORLD, progress=False)
+    assert bent["load_factors"] == [] and "no buckling" in bent["message"]
