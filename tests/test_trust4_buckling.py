@@ -154,7 +154,7 @@ def test_lateral_torsional_buckling_does_not_depend_on_the_reference_load():
         # the linearised estimate about the unloaded state is far off (it used to be reported)
         assert summary["linearised_load_factors"][0] * force < 0.8 * closed
     values = list(critical.values())
-    assert max(values) - min(values) <= 1e-6 * closed, critical
+    assert max(values) - min(values) <= 1e-4 * closed, critical  # the bracket width
 
 
 # --- Euler columns, confirmed -------------------------------------------------------------------

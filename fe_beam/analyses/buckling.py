@@ -211,15 +211,15 @@ def _confirmed(run, linear: Buckling, settings, stepping, progress):
             notes.append(f"[buckling] count = {settings.count}: only {len(factors)} critical "
                          f"factor(s) confirmed on the path up to load factor "
                          f"{path.checked_to:.6g} ([buckling] max_load_factor)")
-    unconfirmed = [f for f in linear.load_factors
-                   if f < path.checked_to and not any(abs(f - c) <= 1e-3 * abs(c)
-                                                      for c in factors)]
-    if unconfirmed:
+    below = [f for f in linear.load_factors if f < path.checked_to]
+    if len(below) > len(factors):
         notes.append(
-            "the linearised estimate(s) " + ", ".join(f"{f:.6g}" for f in unconfirmed)
-            + f" about the state at load factor {linear.prestress:g} are not critical points "
-            "of the nonlinear path (its stability does not change there) and are not reported "
-            "as buckling loads (linearised_load_factors)")
+            f"the nonlinear path confirms {len(factors)} critical point(s) up to load factor "
+            f"{path.checked_to:.6g}, where the problem linearised about the state at load "
+            f"factor {linear.prestress:g} has {len(below)} factor(s) ("
+            + ", ".join(f"{f:.6g}" for f in below) + "): the others are not critical points "
+            "of the path (its stability does not change there) and are not reported as "
+            "buckling loads (linearised_load_factors)")
     result = Buckling(factors, shapes, linear.prestress, linear.negative, notes)
     return result, checks, extra
 
