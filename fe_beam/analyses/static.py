@@ -9,6 +9,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry, stability_entry
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
@@ -104,6 +105,7 @@ def solve_static(
     record_shapes: bool = True,
     stability: bool | None = None,
     extra_exports: list | None = None,
+    certify_equilibrium: bool = True,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
@@ -121,6 +123,8 @@ def solve_static(
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
     it is written with status "interrupted" and the exception is re-raised. ``extra_exports``: more
     `fe_beam.exports.Export` objects fed with the step records (e.g. the finger's sweep table).
+    ``certify_equilibrium``: a converged run's summary gets the ``checks`` "global_equilibrium"
+    (`fe_beam.analyses.certificates`) and, where the stability was checked, "stability".
 
     The problem and solver come from `fe_beam.solvers.realtime.acquire`: a second solve of the same
     kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
@@ -182,6 +186,13 @@ def solve_static(
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        if certify_equilibrium and result.steps:
+            checks = extra.setdefault("checks", [])
+            checks.append(equilibrium_entry(problem, config.solver.rtol,
+                                            result.steps[-1].get("contact")))
+            stable = stability_entry(checked)
+            if stable is not None:
+                checks.append(stable)
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:
