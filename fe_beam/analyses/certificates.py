@@ -23,15 +23,18 @@ def equilibrium_tolerance(rtol: float) -> float:
     return max(EQUILIBRIUM_FLOOR, RTOL_FACTOR * float(rtol))
 
 
-def equilibrium_entry(problem, rtol: float, contact_entries=None, label: str = "") -> dict:
+def equilibrium_entry(problem, rtol: float, contact_entries=None, label: str = "",
+                      tensions=()) -> dict:
     """The global equilibrium of ``problem``'s current state as a check (collective): the
     supports' reactions, the applied loads on the deformed shape and the contact forces sum to
     zero, forces and moments, relative to the largest force (moments: largest moment or
-    force x length). ``value`` is the larger of the force imbalance and the moment imbalance
+    force x length; ``tensions``: the tendons' tensions, self-equilibrated on the rod, count
+    in the force scale). ``value`` is the larger of the force imbalance and the moment imbalance
     beyond a spatial rod's interpolation allowance
     (`fe_beam.fem.equilibrium.spatial_moment_allowance`, 0 in the plane)."""
     terms = rod_wrenches(problem, contact_entries)
-    result = balance(terms, problem.model.length)
+    internal = float(sum(abs(t) for t in tensions)) if len(tensions) else 0.0
+    result = balance(terms, problem.model.length, internal)
     allowance = spatial_moment_allowance(problem)
     value = max(result["force"], result["moment"] - allowance)
     where = f" {label}" if label else ""

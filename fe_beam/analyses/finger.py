@@ -218,11 +218,11 @@ def run_finger(
         try:
             inverse = solve_inverse(config, target, comm, sweep=result.steps)
         except runctl.Interrupted as stop:
-            result.extra = extra | stop.stopped(
+            result.extra = result.extra | stop.stopped(
                 "the inverse solve (the sweep is complete)", "during the inverse solve")
             after.finish(result.summary())
             raise
-    result.extra = extra | ({"inverse": inverse} if inverse else {})
+    result.extra = result.extra | ({"inverse": inverse} if inverse else {})
     after.finish(result.summary())
     return result, inverse
 

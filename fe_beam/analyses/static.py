@@ -189,7 +189,8 @@ def solve_static(
         if certify_equilibrium and result.steps:
             checks = extra.setdefault("checks", [])
             checks.append(equilibrium_entry(problem, config.solver.rtol,
-                                            result.steps[-1].get("contact")))
+                                            result.steps[-1].get("contact"),
+                                            tensions=result.steps[-1].get("tensions", ())))
             stable = stability_entry(checked)
             if stable is not None:
                 checks.append(stable)
