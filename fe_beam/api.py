@@ -30,14 +30,12 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fe_beam import cli, runctl
-from fe_beam.config.registry import REGISTRY
 from fe_beam.config.schema import apply_overrides, load_config
 from fe_beam.errors import ConfigError
 
 __all__ = ["SUMMARY_FILES", "run"]
 
-#: the file that holds a command's summary (summary.json unless named here)
-SUMMARY_FILES = {"refine": "refinement.json"}
+SUMMARY_FILES = runctl.SUMMARY_FILES  # the file that holds a command's summary
 #: commands whose study lives in its folder (resumable points): out=None runs them in a
 #: private temporary folder, removed afterwards
 NEEDS_A_FOLDER = ("validity",)
@@ -136,8 +134,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         try:
             with deferred:  # SIGINT/SIGTERM stop at a step boundary (runctl.Interrupted)
                 if folder is None:  # nothing written: the driver alone
-                    results.append(cli.driver(REGISTRY[command])(
-                        validated, None, world, progress=progress, echo=echo))
+                    results.append(cli.run_driver(command, validated, raw, None, world,
+                                                  progress=progress, echo=echo))
                 else:
                     cli.execute(args, validated, raw, world, on_result=results.append,
                                 echo=echo)

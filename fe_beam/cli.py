@@ -351,6 +351,14 @@ def prepare(args, config: dict, comm, notes: list[str]):
     return validated
 
 
+def run_driver(command: str, validated, config: dict, out, comm, progress: bool, echo):
+    """The command's driver on a validated configuration, then the verdict on its run-time
+    checks (`fe_beam.analyses.result.settle_checks`, ``[checks] strict`` of ``config``): the
+    one way the CLI and `fe_beam.run` run a driver. Returns its `Result`."""
+    result = driver(REGISTRY[command])(validated, out, comm, progress=progress, echo=echo)
+    return analysis("result").settle_checks(result, strict_of(config), out, comm, echo)
+
+
 def execute(args, validated, config: dict, comm, on_session=None, on_result=None,
             echo=None) -> int:
     """Run the command's driver (`fe_beam.analyses.result`: ``run(validated, out, comm,
@@ -361,14 +369,11 @@ def execute(args, validated, config: dict, comm, on_session=None, on_result=None
         if on_session is not None:
             on_session(session)
         runctl.check(comm, runctl.BEFORE)
-        run = driver(REGISTRY[args.command])
-        result = run(validated, args.out, comm, progress=not args.quiet,
-                     echo=echo if echo is not None else (
-                         lambda stream, text: report_line(comm, stream, text)))
+        result = run_driver(args.command, validated, config, args.out, comm,
+                            progress=not args.quiet,
+                            echo=echo if echo is not None else (
+                                lambda stream, text: report_line(comm, stream, text)))
         runctl.check(comm, runctl.AFTER)
-        result = analysis("result").settle_checks(
-            result, strict_of(config), args.out, comm,
-            echo if echo is not None else (lambda stream, text: report_line(comm, stream, text)))
         if on_result is not None:
             on_result(result)
         return result.exit_code
