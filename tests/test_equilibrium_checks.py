@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from mpi4py import MPI
+from mpilaunch import mpirun_command
 
 import fe_beam
 from fe_beam.analyses import certificates, transient
@@ -143,7 +144,7 @@ def test_contact_forces_enter_the_balance(monkeypatch):
     config = copy.deepcopy(FINGER)
     config["loads"] = {"steps": 6}
     config["tendons"][0]["tension"] = 3.0
-    config["obstacles"] = [{"shape": "plane", "name": "ceiling", "point": [0.0, 0.03],
+    config["obstacles"] = [{"shape": "plane", "name": "ceiling", "point": [0.0, 0.018],
                             "normal": [0.0, -1.0]}]
     summary = fe_beam.run("finger", config, None)
     assert summary["status"] == "converged"
@@ -163,7 +164,7 @@ def test_path_records_the_balance_of_its_last_point():
     config["path"] = {"max_load_factor": 1.0, "arc_length": 0.3, "max_steps": 3}
     summary = fe_beam.run("path", config, None)
     (check,) = checks(summary)
-    assert check["passed"] and check["value"] < 1e-9
+    assert check["passed"] and check["value"] < 1e-7  # the arc-length corrector's tolerance
 
 
 MODES = {**copy.deepcopy(BASE), "modes": {"count": 5, "prestress": True}}
@@ -181,7 +182,11 @@ def test_modes_are_certified(kinematics, x0):
     assert summary["status"] == "completed"
     by_name = {c["name"]: c for c in summary["checks"]}
     assert by_name["eigenpair_residual"]["value"] < 1e-9
-    assert by_name["mode_orthogonality"]["value"] < 1e-8
+    # a symmetric pencil (no follower, no spatial tip moment): M-orthogonal modes
+    symmetric = not (kinematics == "spatial" and config["loads"].get("tip_moment"))
+    assert ("mode_orthogonality" in by_name) == symmetric
+    if symmetric:
+        assert by_name["mode_orthogonality"]["value"] < 1e-8
     assert all(c["passed"] for c in summary["checks"])
     assert ("global_equilibrium" in by_name) == (x0 == "clamped")
 
@@ -217,3 +222,26 @@ def test_two_ranks_balance_like_one():
         assert world.name == alone.name
         np.testing.assert_allclose(world.force, alone.force, rtol=1e-9, atol=1e-12)
         np.testing.assert_allclose(world.moment, alone.moment, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+                    reason="needs mpirun (and a serial pytest)")
+def test_two_rank_job_reports_the_serial_imbalance(tmp_path):
+    """``mpirun -n 2 fe-beam static`` of a spatial rod whose Newton is stopped early (a visible
+    imbalance): the same global_equilibrium value as one rank, and both exit 3."""
+    from test_mpi_errors import fe_beam as fe_beam_job
+    from tomlio import dump_toml
+
+    config = spatial(case("gravity"))
+    config["solver"] = {"petsc_options": {"snes_rtol": 1e-2, "snes_stol": 1e-2}}
+    config["loads"]["steps"] = 1
+    (tmp_path / "one").mkdir()
+    path = tmp_path / "one" / "c.toml"
+    path.write_text(dump_toml(config))
+    assert main(["static", str(path), "--out", str(tmp_path / "one" / "out"), "--quiet"]) == 3
+    alone = checks(json.loads((tmp_path / "one" / "out" / "summary.json").read_text()))[0]
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"))
+    assert process.returncode == 3, process.stderr
+    together = checks(json.loads((tmp_path / "two" / "summary.json").read_text()))[0]
+    assert not alone["passed"] and not together["passed"]
+    assert together["value"] == pytest.approx(alone["value"], rel=1e-6)
