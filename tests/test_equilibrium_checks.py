@@ -134,7 +134,30 @@ FINGER = {"beam": {"length": 0.09}, "section": {"shape": "rectangle", "b": 0.018
 
 
 def test_finger_with_a_tendon_balances():
-    summary = fe_beam.run("finger", FINGER, None)
+    """The sweep's last state and the inverse solve's answer (the tendon's tension sets the
+    force scale: a tendon alone loads the rod with no net force)."""
+    config = copy.deepcopy(FINGER)
+    config["inverse"] = {"tip_angle": 0.2}
+    summary = fe_beam.run("finger", config, None)
+    assert summary["status"] == "converged" and "inverse" in summary
+    sweep, answer = checks(summary)
+    assert "inverse" in answer["detail"]
+    for check in (sweep, answer):
+        assert check["passed"] and check["value"] < 1e-9
+
+
+@pytest.mark.parametrize("kinematics", ["planar", "spatial"])
+def test_prescribed_end_motions_balance_through_their_reactions(kinematics):
+    """Both ends held, the end x = L moved and turned: two reactions and gravity (spatial: the
+    turned end's rotation rows converted to moments by T^-T)."""
+    config = copy.deepcopy(BASE)
+    config["loads"] = {"end_displacement": [-0.02, 0.05], "end_rotation": 0.4,
+                       "gravity": [0.0, -9.81], "steps": 3}
+    if kinematics == "spatial":
+        config = spatial(config)
+        config["loads"] |= {"end_displacement": [-0.02, 0.05, 0.03],
+                            "end_rotation": [0.3, 0.1, 0.4]}
+    summary = fe_beam.run("static", config, None)
     assert summary["status"] == "converged"
     (check,) = checks(summary)
     assert check["passed"] and check["value"] < 1e-9
