@@ -17,8 +17,8 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
-from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.analyses.certificates import equilibrium_entry
+from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.analyses.static import StaticResult, contact_line, solve_static
 from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     DEFAULT_FINGER,
