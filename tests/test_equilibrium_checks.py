@@ -268,3 +268,16 @@ def test_two_rank_job_reports_the_serial_imbalance(tmp_path):
     together = checks(json.loads((tmp_path / "two" / "summary.json").read_text()))[0]
     assert not alone["passed"] and not together["passed"]
     assert together["value"] == pytest.approx(alone["value"], rel=1e-6)
+
+
+def test_a_couple_alone_is_measured_against_its_own_scale():
+    """A tip moment alone: the reactions' forces are round-off, the force scale is M / L."""
+    config = copy.deepcopy(BASE)
+    config["loads"] = {"tip_moment": 5.0, "steps": 2}
+    summary = fe_beam.run("static", config, None)
+    (check,) = checks(summary)
+    assert check["passed"] and check["value"] < 1e-9
+    terms = [equilibrium.Wrench("couple", np.zeros(3), np.array([0.0, 0.0, 2.0])),
+             equilibrium.Wrench("reaction", np.array([1e-15, 0.0, 0.0]),
+                                np.array([0.0, 0.0, -2.0]))]
+    assert equilibrium.balance(terms, 0.5)["force"] == pytest.approx(1e-15 / 4.0)

@@ -64,14 +64,18 @@ def moment_of(position, force) -> np.ndarray:
 
 def balance(wrenches: list[Wrench], length: float, internal: float = 0.0) -> dict:
     """The imbalance of a set of wrenches: ``force`` = |sum F| / F_ref, ``moment`` = |sum M| /
-    M_ref with F_ref the largest force of a term (the loads and the reactions) or ``internal``
-    (the largest self-equilibrated force, e.g. the tendon tensions, when larger) and M_ref the
+    M_ref with F_ref the largest force of a term (the loads and the reactions), ``internal``
+    (the largest self-equilibrated force, e.g. the tendon tensions) or the largest moment over
+    ``length`` (a couple alone), whichever is largest, and M_ref the
     largest of the terms' moments and F_ref * length; ``imbalance`` the larger of both (0 when
     nothing is loaded). Plain numpy."""
     forces = np.array([w.force for w in wrenches]) if wrenches else np.zeros((1, 3))
     moments = np.array([w.moment for w in wrenches]) if wrenches else np.zeros((1, 3))
-    f_ref = max(float(np.max(np.linalg.norm(forces, axis=1))), abs(float(internal)))
-    m_ref = max(float(np.max(np.linalg.norm(moments, axis=1))), f_ref * float(length))
+    largest_moment = float(np.max(np.linalg.norm(moments, axis=1)))
+    # a couple alone (a tip moment) leaves only round-off forces: its moment / length scales them
+    f_ref = max(float(np.max(np.linalg.norm(forces, axis=1))), abs(float(internal)),
+                largest_moment / float(length))
+    m_ref = max(largest_moment, f_ref * float(length))
     total_f, total_m = forces.sum(axis=0), moments.sum(axis=0)
     force = float(np.linalg.norm(total_f)) / f_ref if f_ref > 0 else 0.0
     moment = float(np.linalg.norm(total_m)) / m_ref if m_ref > 0 else 0.0
