@@ -4,6 +4,8 @@ for a summary's ``checks``."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from fe_beam import certify
 from fe_beam.fem.equilibrium import balance, rod_wrenches, spatial_moment_allowance
 
@@ -24,24 +26,37 @@ def equilibrium_tolerance(rtol: float) -> float:
 
 
 def equilibrium_entry(problem, rtol: float, contact_entries=None, label: str = "",
-                      tensions=()) -> dict:
+                      tensions=(), contact_tolerance: float = 0.0) -> dict:
     """The global equilibrium of ``problem``'s current state as a check (collective): the
     supports' reactions, the applied loads on the deformed shape and the contact forces sum to
     zero, forces and moments, relative to the largest force (moments: largest moment or
     force x length; ``tensions``: the tendons' tensions, self-equilibrated on the rod, count
     in the force scale). ``value`` is the larger of the force imbalance and the moment imbalance
     beyond a spatial rod's interpolation allowance
-    (`fe_beam.fem.equilibrium.spatial_moment_allowance`, 0 in the plane)."""
+    (`fe_beam.fem.equilibrium.spatial_moment_allowance`, 0 in the plane) and beyond the
+    accuracy of the contact forces: the contact iterations stop when an update would change
+    them by less than ``contact_tolerance`` (`[contact] force_tolerance`) of themselves, so
+    that share of the contact forces and moments is allowed."""
     terms = rod_wrenches(problem, contact_entries)
     internal = float(sum(abs(t) for t in tensions)) if len(tensions) else 0.0
     result = balance(terms, problem.model.length, internal)
     allowance = spatial_moment_allowance(problem)
-    value = max(result["force"], result["moment"] - allowance)
+    contact = [term for term in terms if term.name.startswith("contact")]
+    contact_force = contact_moment = 0.0
+    if contact and contact_tolerance > 0 and result["force_scale"] > 0:
+        contact_force = contact_tolerance * sum(
+            float(np.linalg.norm(term.force)) for term in contact) / result["force_scale"]
+        contact_moment = contact_tolerance * sum(
+            float(np.linalg.norm(term.moment)) for term in contact) / result["moment_scale"]
+    value = max(result["force"] - contact_force, result["moment"] - allowance - contact_moment,
+                0.0)
     where = f" {label}" if label else ""
     detail = (f"|sum of forces| / largest force = {result['force']:.3g}, |sum of moments about "
               f"the origin| / largest moment = {result['moment']:.3g}"
               + (f" (less {allowance:.3g}, the rotation-vector interpolation's allowance)"
                  if allowance else "")
+              + (f"; the contact forces' accuracy ([contact] force_tolerance) allows "
+                 f"{contact_force:.3g} and {contact_moment:.3g}" if contact_force else "")
               + f"{where}: reactions, applied loads"
               + (", contact forces" if contact_entries else "")
               + " on the deformed shape (tendons are internal)")

@@ -118,7 +118,8 @@ def solve_inverse(
         check = equilibrium_entry(
             run.problem, config.solver.rtol,
             run.contact.summary() if run.contact is not None else None,
-            "at the inverse solve's answer", tensions=final["tensions"])
+            "at the inverse solve's answer", tensions=final["tensions"],
+            contact_tolerance=config.contact.force_tolerance if config.obstacles else 0.0)
     finally:
         realtime.release(run)
     answer = {

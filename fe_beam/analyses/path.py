@@ -470,7 +470,8 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
             tensions = run.tendons.tension_values() if run.tendons else ()
             summary.setdefault("checks", []).append(equilibrium_entry(
                 problem, static.solver.rtol, contact, "at the last path point",
-                tensions=tensions))
+                tensions=tensions, contact_tolerance=static.contact.force_tolerance
+                if static.obstacles else 0.0))
     except runctl.Interrupted as stop:
         _interrupted(summary, stop)
         raise

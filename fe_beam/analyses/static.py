@@ -190,7 +190,9 @@ def solve_static(
             checks = extra.setdefault("checks", [])
             checks.append(equilibrium_entry(problem, config.solver.rtol,
                                             result.steps[-1].get("contact"),
-                                            tensions=result.steps[-1].get("tensions", ())))
+                                            tensions=result.steps[-1].get("tensions", ()),
+                                            contact_tolerance=config.contact.force_tolerance
+                                            if config.obstacles else 0.0))
             stable = stability_entry(checked)
             if stable is not None:
                 checks.append(stable)
