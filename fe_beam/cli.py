@@ -23,6 +23,7 @@ from pathlib import Path
 from fe_beam import analyses, runctl
 from fe_beam.certify import strict_of
 from fe_beam.config.calibrate import check_data
+from fe_beam.config.finger import override_defaults
 from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
 from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
 from fe_beam.errors import ConfigError
@@ -342,7 +343,8 @@ def prepare(args, config: dict, comm, notes: list[str]):
     check_partition(config, comm.size, args.command)
     refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
               "quantities": getattr(args, "quantity", None),
-              "data": getattr(args, "data", None), "config_path": str(args.config)}
+              "data": getattr(args, "data", None), "config_path": str(args.config),
+              "overrides": list(getattr(args, "set", None) or [])}
     if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
         refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
     validated = validate(args.command, config, refine)
@@ -390,7 +392,8 @@ def _main(argv: list[str] | None = None) -> int:
 
     def work() -> int:
         _check_output_folder(args.out, comm)
-        config = apply_overrides(load_config(args.config), args.set)
+        raw = load_config(args.config)
+        config = apply_overrides(raw, args.set, override_defaults(args.command, raw))
         validated = prepare(args, config, comm, notes)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()

@@ -120,10 +120,11 @@ def failed(command: str, out, comm, message: str, report: Report) -> Result:
 def settle_checks(result: Result, strict: bool, out, comm, echo=None) -> Result:
     """The run-time certificates of a finished run (`fe_beam.certify.settle`): a failed check
     of a run that claims success makes it status "failed" with exit code 3 (``strict``) or a
-    warning; the summary file in ``out`` is rewritten when the verdict changed it. Collective
-    (every rank holds the same summary)."""
+    warning; the summary file in ``out`` is rewritten whenever the run made checks (with
+    ``checks_passed``, as the returned summary has it). Collective (every rank holds the same
+    summary)."""
     data, lines = certify.settle(result.data, strict)
-    if not lines:
+    if not data.get("checks"):
         return result
     report = Report(echo)
     for text in lines:

@@ -461,7 +461,8 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
     r = np.column_stack([x, np.zeros_like(x)] + ([np.zeros_like(x)] if obstacle.dim == 3
                                                   else []))
     if obstacle.dim == 3:  # the spatial rod's contact tube
-        gap = distance(obstacle, r) - section_circumradius(section, x / length)
+        radius = section_circumradius(section, x / length)
+        gap = distance(obstacle, r) - radius
     else:
         d = np.zeros_like(r)
         d[:, 1] = 1.0
@@ -469,7 +470,18 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
         gap = segment_distance(obstacle, r, d, below, above)
     worst = int(np.argmin(gap))
     if not gap[worst] > 0:
+        # the section's extent the check used, at the station that touches
+        def at(value) -> float:
+            return float(np.broadcast_to(np.asarray(value, dtype=float), x.shape)[worst])
+
+        extent = (f"the section taken as a tube of radius {at(radius):.4g} m (its "
+                  "circumradius) about the centreline" if obstacle.dim == 3 else
+                  f"the section reaching from y = {-at(below):.4g} to {at(above):.4g} m")
+        depth = -float(gap[worst])
+        where = (f"it touches the rod's surface at x = {x[worst]:.4g} m" if depth <= 0 else
+                 f"the rod's surface is {depth:.4g} m inside the obstacle at x = {x[worst]:.4g} m")
+        verb = "touches" if depth <= 0 else "intersects"
         raise ConfigError(
-            f"{obstacle.where} the {obstacle.shape} intersects the undeformed rod (its surface "
-            f"is {-gap[worst]:.4g} m inside the obstacle at x = {x[worst]:.4g} m); move it "
-            "clear of the rod (the rod starts straight along x with its section centred on y = 0)")
+            f"{obstacle.where} the {obstacle.shape} {verb} the undeformed rod ({where}; "
+            f"{extent}); move it clear of the rod (the rod starts straight along x with its "
+            "section centred on y = 0)")
