@@ -9,6 +9,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from fe_beam import certify, exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry, stability_entry
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
@@ -59,6 +60,7 @@ class StaticResult:
         without ``extra``, the driver's own (``self.extra``)."""
         extra = dict(self.extra if extra is None else extra)
         notes = list(extra.pop("notes", []))
+        checks = list(self.checks) + list(extra.pop("checks", []))
         data = {
             "status": self.status,
             "message": self.message,
@@ -69,8 +71,8 @@ class StaticResult:
         }
         if self.strain_range is not None:
             data["strain_range"] = self.strain_range
-        if self.checks:
-            data["checks"] = list(self.checks)
+        if checks:
+            data["checks"] = checks
         return data | (extra or {})
 
 
@@ -147,6 +149,7 @@ def solve_static(
     record_shapes: bool = True,
     stability: bool | None = None,
     extra_exports: list | None = None,
+    certify_equilibrium: bool = True,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
@@ -164,6 +167,8 @@ def solve_static(
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
     it is written with status "interrupted" and the exception is re-raised. ``extra_exports``: more
     `fe_beam.exports.Export` objects fed with the step records (e.g. the finger's sweep table).
+    ``certify_equilibrium``: a converged run's summary gets the ``checks`` "global_equilibrium"
+    (`fe_beam.analyses.certificates`) and, where the stability was checked, "stability".
 
     The problem and solver come from `fe_beam.solvers.realtime.acquire`: a second solve of the same
     kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
@@ -226,6 +231,16 @@ def solve_static(
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        if certify_equilibrium and result.steps:
+            checks = result.checks
+            checks.append(equilibrium_entry(problem, config.solver.rtol,
+                                            result.steps[-1].get("contact"),
+                                            tensions=result.steps[-1].get("tensions", ()),
+                                            contact_tolerance=config.contact.force_tolerance
+                                            if config.obstacles else 0.0))
+            stable = stability_entry(checked)
+            if stable is not None:
+                checks.append(stable)
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:
