@@ -447,6 +447,80 @@ class SolidFingerProblem:
             "normal_angle": float(math.atan2(n[1], n[0])),
         }
 
+    def _displacement_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned displacement nodes (n, 3) local dof indices of W, their reference
+        coordinates (n, 3)), built once."""
+        if getattr(self, "_u_nodes", None) is None:
+            owned = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
+            if self.p is None:
+                n = self.W.dofmap.index_map.size_local
+                nodes = np.arange(3 * n).reshape(-1, 3)
+                coordinates = self.W.tabulate_dof_coordinates()[:n]
+            else:  # V0's dofs come in nodes of 3 components (`UPFieldSplit`)
+                V0, u_map = compat.sub_space_collapsed(self.W, 0)
+                nodes = np.asarray(u_map, dtype=np.int64).reshape(-1, 3)
+                coordinates = V0.tabulate_dof_coordinates()[: len(nodes)]
+                keep = np.all(nodes < owned, axis=1)
+                nodes, coordinates = nodes[keep], coordinates[keep]
+            self._u_nodes, self._u_X = nodes, np.asarray(coordinates, dtype=float)[:, :3]
+        return self._u_nodes, self._u_X
+
+    def equilibrium(self) -> dict:
+        """Global equilibrium of the current state (collective): the support reaction at the
+        clamped face, read off the rows of the assembled residual (no boundary conditions, the
+        cables' contributions included) that the clamp fixes, against the external loads
+        computed apart: the dead tip force lambda * tip_force with its moment (Xc + u_tip) x F
+        (a uniform traction), and each obstacle's contact force and moment (its traction
+        integrated over the surface, `SolidContact.summary`, `SolidContact.moments`). The
+        tendons are internal (a cable's energy tau l is invariant under rigid motions: its
+        forces on the body sum to zero, force and moment), so the reaction balances the
+        external loads only.
+
+        Returns {"reaction_force", "reaction_moment" (about the origin, deformed positions),
+        "force_imbalance", "moment_imbalance" (|sum|), "scale" (the largest load: the tip
+        force, a contact force, a tendon tension, the reaction [N]), "value"
+        (max(|force sum|, |moment sum| / L) / scale; 0 when nothing is loaded)}."""
+        x = compat.vector_of(self.w)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        b = compat.create_vector(self.problem.residual_form)
+        with b.localForm() as local:
+            local.set(0.0)
+        compat.assemble_vector(b, self.problem.residual_form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        for term in self.problem.contributions:
+            term.add_to_residual(x, b)
+        b.assemble()
+        residual = b.getArray(readonly=True).copy()
+        state = x.getArray(readonly=True)
+        b.destroy()
+        nodes, X = self._displacement_nodes()
+        clamped = np.zeros(len(residual), dtype=bool)
+        clamped[compat.owned_bc_dofs(self.bcs)] = True
+        on_clamp = clamped[nodes[:, 0]]
+        reaction = residual[nodes[on_clamp]]  # R = f_int - f_ext: the support's force there
+        positions = X[on_clamp] + state[nodes[on_clamp]]
+        force = global_sum(self.comm, reaction.sum(axis=0))
+        moment = global_sum(self.comm, np.cross(positions, reaction).sum(axis=0))
+        applied = self.load_factor * self.tip_force
+        centre = self.tip_centroid + self.tip_displacement()
+        total_force = force + applied
+        total_moment = moment + np.cross(centre, applied)
+        loads = [float(np.linalg.norm(applied)), float(np.linalg.norm(force)),
+                 *(abs(t) for t in self.tensions())]
+        if self.contact is not None:
+            forces = [np.asarray(e["force"]) for e in self.contact.summary()]
+            for f, m in zip(forces, self.contact.moments(), strict=True):
+                total_force = total_force + f
+                total_moment = total_moment + m
+                loads.append(float(np.linalg.norm(f)))
+        scale = max(loads)
+        length = self.finger.geometry.length
+        imbalance = (float(np.linalg.norm(total_force)), float(np.linalg.norm(total_moment)))
+        value = max(imbalance[0], imbalance[1] / length) / scale if scale > 0 else 0.0
+        return {"reaction_force": force.tolist(), "reaction_moment": moment.tolist(),
+                "force_imbalance": imbalance[0], "moment_imbalance": imbalance[1],
+                "scale": scale, "value": value}
+
     def backbone(self, xs: Sequence[float] | None = None, n_gauss: int = 4) -> dict:
         """Deformed area centroids of the reference sections X = xs (default 21 stations).
 
