@@ -234,15 +234,39 @@ class SolidFingerProblem:
 
     def _cables(self) -> None:
         length = self.finger.geometry.length
-        face = self._tip_face_vertices() if self.anchor == "face" else None
+        face = self._tip_face_nodes() if self.anchor == "face" else None
         self.cables = []
         for chain, tendon in zip(self.finger.tendon_chains, self.finger.geometry.tendons,
                                  strict=True):
             patch = None
             if face is not None and abs(chain[-1][0] - length) <= 1e-9 * length:
-                patch = (face[0], plate_weights(face[0], face[1], chain[-1]))
+                patch = (face[0], consistent_plate_weights(face[0], face[1], chain[-1]))
             self.cables.append(TendonCable(self.V, chain, 0.0, name=tendon.name,
                                            anchor_patch=patch))
+
+    def _tip_face_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the displacement space's nodes on the tip face (m, 3), their load moments (m, 3):
+        int_tip phi_j (1, Y, Z) dA, phi_j the node's scalar shape function), on every rank:
+        the consistent nodal loads of a traction linear in (Y, Z) (`consistent_plate_weights`).
+        """
+        S = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange",
+                                                             self.discretization.degree))
+        v = ufl.TestFunction(S)
+        X = ufl.SpatialCoordinate(self.mesh)
+        one = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+        fdim = self.mesh.topology.dim - 1
+        dofs = fem.locate_dofs_topological(S, fdim, self.finger.facet_tags.find(TIP_TAG))
+        dofs = dofs[dofs < S.dofmap.index_map.size_local]
+        columns = []
+        for density in (one, X[1], X[2]):
+            vector = compat.assemble_vector(fem.form(density * v * self.ds(TIP_TAG)))
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            columns.append(vector.getArray(readonly=True)[dofs].copy())
+            vector.destroy()
+        points = S.tabulate_dof_coordinates()[dofs][:, :3]
+        moments = np.column_stack(columns)
+        return (np.concatenate(self.comm.allgather(points)),
+                np.concatenate(self.comm.allgather(moments)))
 
     def _tip_face_vertices(self) -> tuple[np.ndarray, np.ndarray]:
         """(vertices (m, 3), lumped areas (m,)) of the whole tip face, on every rank."""
@@ -604,6 +628,25 @@ def plate_weights(vertices: np.ndarray, lumped: np.ndarray, anchor: np.ndarray) 
     system = moments @ (base[:, None] * moments.T)
     multipliers = np.linalg.solve(system, target - moments @ base)
     return base * (1.0 + moments.T @ multipliers)
+
+
+def consistent_plate_weights(points: np.ndarray, moments: np.ndarray,
+                             anchor: np.ndarray) -> np.ndarray:
+    """Weights w_j of the face nodes ``points`` (m, 3) for an anchor plate at ``anchor``: the
+    consistent nodal loads w_j = int_tip phi_j t dA of the traction t = a + b Y + c Z (per
+    unit force) with resultant 1 and moment arm the anchor's (y, z), i.e. sum w_j = 1 and
+    sum w_j (y_j, z_j) = (y_a, z_a) (exact: Y and Z lie in the nodal space). ``moments`` holds
+    int_tip phi_j (1, Y, Z) dA (`SolidFingerProblem._tip_face_nodes`).
+
+    Unlike `plate_weights` (the same traction lumped to the P1 vertices, which for P2 elements
+    is a set of point forces at the vertices: local singularities of the discrete solution
+    right on the tip face, so that the face's best-fit rotation converged erratically under
+    refinement), this is the traction itself as the finite element sees it."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    moments = np.asarray(moments, dtype=float).reshape(-1, 3)
+    arms = np.vstack([np.ones(len(points)), points[:, 1], points[:, 2]])  # (3, m)
+    coefficients = np.linalg.solve(arms @ moments, np.array([1.0, anchor[1], anchor[2]]))
+    return moments @ coefficients
 
 
 TENDON_TUBE = 0.1  # radius of the tube around a tendon left out of the bulk, / section height
