@@ -51,7 +51,8 @@ def _import_gmsh() -> None:
 
 _import_gmsh()
 
-__all__ = ["run", "SolidRun", "check_solid_work", "equilibrium_check", "rotation_vector", "run_solid"]
+__all__ = ["run", "SolidRun", "check_solid_work", "equilibrium_check", "rotation_vector",
+           "run_solid"]
 
 # --- the 3D run ---------------------------------------------------------------------------------
 

@@ -323,7 +323,8 @@ def parse_validity(raw: dict) -> ValidityConfig:
                 raise ConfigError(f"[validity] the point {where}: {error}") from None
             points.append(GridPoint(i, j, float(xv), None if yv is None else float(yv), point,
                                     parsed, config_hash(point | {"__map__": {
-                                        "second_mesh_ratio": ratio, "order": order, "mesh_check": 1}})))
+                                        "second_mesh_ratio": ratio, "order": order,
+                                        "mesh_check": 1}})))
     return ValidityConfig(given["x"], x_values, y, y_values, tuple(laws),
                           None if ratio is None else float(ratio), float(order), tuple(points),
                           workers, metric)
