@@ -502,8 +502,9 @@ class SolidFingerProblem:
 
         Returns {"reaction_force", "reaction_moment" (about the origin, deformed positions),
         "force_imbalance", "moment_imbalance" (|sum|), "scale" (the largest load: the tip
-        force, a contact force, a tendon tension, the reaction [N]), "value"
-        (max(|force sum|, |moment sum| / L) / scale; 0 when nothing is loaded)}."""
+        force, a contact force, a tendon tension, the reaction [N]; with nothing loaded the
+        force of a unit strain on the tip face, mu A), "value" (max(|force sum|, |moment sum|
+        / L) / scale)}."""
         x = compat.vector_of(self.w)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         b = compat.create_vector(self.problem.residual_form)
@@ -529,18 +530,20 @@ class SolidFingerProblem:
         centre = self.tip_centroid + self.tip_displacement()
         total_force = force + applied
         total_moment = moment + np.cross(centre, applied)
-        loads = [float(np.linalg.norm(applied)), float(np.linalg.norm(force)),
-                 *(abs(t) for t in self.tensions())]
+        loads = [float(np.linalg.norm(applied)), *(abs(t) for t in self.tensions())]
         if self.contact is not None:
             forces = [np.asarray(e["force"]) for e in self.contact.summary()]
             for f, m in zip(forces, self.contact.moments(), strict=True):
                 total_force = total_force + f
                 total_moment = total_moment + m
                 loads.append(float(np.linalg.norm(f)))
-        scale = max(loads)
+        # the largest load (the reaction too: a spurious one must not set a small scale);
+        # nothing loaded: the force of a unit strain on the tip face, mu A
+        scale = (max(*loads, float(np.linalg.norm(force))) if max(loads) > 0
+                 else self.material.shear_modulus * self.tip_area)
         length = self.finger.geometry.length
         imbalance = (float(np.linalg.norm(total_force)), float(np.linalg.norm(total_moment)))
-        value = max(imbalance[0], imbalance[1] / length) / scale if scale > 0 else 0.0
+        value = max(imbalance[0], imbalance[1] / length) / scale
         return {"reaction_force": force.tolist(), "reaction_moment": moment.tolist(),
                 "force_imbalance": imbalance[0], "moment_imbalance": imbalance[1],
                 "scale": scale, "value": value}
