@@ -91,7 +91,8 @@ class InertiaFactor:
                     pc.setType("cholesky")
                     pc.setFactorSolverType("mumps")
                     self._ksp.setFromOptions()
-                # a new state of the same matrix: PCSetUp refactors numerically only
+                # the same matrix with new values: PCSetUp refactors numerically only
+                self._ksp.setOperators(self._matrix)
                 self._ksp.setUp()
                 negative, zero, positive = self._ksp.getPC().getFactorMatrix().getInertia()
             finally:

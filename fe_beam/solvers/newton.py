@@ -270,6 +270,10 @@ class SNESSolver:
         # their MPI communicators) alive until the process ends (MPICH allows 2048
         # communicators per process: a long session or test suite ran out of them)
         self.snes.setConvergenceTest(_WeakConvergenceTest(self))
+        # petsc4py 3.18 (Debian) keeps an unreferenced SNES (with its Python callbacks: the
+        # problem, its mesh) alive: a dropped serial solver destroys it (on several ranks
+        # destroying is collective: petsc4py's delayed destroy, fe_beam.cli.free_parallel_garbage)
+        weakref.finalize(self, _destroy_if_serial, self.snes)
         self._x = problem.b.duplicate()
         self.linear_iterations = 0
 
@@ -377,6 +381,11 @@ class _WeakConvergenceTest:
         if solver is None:  # its SNES outlived it (not in fe_beam's use): stop
             return PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_DOMAIN
         return solver._converged(snes, iteration, norms)
+
+
+def _destroy_if_serial(snes: PETSc.SNES) -> None:
+    if snes.handle and snes.getComm().getSize() == 1:
+        snes.destroy()
 
 
 def _reason_name(reason: int) -> str:
