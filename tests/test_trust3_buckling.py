@@ -29,8 +29,7 @@ def buckle(raw):
     return run_buckling(copy.deepcopy(raw), None, MPI.COMM_WORLD, progress=False)
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 @pytest.mark.parametrize("law, constraint", [("reissner", "inextensible-unshearable"),
                                              ("nonstandard", "inextensible"),
                                              ("nonstandard", "unshearable")])
@@ -46,8 +45,7 @@ def test_constrained_rod_in_tension_does_not_buckle(law, constraint, elements):
     assert abs(-summary["reversed_load_factors"][0] - euler) <= 2e-4 * euler
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 def test_reissner_tensile_shear_buckling_on_every_mesh():
     G = E / (2 * (1 + NU))
     GA, EA = G * B * H, E * B * H
@@ -65,8 +63,7 @@ def test_reissner_tensile_shear_buckling_on_every_mesh():
     assert max(firsts) - min(firsts) <= 1e-9 * closed, firsts
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 def test_compressed_column_factors_are_kept():
     """Pinned-roller column: the verification keeps every genuine factor. Under compression
     the (verified) factors are exactly the reversed (unverified) factors of the same column
