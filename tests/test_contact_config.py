@@ -93,8 +93,9 @@ SPATIAL_FLOOR = {"shape": "plane", "point": [0.0, -0.01, 0.0], "normal": [0.0, 1
     ({"shape": "sphere", "center": [0.5, 0.3, 0.0], "radius": 0.1, "friction": 0.3},
      ("friction", "plane or an infinite cylinder")),
     (FLOOR, ("point", "3 numbers")),
-    # the tube of the circumradius (half-diagonal 0.00707 m) reaches y = -0.00707
-    ({**SPATIAL_FLOOR, "point": [0.0, -0.007, 0.0]}, ("intersects the undeformed rod",)),
+    # the section's flat face (h/2 = 0.005 m) reaches y = -0.005; the refusal names it
+    ({**SPATIAL_FLOOR, "point": [0.0, -0.0049, 0.0]}, ("intersects the undeformed rod",
+                                                       "0.01 x 0.01 m")),
     ({"shape": "cylinder", "point": [0.5, 0.0, 0.0], "radius": 0.1, "axis": [0, 0, 1],
       "length": 0.2}, ("intersects",)),
     ({"shape": "cylinder", "point": [0.5, 0.3, 0.0], "radius": 0.1, "axis": [0, 0, 0]},

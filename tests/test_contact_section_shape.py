@@ -105,3 +105,61 @@ def test_touching_obstacle_is_not_minus_zero_inside():
     with pytest.raises(ConfigError, match="touches it") as error:
         check_clear_of_rod(touching, section, 0.3)
     assert "-0 m" not in str(error.value)
+
+
+# --- planar problems run as spatial rods ---------------------------------------------------------
+def _cantilever(spatial: bool, obstacle: dict, section: dict, force: float) -> dict:
+    return {
+        "beam": {"length": 1.0},
+        "section": section,
+        "material": {"E": 2e9, "nu": 0.3},
+        "model": {"law": "reissner", "constraint": "none"}
+        | ({"kinematics": "spatial"} if spatial else {}),
+        "mesh": {"elements": 12, "degree": 2},
+        "loads": {"tip_force": [0.0, -force] + ([0.0] if spatial else []), "steps": 4},
+        "solver": {"atol": 1e-12},
+        "obstacles": [obstacle | (
+            {"point": obstacle["point"] + [0.0]} if spatial and "point" in obstacle else {})
+            | ({"center": obstacle["center"] + [0.0]} if spatial and "center" in obstacle
+               else {})
+            | ({"normal": obstacle["normal"] + [0.0]} if spatial and "normal" in obstacle
+               else {})
+            | ({"axis": [0.0, 0.0, 1.0]} if spatial and obstacle["shape"] == "cylinder"
+               else {})],
+        "contact": {"penetration_tolerance": 1e-9, "max_updates": 200},
+        "output": {"xdmf": False, "plots": False},
+    }
+
+
+def _contact(config: dict) -> dict:
+    from fe_beam.analyses.static import solve_static
+    from fe_beam.config.registry import validate
+
+    result = solve_static(validate("static", config).parsed, None, progress=False,
+                          record_shapes=False)
+    assert result.status == "converged", result.message
+    return result.steps[-1]["contact"][0]
+
+
+# a rectangle 30 x 6 mm (b along z, h along y: the tube of its circumradius, 15.3 mm, would
+# touch 12 mm early); a tilted floor under the tip (the corner of the end face touches), a
+# disc (cylinder along z) and a ball under the span
+SECTION = {"shape": "rectangle", "b": 0.03, "h": 0.006}
+CASES = {
+    "tilted plane": {"shape": "plane", "name": "floor", "point": [1.0, -0.02],
+                     "normal": [-0.02, 1.0]},
+    "cylinder": {"shape": "cylinder", "name": "bottle", "point": [0.7, -0.043], "radius": 0.035},
+    "sphere": {"shape": "sphere", "name": "ball", "center": [0.6, -0.06], "radius": 0.05},
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_planar_problem_run_as_spatial_gives_the_planar_contact_force(case):
+    obstacle = CASES[case]
+    planar = _contact(_cantilever(False, obstacle, SECTION, 0.15))
+    spatial = _contact(_cantilever(True, obstacle, SECTION, 0.15))
+    assert math.hypot(*planar["force"]) > 0.01  # it presses
+    print(case, planar["force"], spatial["force"])
+    assert spatial["force"][:2] == pytest.approx(planar["force"], rel=1e-6, abs=1e-9)
+    assert abs(spatial["force"][2]) <= 1e-9 * math.hypot(*planar["force"])
+    assert spatial["end_forces"] == pytest.approx(planar["end_forces"], rel=1e-6, abs=1e-9)

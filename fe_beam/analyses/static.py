@@ -8,7 +8,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from fe_beam import exports, runctl
+from fe_beam import certify, exports, runctl
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
@@ -33,7 +33,8 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
     check_beam_work,
 )
 
-__all__ = ["StaticContinuation", "StaticResult", "contact_columns", "contact_line", "run",
+__all__ = ["StaticContinuation", "StaticResult", "contact_checks", "contact_columns",
+           "contact_line", "run",
            "solve_static"]
 
 
@@ -182,6 +183,9 @@ def solve_static(
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        if run.contact is not None and result.steps:
+            extra.setdefault("checks", []).extend(contact_checks(
+                result.steps[-1].get("contact", []), run.contact.tolerance))
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:
@@ -202,6 +206,35 @@ def solve_static(
                                     *bounding_box(result.shapes, config.model.length))
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
+
+
+#: the largest relative difference between an obstacle's reported normal force and the one
+#: recomputed from the contact pressures and the obstacle's normals (`contact_checks`)
+FORCE_BALANCE_TOLERANCE = 1e-6
+
+
+def contact_checks(entries: list[dict], tolerance: float) -> list[dict]:
+    """The contact certificates of the last accepted state (`fe_beam.certify`), over all
+    obstacles: ``surface_penetration``, the largest penetration over the rod's whole surface
+    (between the contact points, at the vertices, on the end faces; the section's true shape:
+    `fe_beam.fem.contact.ContactSet.surface`) against the penetration tolerance, and
+    ``contact_force_balance``, the reported normal force against the pressures times the
+    obstacle's normals (relative)."""
+    if not entries:
+        return []
+    depth = max(float(e["max_penetration"]) for e in entries)
+    balance = max(float(e.get("force_balance", 0.0)) for e in entries)
+    return [
+        certify.entry("surface_penetration", depth, tolerance * (1 + 1e-9),
+                      detail="largest penetration [m] over the rod's whole surface (between "
+                             "the contact points, at the vertices and on the end faces) "
+                             "against [contact] penetration_tolerance",
+                      remedy="refine [mesh] elements or raise [contact] quadrature_degree"),
+        certify.entry("contact_force_balance", balance, FORCE_BALANCE_TOLERANCE,
+                      detail="relative difference of each obstacle's reported normal force "
+                             "from its pressures times the obstacle's normals",
+                      remedy="lower [contact] force_tolerance"),
+    ]
 
 
 def compressed_tendon_notes(tendons, steps: list[dict]) -> list[str]:

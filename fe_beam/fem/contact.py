@@ -3,12 +3,22 @@
 UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
 holds the multipliers and stick/slip states and measures the contact state.
 
-Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
-`fe_beam.model.obstacles.section_circumradius`); the rest below is the same. Their friction
-(planes and infinite cylinders) acts at the tube's material point facing the obstacle
-(`section_facing`), with 2-vector slips in the tangent plane (`spatial_slip`), tangential
-multipliers and slip directions (`spatial_stick_density`, `spatial_slip_traction`,
-`coulomb_state_2d`).
+Spatial rods: the section is its true shape in the plane of the current directors d2, d3
+(`section_gap`, `fe_beam.model.obstacles.section_parts`: a rectangle, a union of rectangles
+for a t-section, a disc for circles and tubes), flat, so that the rod's ends are flat faces.
+The gap to a plane is its support function (a rectangle's nearest corner); to a sphere and to
+an infinite cylinder the exact distance of the section rectangle; to a box and a finite
+cylinder the largest gap to its faces (caps) and lateral surface (conservative near edges).
+`fe_beam.model.obstacles.section_distance` is the numpy twin. Their friction (planes and
+infinite cylinders) acts at the section's material point reaching farthest toward the
+obstacle (`section_support`), with 2-vector slips in the tangent plane (`spatial_slip`),
+tangential multipliers and slip directions (`spatial_stick_density`,
+`spatial_slip_traction`, `coulomb_state_2d`).
+
+Certificate (`ContactSet.surface`): the largest penetration over the rod's whole surface,
+sampled with the numpy twin between the contact points, at the vertices and on the end
+faces, and each obstacle's normal force recomputed from the pressures and the twin's
+normals.
 
 Friction (planar): the slip s of a contact point since the last accepted step
 (`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
@@ -640,7 +650,7 @@ def box_edge_contact(box: Box, r, tangent, below, above, d=None, spacing: float 
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
-    `fe_beam.fem.spatial_rod.SpatialRodProblem` (the tube of the section's circumradius):
+    `fe_beam.fem.spatial_rod.SpatialRodProblem` (the section's true shape, `section_gap`):
     multipliers, the energy hook (``energy(problem, parts)``, like
     `fe_beam.fem.tendons.TendonSet`), the Uzawa and friction updates and the measured
     contact state. Built before the problem; attached on the first ``energy``."""
@@ -982,8 +992,9 @@ class ContactSet:
         longest = problem.comm.allreduce(float(np.max(lengths)) if len(lengths) else 0.0,
                                          op=MPI.MAX)
         narrowest = min([_feature_size(o) for o in self.obstacles] + [np.inf])
-        count = 9 if not np.isfinite(narrowest) else int(np.clip(
-            np.ceil(8 * longest / narrowest) + 1, 9, 513))
+        # at least 17 per element: also the whole-surface penetration (`surface`)
+        count = 17 if not np.isfinite(narrowest) else int(np.clip(
+            np.ceil(8 * longest / narrowest) + 1, 17, 513))
         self._narrowest = narrowest
         self._dense_expression = compat.expression(
             ufl.as_vector(columns[:self._base_columns]), np.linspace(0.0, 1.0, count)[:, None])
@@ -1804,11 +1815,71 @@ class ContactSet:
         return [np.asarray(p).reshape(cells, -1).max(axis=1) if cells else np.zeros(0)
                 for p in state["pressure"]]
 
+    def surface(self, state: dict | None = None) -> list[dict]:
+        """Per obstacle, the run-time certificate of its contact (collective):
+        ``penetration``, the largest penetration [m] over the rod's whole surface, measured
+        with the numpy twin of the gap (`fe_beam.model.obstacles.section_distance`: the
+        section's true shape; planar: the section segment) at points 1/16 of an element
+        apart or closer (`_dense_local`: the vertices and the rod's ends, i.e. its flat end
+        faces, included), and at the contact points; ``force`` the obstacle's normal force on
+        the rod recomputed from the pressures at the contact points and the ends times the
+        numpy twin's gradient (the obstacle's normal at the section's nearest point, by
+        central differences), and ``balance`` its relative difference from the reported
+        (assembled) normal force."""
+        state = state or self.evaluate(friction=False)
+        comm = self._problem.comm
+        dense = self._dense_local()
+        points = state["local"]
+        length = float(self.model.length)
+        step = 1e-7 * length
+        result = []
+        for i, obstacle in enumerate(self.placed()):
+            depth = 0.0
+            if len(dense["x"]):
+                depth = max(depth, float(np.max(-self._surface_gap(obstacle, dense))))
+            if len(state["gap"][i]):
+                depth = max(depth, float(np.max(-state["gap"][i])))
+            depth = max(depth, float(np.max(-np.asarray(state["end_gap"][i]))))
+            depth = comm.allreduce(depth, op=MPI.MAX)
+            force = np.zeros(self.dim)
+            pressure = np.asarray(state["pressure"][i])
+            if np.any(pressure > 0):
+                force += np.sum((self._weights * pressure)[:, None]
+                                * self._gradient(obstacle, points, step), axis=0)
+            ends = np.asarray(state["end_pressure"][i], dtype=float)
+            for e, where in enumerate((0.0, length)):
+                # each end is a vertex of one owned cell of one rank: counted once
+                at = np.flatnonzero(np.abs(dense["x"] - where) <= 1e-12 * length)[:1]
+                if ends[e] > 0 and len(at):
+                    force += ends[e] * self._gradient(obstacle, _take(dense, at), step)[0]
+            force = comm.allreduce(force, op=MPI.SUM)
+            reported = np.array([global_sum(comm, fem.assemble_scalar(form))
+                                 for form in self._resultant_forms[i]["normal"][:self.dim]])
+            scale = max(float(np.linalg.norm(reported)), float(np.linalg.norm(force)),
+                        self.force_scale * 1e-9, 1e-300)
+            result.append({"penetration": depth, "force": force,
+                           "balance": float(np.linalg.norm(force - reported)) / scale})
+        return result
+
+    def _gradient(self, obstacle, local, step: float) -> np.ndarray:
+        """d gap / d r (n, dim) of the numpy twin at the points of ``local``, by central
+        differences."""
+        columns = []
+        for c in range(self.dim):
+            shift = np.zeros(self.dim)
+            shift[c] = step
+            plus = self._surface_gap(obstacle, dict(local, r=local["r"] + shift))
+            minus = self._surface_gap(obstacle, dict(local, r=local["r"] - shift))
+            columns.append((plus - minus) / (2 * step))
+        return np.stack(columns, axis=1)
+
     def summary(self, state: dict | None = None) -> list[dict]:
         """Per obstacle, in the order given: {name, force (the obstacle on the rod, global
         axes: [Fx, Fy] planar, [Fx, Fy, Fz] spatial) [N], moment (about the origin: planar
         the counterclockwise scalar, spatial [Mx, My, Mz]) [N m], active (contact intervals
-        [[x0, x1], ...] in the reference x) [m], max_penetration [m], pressure_peak (largest
+        [[x0, x1], ...] in the reference x) [m], max_penetration (over the rod's whole
+        surface: `surface`) [m], force_balance (the normal force recomputed from the pressures
+        and the obstacle's normals against the reported one, relative), pressure_peak (largest
         line pressure at the contact points) [N/m], end_forces (the normal point forces at
         x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
         force) [N], slip (intervals of slipping points) [m] and end_friction (the tangential
@@ -1818,6 +1889,7 @@ class ContactSet:
         comm = self._problem.comm
         x_all = np.concatenate(comm.allgather(state["local"]["x"]))
         order = np.argsort(x_all, kind="stable")
+        certificates = self.surface(state)
         result = []
         for i, obstacle in enumerate(self.obstacles):
             forms = self._resultant_forms[i]
@@ -1840,8 +1912,11 @@ class ContactSet:
             active = _intervals(
                 x_line, np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
                 touching)
+            # over the whole surface (`surface`): between the contact points, the vertices
+            # and the end faces too
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
-                              float(np.max(-state["end_gap"][i])))
+                              float(np.max(-state["end_gap"][i])),
+                              certificates[i]["penetration"])
             dim = self.dim
             entry = {
                 "name": obstacle.name,
@@ -1854,6 +1929,7 @@ class ContactSet:
                 "max_penetration": penetration,
                 "pressure_peak": peak,
                 "end_forces": [float(e) for e in ends],
+                "force_balance": certificates[i]["balance"],
             }
             if friction is not None:
                 f, flags = state["friction"][i], self._friction[i]
@@ -1877,6 +1953,17 @@ class ContactSet:
                     else [float(t) for t in f["end_traction"]])
             result.append(entry)
         return result
+
+
+def _take(local: dict, at) -> dict:
+    """The points ``at`` of a `ContactSet._dense_local` / `evaluate` geometry."""
+    taken = {k: v[at] for k, v in local.items() if k != "parts"}
+    if "parts" in local:
+        parts = local["parts"]
+        taken["parts"] = ({"disc": parts["disc"][at]} if "disc" in parts else
+                          {"rectangles": [tuple(np.asarray(v)[at] for v in rectangle)
+                                          for rectangle in parts["rectangles"]]})
+    return taken
 
 
 def _intervals(x: np.ndarray, active: np.ndarray, touching: np.ndarray) -> list:
