@@ -163,3 +163,37 @@ def test_planar_problem_run_as_spatial_gives_the_planar_contact_force(case):
     assert spatial["force"][:2] == pytest.approx(planar["force"], rel=1e-6, abs=1e-9)
     assert abs(spatial["force"][2]) <= 1e-9 * math.hypot(*planar["force"])
     assert spatial["end_forces"] == pytest.approx(planar["end_forces"], rel=1e-6, abs=1e-9)
+
+
+# --- the contact certificates (issue 28, section 1) ----------------------------------------------
+def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch):
+    """surface_penetration and contact_force_balance are in the summary of a spatial rod's
+    static run and pass; a penetration beyond the tolerance found between the contact points
+    (the certificate's quantity scaled on purpose) or a force that does not balance the
+    pressures turn the run "failed" (strict) and stay visible (lenient)."""
+    import fe_beam
+    from fe_beam.fem.contact import ContactSet
+
+    config = _cantilever(True, CASES["tilted plane"], SECTION, 0.15)
+    summary = fe_beam.run("static", config)
+    checks = {c["name"]: c for c in summary["checks"]}
+    assert summary["status"] == "converged"
+    assert checks["surface_penetration"]["passed"] and checks["contact_force_balance"]["passed"]
+    assert checks["surface_penetration"]["tolerance"] == pytest.approx(1e-9)
+    assert checks["contact_force_balance"]["value"] <= 1e-9
+    original = ContactSet.surface
+
+    def broken(scale_depth, add_balance):
+        def surface(self, state=None):
+            return [dict(c, penetration=c["penetration"] * scale_depth + 1e-9 * scale_depth,
+                         balance=c["balance"] + add_balance) for c in original(self, state)]
+        return surface
+
+    monkeypatch.setattr(ContactSet, "surface", broken(10.0, 0.0))
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "failed" and "surface_penetration" in summary["message"]
+    monkeypatch.setattr(ContactSet, "surface", broken(1.0, 1e-3))
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "failed" and "contact_force_balance" in summary["message"]
+    summary = fe_beam.run("static", config, **{"checks.strict": False})
+    assert summary["status"] == "converged" and summary["checks_passed"] is False

@@ -240,26 +240,43 @@ def _clip(value, low, high):
     return _larger(_smaller(value, high), low)
 
 
+def _edge_parameter(numerator, denominator, bound):
+    """clip(-numerator / denominator, -bound, bound) (UFL), the minimiser along an edge,
+    written without the division where it saturates: an edge along the axis (denominator 0,
+    numerator 0) takes the end bound sign(-numerator) = 0 with a zero derivative, as the
+    support function's |n.d| does, instead of 0/0 and a Hessian of 1/denominator."""
+    saturated = ufl.ge(abs(numerator), bound * denominator)
+    return ufl.conditional(saturated, -bound * ufl.sign(numerator),
+                           -numerator / (denominator + 1e-150))
+
+
 def _rectangle_line_distance(w, u, v, a2, a3):
     """min over |s| <= a2, |t| <= a3 of |w + s u + t v| (UFL; `fe_beam.model.obstacles`
     twin): the best of the four edges, and 0 where the unconstrained minimiser lies inside
     (the line pierces the section)."""
     uu, vv, uv = ufl.dot(u, u), ufl.dot(v, v), ufl.dot(u, v)
     wu, wv = ufl.dot(w, u), ufl.dot(w, v)
-    best = None
     tiny = 1e-300
-    for sign in (-1.0, 1.0):
-        s = sign * a2
-        t = _clip(-(wv + s * uv) / (vv + tiny), -a3, a3)
-        e = w + s * u + t * v
-        value = ufl.sqrt(ufl.dot(e, e) + tiny)
-        best = value if best is None else _smaller(best, value)
-        t = sign * a3
-        s = _clip(-(wu + t * uv) / (uu + tiny), -a2, a2)
-        e = w + s * u + t * v
-        best = _smaller(best, ufl.sqrt(ufl.dot(e, e) + tiny))
+    # the two opposite edges first: equal in value when the section is symmetric about the
+    # axis (a planar problem: d3 along it), whose min is then their mean with its mean
+    # derivative exactly (sign(0) = 0), as the plane's |n.d3|; min-of-min in another order
+    # would pick one side's out-of-plane derivative by round-off
+    pairs = []
+    for first in (True, False):
+        values = []
+        for sign in (-1.0, 1.0):
+            if first:
+                s = sign * a2
+                t = _edge_parameter(wv + s * uv, vv, a3)
+            else:
+                t = sign * a3
+                s = _edge_parameter(wu + t * uv, uu, a2)
+            e = w + s * u + t * v
+            values.append(ufl.sqrt(ufl.dot(e, e) + tiny))
+        pairs.append(_smaller(*values))
+    best = _smaller(*pairs)
     det = uu * vv - uv**2
-    safe = det + 1e-12 * uu * vv + tiny
+    safe = det + 1e-12 * uu * vv + 1e-24
     s0, t0 = (-wu * vv + wv * uv) / safe, (-wv * uu + wu * uv) / safe
     pierced = ufl.conditional(ufl.And(ufl.gt(det, 1e-12 * uu * vv),
                                       ufl.And(ufl.le(abs(s0), a2), ufl.le(abs(t0), a3))),
