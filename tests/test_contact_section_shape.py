@@ -166,7 +166,7 @@ def test_planar_problem_run_as_spatial_gives_the_planar_contact_force(case):
 
 
 # --- the contact certificates (issue 28, section 1) ----------------------------------------------
-def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch):
+def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch, tmp_path):
     """surface_penetration and contact_force_balance are in the summary of a spatial rod's
     static run and pass; a penetration beyond the tolerance found between the contact points
     (the certificate's quantity scaled on purpose) or a force that does not balance the
@@ -175,7 +175,7 @@ def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch):
     from fe_beam.fem.contact import ContactSet
 
     config = _cantilever(True, CASES["tilted plane"], SECTION, 0.15)
-    summary = fe_beam.run("static", config)
+    summary = fe_beam.run("static", config, tmp_path / "pass")
     checks = {c["name"]: c for c in summary["checks"]}
     assert summary["status"] == "converged"
     assert checks["surface_penetration"]["passed"] and checks["contact_force_balance"]["passed"]
@@ -183,17 +183,17 @@ def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch):
     assert checks["contact_force_balance"]["value"] <= 1e-9
     original = ContactSet.surface
 
-    def broken(scale_depth, add_balance):
+    def broken(add_depth, add_balance):
         def surface(self, state=None):
-            return [dict(c, penetration=c["penetration"] * scale_depth + 1e-9 * scale_depth,
+            return [dict(c, penetration=c["penetration"] + add_depth,
                          balance=c["balance"] + add_balance) for c in original(self, state)]
         return surface
 
-    monkeypatch.setattr(ContactSet, "surface", broken(10.0, 0.0))
-    summary = fe_beam.run("static", config)
+    monkeypatch.setattr(ContactSet, "surface", broken(2e-9, 0.0))
+    summary = fe_beam.run("static", config, tmp_path / "deep")
     assert summary["status"] == "failed" and "surface_penetration" in summary["message"]
-    monkeypatch.setattr(ContactSet, "surface", broken(1.0, 1e-3))
-    summary = fe_beam.run("static", config)
+    monkeypatch.setattr(ContactSet, "surface", broken(0.0, 1e-3))
+    summary = fe_beam.run("static", config, tmp_path / "force")
     assert summary["status"] == "failed" and "contact_force_balance" in summary["message"]
-    summary = fe_beam.run("static", config, **{"checks.strict": False})
+    summary = fe_beam.run("static", config, tmp_path / "lenient", **{"checks.strict": False})
     assert summary["status"] == "converged" and summary["checks_passed"] is False
