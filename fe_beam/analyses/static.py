@@ -52,6 +52,8 @@ class StaticResult:
     extra: dict = field(default_factory=dict)
     #: the obstacles at their place in the last state (moving obstacles: translated)
     obstacles: tuple = ()
+    #: the run's own certificates (`fe_beam.certify`), after any the driver adds in ``extra``
+    checks: list[dict] = field(default_factory=list)
 
     def summary(self, extra: dict | None = None) -> dict:
         """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's;
@@ -68,7 +70,8 @@ class StaticResult:
         }
         if self.strain_range is not None:
             data["strain_range"] = self.strain_range
-        return data | (extra or {})
+        checks = list(extra.pop("checks", [])) + list(self.checks)
+        return data | (extra or {}) | ({"checks": checks} if checks else {})
 
 
 def contact_line(entry: dict) -> str:
@@ -184,7 +187,7 @@ def solve_static(
         if checked is not None:
             result.steps[-1]["stability"] = checked
         if run.contact is not None and result.steps:
-            extra.setdefault("checks", []).extend(contact_checks(
+            result.checks.extend(contact_checks(
                 result.steps[-1].get("contact", []), run.contact.tolerance))
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
