@@ -197,3 +197,39 @@ def test_contact_certificates_pass_and_fail_on_purpose(monkeypatch, tmp_path):
     assert summary["status"] == "failed" and "contact_force_balance" in summary["message"]
     summary = fe_beam.run("static", config, tmp_path / "lenient", **{"checks.strict": False})
     assert summary["status"] == "converged" and summary["checks_passed"] is False
+
+
+def _finger(spatial: bool) -> dict:
+    three = [0.0] if spatial else []
+    return {
+        "beam": {"length": 0.08},
+        "section": {"shape": "rectangle", "b": 0.015, "h": 0.018, "h_tip": 0.009},
+        "material": {"E": 1.2e6, "nu": 0.45},
+        "model": {"law": "nonstandard"} | ({"kinematics": "spatial"} if spatial else {}),
+        "mesh": {"elements": 8, "degree": 2},
+        "tendons": [{"name": "flexor", "offset_base": 0.007, "offset_tip": 0.003,
+                     "tension": 3.0}],
+        "loads": {"steps": 6},
+        "obstacles": [{"shape": "plane", "name": "ceiling", "point": [0.0, 0.013] + three,
+                       "normal": [0.0, -1.0] + three}],
+        "contact": {"penetration_tolerance": 1e-9},
+        "output": {"xdmf": False, "plots": False},
+    }
+
+
+def test_tapered_finger_under_a_ceiling_spatial_equals_planar(tmp_path):
+    """A tendon finger (tapered rectangle 15 mm wide, 18 -> 9 mm high) bending into a ceiling:
+    the spatial rod presses with the planar rod's force (the tube of the circumradius pressed
+    about 10 % harder here), and its summary carries the contact checks."""
+    import fe_beam
+
+    planar = fe_beam.run("finger", _finger(False), tmp_path / "planar")
+    spatial = fe_beam.run("finger", _finger(True), tmp_path / "spatial")
+    assert planar["status"] == spatial["status"] == "converged", spatial["message"]
+    force = planar["steps"][-1]["contact"][0]["force"]
+    assert abs(force[1]) > 0.05
+    assert spatial["steps"][-1]["contact"][0]["force"][:2] == pytest.approx(force, rel=1e-6,
+                                                                             abs=1e-12)
+    for summary in (planar, spatial):
+        names = {c["name"]: c["passed"] for c in summary["checks"]}
+        assert names["surface_penetration"] and names["contact_force_balance"]
