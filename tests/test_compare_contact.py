@@ -104,7 +104,7 @@ def test_compare_in_contact_agrees_with_the_solid_the_rod_alone_and_the_xdmf(tmp
         assert rod["contact_force_difference"][0] == pytest.approx(expected, rel=1e-12)
         assert rod["max_contact_force_difference"] == rod["contact_force_difference"][0]
         assert rod["contact_force_difference"][0] < free_difference
-        assert rod["contact"][0]["max_penetration"] <= TOLERANCE
+        assert rod["contact"][0]["contact_point_penetration"] <= TOLERANCE
         assert summary["departures"][law]["max_contact_force_difference"] == pytest.approx(
             rod["contact_force_difference"][0])
         assert rod["distance_over_L"] < 0.01

@@ -49,7 +49,7 @@ def load_path(config: dict, steps: int):
 
     def record(step) -> None:
         (entry,) = run.contact.summary()
-        assert entry["max_penetration"] <= config["contact"]["penetration_tolerance"], entry
+        assert entry["contact_point_penetration"] <= config["contact"]["penetration_tolerance"], entry
         records.append((step.load_factor, entry, run.problem.end_reaction("x0"),
                         run.problem.end_values("xL")))
 

@@ -1895,7 +1895,9 @@ class ContactSet:
         axes: [Fx, Fy] planar, [Fx, Fy, Fz] spatial) [N], moment (about the origin: planar
         the counterclockwise scalar, spatial [Mx, My, Mz]) [N m], active (contact intervals
         [[x0, x1], ...] in the reference x) [m], max_penetration (over the rod's whole
-        surface: `surface`) [m], force_balance (the normal force recomputed from the pressures
+        surface: `surface`) [m], contact_point_penetration (at the contact points and ends,
+        where the solver holds the tolerance) [m], force_balance (the normal force recomputed
+        from the pressures
         and the obstacle's normals against the reported one, relative), pressure_peak (largest
         line pressure at the contact points) [N/m], end_forces (the normal point forces at
         x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
@@ -1944,6 +1946,10 @@ class ContactSet:
                            else float(resultants[dim])),
                 "active": active,
                 "max_penetration": penetration,
+                # where the solver holds the tolerance: the contact points and the ends
+                "contact_point_penetration": max(
+                    0.0, float(np.max(-gap)) if len(gap) else 0.0,
+                    float(np.max(-state["end_gap"][i]))),
                 "pressure_peak": peak,
                 "end_forces": [float(e) for e in ends],
                 "force_balance": certificates[i]["balance"],
