@@ -255,7 +255,8 @@ def test_examples_grip_harder_with_more_tension(name):
     assert touched and touched == list(range(touched[0], len(forces)))
     assert all(np.diff([forces[i] for i in touched]) > 0)
     assert all(np.diff(tensions) > 0)
-    assert all(e["contact_point_penetration"] <= tolerance for s in result.steps for e in s["contact"])
+    assert all(e["contact_point_penetration"] <= tolerance
+               for s in result.steps for e in s["contact"])
     final = result.steps[-1]["contact"]
     if name == "pinch.toml":  # the fingers do not touch each other: no force on the plane
         assert final[1]["force"] == [0.0, 0.0] and final[0]["name"] == "marker"
