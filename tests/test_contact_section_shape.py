@@ -236,3 +236,31 @@ def test_tapered_finger_under_a_ceiling_spatial_equals_planar(tmp_path):
     for summary in (planar, spatial):
         names = {c["name"]: c["passed"] for c in summary["checks"]}
         assert names["surface_penetration"] and names["contact_force_balance"]
+
+
+@pytest.mark.parametrize("obstacle", [
+    Plane(point=(0.0, -0.03, 0.01), normal=(0.3, 1.0, -0.5), dim=3),
+    Sphere(center=(0.31, 0.03, 0.004), radius=0.01, dim=3),
+    Cylinder(point=(0.29, -0.035, 0.0), radius=0.02, axis=(0.2, 0.1, 1.0), dim=3),
+])
+def test_t_section_and_disc_against_sampling(obstacle):
+    """A T-section (web and flange rectangles about the centroid) and a disc (circle section:
+    exact on planes and spheres; its tube on a cylinder, a lower bound) against the sampled
+    minimum over the rotated section."""
+    d1, d2, d3 = _frame((0.4, 0.3, -0.6))
+    r = np.array([0.3, 0.0, 0.0])
+    tee = Section("t-section", {"b": 0.03, "h": 0.024, "tf": 0.004, "tw": 0.006})
+    parts = section_parts(tee, 0.0)
+    gap = section_distance(obstacle, r[None], d1, d2, d3, parts)[0]
+    sampled = min(_sampled(obstacle, r + offset * d2, d2, d3, 2 * a3, 2 * a2, count=201)
+                  for offset, a2, a3 in parts["rectangles"])
+    assert sampled - 3e-5 <= gap <= sampled + 1e-12
+    disc = section_distance(obstacle, r[None], d1, d2, d3, {"disc": 0.01})[0]
+    phi, rho = np.meshgrid(np.linspace(0, 2 * np.pi, 721), np.linspace(0, 0.01, 101))
+    points = (r + (rho * np.cos(phi)).reshape(-1, 1) * d2
+              + (rho * np.sin(phi)).reshape(-1, 1) * d3)
+    sampled = float(np.min(distance(obstacle, points)))
+    if isinstance(obstacle, Cylinder):
+        assert disc <= sampled + 1e-12
+    else:
+        assert sampled - 2e-5 <= disc <= sampled + 1e-12
