@@ -30,14 +30,13 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from fe_beam import cli, runctl
-from fe_beam.config.registry import REGISTRY
+from fe_beam.config.finger import override_defaults
 from fe_beam.config.schema import apply_overrides, load_config
 from fe_beam.errors import ConfigError
 
 __all__ = ["SUMMARY_FILES", "run"]
 
-#: the file that holds a command's summary (summary.json unless named here)
-SUMMARY_FILES = {"refine": "refinement.json"}
+SUMMARY_FILES = runctl.SUMMARY_FILES  # the file that holds a command's summary
 #: commands whose study lives in its folder (resumable points): out=None runs them in a
 #: private temporary folder, removed afterwards
 NEEDS_A_FOLDER = ("validity",)
@@ -101,9 +100,13 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
     """
     if isinstance(config, Mapping):
         raw = copy.deepcopy(dict(config))
-    else:
+    elif isinstance(config, (str, os.PathLike)):
         raw = load_config(config)
-    raw = apply_overrides(raw, _overrides(keys))
+    else:
+        raise ConfigError(f"fe_beam.run: config must be a TOML file's path or a dict of tables "
+                          f"as the TOML would parse; got {type(config).__name__}")
+    assignments = _overrides(keys)
+    raw = apply_overrides(raw, assignments, override_defaults(command, raw))
     if command == "calibrate" and data is None:
         raise ConfigError("fe_beam.run('calibrate', ...) needs data= (the measurements CSV, the "
                           "CLI's --data)")
@@ -117,7 +120,7 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
             cli._check_output_folder(folder, world)
         args = argparse.Namespace(
             command=command, config="<dict>" if isinstance(config, Mapping) else str(config),
-            out=folder, set=[], quiet=not progress,
+            out=folder, set=assignments, quiet=not progress,
             data=None if data is None else str(data),
             levels=None if levels is None else str(levels),
             ratio=None if ratio is None else str(ratio), quantity=quantity)
@@ -136,8 +139,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         try:
             with deferred:  # SIGINT/SIGTERM stop at a step boundary (runctl.Interrupted)
                 if folder is None:  # nothing written: the driver alone
-                    results.append(cli.driver(REGISTRY[command])(
-                        validated, None, world, progress=progress, echo=echo))
+                    results.append(cli.run_driver(command, validated, raw, None, world,
+                                                  progress=progress, echo=echo))
                 else:
                     cli.execute(args, validated, raw, world, on_result=results.append,
                                 echo=echo)

@@ -23,6 +23,7 @@ from pathlib import Path
 from fe_beam import analyses, runctl
 from fe_beam.certify import strict_of
 from fe_beam.config.calibrate import check_data
+from fe_beam.config.finger import override_defaults
 from fe_beam.config.registry import REGISTRY, CommandSpec, check_command_tables, validate
 from fe_beam.config.schema import apply_overrides, check_partition, check_values, load_config
 from fe_beam.errors import ConfigError
@@ -342,13 +343,22 @@ def prepare(args, config: dict, comm, notes: list[str]):
     check_partition(config, comm.size, args.command)
     refine = {"levels": getattr(args, "levels", None), "ratio": getattr(args, "ratio", None),
               "quantities": getattr(args, "quantity", None),
-              "data": getattr(args, "data", None), "config_path": str(args.config)}
+              "data": getattr(args, "data", None), "config_path": str(args.config),
+              "overrides": list(getattr(args, "set", None) or [])}
     if args.command == "refine" and "solid" in config:  # the solid driver validates [solid]
         refine["solid_parser"] = getattr(analysis("solid_driver"), "parse_solid", None)
     validated = validate(args.command, config, refine)
     if args.command == "calibrate":  # the data file too, before the FE stack is loaded
         check_data(config, args.data)
     return validated
+
+
+def run_driver(command: str, validated, config: dict, out, comm, progress: bool, echo):
+    """The command's driver on a validated configuration, then the verdict on its run-time
+    checks (`fe_beam.analyses.result.settle_checks`, ``[checks] strict`` of ``config``): the
+    one way the CLI and `fe_beam.run` run a driver. Returns its `Result`."""
+    result = driver(REGISTRY[command])(validated, out, comm, progress=progress, echo=echo)
+    return analysis("result").settle_checks(result, strict_of(config), out, comm, echo)
 
 
 def execute(args, validated, config: dict, comm, on_session=None, on_result=None,
@@ -361,14 +371,11 @@ def execute(args, validated, config: dict, comm, on_session=None, on_result=None
         if on_session is not None:
             on_session(session)
         runctl.check(comm, runctl.BEFORE)
-        run = driver(REGISTRY[args.command])
-        result = run(validated, args.out, comm, progress=not args.quiet,
-                     echo=echo if echo is not None else (
-                         lambda stream, text: report_line(comm, stream, text)))
+        result = run_driver(args.command, validated, config, args.out, comm,
+                            progress=not args.quiet,
+                            echo=echo if echo is not None else (
+                                lambda stream, text: report_line(comm, stream, text)))
         runctl.check(comm, runctl.AFTER)
-        result = analysis("result").settle_checks(
-            result, strict_of(config), args.out, comm,
-            echo if echo is not None else (lambda stream, text: report_line(comm, stream, text)))
         if on_result is not None:
             on_result(result)
         return result.exit_code
@@ -385,7 +392,8 @@ def _main(argv: list[str] | None = None) -> int:
 
     def work() -> int:
         _check_output_folder(args.out, comm)
-        config = apply_overrides(load_config(args.config), args.set)
+        raw = load_config(args.config)
+        config = apply_overrides(raw, args.set, override_defaults(args.command, raw))
         validated = prepare(args, config, comm, notes)
         world = _world() if isinstance(comm, SerialComm) else comm
         quiet_jit_logging()

@@ -33,6 +33,8 @@ from pathlib import Path
 EXIT_SIGINT = 130
 EXIT_SIGTERM = 143
 LOCK_NAME = ".fe-beam.lock"
+#: the file that holds a command's summary (summary.json unless named here)
+SUMMARY_FILES = {"refine": "refinement.json"}
 MANIFEST_NAME = ".fe-beam-manifest.json"
 # output names of fe_beam versions without a manifest (cleared when no manifest exists)
 KNOWN_OUTPUTS = (

@@ -192,3 +192,16 @@ def test_numpy_values_and_work_beyond_the_limits(tmp_path):
     for out in (None, tmp_path / "large"):
         with pytest.raises(fe_beam.ConfigError, match="allow_large"):
             fe_beam.run("static", config, out=out, **{"loads.steps": 2_000_000})
+
+
+@pytest.mark.parametrize("config", [None, 3.5, ["static.toml"]])
+def test_run_without_a_configuration_is_a_config_error(config):
+    """fe_beam.run(command, None) raised a bare TypeError from pathlib: a ConfigError of one
+    sentence naming what config must be."""
+    import fe_beam
+    from fe_beam.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="config must be a TOML file's path or a dict") as info:
+        fe_beam.run("static", config)
+    assert len(str(info.value).splitlines()) == 1
+    assert type(config).__name__ in str(info.value)

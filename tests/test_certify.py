@@ -54,3 +54,64 @@ def test_strict_key_is_validated():
         check_values({"checks": {"strict": "no"}})
     with pytest.raises(ConfigError, match="unknown key"):
         check_values({"checks": {"strickt": True}})
+
+
+# --- the verdict through the CLI and fe_beam.run: a stand-in driver reports a failed check ---
+CASE = {"beam": {"length": 1.0}, "section": {"b": 0.1, "h": 0.01},
+        "material": {"E": 1e9, "nu": 0.3}, "mesh": {"elements": 2, "degree": 1},
+        "loads": {"tip_force": [0.0, -1.0]}}
+
+
+def _stand_in(passed: bool):
+    """A stand-in static driver (installed in sys.modules, where `fe_beam.cli.analysis` looks
+    first) whose run claims success with one check."""
+    import types
+
+    from fe_beam.analyses.result import Result
+    from fe_beam.exports.outputs import atomic_write_json
+
+    def run(validated, out, comm, progress=True, echo=None):
+        summary = {"status": "converged", "message": "", "notes": [],
+                   "checks": [certify.entry("global_equilibrium", 0.0 if passed else 0.5, 1e-8)]}
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+            atomic_write_json(out / "summary.json", summary)
+        return Result("static", summary, 0, [])
+
+    return types.SimpleNamespace(run=run)
+
+
+@pytest.mark.parametrize("out", [True, False])
+def test_failed_check_is_a_failed_run(monkeypatch, tmp_path, out):
+    import json
+    import sys
+
+    import fe_beam
+
+    monkeypatch.setitem(sys.modules, "fe_beam.analyses.static", _stand_in(passed=False))
+    folder = tmp_path / "run" if out else None
+    summary = fe_beam.run("static", CASE, out=folder)
+    assert summary["status"] == "failed" and summary["checks_passed"] is False
+    assert "global_equilibrium" in summary["message"]
+    if out:  # the file says the same
+        assert json.loads((folder / "summary.json").read_text())["status"] == "failed"
+    lenient = fe_beam.run("static", CASE, out=folder, **{"checks.strict": False})
+    assert lenient["status"] == "converged" and lenient["checks_passed"] is False
+    assert any("global_equilibrium" in note for note in lenient["notes"])
+    monkeypatch.setitem(sys.modules, "fe_beam.analyses.static", _stand_in(passed=True))
+    assert fe_beam.run("static", CASE, out=folder)["status"] == "converged"
+
+
+def test_cli_exit_code_of_a_failed_check(monkeypatch, tmp_path, capsys):
+    import sys
+
+    from tomlio import dump_toml
+
+    from fe_beam import cli
+
+    path = tmp_path / "case.toml"
+    path.write_text(dump_toml(CASE))
+    monkeypatch.setitem(sys.modules, "fe_beam.analyses.static", _stand_in(passed=False))
+    code = cli.main(["static", str(path), "--out", str(tmp_path / "o"), "--quiet"])
+    assert code == 3
+    assert "not certified" in capsys.readouterr().err

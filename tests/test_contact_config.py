@@ -126,3 +126,38 @@ def test_finite_cylinder_distance():
     post = Cylinder(dim=3, point=(0.0, 0.0, 0.0), radius=1.0, axis=(0, 0, 1), length=2.0)
     points = np.array([[2.0, 0, 0], [0, 0, 3.0], [2.0, 0, 3.0], [0.5, 0, 0], [0, 0, 0.5]])
     assert distance(post, points) == pytest.approx([1.0, 2.0, 5**0.5, -0.5, -0.5])
+
+
+@pytest.mark.parametrize("section, obstacle, words", [
+    # a floor exactly at the lower face of a 6 mm high strip: it touches (was: "its surface
+    # is -0 m inside"), and the message names the section's extent it used
+    ({"shape": "rectangle", "b": 0.02, "h": 0.006}, {**FLOOR, "point": [0.0, -0.003]},
+     ("touches the undeformed rod", "the section reaching from y = -0.003 to 0.003 m")),
+    # a T-section (flange on top): its centroid lies (0.016 * 0.004 * 0.008 + 0.02 * 0.004 *
+    # 0.018) / 1.44e-4 = 0.013556 m above the web's foot, 0.006444 m below the flange's top
+    ({"shape": "t-section", "b": 0.02, "h": 0.02, "tf": 0.004, "tw": 0.004},
+     {**FLOOR, "point": [0.0, -0.006]},
+     ("intersects the undeformed rod", "0.007556 m inside the obstacle",
+      "from y = -0.01356 to 0.006444 m")),
+])
+def test_obstacle_on_the_undeformed_rod_names_the_section_extent(tmp_path, capsys, section,
+                                                                  obstacle, words):
+    code, err, _, path = run_cli(tmp_path, {**with_obstacles(obstacle), "section": section},
+                                 capsys=capsys)
+    message = usage_error(code, err, path)
+    for word in words:
+        assert word in message, message
+    assert "-0 m" not in message and "is -" not in message, message
+
+
+def test_spatial_obstacle_on_the_rod_names_the_section(tmp_path, capsys):
+    """The spatial refusal names the extent it used: the section's true shape (a 6 x 16 mm
+    rectangle, h = 16 mm along y: its flat face at y = -0.008; the tube of its circumradius,
+    0.008544 m, was used until issue 28)."""
+    floor = {**SPATIAL_FLOOR, "point": [0.0, -0.0075, 0.0]}
+    config = {**SPATIAL, "section": {"shape": "rectangle", "b": 0.006, "h": 0.016},
+              "obstacles": [floor]}
+    code, err, _, path = run_cli(tmp_path, config, capsys=capsys)
+    message = usage_error(code, err, path)
+    assert "the rectangle 0.006 x 0.016 m (b x h)" in message, message
+    assert "0.0005 m inside" in message, message

@@ -102,7 +102,7 @@ def test_obstacle_just_beyond_the_flat_end_is_accepted():
 def test_touching_obstacle_is_not_minus_zero_inside():
     section = Section("rectangle", {"b": 0.02, "h": 0.01})
     touching = Plane(point=(0.0, 0.005, 0.0), normal=(0.0, -1.0, 0.0), dim=3)
-    with pytest.raises(ConfigError, match="touches it") as error:
+    with pytest.raises(ConfigError, match="touches the undeformed rod") as error:
         check_clear_of_rod(touching, section, 0.3)
     assert "-0 m" not in str(error.value)
 

@@ -279,3 +279,51 @@ def test_trial_design_without_equilibrium_exits_3(tmp_path, capfd, monkeypatch):
     assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
     err = capfd.readouterr().err.strip()
     assert "no equilibrium for a trial design" in err and len(err.splitlines()) == 1, err
+
+
+def test_the_design_prints_the_command_that_reproduces_its_answer(tmp_path, capsys):
+    """A finger design varying a dimension of the default section (no [section] table): the
+    command it prints (and writes as summary.json's ``reproduce``) re-runs its answer; was:
+    ``--set section.h=...`` made a section of h alone (exit 2, "section.b is required")."""
+    import shlex
+
+    path = tmp_path / "taper.toml"
+    path.write_text(dump_toml({
+        "mesh": {"elements": 4, "degree": 2}, "loads": {"steps": 5},
+        "output": {"plots": False, "xdmf": False},
+        "tendons": [{"offset_base": 0.007, "offset_tip": 0.003, "tension": 3.0}],
+        "design": {"variables": ["section.h"], "bounds": [[0.014, 0.03]],
+                   "objective": "tip_pose", "target": {"theta": 0.5}}}))
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "--quiet",
+                 "--set", "material.E=0.7e6"]) == 0
+    printed = capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    command = summary["reproduce"]
+    assert f"reproduce the answer with: {command}" in printed
+    words = shlex.split(command)
+    assert words[:3] == ["fe-beam", "finger", str(path)]
+    assert "material.E=0.7e6" in words  # the run's own override, kept
+    assert summary["tip"]["theta"] == pytest.approx(0.5, abs=1e-8)
+    assert main(words[1:] + ["--out", str(tmp_path / "again"), "--quiet"]) == 0
+    again = json.loads((tmp_path / "again" / "summary.json").read_text())
+    assert again["steps"][-1]["tip"]["theta"] == pytest.approx(0.5, abs=1e-8)
+    for key in ("u", "v"):
+        assert again["steps"][-1]["tip"][key] == pytest.approx(summary["tip"][key], rel=1e-7)
+
+
+def test_an_override_of_a_defaulted_table_applies_to_the_default():
+    from fe_beam.config.finger import DEFAULT_FINGER, override_defaults
+    from fe_beam.config.schema import apply_overrides
+
+    given = {"tendons": [{"offset_base": 0.008, "offset_tip": 0.004, "tension": 1.0}]}
+    changed = apply_overrides(given, ["section.h_tip=0.009"],
+                              override_defaults("design", given))
+    assert changed["section"] == {**DEFAULT_FINGER["section"], "h_tip": 0.009}
+    own = {**given, "section": {"shape": "circle", "d": 0.01}}  # the file's table: kept whole
+    assert apply_overrides(own, ["section.d=0.02"], override_defaults("finger", own))[
+        "section"] == {"shape": "circle", "d": 0.02}
+    rod = {"section": {"shape": "rectangle", "b": 0.01, "h": 0.01}}  # no finger: no defaults
+    assert override_defaults("static", rod) is None
+    assert apply_overrides({}, ["tendons.0.tension=3.0"], override_defaults("finger", {}))[
+        "tendons"][0] == {**DEFAULT_FINGER["tendons"][0], "tension": 3.0}

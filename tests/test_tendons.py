@@ -1,5 +1,6 @@
 """Verification of the tendon-driven finger (reduced Cosserat model, MODEL.md section 2)."""
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -257,8 +258,6 @@ def test_inverse_reaches_tip_targets_with_either_control(control, key, value):
         ({"tip_angle": 0.2}, 2, "needs exactly one tendon"),
         ({"tip_w": 0.2}, 1, "tip_w"),
         ({"tip_angle": "big"}, 1, "tip_angle"),
-        ({"tip_angle": -0.3}, 1, "cannot be reached: the tendon moves the tip the other way"),
-        ({"tip_angle": 10.0}, 1, "is not reached: the largest tension with an equilibrium"),
     ],
 )
 def test_inverse_config_mistakes(tmp_path, capsys, inverse, tendons, words):
@@ -274,6 +273,45 @@ def test_inverse_config_mistakes(tmp_path, capsys, inverse, tendons, words):
     assert main(["finger", str(config), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize(("target", "control", "words"), [
+    (-0.3, "tension", "cannot be reached: the tendon moves the tip the other way"),
+    (10.0, "tension", "is not reached: the largest tension with an equilibrium"),
+    (-0.2, "pull_in", "cannot be reached: the tendon moves the tip the other way"),
+])
+def test_unreachable_inverse_target_is_a_stopped_analysis(tmp_path, capsys, target, control,
+                                                          words):
+    """A target the tendon cannot reach is no input mistake: exit 3, summary.json status
+    "failed" with the message and the best reached value (was: exit 2 with status
+    "converged" left in summary.json); the best reached value is what a forward solve at its
+    tension gives."""
+    from fe_beam.cli import main
+
+    amount = "tension = 1.0" if control == "tension" else "pull_in = 0.002"
+    config = tmp_path / "far.toml"
+    config.write_text("[mesh]\nelements = 6\n[loads]\nsteps = 4\n[[tendons]]\n"
+                      f"offset_base = 0.008\noffset_tip = 0.004\n{amount}\n"
+                      f"[inverse]\ntip_angle = {target}\n")
+    out = tmp_path / "out"
+    assert main(["finger", str(config), "--out", str(out), "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and words in summary["message"]
+    inverse = summary["inverse"]
+    assert inverse["status"] == "failed" and inverse["control"] == control
+    best = inverse["best_reached"]
+    reached = [0.0] + [step["tip"]["theta"] for step in summary["steps"]]
+    assert abs(best["tip_angle"] - target) <= min(abs(r - target) for r in reached) + 1e-12
+    if target > 0:  # beyond the sweep: a forward solve at the best tension gives its angle
+        assert best["tension"] > summary["steps"][-1]["tensions"][0]
+        forward = tmp_path / "forward.toml"
+        forward.write_text(config.read_text().split("[inverse]")[0].replace(
+            amount, f"tension = {best['tension']!r}"))
+        assert main(["finger", str(forward), "--out", str(tmp_path / "fw"), "--quiet"]) == 0
+        tip = json.loads((tmp_path / "fw" / "summary.json").read_text())["steps"][-1]["tip"]
+        assert tip["theta"] == pytest.approx(best["tip_angle"], rel=1e-6)
 
 
 @pytest.mark.parametrize(("tendon", "where"), [

@@ -3,11 +3,13 @@ about the undeformed or a loaded state (the engine: `fe_beam.solvers.buckling`).
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
 from mpi4py import MPI
 
+from fe_beam import certify
 from fe_beam.analyses.result import EXIT_FAILED, Report, Result
 from fe_beam.analyses.solid import SolidRun, check_solid_work
 from fe_beam.analyses.static import StaticContinuation, check_beam_work
@@ -17,7 +19,10 @@ from fe_beam.exports.solid import DisplacementXDMF
 from fe_beam.exports.spatial import SpatialXDMFWriter
 from fe_beam.fem import compat
 from fe_beam.solvers.buckling import (
+    CONFIRM_TOLERANCE,
     Buckling,
+    confirm_on_path,
+    default_search_limit,
     load_scale_record,
     rod_buckling,
     solid_buckling,
@@ -75,40 +80,48 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
     problem = run.problem
     try:
         try:
-            result = rod_buckling(run, settings.count, settings.prestress, static.stepping,
+            linear = rod_buckling(run, settings.count, settings.prestress, static.stepping,
                                   progress=progress)
         except LoadSteppingFailed as failure:
             return _failed(failure, settings.prestress, problem.global_dofs, started,
                            {"load_factor": float(run.load_factor),
                             "tip": problem.end_values("xL")}, out, comm)
-        if problem.spatial and result.load_factors:
-            result = _on_the_path(run, result, settings, static, progress)
+        prestate_tip = problem.end_values("xL")
+        checks, extra = [], {}
+        if _confirmable(run):
+            result, checks, extra = _confirmed(run, linear, settings, static.stepping,
+                                               progress)
+        else:
+            result = linear
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
         if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
             result.notes.append(
                 "follower tip force: a non-conservative load loses stability by flutter "
                 "(complex eigenvalues of the dynamic problem), which linear buckling does not "
                 "find; an empty or short load_factors list does not mean stable: check with "
-                "fe-beam modes (prestress = true) at the loads of interest")
+                "fe-beam modes (prestress = true) at the loads of interest; the load factors "
+                "are the linearised estimates, not confirmed by the path (its stability is not "
+                "that of an energy)")
         if run.tendons:
             for record, factor in zip(critical, result.load_factors, strict=True):
                 record["tensions"] = [factor * t.tension for t in static.tendons]
-            result.notes.append(
-                "tendon loads: the load factors are the linearised-buckling estimate about the "
-                "given state (the tendon's tension enters the geometric stiffness); a tendon "
-                "that bends the rod gives no bifurcation of the nonlinear path, and these "
-                "factors are not verified against a reference: confirm with the stability "
-                "check of the static path")
         summary = _summary(result, settings, problem.global_dofs, started, critical)
+        message = extra.pop("message", None)
+        summary.update(extra)
+        if message:
+            summary["message"] = message
+        if checks:
+            summary["checks"] = checks
         summary["notes"] = work_notes + summary["notes"]
-        summary["prestate_tip"] = problem.end_values("xL")
+        summary["prestate_tip"] = prestate_tip
         if out is not None:
             if comm.rank == 0:
                 out.mkdir(parents=True, exist_ok=True)
             comm.barrier()
             state = compat.local_array(problem.w).copy()
             writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-                problem, out / "buckling_modes.xdmf" if static.output.xdmf else None)
+                problem, out / "buckling_modes.xdmf" if static.output.xdmf else None,
+                sections=False)  # normalised shapes: their strains and forces mean nothing
             for index, shape in enumerate(result.shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
                 writer.write(float(index))
@@ -121,54 +134,95 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         run.destroy()
 
 
-#: spatial rods: the first factor is re-linearised about these fractions of its estimate (the
-#: last repeated; closer, K_T is too near singular for the inertia check of the factor) ...
-PATH_FRACTIONS = (0.97, 0.99, 0.995)
-#: ... until two estimates agree to this (relative), at most PATH_ITERATIONS times
-PATH_TOLERANCE = 1e-7
-PATH_ITERATIONS = 8
+def _confirmable(run) -> bool:
+    """Is the tangent that of an energy (its inertia counts the energy-decreasing directions)?
+    Not with follower loads, pull-in control or a non-conservative law."""
+    pull_in = run.tendons is not None and any(
+        t.controlled_by_pull_in for t in run.tendons.tendons)
+    return not (pull_in or run.config.model.loads.follower
+                or not getattr(run.problem, "conservative", True))
 
 
-def _on_the_path(run, first: Buckling, settings, static, progress) -> Buckling:
-    """A spatial rod's buckling factors from the state on the nonlinear path just below the
-    first critical load (docs/theory.md, Spatial rods: buckling).
-
-    The linear estimate about a state far below the critical load depends on how the rotations
-    are parametrised (its third derivatives do), which matters when the critical mode couples
-    bending and torsion: a cantilever's lateral-torsional buckling is estimated 12% low about the
-    undeformed state with the rotation vector. The critical load of the path does not depend on
-    it: the state is loaded to a fraction (PATH_FRACTIONS, toward 1) of the estimate and
-    linearised again, until two estimates agree to PATH_TOLERANCE. The factors are then the
-    path's (the pre-state steps approach the first critical load: the estimate's error is
-    quadratic in the distance)."""
-    estimate = first
-    history = [first.load_factors[0]]
-    for iteration in range(PATH_ITERATIONS):
-        fraction = PATH_FRACTIONS[min(iteration, len(PATH_FRACTIONS) - 1)]
-        target = fraction * estimate.load_factors[0]
-        if not target > settings.prestress:
-            break  # the given state is already close to the critical load
-        try:
-            trial = rod_buckling(run, settings.count, target, static.stepping,
-                                 progress=progress)
-        except LoadSteppingFailed as failure:
-            estimate.notes.append(f"the pre-state toward the critical load failed ({failure}): "
-                                  "the factors are the estimate about the last state reached")
-            break
-        passed = any(0 < f < target for f in trial.negative)
-        jumped = trial.load_factors and trial.load_factors[0] > 1.2 * estimate.load_factors[0]
-        if not trial.load_factors or passed or jumped or trial.load_factors[0] <= target:
-            break  # past the critical load, or its factor lost: keep the estimate from below
-        estimate = trial
-        history.append(estimate.load_factors[0])
-        if abs(history[-1] - history[-2]) <= PATH_TOLERANCE * abs(history[-1]):
-            break
-    if len(history) > 1:
-        estimate.notes.append(
-            "spatial rod: the load factors are linearised about the state on the path at load "
-            f"factor {float(run.load_factor):.6g} (the linear estimate about the given state was "
-            f"{history[0]:.6g}; successive estimates {', '.join(f'{h:.8g}' for h in history)})")
-    return estimate
+def _confirmed(run, linear: Buckling, settings, stepping, progress):
+    """The linearised factors about the prestress checked on the nonlinear path
+    (`fe_beam.solvers.buckling.confirm_on_path`): the Buckling of the confirmed critical
+    factors only, the checks, and the summary's extra keys (docs/notes/commands/buckling.md)."""
+    limit = (settings.max_load_factor if settings.max_load_factor is not None
+             else default_search_limit(linear, settings.count))
+    path = confirm_on_path(run, linear, settings.count, limit, stepping, progress=progress)
+    factors, shapes, checks, points = [], [], [], []
+    for point in path.confirmed:
+        lo, hi = point.bracket
+        width = (hi - lo) / abs(hi)
+        check = certify.entry(
+            "critical_point_confirmed", width, CONFIRM_TOLERANCE,
+            detail=(f"load factor {point.load_factor:.8g}: {point.unstable_below} "
+                    f"energy-decreasing direction(s) of the tangent on the path at "
+                    f"{lo:.8g}, {point.unstable_above} at {hi:.8g} (relative bracket width)"),
+            remedy="follow the path with fe-beam path",
+            passed=point.unstable_above > point.unstable_below and width <= CONFIRM_TOLERANCE)
+        check.update(load_factor=point.load_factor, bracket=[lo, hi],
+                     unstable_below=point.unstable_below, unstable_above=point.unstable_above)
+        checks.append(check)
+        points.append({"load_factor": point.load_factor, "bracket": [lo, hi],
+                       "unstable_below": point.unstable_below,
+                       "unstable_above": point.unstable_above,
+                       "multiplicity": point.multiplicity})
+        for index in range(point.multiplicity):
+            factors.append(point.load_factor)
+            if index < len(point.shapes):
+                shapes.append(point.shapes[index])
+    factors, shapes = factors[: settings.count], shapes[: settings.count]
+    notes = list(linear.notes)
+    shown = ", ".join(f"{f:.6g}" for f in linear.load_factors)
+    extra = {"linearised_load_factors": list(linear.load_factors),
+             "critical_points": points, "path_checked_to": path.checked_to,
+             "max_load_factor": limit, "path_trials": path.trials}
+    if path.failure is not None:
+        checks.append(certify.entry(
+            "critical_point_confirmed", math.nan, CONFIRM_TOLERANCE, passed=False,
+            detail=f"the nonlinear path could not confirm the critical factors: {path.failure}",
+            remedy="follow the path with fe-beam path (a limit point is passed by arc length), "
+                   "or lower [buckling] count or max_load_factor"))
+    elif len(factors) < settings.count:
+        if path.left_branch is not None:
+            lo, x, before, after = path.left_branch
+            notes.append(f"the path search stopped: between load factors {lo:.6g} and {x:.6g} "
+                         f"the energy-decreasing directions went from {before} to {after} (the "
+                         "load stepping left the branch, e.g. onto the buckled one of a slightly "
+                         "imperfect structure): critical factors above are not confirmed; "
+                         "fe-beam path follows the branches")
+        gained = path.unstable_at_end - path.unstable_at_start - sum(
+            p.multiplicity for p in path.confirmed)
+        checks.append(certify.entry(
+            "no_critical_point_below_limit", float(gained), 0.0,
+            detail=(f"energy-decreasing directions gained on the path from load factor "
+                    f"{linear.prestress:g} to {path.checked_to:.8g} besides the confirmed "
+                    "critical points")))
+        if not factors:
+            extra["message"] = (
+                f"no buckling up to load factor {path.checked_to:.6g}: the nonlinear path from "
+                f"{linear.prestress:g} stays as stable as it starts ({path.unstable_at_start} "
+                "energy-decreasing direction(s)); "
+                + (f"the linearised estimate(s) {shown} about the state at load factor "
+                   f"{linear.prestress:g} are not critical points of the path (a bent "
+                   "pre-buckling state need not bifurcate); " if shown else "")
+                + "fe-beam path follows the path further")
+        else:
+            notes.append(f"[buckling] count = {settings.count}: only {len(factors)} critical "
+                         f"factor(s) confirmed on the path up to load factor "
+                         f"{path.checked_to:.6g} ([buckling] max_load_factor)")
+    below = [f for f in linear.load_factors if f < path.checked_to]
+    if len(below) > len(factors):
+        notes.append(
+            f"the nonlinear path confirms {len(factors)} critical point(s) up to load factor "
+            f"{path.checked_to:.6g}, where the problem linearised about the state at load "
+            f"factor {linear.prestress:g} has {len(below)} factor(s) ("
+            + ", ".join(f"{f:.6g}" for f in below) + "): the others are not critical points "
+            "of the path (its stability does not change there) and are not reported as "
+            "buckling loads (linearised_load_factors)")
+    result = Buckling(factors, shapes, linear.prestress, linear.negative, notes)
+    return result, checks, extra
 
 
 def _run_solid(config, settings, out, comm, progress) -> dict:
@@ -183,8 +237,20 @@ def _run_solid(config, settings, out, comm, progress) -> dict:
     except LoadSteppingFailed as failure:
         return _failed(failure, settings.prestress, run.dofs, started,
                        {"load_factor": float(run.load_factor)}, out, comm)
+    checks, extra = [], {}
+    try:
+        result, checks, extra = _confirmed(run, result, settings, config.stepping, progress)
+    except LoadSteppingFailed as failure:  # the path's start could not be restored
+        return _failed(failure, settings.prestress, run.dofs, started,
+                       {"load_factor": float(run.load_factor)}, out, comm)
     critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
     summary = _summary(result, settings, run.dofs, started, critical)
+    message = extra.pop("message", None)
+    summary.update(extra)
+    if message:
+        summary["message"] = message
+    if checks:
+        summary["checks"] = checks
     summary["notes"] = work_notes + summary["notes"]
     summary["model"] = "solid"
     if out is not None:
@@ -215,9 +281,23 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     if summary["status"] != "completed":
         report.err(f"fe-beam buckling: {summary['message']}")
         return Result("buckling", summary, EXIT_FAILED, report.lines)
-    report.out(f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
-               f"{summary['prestress']:g}")
-    for index, factor in enumerate(summary["load_factors"], start=1):
-        report.out(f"{index:>4}  {factor:>14.8g}")
+    if "critical_points" in summary and not summary["load_factors"]:
+        report.out(f"fe-beam buckling: {summary['message']}")
+    elif "critical_points" in summary:
+        report.out(f"{'mode':>4}  {'load factor':>14}  critical points of the nonlinear path "
+                   f"(linearised about the state at load factor {summary['prestress']:g}, "
+                   "confirmed by the path's stability)")
+        brackets = [point for point in summary["critical_points"]
+                    for _ in range(point["multiplicity"])]
+        for index, (factor, point) in enumerate(
+                zip(summary["load_factors"], brackets, strict=False), start=1):
+            report.out(f"{index:>4}  {factor:>14.8g}  stable at {point['bracket'][0]:.8g} "
+                       f"({point['unstable_below']} energy-decreasing directions), "
+                       f"{point['unstable_above']} at {point['bracket'][1]:.8g}")
+    else:
+        report.out(f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
+                   f"{summary['prestress']:g}")
+        for index, factor in enumerate(summary["load_factors"], start=1):
+            report.out(f"{index:>4}  {factor:>14.8g}")
     report.out(f"{summary['dofs']} dofs, {summary['wall_time_s']:.2f} s; results in {out}")
     return Result("buckling", summary, 0, report.lines)

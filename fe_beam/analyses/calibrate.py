@@ -1,7 +1,16 @@
 """``fe-beam calibrate``: fit rod or finger parameters to measured tip poses and backbone points
 by Gauss-Newton / Levenberg-Marquardt (scipy.optimize.least_squares, trust-region reflective)
 with the exact adjoint Jacobian of `fe_beam.analyses.sensitivity.RodSensitivity`; each new parameter
-set is solved from the last equilibrium at each load level (continuation).
+set is solved from the equilibria of the accepted point (the best evaluated so far) at each load
+level, never from the last trial's (a far trial leaves states from which Newton can land on a
+kinked, non-physical branch), and the returned point is re-solved from the reference state.
+
+Run-time checks (summary ``checks``, `_certified_fit`, `_identifiability`):
+``calibrate_best_evaluated`` (the returned point is the best evaluated one),
+``calibrate_reference_path`` (its residuals continued from earlier trials equal a fresh load
+stepping's) and ``calibrate_identifiable`` (the condition number of J^T J in relative parameters
+below `IDENTIFIABLE_TOLERANCE`; beyond it summary ``identifiability`` names the combination the
+data determine).
 
 Configuration::
 
@@ -41,7 +50,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares
 
-from fe_beam import analyses
+from fe_beam import analyses, certify
 from fe_beam.analyses.result import Report, Result, failed, fit_report, world
 from fe_beam.config.calibrate import (
     CalibrationData,
@@ -71,6 +80,10 @@ class _Residuals:
         self.levels = sorted(set(load_factors.tolist()))
         self.history: list[dict] = []
         self._cache: dict = {}
+        # the accepted point: the best evaluated parameters (scaled), their residuals and
+        # equilibria, from which every trial is solved (a branch-safe start)
+        self.best: tuple | None = None  # (norm, q, r)
+        self.accepted: dict | None = None
         self.failed = 0  # trial points without an equilibrium
         # per level: output names and (row index, column, output index, data value, weight)
         self.plan = {}
@@ -107,11 +120,16 @@ class _Residuals:
                                  "residual_norm": None, "equilibrium": False})
             return np.full(size, np.inf)
 
-    def evaluate(self, q: np.ndarray):
+    def evaluate(self, q: np.ndarray, fresh: bool = False):
+        """Residuals and Jacobian at ``q``: each level solved from the accepted point's
+        equilibria (not from the last trial's: a far trial can leave a kinked, non-physical
+        state that Newton then continues from), or with ``fresh`` from the reference state by
+        load stepping (the certificate of the returned point)."""
         key = tuple(np.asarray(q, dtype=float).tolist())
-        if key in self._cache:
+        if key in self._cache and not fresh:
             return self._cache[key]
         self.model.set_values(q * self.scale)
+        self.model.start_from(None if fresh else self.accepted)
         residuals, jacobian = [], []
         for level in self.levels:
             names, entries = self.plan[level]
@@ -128,10 +146,31 @@ class _Residuals:
                 jacobian.extend(weight * rows * self.scale)
         r, jac = np.array(residuals), np.array(jacobian)
         self._cache = {key: (r, jac)}
+        norm = float(np.linalg.norm(r))
         self.history.append({"parameters": dict(zip(self.spec.parameters,
                                                     (q * self.scale).tolist(), strict=True)),
-                             "residual_norm": float(np.linalg.norm(r))})
+                             "residual_norm": norm,
+                             "start": "reference" if fresh or self.accepted is None
+                             else "accepted"})
+        if fresh or self.best is None or norm < self.best[0]:
+            self.accept(np.array(q, dtype=float), r)
         return r, jac
+
+    def accept(self, q: np.ndarray, r: np.ndarray) -> None:
+        """``q`` (just solved) becomes the accepted point: later trials start from its
+        equilibria."""
+        self.best = (float(np.linalg.norm(r)), q.copy(), r.copy())
+        self.accepted = self.model.saved_states()
+
+    def data_norm(self) -> float:
+        """The norm of the weighted data (the scale of the residuals)."""
+        total = 0.0
+        for level in self.levels:
+            total += sum((weight * value) ** 2 for _, value, weight in self.plan[level][1])
+            if len(self.points[level]):
+                weight = self.spec.weights.get("x", self.spec.weights.get("y", 1.0))
+                total += float(np.sum((weight * self.points[level]) ** 2))
+        return math.sqrt(total)
 
 
 def _data_rows(data: CalibrationData, rows: np.ndarray) -> CalibrationData:
@@ -243,13 +282,9 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             raise ConfigError(f"[calibrate] parameter {spec.parameters[int(dead[0])]!r} does not "
                               "influence the data (zero sensitivity of every measured value): "
                               "remove it from parameters or give data it changes")
-        fit = least_squares(lambda q: residuals.trial(q, size_r),
-                            q0, jac=lambda q: residuals.evaluate(q)[1],
-                            bounds=(low / scale, high / scale), method="trf",
-                            x_scale="jac", xtol=tolerance, ftol=tolerance, gtol=tolerance,
-                            max_nfev=200)
-        r, jac = residuals.evaluate(fit.x)
-        values = fit.x * scale
+        fit, q, r, jac, certificate_notes, mismatch = _certified_fit(
+            residuals, q0, size_r, (low / scale, high / scale), tolerance)
+        values = q * scale
         jac_p = jac / scale  # d r / d p
         names = list(spec.parameters)
         # a parameter stopped by its bound is not a least-squares estimate: no standard error
@@ -265,6 +300,8 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
                     | ((values <= low + near) & (step < -outward))
                     | ((values >= high - near) & (step > outward)))
         free = np.flatnonzero(~at_bound)
+        identifiability = _identifiability(jac_p[:, free], np.where(
+            values[free] != 0, np.abs(values[free]), scale[free]), [names[i] for i in free])
         errors = correlation = None
         if len(free):
             sub_errors, sub_corr = _uncertainty(r, jac_p[:, free], scale[free])
@@ -290,6 +327,35 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
                                f"{extent[0]:.6g} to {extent[1]:.6g} m): this model cannot "
                                "reproduce the data with the tendon inside; check the data or "
                                "give [calibrate] bounds")
+        evaluated = [h["residual_norm"] for h in residuals.history
+                     if h.get("residual_norm") is not None]
+        norm, floor = float(np.linalg.norm(r)), 1e-3 * residuals.data_norm()
+        best = min(evaluated) if evaluated else norm
+        checks = [
+            certify.entry("calibrate_best_evaluated", max(norm - best, 0.0) / max(best, floor),
+                          BEST_TOLERANCE,
+                          detail="(residual norm of the returned parameters, solved from the "
+                                 "reference state, minus the least one evaluated) / that least "
+                                 "one",
+                          remedy="the fit returned a point worse than one it evaluated: start "
+                                 "nearer the data or give [calibrate] bounds"),
+            certify.entry("calibrate_reference_path", mismatch, BRANCH_TOLERANCE,
+                          detail="|residuals continued from the accepted point - residuals "
+                                 "solved from the reference state| / |residuals| at the "
+                                 "returned parameters",
+                          remedy="the continuation left the physical equilibrium branch: "
+                                 "raise [loads] steps or start nearer the data"),
+        ]
+        if identifiability is not None:
+            condition = identifiability["condition_number"]
+            condition = math.inf if condition is None else condition
+            checks.append(certify.entry(
+                "calibrate_identifiable", condition, IDENTIFIABLE_TOLERANCE,
+                detail="condition number of J^T J in relative parameters (dp/p)"
+                       + ("" if condition <= IDENTIFIABLE_TOLERANCE
+                          else f"; {identifiability['sentence']}"),
+                remedy="fit fewer parameters (fix one of the combination in the "
+                       "configuration) or give data that separate them"))
         summary = {
             "status": "converged" if fit.success and not outside else "not converged",
             "message": outside[0] if outside else str(fit.message),
@@ -305,8 +371,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
             "iterations": int(fit.njev or 0),
             "function_evaluations": int(fit.nfev),
             "history": residuals.history,
+            "identifiability": identifiability,
+            "checks": checks,
             "wall_time_s": time.perf_counter() - started,
-            "notes": start_notes + bound_notes + ([] if errors is not None or len(free) == 0 else [
+            "notes": start_notes + certificate_notes + bound_notes + ([] if (
+                errors is not None or len(free) == 0) else [
                 "no standard errors: as many data as parameters, or parameters the data cannot "
                 "tell apart (J^T J singular)"]) + ([
                 f"{residuals.failed} trial parameter set(s) had no equilibrium (rejected steps)"]
@@ -318,6 +387,96 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
     finally:
         if own:
             model.destroy()
+
+
+#: the returned point's residual norm may exceed the least evaluated one by this (relative)
+BEST_TOLERANCE = 1e-6
+#: the returned point's residuals continued from the accepted point and solved from the
+#: reference state agree to this (relative to their norm, at least 1e-3 of the data's)
+BRANCH_TOLERANCE = 1e-6
+#: largest condition number of J^T J in relative parameters (dp/p) of an identifiable fit:
+#: beyond it a relative error of the data of 1e-4 (below a good measurement's) can move the
+#: weakest combination of the parameters by O(1) (e.g. E and h of a slender rod whose data
+#: fix only E h^3: 6.5e9; E and a tendon's offset of a soft finger: 2e4)
+IDENTIFIABLE_TOLERANCE = 1e8
+
+
+def _certified_fit(residuals: _Residuals, q0: np.ndarray, size: int, bounds,
+                   tolerance: float, rounds: int = 3):
+    """The trust-region fit, certified: every trial is solved from the accepted (best
+    evaluated) point's equilibria; the returned point is the best evaluated one (never worse
+    than a point already evaluated), re-solved from the reference state by load stepping. When
+    that differs from its continued solution (the continuation left the physical branch), the
+    fit is restarted from there, up to ``rounds`` times. Returns (least_squares result, q,
+    residuals, Jacobian, notes, the relative mismatch of the last re-solve)."""
+    notes: list[str] = []
+    q = q0
+    mismatch = math.inf
+    for _ in range(rounds):
+        fit = least_squares(lambda x: residuals.trial(x, size), q,
+                            jac=lambda x: residuals.evaluate(x)[1], bounds=bounds,
+                            method="trf", x_scale="jac", xtol=tolerance, ftol=tolerance,
+                            gtol=tolerance, max_nfev=200)
+        q = np.array(fit.x, dtype=float)
+        continued = residuals.evaluate(q)[0]
+        if residuals.best is not None and residuals.best[0] < float(np.linalg.norm(continued)):
+            # the optimiser ended worse than a point it evaluated: return that one
+            shown = ", ".join(f"{k} = {v:.6g}" for k, v in zip(
+                residuals.spec.parameters, q * residuals.scale, strict=True))
+            notes.append(f"the optimiser ended at {shown} (residual norm "
+                         f"{float(np.linalg.norm(continued)):.6g}), worse than a point it had "
+                         f"evaluated (residual norm {residuals.best[0]:.6g}): that point is "
+                         "returned")
+            q, continued = residuals.best[1].copy(), residuals.best[2]
+        r, jac = residuals.evaluate(q, fresh=True)
+        floor = 1e-3 * residuals.data_norm()
+        mismatch = float(np.linalg.norm(r - continued)) / max(float(np.linalg.norm(r)), floor,
+                                                              1e-300)
+        if mismatch <= BRANCH_TOLERANCE:
+            break
+        notes.append(f"the residuals at the fit's point continued from earlier trials differ "
+                     f"from those solved from the reference state ({mismatch:.3g} relative): "
+                     "the fit was restarted from the reference solution")
+    return fit, q, r, jac, notes, mismatch
+
+
+def _identifiability(jac_p: np.ndarray, scale: np.ndarray, names: list) -> dict | None:
+    """Whether the data determine the (free) parameters: the condition number of J^T J in
+    relative parameters (dp/p; J = d r / d p scaled by |p|) and, when it is too large, its
+    weakest direction (the relative changes of the parameters that leave the residuals
+    unchanged to first order) in one sentence. None without free parameters."""
+    if jac_p.shape[1] == 0:
+        return None
+    scaled = jac_p * scale[None, :]
+    singular, vt = np.linalg.svd(scaled, full_matrices=False)[1:]
+    condition = (float((singular[0] / singular[-1]) ** 2) if singular[-1] > 0
+                 else math.inf)
+    direction = vt[-1] / np.max(np.abs(vt[-1])) if singular[0] > 0 else vt[-1]
+    weakest = {name: float(c) for name, c in zip(names, direction, strict=True)}
+    moving = [f"{name} by {c:+.3g}" for name, c in weakest.items() if abs(c) > 1e-3]
+    sentence = "the data do not tell the parameters apart"
+    if len(names) > 2:
+        sentence += (": changing " + " and ".join(moving) + " times a common small relative "
+                     "amount leaves every residual unchanged to first order")
+    if len(names) == 2 and np.all(scale > 0):
+        # p1^u1 p2^u2 with u orthogonal to the weakest direction (in ln p) is what they fix
+        u = np.array([direction[1], -direction[0]])
+        u = u / u[np.argmax(np.abs(u))]
+        if np.min(np.abs(u)) < 1e-3:
+            kept = int(np.argmax(np.abs(u)))
+            sentence += (f": only {names[kept]} is determined (the data barely depend on "
+                         f"{names[1 - kept]})")
+        else:
+            sentence += (f": only {names[0]}^{u[0]:.3g} * {names[1]}^{u[1]:.3g} is "
+                         f"determined (changing {names[0]} by {direction[0]:+.3g} and "
+                         f"{names[1]} by {direction[1]:+.3g} times a small relative amount "
+                         "leaves every residual unchanged)")
+    elif len(names) == 1:
+        sentence = f"the data barely depend on {names[0]}"
+    return {"condition_number": condition if math.isfinite(condition) else None,
+            "smallest_singular_value_relative": float(singular[-1] / singular[0])
+            if singular[0] > 0 else 0.0,
+            "weakest_direction": weakest, "sentence": sentence}
 
 
 def _offset_bounds(model, key: str) -> tuple[float, float] | None:

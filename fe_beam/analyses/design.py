@@ -34,7 +34,9 @@ summary.json: ``status``, ``message``, ``variables`` ({key: optimum}), ``initial
 ``objective`` ({kind, value}), ``constraints`` ({name: value}, >= 0 feasible for
 inequalities, 0 for equalities), ``kkt_residual`` and ``kkt`` (stationarity, feasibility,
 dual sign, complementarity, multipliers; scaled variables), ``iterations``, ``evaluations``,
-``gradient``, ``tip``, ``history``, ``wall_time_s``. Plot: design.png (initial and optimal
+``gradient``, ``tip``, ``history``, ``wall_time_s``, ``reproduce`` (the command line that
+re-runs the answer: `fe-beam finger` or `static` on the file with one ``--set`` per variable).
+Plot: design.png (initial and optimal
 shapes, targets).
 
 Grasp force (``objective = "grasp_force"``, `grasp_design`): no gradient. The grasp force of
@@ -72,6 +74,7 @@ from fe_beam.analyses.static import solve_static
 from fe_beam.config.design import (
     DesignProblem,
     parse_design,
+    reproduce_command,
 )
 from fe_beam.config.finger import parse_finger, with_defaults
 from fe_beam.config.schema import parse_static
@@ -705,8 +708,11 @@ def grasp_design(design: DesignProblem, config, comm) -> dict:
     }
 
 
-def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> dict:
-    """Parse, optimise, write summary.json and design.png under ``out``."""
+def run_design(config: dict, out: Path | None, comm, progress: bool = False,
+               options: dict | None = None) -> dict:
+    """Parse, optimise, write summary.json and design.png under ``out``. summary.json's
+    ``reproduce`` is the command line that re-runs the answer (`reproduce_command`;
+    ``options``: the command's, with the configuration's path and the run's overrides)."""
 
     design, rest = parse_design(config)
     rest = copy.deepcopy(rest)
@@ -733,6 +739,7 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False) -> 
     else:
         summary = optimise(design, parsed, comm, rest)
         shapes = summary.pop("_shapes")
+    summary["reproduce"] = reproduce_command(config, summary["variables"], options)
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         atomic_write_json(out / "summary.json", summary)
@@ -747,7 +754,8 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
     report = Report(echo)
     comm = comm if comm is not None else world()
     try:
-        summary = run_design(validated.config, out, comm, progress=progress)
+        summary = run_design(validated.config, out, comm, progress=progress,
+                             options=validated.options)
     except UpdateFailed as failure:  # a trial design without equilibrium
         report.err(f"fe-beam design: no equilibrium for a trial design: {failure} (narrow the "
                    "[design] bounds)")
@@ -756,6 +764,7 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
     values = ", ".join(f"{k} = {v:.6g}" for k, v in summary["variables"].items())
     if "grasp" in summary:
         grasp = summary["grasp"]
+        report.out(f"reproduce the answer with: {summary['reproduce']}")
         code = fit_report(report, "design", summary,
                           f"design {summary['status']}: {values}; "
                           f"{'normal ' if grasp['component'] == 'normal' else ''}grasp force on "
@@ -767,6 +776,7 @@ def run(validated, out: Path | None, comm=None, progress: bool = True,
     minimised = summary["objective"].get("minimised")
     shown = (f"{objective:.6g}" if minimised is None else  # the tension, not tension / bound
              f"{minimised['name']} = {minimised['value']:.6g} (minimised)")
+    report.out(f"reproduce the answer with: {summary['reproduce']}")
     code = fit_report(report, "design", summary,
                       f"design {summary['status']}: {values}; objective {shown}, KKT "
                       f"residual {summary['kkt_residual']:.2g}, {summary['iterations']} "

@@ -39,12 +39,23 @@ from fe_beam.solvers import realtime
 from fe_beam.solvers.newton import LoadSteppingFailed
 from fe_beam.solvers.pull_in import tension_for_target
 
-__all__ = ["DEFAULT_FINGER", "parse_finger", "run", "run_finger", "tension_for_tip_angle"]
+__all__ = ["DEFAULT_FINGER", "InverseUnreachable", "parse_finger", "run", "run_finger",
+           "tension_for_tip_angle"]
 
 
 def _profile_value(profile):
     """A routing profile as the configuration gave it: the number, or the formula's text."""
     return profile.constant if profile.is_constant else profile.text
+
+class InverseUnreachable(ConfigError):
+    """The inverse target is not reached by the tendon (a stopped analysis, not an input
+    mistake: `run_finger` reports it with status "failed" and exit code 3). ``best``: the
+    evaluated (control value, tip value) nearest the target."""
+
+    def __init__(self, message: str, best: tuple[float, float] | None = None):
+        super().__init__(message)
+        self.best = best
+
 
 def tension_for_tip_angle(
     config: StaticConfig,
@@ -74,6 +85,10 @@ def solve_inverse(
     control = "pull_in" if tendon.controlled_by_pull_in else "tension"
     unit = "m" if control == "pull_in" else "N"
     evaluations = []
+    key = "tensions" if control == "tension" else "pull_ins"
+    component = target.component
+    reached = [(0.0, 0.0)] + [(float(step[key][0]), float(step["tip"][target.component]))
+                              for step in sweep or []]
     # One problem for all trials: the tendon at a reference value, each trial a load factor
     # reached by continuation from the previous equilibrium (a few Newton iterations instead of
     # a full load ramp); from the unloaded state again only if that fails.
@@ -97,8 +112,10 @@ def solve_inverse(
                     f"[inverse] no equilibrium at {control} {value:g} {unit}"
                 ) from None
         evaluations.append(value)
+        tip = run.problem.end_values("xL")
+        reached.append((value, float(tip[component])))
         return {
-            "tip": run.problem.end_values("xL"),
+            "tip": tip,
             "tensions": run.tendons.tension_values().tolist(),
             "pull_ins": run.tendons.pull_ins().tolist(),
         }
@@ -114,6 +131,10 @@ def solve_inverse(
                                            max(abs(getattr(tendon, control)), 1e-9))
         value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
         final = solve(value)
+    except ConfigError as error:
+        # the configuration was valid (the sweep converged): the target is out of reach
+        best = min(reached, key=lambda pair: abs(pair[1] - target.value))
+        raise InverseUnreachable(str(error), best) from None
     finally:
         realtime.release(run)
     answer = {
@@ -217,6 +238,15 @@ def run_finger(
     if target is not None and result.status == "converged":
         try:
             inverse = solve_inverse(config, target, comm, sweep=result.steps)
+        except InverseUnreachable as error:
+            # a stopped analysis (exit 3), its best reached value in the summary
+            control = "pull_in" if config.tendons[0].controlled_by_pull_in else "tension"
+            result.status, result.message = "failed", str(error)
+            inverse = {"target": target.key, "target_value": target.value,
+                       "control": control, "status": "failed", "message": str(error)}
+            if error.best is not None:
+                inverse["best_reached"] = {control: error.best[0],
+                                           target.key: error.best[1]}
         except runctl.Interrupted as stop:
             result.extra = extra | stop.stopped(
                 "the inverse solve (the sweep is complete)", "during the inverse solve")
@@ -438,7 +468,14 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
                    f"v = {tip['v']:.6g} m, {where}")
         for entry in step.get("contact", []):
             report.out(contact_line(entry))
-    if inverse:
+    if inverse.get("status") == "failed":
+        best = inverse.get("best_reached")
+        if best:
+            report.out(f"inverse: {inverse['target']} = {inverse['target_value']:g} not "
+                       f"reached; the nearest was {inverse['target']} = "
+                       f"{best[inverse['target']]:.6g} at {inverse['control']} "
+                       f"{best[inverse['control']]:.6g}")
+    elif inverse:
         report.out(f"inverse: tension {inverse['tension']:.8g} N, pull-in "
                    f"{inverse['pull_in']:.6g} m give {inverse['target']} = "
                    f"{inverse['target_value']:g} ({inverse['evaluations']} solves, "

@@ -473,7 +473,7 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
             modes = [(i, c) for i, c in enumerate(result.critical_points) if c.mode is not None]
             state = compat.local_array(problem.w).copy()
             modes_writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-                problem, out / "critical_modes.xdmf")
+                problem, out / "critical_modes.xdmf", sections=False)  # shapes only
             for number, (index, point) in enumerate(modes, start=1):
                 compat.local_array(problem.w)[:] = point.mode
                 modes_writer.write(float(number))

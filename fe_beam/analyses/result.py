@@ -18,12 +18,10 @@ from pathlib import Path
 from fe_beam import certify, runctl
 from fe_beam.exports.outputs import as_json, atomic_write_json
 
-__all__ = ["EXIT_FAILED", "SUMMARY_FILES", "Report", "Result", "closing_of_steps", "exit_code",
+__all__ = ["EXIT_FAILED", "Report", "Result", "closing_of_steps", "exit_code",
            "failed", "fit_report", "settle_checks", "world"]
 
 EXIT_FAILED = 3
-#: the file that holds a command's summary (summary.json unless named here)
-SUMMARY_FILES = {"refine": "refinement.json"}
 
 
 @dataclass
@@ -122,10 +120,11 @@ def failed(command: str, out, comm, message: str, report: Report) -> Result:
 def settle_checks(result: Result, strict: bool, out, comm, echo=None) -> Result:
     """The run-time certificates of a finished run (`fe_beam.certify.settle`): a failed check
     of a run that claims success makes it status "failed" with exit code 3 (``strict``) or a
-    warning; the summary file in ``out`` is rewritten when the verdict changed it. Collective
-    (every rank holds the same summary)."""
+    warning; the summary file in ``out`` is rewritten whenever the run made checks (with
+    ``checks_passed``, as the returned summary has it). Collective (every rank holds the same
+    summary)."""
     data, lines = certify.settle(result.data, strict)
-    if not lines:
+    if not data.get("checks"):
         return result
     report = Report(echo)
     for text in lines:
@@ -136,7 +135,7 @@ def settle_checks(result: Result, strict: bool, out, comm, echo=None) -> Result:
     if strict and data.get("status") == "failed":
         result.exit_code = EXIT_FAILED
     if out is not None and comm.rank == 0 and Path(out).is_dir():
-        atomic_write_json(Path(out) / SUMMARY_FILES.get(result.command, "summary.json"),
+        atomic_write_json(Path(out) / runctl.SUMMARY_FILES.get(result.command, "summary.json"),
                           result.data)
     return result
 

@@ -579,6 +579,29 @@ class RodSensitivity:
         self._states.clear()
         self._versions.clear()
         self._tension_states.clear()
+        self._dirty = True
+
+    def saved_states(self) -> dict:
+        """A copy of the cached equilibria (per load factor) of the current parameters: the
+        start `start_from` restores (e.g. a fit's accepted point)."""
+        current = {lf: state.copy() for lf, state in self._states.items()
+                   if self._versions[lf] == self._version}
+        return {"states": current,
+                "tensions": {lf: np.array(t, copy=True) for lf, t in
+                             self._tension_states.items() if lf in current}}
+
+    def start_from(self, saved: dict | None) -> None:
+        """Continue the next solves from ``saved`` (`saved_states`; None: from the reference
+        state) instead of the last solved equilibria: a branch-safe start for a trial
+        parameter set (Newton from a far trial's state can land on another, non-physical
+        equilibrium branch)."""
+        self.forget_states()
+        if saved:
+            for lf, state in saved["states"].items():
+                self._states[lf] = state.copy()
+                self._versions[lf] = -1  # a start for Newton's method, not an answer
+            self._tension_states.update({lf: np.array(t, copy=True)
+                                         for lf, t in saved["tensions"].items()})
 
     # --- outputs ------------------------------------------------------------------------------
     def outputs(self, names: Sequence[str]) -> np.ndarray:

@@ -430,11 +430,12 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def _writer(problem, path, contact=None):
+def _writer(problem, path, contact=None, sections: bool = True):
     """The XDMF writer of a rod problem (the spatial rod's has the directors); with
-    ``contact`` (a `fe_beam.fem.contact.ContactSet`) the contact fields."""
+    ``contact`` (a `fe_beam.fem.contact.ContactSet`) the contact fields; ``sections=False``:
+    no strains and section forces (mode shapes)."""
     return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-        problem, path, contact=contact if path is not None else None)
+        problem, path, contact=contact if path is not None else None, sections=sections)
 
 
 SPATIAL_MOMENTA = tuple(f"momentum_{k}" for k in "xyz") + tuple(
@@ -646,7 +647,8 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                              ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
             if name == "unstable_modes.xdmf" and not shapes:
                 continue
-            writer = _writer(problem, out / name if static.output.xdmf else None)
+            writer = _writer(problem, out / name if static.output.xdmf else None,
+                             sections=False)  # normalised shapes: no strains or forces
             family = _family_field(problem, writer) if name == "modes.xdmf" else None
             for index, shape in enumerate(shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)

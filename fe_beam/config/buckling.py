@@ -15,6 +15,9 @@ BUCKLING_KEYS = {
     "count": Key((int,), 3, "number of buckling load factors and modes (>= 1)"),
     "prestress": Key(NUMBER, 0.0, "load factor of the state linearised about (0: the "
                      "undeformed state)"),
+    "max_load_factor": Key(NUMBER, None, "largest load factor up to which the nonlinear path "
+                           "is followed to confirm the critical factors (default: max(1, 4 x "
+                           "the first, 2 x the count-th linearised factor))"),
 }
 MAX_BUCKLING_COUNT = 500
 
@@ -22,15 +25,21 @@ MAX_BUCKLING_COUNT = 500
 @dataclass(frozen=True)
 class BucklingSettings:
     """``count`` smallest positive buckling load factors about the state at load factor
-    ``prestress`` (multiples of the applied loads)."""
+    ``prestress`` (multiples of the applied loads), confirmed on the nonlinear path up to
+    ``max_load_factor`` (None: a default from the linearised factors)."""
 
     count: int = 3
     prestress: float = 0.0
+    max_load_factor: float | None = None
 
     def __post_init__(self):
         if not 1 <= self.count <= MAX_BUCKLING_COUNT:
             raise ConfigError(f"[buckling] count must be an integer from 1 to "
                               f"{MAX_BUCKLING_COUNT}; got {self.count}")
+        if self.max_load_factor is not None and not self.max_load_factor > self.prestress:
+            raise ConfigError(f"[buckling] max_load_factor = {self.max_load_factor:g} must be "
+                              f"above the prestress ({self.prestress:g}): it is the largest "
+                              "load factor the path is checked to")
 
 
 def parse_buckling(config: dict) -> tuple[str, object, BucklingSettings]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import math
 import re
+import shlex
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -14,7 +15,7 @@ from fe_beam.config.finger import parse_finger, with_defaults
 from fe_beam.config.schema import parse_static
 from fe_beam.errors import ConfigError
 
-__all__ = ["DesignProblem", "parse_design", "with_value"]
+__all__ = ["DesignProblem", "parse_design", "reproduce_command", "with_value"]
 
 OBJECTIVES = ("tip_pose", "backbone", "tension", "grasp_force")
 DESIGN_KEYS = ("variables", "bounds", "objective", "target", "points", "tip_angle",
@@ -331,3 +332,26 @@ def with_value(config: dict, key: str, value: float) -> dict:
     else:
         raise KeyError(key)
     return changed
+
+
+def reproduce_command(config: dict, variables: dict, options: dict | None = None) -> str:
+    """The command line that re-runs a design's answer: ``fe-beam finger`` (a configuration
+    with [[tendons]]) or ``fe-beam static`` on the design's file, with the run's own ``--set``
+    overrides (``options["overrides"]``, those of [design] and of the variables left out)
+    and one ``--set key=value`` per design variable at its optimum (full precision; an
+    override of a table the file leaves out applies to its default,
+    `fe_beam.config.schema.apply_overrides`)."""
+    options = options or {}
+    command = "finger" if config.get("tendons") else "static"
+    path = options.get("config_path") or "CONFIG.toml"
+    if path == "<dict>":
+        path = "CONFIG.toml"
+    words = ["fe-beam", command, str(path)]
+    for assignment in options.get("overrides") or []:
+        key = assignment.split("=", 1)[0].strip()
+        if key.split(".")[0] == "design" or key in variables:
+            continue
+        words += ["--set", assignment]
+    for key, value in variables.items():
+        words += ["--set", f"{key}={float(value)!r}"]
+    return shlex.join(words)

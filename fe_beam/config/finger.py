@@ -31,6 +31,7 @@ __all__ = [
     "InverseTarget",
     "check_tendon_inside",
     "check_tendons_planar",
+    "override_defaults",
     "parse_finger",
     "parse_tendon",
     "with_defaults",
@@ -82,6 +83,15 @@ class InverseTarget:
     @property
     def component(self) -> str:
         return TIP_COMPONENT[self.key]
+
+
+def override_defaults(command: str, config: dict) -> dict | None:
+    """The tables an override of a table the file leaves out applies to
+    (`fe_beam.config.schema.apply_overrides`): the chapter's finger for ``fe-beam finger`` and
+    every configuration with [[tendons]] (whose left-out tables default to it), else None."""
+    if command == "finger" or (isinstance(config, dict) and config.get("tendons")):
+        return DEFAULT_FINGER
+    return None
 
 
 def with_defaults(config: dict) -> dict:

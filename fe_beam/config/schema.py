@@ -110,10 +110,14 @@ def _parse_value(text: str):
         return text  # a bare word such as reissner (or a value the checks then refuse)
 
 
-def apply_overrides(config: dict, assignments: list[str]) -> dict:
+def apply_overrides(config: dict, assignments: list[str], defaults: dict | None = None) -> dict:
     """Apply ``table.key=value`` overrides (values in TOML syntax; bare words are strings).
-    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``."""
+    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``. ``defaults``: the tables a
+    command uses for those the file leaves out (the finger's, `fe_beam.config.finger`): an
+    override of such a table applies to a copy of its default (``section.h_tip=0.009`` with no
+    [section] changes the default section's h_tip, not a new section of h_tip alone)."""
     config = copy.deepcopy(config)
+    defaults = defaults or {}
     for assignment in assignments or []:
         if "=" not in assignment:
             raise ConfigError(f"--set {shown(assignment)}: expected table.key=value")
@@ -124,6 +128,9 @@ def apply_overrides(config: dict, assignments: list[str]) -> dict:
         target, position = config, 0
         while position < len(names) - 1:
             name = names[position]
+            if position == 0 and name not in target and isinstance(defaults.get(name),
+                                                                    (dict, list)):
+                target[name] = copy.deepcopy(defaults[name])
             target = target.setdefault(name, {})
             position += 1
             if isinstance(target, list) and all(isinstance(item, dict) for item in target):

@@ -17,6 +17,8 @@ import ufl
 from dolfinx import fem, mesh
 from mpi4py import MPI
 from petsc4py import PETSc
+from ufl.algorithms.apply_algebra_lowering import apply_algebra_lowering
+from ufl.algorithms.apply_derivatives import apply_derivatives
 
 __all__ = [
     "DOLFINX_VERSION",
@@ -362,7 +364,19 @@ def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace)
     points = space.element.interpolation_points
     if callable(points):  # later dolfinx versions turned it into a method
         points = points()
-    return fem.Expression(expr, points)
+    return fem.Expression(_derivatives_applied(expr), points)
+
+
+def _derivatives_applied(expr: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """``expr`` with its derivatives (``ufl.diff``, ``ufl.derivative``) carried out.
+
+    FFCx 0.5 numbers an Expression's constants after applying the derivatives, dolfinx 0.5.2
+    packs those of the expression as given: a ``fem.Constant`` the differentiation removes
+    (a stiffness of a term that does not depend on the variable) shifts every later constant
+    into the wrong slot (issue 28, item 5: the moment M = dW/dkappa was E G b^3 / 12 kappa,
+    1e6..1e18 too large). Differentiated beforehand, both lists are the same. Harmless on the
+    later stacks (FFCx would apply the same rules itself)."""
+    return apply_derivatives(apply_algebra_lowering(ufl.as_ufl(expr)))
 
 
 # --- solid ---
@@ -397,7 +411,8 @@ def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray) -> np.ndarra
 
 def expression(expr: ufl.core.expr.Expr, reference_points: np.ndarray) -> fem.Expression:
     """A compiled expression evaluated at fixed points of the reference cell."""
-    return fem.Expression(expr, np.asarray(reference_points, dtype=np.float64))
+    return fem.Expression(_derivatives_applied(expr),
+                          np.asarray(reference_points, dtype=np.float64))
 
 
 def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndarray) -> np.ndarray:

@@ -594,19 +594,25 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
     if obstacle.dim == 3:  # the section in the reference frame d1, d2, d3 = x, y, z
         e = np.eye(3)
         gap = section_distance(obstacle, r, e[0], e[1], e[2], section_parts(section, x / length))
-        extent = f" (its section: {describe_section(section)})"
     else:
         d = np.zeros_like(r)
         d[:, 1] = 1.0
         below, above = section_extents(section, x / length)
         gap = segment_distance(obstacle, r, d, below, above)
-        extent = (f" (its section reaching {float(np.min(below)):.4g} m below and "
-                  f"{float(np.min(above)):.4g} m above the centreline)")
     worst = int(np.argmin(gap))
     if not gap[worst] > 0:
-        depth = max(-float(gap[worst]), 0.0)
-        where = ("touches it" if depth == 0.0 else f"is {depth:.4g} m inside the obstacle")
+        # the section's extent the check used, at the station that touches
+        def at(value) -> float:
+            return float(np.broadcast_to(np.asarray(value, dtype=float), x.shape)[worst])
+
+        extent = (f"the section taken as {describe_section(section, x[worst] / length)}, "
+                  "with flat end faces" if obstacle.dim == 3 else
+                  f"the section reaching from y = {-at(below):.4g} to {at(above):.4g} m")
+        depth = -float(gap[worst])
+        where = (f"it touches the rod's surface at x = {x[worst]:.4g} m" if depth <= 0 else
+                 f"the rod's surface is {depth:.4g} m inside the obstacle at x = {x[worst]:.4g} m")
+        verb = "touches" if depth <= 0 else "intersects"
         raise ConfigError(
-            f"{obstacle.where} the {obstacle.shape} intersects the undeformed rod{extent}: its "
-            f"surface {where} at x = {x[worst]:.4g} m; move it clear of the rod (the rod "
-            "starts straight along x with its section centred on the x axis)")
+            f"{obstacle.where} the {obstacle.shape} {verb} the undeformed rod ({where}; "
+            f"{extent}); move it clear of the rod (the rod starts straight along x with its "
+            "section centred on the x axis)")

@@ -42,10 +42,11 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_max, global_sum
 from fe_beam.model.loads import scaled
-from fe_beam.solvers.inertia import inertia
-from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE
+from fe_beam.solvers.inertia import inertia, rod_unstable_count, solid_unstable_count
+from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, LoadStepping, LoadSteppingFailed
 
-__all__ = ["Buckling", "LinearisedProblem", "buckling_modes", "rod_buckling",
+__all__ = ["Buckling", "LinearisedProblem", "PathCheck", "PathCritical", "buckling_modes",
+           "confirm_on_path", "default_search_limit", "rod_buckling",
            "solid_buckling"]
 
 # eigenvalues whose imaginary part is below this fraction of their modulus are real
@@ -173,8 +174,12 @@ def geometric_stiffness(problem: LinearisedProblem, w1: fem.Function, jacobian) 
     return G
 
 
-def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
-    """The ``count`` smallest buckling load factors above the current one, and their modes."""
+def buckling_modes(problem: LinearisedProblem, count: int, verify: bool = True) -> Buckling:
+    """The ``count`` smallest buckling load factors above the current one, and their modes.
+    ``verify``: keep only the positive factors that are crossings of the inertia of
+    K_T + lambda K_geo (conservative loads); False keeps the pencil's eigenvalues as they are
+    (about a nearly critical state the inertia cannot resolve a factor mu ~ 1e-5 x p: the
+    estimates that `confirm_on_path` checks on the path itself)."""
     from slepc4py import SLEPc
 
     if count < 1:
@@ -206,7 +211,7 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         extra *= 2
     positive.sort(key=lambda pair: pair[0])
     negative = sorted((mu for mu, _ in pairs if mu < 0), key=abs)
-    if problem.conservative:
+    if problem.conservative and verify:
         try:
             positive = _verified_positive(SLEPc, K, G, B, positive, pairs, count, fixed,
                                           problem, notes)
@@ -217,7 +222,7 @@ def buckling_modes(problem: LinearisedProblem, count: int) -> Buckling:
         for matrix in (K, G, B):
             matrix.destroy()
     chosen = positive[:count]
-    if len(chosen) < count and not problem.conservative:
+    if len(chosen) < count and not (problem.conservative and verify):
         notes.append(f"[buckling] count = {count}: only {len(chosen)} positive buckling load "
                      "factor(s) found (the loads may not compress the structure enough)")
     p = problem.load_factor
@@ -453,19 +458,19 @@ def _rod_linearised(run) -> LinearisedProblem:
 
 
 def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,
-                 progress: bool = False) -> Buckling:
+                 progress: bool = False, verify: bool = True) -> Buckling:
     """Buckling of the rod of ``run`` (a `fe_beam.analyses.static.StaticContinuation`): the state is
     first loaded to ``prestress`` (load stepping; `LoadSteppingFailed` if it is not reached)."""
     if prestress != run.load_factor:
         run.advance(prestress, stepping or run.config.stepping, progress=progress,
                     label="buckling pre-state")
     run._set_load_factor(float(run.load_factor))
-    return buckling_modes(_rod_linearised(run), count)
+    return buckling_modes(_rod_linearised(run), count, verify)
 
 
 # --- the 3D solid -------------------------------------------------------------------------------
 def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
-                   progress: bool = False) -> Buckling:
+                   progress: bool = False, verify: bool = True) -> Buckling:
     """Buckling of the 3D solid of ``run`` (a `fe_beam.analyses.solid.SolidRun`, tip force only:
     its cables' contributions are outside the UFL residual) about the state at ``prestress``."""
     if prestress > run.load_factor:
@@ -487,7 +492,7 @@ def solid_buckling(run, count: int, prestress: float = 0.0, stepping=None,
         set_load_factor=problem.set_load_factor, set_prescribed_factor=lambda value: None,
         load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
         saddle_point=problem.p is not None)
-    return buckling_modes(lin, count)
+    return buckling_modes(lin, count, verify)
 
 
 # --- the command ------------------------------------------------------------------------------
@@ -500,3 +505,302 @@ def load_scale_record(model, factor: float) -> dict:
         if values:
             record[f"prescribed_{end}"] = {k: factor * v for k, v in values.items()}
     return record
+
+
+# --- the critical points of the nonlinear path ----------------------------------------------------
+#: a confirmed critical factor's bracket on the path: stable at lo, one more energy-decreasing
+#: direction at hi, (hi - lo) <= CONFIRM_TOLERANCE * hi
+CONFIRM_TOLERANCE = 1e-4
+#: the search for a crossing walks toward the linearised estimate about the last state: this
+#: fraction of the way while it is farther than APPROACH_GAP (relative) ...
+APPROACH, APPROACH_GAP = 0.8, 0.1
+#: ... then past it by this fraction of the gap (at least 1e-3 relative) ...
+BRACKET_MARGIN = 0.5
+#: ... and at least this multiple of the distance from the prestress already walked (an
+#: estimate that keeps running ahead of the path, as about a bent cantilever, is overtaken)
+WALK_GROWTH = 0.5
+MAX_PATH_TRIALS = 80
+#: the default largest load factor checked: max(1, SEARCH_MULTIPLE x the count-th linearised
+#: factor about the prestress, SEARCH_MULTIPLE_FIRST x the first)
+SEARCH_MULTIPLE = 2.0
+SEARCH_MULTIPLE_FIRST = 4.0
+
+
+@dataclass
+class PathCritical:
+    """A critical load factor confirmed by the nonlinear path: ``bracket`` (lo, hi) with
+    ``unstable_below`` energy-decreasing directions of the tangent at lo and
+    ``unstable_above`` > that at hi; ``load_factor``: the linearised estimate about the state
+    at lo when it lies in the bracket (error O((hi - lo)^2)), else the bracket's middle;
+    ``multiplicity``: unstable_above - unstable_below (coincident factors); ``shapes``: the
+    critical modes (linearised about lo)."""
+
+    load_factor: float
+    bracket: tuple[float, float]
+    unstable_below: int
+    unstable_above: int
+    shapes: list = field(default_factory=list)
+
+    @property
+    def multiplicity(self) -> int:
+        return self.unstable_above - self.unstable_below
+
+
+@dataclass
+class PathCheck:
+    """What the nonlinear path says of the linearised factors: the ``confirmed`` critical points
+    (ascending), ``checked_to``: the largest load factor at which the path was followed and its
+    energy-decreasing directions counted, ``unstable_at_start`` (at the prestress),
+    ``unstable_at_end`` (at checked_to), ``failure``: why the path could not be followed
+    further (None: it reached ``limit``, or ``count`` factors were confirmed)."""
+
+    confirmed: list[PathCritical]
+    checked_to: float
+    limit: float
+    unstable_at_start: int
+    unstable_at_end: int
+    failure: str | None = None
+    trials: int = 0
+    #: (lo, x, count at lo, count at x < it): the search stopped where the path lost an
+    #: energy-decreasing direction (it left the branch), None otherwise
+    left_branch: tuple | None = None
+
+
+def default_search_limit(first: Buckling, count: int) -> float:
+    """The largest load factor the path is followed to when no critical point is confirmed
+    before it (module constants SEARCH_MULTIPLE*)."""
+    factors = first.load_factors
+    candidates = [1.0, 2.0 * abs(first.prestress)]
+    if factors:
+        candidates += [SEARCH_MULTIPLE_FIRST * factors[0],
+                       SEARCH_MULTIPLE * factors[min(count, len(factors)) - 1]]
+    return max(candidates)
+
+
+def confirm_on_path(run, first: Buckling, count: int, limit: float, stepping=None,
+                    tolerance: float = CONFIRM_TOLERANCE, progress: bool = False) -> PathCheck:
+    """The critical load factors of the nonlinear path of ``run`` (a
+    `fe_beam.solvers.rod_static.StaticContinuation` at the state ``first`` was linearised
+    about, conservative loads), up to ``count`` of them below ``limit``.
+
+    From the prestress state, the path is followed by load stepping toward the linearised
+    estimate about the last state reached (APPROACH of the way while it is far, then just past
+    it: BRACKET_MARGIN; at least WALK_GROWTH times the distance already walked), and the
+    energy-decreasing directions of the tangent are counted there (the sparse inertia,
+    `fe_beam.solvers.inertia`; the 3D solid's: a `fe_beam.analyses.solid.SolidRun`). A state with
+    more of them than the last one brackets a critical point; the bracket is narrowed by probes
+    on either side of the estimate linearised about its stable end (quadratic convergence) or,
+    when that estimate leaves the bracket, by bisection, to ``tolerance`` (relative). The
+    search for the next factor starts at the unstable end. A linearised factor that the path
+    does not cross is not a critical point (about a bent pre-buckling state it rarely is: a
+    cantilever under a transverse tip load never buckles).
+
+    ``stepping``: the load stepping of the walk (its initial steps per walk; probes near a
+    bracket take one step, cut back on failure). The run is left at the last state reached."""
+    stepping = stepping or LoadStepping()
+    walk = LoadStepping(steps=max(2, min(stepping.steps, 10)),
+                        min_increment=min(stepping.min_increment, 1e-4), max_increment=1.0,
+                        cut_factor=stepping.cut_factor, grow_factor=stepping.grow_factor,
+                        easy_iterations=stepping.easy_iterations, adaptive=True)
+    probe = LoadStepping(steps=1, min_increment=1e-4, max_increment=1.0,
+                         cut_factor=stepping.cut_factor, grow_factor=stepping.grow_factor,
+                         easy_iterations=stepping.easy_iterations, adaptive=True)
+    path = _SolidPath(run) if not hasattr(run, "engine") else _RodPath(run)
+    start = path.load_factor
+    trials = 0
+
+    def state():
+        return path.snapshot()
+
+    def back_to(snapshot) -> None:
+        path.restore(snapshot)
+
+    def reach(target: float, how) -> int:
+        nonlocal trials
+        trials += 1
+        path.advance(target, how, progress)
+        return path.unstable()
+
+    cache: dict[float, Buckling | None] = {}
+
+    def estimate(wanted: int = 2) -> Buckling | None:
+        """The linearised factors above the current state (at least the first ``wanted``;
+        one solve per state)."""
+        here = path.load_factor
+        known = cache.get(here, False)
+        if known is not False and (known is None or len(known.load_factors) >= wanted):
+            return known
+        try:
+            found = path.estimate(max(2, wanted))
+        except BucklingFailed:
+            found = None
+        cache[here] = found if found is not None and found.load_factors else None
+        return cache[here]
+
+    lo, n_lo, lo_state = start, path.unstable(), state()
+    result = PathCheck([], start, limit, n_lo, n_lo)
+    linear = first if first.load_factors else None
+    if first.prestress == start:
+        cache[start] = linear
+    failure = None
+    while len(result.confirmed) < count and failure is None:
+        # 1. bracket: walk up the path until the count of energy-decreasing directions grows
+        hi = None
+        while trials < MAX_PATH_TRIALS:
+            guess = linear.load_factors[0] if linear is not None else math.inf
+            gap = guess - lo
+            if gap > APPROACH_GAP * abs(guess):  # far: toward the estimate, stopping short
+                target = lo + APPROACH * gap
+            else:  # near: just past it (its error is quadratic in the gap)
+                target = guess + max(BRACKET_MARGIN * gap, 1e-3 * abs(guess))
+            target = max(target, lo + WALK_GROWTH * max(lo - start, 0.0),
+                         lo + 1e-3 * max(abs(lo), abs(limit)))
+            target = min(target, limit)
+            if not target > lo:
+                break
+            try:
+                n = reach(target, walk)
+            except LoadSteppingFailed as stopped:
+                failure = (f"the path could not be followed from load factor {lo:.8g} to "
+                           f"{target:.8g} ({stopped}); last converged load factor "
+                           f"{path.load_factor:.8g}")
+                back_to(lo_state)
+                break
+            if n > n_lo:
+                hi, n_hi, hi_state = target, n, state()
+                break
+            if n < n_lo:  # restabilised: the load stepping left the branch (an imperfect or
+                # a jumped path); what lies above is not the continuation of this branch
+                result.left_branch = (lo, target, n_lo, n)
+                back_to(lo_state)
+                break
+            lo, n_lo, lo_state = target, n, state()
+            result.checked_to, result.unstable_at_end = lo, n_lo
+            if lo >= limit:
+                break
+            linear = estimate()
+        if hi is None:
+            if trials >= MAX_PATH_TRIALS and failure is None and result.left_branch is None:
+                failure = (f"no crossing bracketed in {MAX_PATH_TRIALS} path trials (the "
+                           f"path was followed to load factor {lo:.8g})")
+            break
+        # 2. narrow the bracket: probes about the estimate linearised at its stable end
+        back_to(lo_state)
+        linear = estimate(2)
+        stale, slow = False, 0
+        while hi - lo > tolerance * abs(hi) and trials < MAX_PATH_TRIALS and failure is None:
+            width = hi - lo
+            guess = min((f for f in (linear.load_factors if linear is not None else [])
+                         if lo < f < hi), default=math.nan)
+            if stale or not lo < guess < hi:
+                points = [0.5 * (lo + hi)]
+            else:
+                half = 0.25 * tolerance * abs(guess)
+                points = [min(guess + half, 0.5 * (guess + hi)),
+                          max(guess - half, 0.5 * (guess + lo))]
+            moved = False
+            for x in points:
+                if not lo < x < hi:
+                    continue
+                back_to(lo_state)
+                try:
+                    n = reach(x, probe)
+                except LoadSteppingFailed as stopped:
+                    failure = (f"no equilibrium at load factor {x:.8g} inside the bracket "
+                               f"({lo:.8g}, {hi:.8g}) of a critical point ({stopped})")
+                    break
+                if n > n_lo:
+                    hi, n_hi, hi_state = x, n, state()
+                else:
+                    lo, n_lo, lo_state = x, n, state()
+                    moved = True
+                    result.checked_to, result.unstable_at_end = lo, n_lo
+                    break  # the estimate about the new stable end is better
+            back_to(lo_state)
+            if failure is None:
+                # estimates that do not halve the bracket twice in a row give way to a
+                # bisection (the bracket then shrinks at least geometrically)
+                slow = slow + 1 if hi - lo > 0.5 * width else 0
+                stale = not moved or slow >= 2
+                if moved:
+                    linear = estimate(2)
+        if failure is not None:
+            break
+        if hi - lo > tolerance * abs(hi):
+            failure = (f"the critical point in ({lo:.8g}, {hi:.8g}) was not narrowed to "
+                       f"{tolerance:g} in {MAX_PATH_TRIALS} path trials")
+            break
+        # 3. the critical factor and its modes, linearised about the stable end
+        back_to(lo_state)
+        multiplicity = n_hi - n_lo
+        about = estimate(multiplicity)
+        inside = [] if about is None else [
+            (f, s) for f, s in zip(about.load_factors, about.shapes, strict=True)
+            if lo - tolerance * abs(hi) <= f <= hi + tolerance * abs(hi)]
+        factor = inside[0][0] if inside else 0.5 * (lo + hi)
+        shapes = [s for _, s in inside][:multiplicity]
+        if len(shapes) < multiplicity and about is not None:
+            shapes += about.shapes[len(shapes):multiplicity]
+        result.confirmed.append(PathCritical(factor, (lo, hi), n_lo, n_hi, shapes))
+        # 4. the next one from the unstable end
+        back_to(hi_state)
+        lo, n_lo, lo_state = hi, n_hi, hi_state
+        result.checked_to, result.unstable_at_end = lo, n_lo
+        start = lo
+        if len(result.confirmed) < count:
+            linear = estimate()
+    result.failure = failure
+    result.trials = trials
+    return result
+
+
+class _RodPath:
+    """`confirm_on_path` on a `fe_beam.solvers.rod_static.StaticContinuation`."""
+
+    def __init__(self, run):
+        self.run = run
+        self.engine = run.engine()
+        self.engine.parameter = float(run.load_factor)
+
+    @property
+    def load_factor(self) -> float:
+        return float(self.run.load_factor)
+
+    def snapshot(self):
+        return self.engine.snapshot()
+
+    def restore(self, snapshot) -> None:
+        self.engine.restore(snapshot)
+        self.run.load_factor = snapshot.parameter
+
+    def advance(self, target: float, stepping, progress: bool) -> None:
+        self.run.advance(target, stepping, progress=progress, label="path check")
+
+    def unstable(self) -> int:
+        return rod_unstable_count(self.run)
+
+    def estimate(self, count: int) -> Buckling:
+        return rod_buckling(self.run, count, self.load_factor, verify=False)
+
+
+class _SolidPath(_RodPath):
+    """`confirm_on_path` on a `fe_beam.analyses.solid.SolidRun` (tip force only)."""
+
+    def __init__(self, run):
+        self.run = run
+        self.engine = run.problem.engine()
+        self.engine.parameter = float(run.load_factor)
+
+    def restore(self, snapshot) -> None:
+        self.engine.restore(snapshot)
+        self.run.load_factor = snapshot.parameter
+        self.run.problem.set_load_factor(snapshot.parameter)
+
+    def unstable(self) -> int:
+        count = solid_unstable_count(self.run.problem)
+        if count is None:
+            raise BucklingFailed("the solid's stability is not available (a tensioned cable)")
+        return count
+
+    def estimate(self, count: int) -> Buckling:
+        return solid_buckling(self.run, count, self.load_factor, verify=False)
