@@ -104,7 +104,7 @@ def test_compare_in_contact_agrees_with_the_solid_the_rod_alone_and_the_xdmf(tmp
         assert rod["contact_force_difference"][0] == pytest.approx(expected, rel=1e-12)
         assert rod["max_contact_force_difference"] == rod["contact_force_difference"][0]
         assert rod["contact_force_difference"][0] < free_difference
-        assert rod["contact"][0]["max_penetration"] <= TOLERANCE
+        assert rod["contact"][0]["contact_point_penetration"] <= TOLERANCE
         assert summary["departures"][law]["max_contact_force_difference"] == pytest.approx(
             rod["contact_force_difference"][0])
         assert rod["distance_over_L"] < 0.01
@@ -238,11 +238,15 @@ def test_compare_refuses_obstacles_the_planar_rod_cannot_read(tmp_path, obstacle
     assert_usage_error(code, stderr, "compare", fragment)
 
 
-def test_compare_refuses_a_spatial_rod_whose_tube_cuts_the_roof():
-    """The spatial rod's contact tube (the section's circumradius, 14 mm) reaches above the
-    roof at 11 mm: no rod to compare, a configuration error."""
-    with pytest.raises(ConfigError, match="circumradius"):
-        parse_compare(roofed(model={"law": "nonstandard", "kinematics": "spatial"}))
+def test_compare_takes_a_spatial_rod_under_a_roof_clear_of_its_flat_side():
+    """The roof at 11 mm is clear of the section's flat side (h/2 = 10 mm): the spatial rod
+    is compared (the tube of its circumradius, 14 mm, was refused until issue 28); a roof at
+    9 mm cuts the section, and the refusal names its extent."""
+    parse_compare(roofed(model={"law": "nonstandard", "kinematics": "spatial"}))
+    low = roofed(model={"law": "nonstandard", "kinematics": "spatial"})
+    low["obstacles"][0]["point"] = [0.0, 0.009, 0.0]
+    with pytest.raises(ConfigError, match="intersects the undeformed rod.*0.02 x 0.02 m"):
+        parse_compare(low)
 
 
 def test_validity_refuses_the_contact_metric_without_obstacles():

@@ -51,7 +51,7 @@ def solve(config: dict):
     assert result.status == "converged", result.message
     for step in result.steps:
         for entry in step["contact"]:
-            assert entry["max_penetration"] <= TOLERANCE_OF(config), step
+            assert entry["contact_point_penetration"] <= TOLERANCE_OF(config), step
     return result
 
 

@@ -93,8 +93,9 @@ SPATIAL_FLOOR = {"shape": "plane", "point": [0.0, -0.01, 0.0], "normal": [0.0, 1
     ({"shape": "sphere", "center": [0.5, 0.3, 0.0], "radius": 0.1, "friction": 0.3},
      ("friction", "plane or an infinite cylinder")),
     (FLOOR, ("point", "3 numbers")),
-    # the tube of the circumradius (half-diagonal 0.00707 m) reaches y = -0.00707
-    ({**SPATIAL_FLOOR, "point": [0.0, -0.007, 0.0]}, ("intersects the undeformed rod",)),
+    # the section's flat face (h/2 = 0.005 m) reaches y = -0.005; the refusal names it
+    ({**SPATIAL_FLOOR, "point": [0.0, -0.0049, 0.0]}, ("intersects the undeformed rod",
+                                                       "0.01 x 0.01 m")),
     ({"shape": "cylinder", "point": [0.5, 0.0, 0.0], "radius": 0.1, "axis": [0, 0, 1],
       "length": 0.2}, ("intersects",)),
     ({"shape": "cylinder", "point": [0.5, 0.3, 0.0], "radius": 0.1, "axis": [0, 0, 0]},
@@ -149,13 +150,14 @@ def test_obstacle_on_the_undeformed_rod_names_the_section_extent(tmp_path, capsy
     assert "-0 m" not in message and "is -" not in message, message
 
 
-def test_spatial_obstacle_on_the_rod_names_the_tube_radius(tmp_path, capsys):
-    """The spatial refusal names the extent it used: the tube of the section's circumradius
-    (a 6 x 16 mm rectangle: sqrt(0.006^2 + 0.016^2) / 2 = 0.008544 m)."""
-    floor = {**SPATIAL_FLOOR, "point": [0.0, -0.008, 0.0]}
+def test_spatial_obstacle_on_the_rod_names_the_section(tmp_path, capsys):
+    """The spatial refusal names the extent it used: the section's true shape (a 6 x 16 mm
+    rectangle, h = 16 mm along y: its flat face at y = -0.008; the tube of its circumradius,
+    0.008544 m, was used until issue 28)."""
+    floor = {**SPATIAL_FLOOR, "point": [0.0, -0.0075, 0.0]}
     config = {**SPATIAL, "section": {"shape": "rectangle", "b": 0.006, "h": 0.016},
               "obstacles": [floor]}
     code, err, _, path = run_cli(tmp_path, config, capsys=capsys)
     message = usage_error(code, err, path)
-    assert "tube of radius 0.008544 m (its circumradius)" in message, message
-    assert "0.000544 m inside" in message, message
+    assert "the rectangle 0.006 x 0.016 m (b x h)" in message, message
+    assert "0.0005 m inside" in message, message

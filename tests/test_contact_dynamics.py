@@ -58,7 +58,7 @@ def solve(config: dict):
     assert result.status == "converged", result.message
     tolerance = config["contact"]["penetration_tolerance"]
     for step in result.steps:
-        assert step["contact"][0]["max_penetration"] <= tolerance, step
+        assert step["contact"][0]["contact_point_penetration"] <= tolerance, step
     return result
 
 
@@ -170,7 +170,7 @@ def run_dynamic(config: dict) -> dict:
     tolerance = config["contact"]["penetration_tolerance"]
     for record in summary["history"]:  # every accepted step is an output here
         for entry in record["contact"]:
-            assert entry["max_penetration"] <= tolerance, record
+            assert entry["contact_point_penetration"] <= tolerance, record
     return summary
 
 

@@ -32,7 +32,7 @@ def run_of(config: dict) -> StaticContinuation:
 
 def check_penetration(run, tolerance):
     for entry in run.contact.summary():
-        assert entry["max_penetration"] <= tolerance, entry
+        assert entry["contact_point_penetration"] <= tolerance, entry
 
 
 @pytest.mark.mpi
@@ -81,8 +81,8 @@ def test_pressed_tip_sticks_below_mu_n_and_slips_at_it():
     stuck = slipping = 0
     worst = {"stick": 0.0, "slip": 0.0, "penetration": 0.0}
     for index, (pulled, entry, tip) in enumerate(records):
-        assert entry["max_penetration"] <= TOLERANCE, entry
-        worst["penetration"] = max(worst["penetration"], entry["max_penetration"])
+        assert entry["contact_point_penetration"] <= TOLERANCE, entry
+        worst["penetration"] = max(worst["penetration"], entry["contact_point_penetration"])
         n = entry["force"][1] - entry["friction_force"][1]
         # the friction moment (h/2) F_t on the propped tip changes N by 3 M / 2L
         assert n == pytest.approx(normal, rel=5e-3)

@@ -113,7 +113,7 @@ def test_oblique_pull_sticks_below_mu_n_and_slips_against_the_friction():
         # last accepted step (statics: friction opposes the incremental slip)
         point = material_point(tip, body)
         body = facing(tip, normal)
-        assert entry["max_penetration"] <= TOLERANCE, entry
+        assert entry["contact_point_penetration"] <= TOLERANCE, entry
         force, friction = np.array(entry["force"]), np.array(entry["friction_force"])
         n = (force - friction) @ normal
         assert n == pytest.approx(1.0, rel=2e-3)  # the friction's moment changes N a little
@@ -266,7 +266,7 @@ def test_capstan_over_a_cylinder_with_an_oblique_axis():
 
     def record(step) -> None:
         (drum,) = run.contact.summary()
-        assert drum["max_penetration"] <= 1e-7, drum
+        assert drum["contact_point_penetration"] <= 1e-7, drum
         states.append((drum, problem.end_reaction("x0"), problem.end_values("xL")))
 
     run.advance_along(problem.set_prescribed_factor, 0.0, 1.0, LoadStepping(steps=4),

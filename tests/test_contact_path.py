@@ -40,7 +40,7 @@ L, EI = 1.0, 1.0
 def _penetration_below_tolerance(summary: dict, tolerance: float) -> None:
     for point in summary["path"]:
         for entry in point["contact"]:
-            assert entry["max_penetration"] <= tolerance, point
+            assert entry["contact_point_penetration"] <= tolerance, point
 
 
 # --- (a) the elastica on a floor -----------------------------------------------------------------

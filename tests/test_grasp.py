@@ -255,7 +255,8 @@ def test_examples_grip_harder_with_more_tension(name):
     assert touched and touched == list(range(touched[0], len(forces)))
     assert all(np.diff([forces[i] for i in touched]) > 0)
     assert all(np.diff(tensions) > 0)
-    assert all(e["max_penetration"] <= tolerance for s in result.steps for e in s["contact"])
+    assert all(e["contact_point_penetration"] <= tolerance
+               for s in result.steps for e in s["contact"])
     final = result.steps[-1]["contact"]
     if name == "pinch.toml":  # the fingers do not touch each other: no force on the plane
         assert final[1]["force"] == [0.0, 0.0] and final[0]["name"] == "marker"
@@ -358,7 +359,7 @@ def test_realtime_update_with_an_obstacle_keeps_the_contact_converged():
     with RealtimeSolver(set_parameters(config, {"tendons.0.tension": 4.0})) as solver:
         tip = solver.update(tensions=[5.0])
         (entry,) = solver.run.contact.summary()
-    assert entry["max_penetration"] <= tolerance
+    assert entry["contact_point_penetration"] <= tolerance
     expected = reference.steps[-1]
     assert math.hypot(*entry["force"]) == pytest.approx(grasp_force(expected)[0], rel=1e-2)
     assert math.hypot(tip["u"] - expected["tip"]["u"], tip["v"] - expected["tip"]["v"]) < 1e-3 * 0.1

@@ -20,6 +20,7 @@ from fe_beam.exports.spatial import (
 )
 from fe_beam.fem.rod import BeamProblem
 from fe_beam.fem.section_laws import SOLID_NAMES
+from fe_beam.model.obstacles import ContactSettings
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers import realtime
 from fe_beam.solvers.newton import (
@@ -34,7 +35,8 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
     check_beam_work,
 )
 
-__all__ = ["StaticContinuation", "StaticResult", "contact_columns", "contact_line", "run",
+__all__ = ["StaticContinuation", "StaticResult", "contact_checks", "contact_columns",
+           "contact_line", "run",
            "solve_static"]
 
 
@@ -52,7 +54,8 @@ class StaticResult:
     extra: dict = field(default_factory=dict)
     #: the obstacles at their place in the last state (moving obstacles: translated)
     obstacles: tuple = ()
-    #: run-time certificates (`fe_beam.certify.entry`), summary.json's ``checks``
+    #: run-time certificates (`fe_beam.certify.entry`), summary.json's ``checks`` (after any
+    #: the driver adds in ``extra``)
     checks: list[dict] = field(default_factory=list)
 
     def summary(self, extra: dict | None = None) -> dict:
@@ -231,6 +234,10 @@ def solve_static(
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        if run.contact is not None and result.steps:
+            result.checks.extend(contact_checks(
+                result.steps[-1].get("contact", []),
+                max(run.contact.tolerance, ContactSettings().tolerance(config.model.section))))
         if certify_equilibrium and result.steps:
             checks = result.checks
             checks.append(equilibrium_entry(problem, config.solver.rtol,
@@ -261,6 +268,39 @@ def solve_static(
                                     *bounding_box(result.shapes, config.model.length))
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
+
+
+#: the largest relative difference between an obstacle's reported normal force and the one
+#: recomputed from the contact pressures and the obstacle's normals (`contact_checks`)
+FORCE_BALANCE_TOLERANCE = 1e-6
+
+
+def contact_checks(entries: list[dict], tolerance: float) -> list[dict]:
+    """The contact certificates of the last accepted state (`fe_beam.certify`), over all
+    obstacles: ``surface_penetration``, the largest penetration over the rod's whole surface
+    (between the contact points, at the vertices, on the end faces; the section's true shape:
+    `fe_beam.fem.contact.ContactSet.surface`) against ``tolerance`` (the caller's: the
+    penetration tolerance, at least the default 1e-3 of the thinnest section: the solver holds
+    a tighter one at the contact points only, between them a P2 centreline on a curved
+    obstacle may dip deeper), and
+    ``contact_force_balance``, the reported normal force against the pressures times the
+    obstacle's normals (relative)."""
+    if not entries:
+        return []
+    depth = max(float(e["max_penetration"]) for e in entries)
+    balance = max(float(e.get("force_balance", 0.0)) for e in entries)
+    return [
+        certify.entry("surface_penetration", depth, tolerance * (1 + 1e-9),
+                      detail="largest penetration [m] over the rod's whole surface (between "
+                             "the contact points, at the vertices and on the end faces) "
+                             "against [contact] penetration_tolerance (at least 1e-3 of the "
+                             "thinnest section)",
+                      remedy="refine [mesh] elements or raise [contact] quadrature_degree"),
+        certify.entry("contact_force_balance", balance, FORCE_BALANCE_TOLERANCE,
+                      detail="relative difference of each obstacle's reported normal force "
+                             "from its pressures times the obstacle's normals",
+                      remedy="lower [contact] force_tolerance"),
+    ]
 
 
 def compressed_tendon_notes(tendons, steps: list[dict]) -> list[str]:

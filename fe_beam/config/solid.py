@@ -420,10 +420,9 @@ def parse_solid(raw: dict, planar_contact_rod: bool = False) -> SolidConfig:
     except ConfigError as error:
         if not (obstacles and "undeformed rod" in str(error)):
             raise
-        # the spatial rod's contact tube (the section's circumradius) reaches farther than the
-        # solid's faces: an obstacle clear of the solid may cut it; the solid runs alone
-        tube_note = (f"no rod comparison: {error} (the spatial rod's contact surface is the "
-                     "tube of the section's circumradius, wider than the solid)")
+        # the rod's section (its true shape, the solid's own trace) cuts an obstacle the
+        # solid's mesh is clear of (the solid checks its nodes): the solid runs alone
+        tube_note = f"no rod comparison: {error}"
         rod = _rod_static({k: v for k, v in raw.items() if k not in ("obstacles", "contact")},
                           law, section, tip_force)
     paths, tendon_loads, owners, names = _cables(rod, b, sizes.tendon)

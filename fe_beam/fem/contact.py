@@ -3,12 +3,22 @@
 UFL, the augmented-Lagrangian energy, the slip traction's virtual work, and `ContactSet`, which
 holds the multipliers and stick/slip states and measures the contact state.
 
-Spatial rods: the section is the tube of its circumradius about the centreline (`tube_gap`,
-`fe_beam.model.obstacles.section_circumradius`); the rest below is the same. Their friction
-(planes and infinite cylinders) acts at the tube's material point facing the obstacle
-(`section_facing`), with 2-vector slips in the tangent plane (`spatial_slip`), tangential
-multipliers and slip directions (`spatial_stick_density`, `spatial_slip_traction`,
-`coulomb_state_2d`).
+Spatial rods: the section is its true shape in the plane of the current directors d2, d3
+(`section_gap`, `fe_beam.model.obstacles.section_parts`: a rectangle, a union of rectangles
+for a t-section, a disc for circles and tubes), flat, so that the rod's ends are flat faces.
+The gap to a plane is its support function (a rectangle's nearest corner); to a sphere and to
+an infinite cylinder the exact distance of the section rectangle; to a box and a finite
+cylinder the largest gap to its faces (caps) and lateral surface (conservative near edges).
+`fe_beam.model.obstacles.section_distance` is the numpy twin. Their friction (planes and
+infinite cylinders) acts at the section's material point reaching farthest toward the
+obstacle (`section_support`), with 2-vector slips in the tangent plane (`spatial_slip`),
+tangential multipliers and slip directions (`spatial_stick_density`,
+`spatial_slip_traction`, `coulomb_state_2d`).
+
+Certificate (`ContactSet.surface`): the largest penetration over the rod's whole surface,
+sampled with the numpy twin between the contact points, at the vertices and on the end
+faces, and each obstacle's normal force recomputed from the pressures and the twin's
+normals.
 
 Friction (planar): the slip s of a contact point since the last accepted step
 (`tangential_slip`), stuck points with the energy `stick_density` (Uzawa on lambda_t),
@@ -68,9 +78,10 @@ from fe_beam.model.obstacles import (
     Obstacle,
     Plane,
     Sphere,
-    distance,
     section_circumradius,
+    section_distance,
     section_extents,
+    section_parts,
     segment_distance,
     translated,
 )
@@ -79,7 +90,8 @@ __all__ = ["EDGE_ANGLE", "ContactSet", "active_set_density", "augmented_lagrangi
            "box_edge_contact",
            "contact_point", "contact_pressure", "director", "coulomb_state",
            "coulomb_state_2d", "friction_return_map", "outward_normal", "plane_tangent_basis",
-           "point_gap", "positive_part", "section_facing", "segment_gap", "slip_traction",
+           "point_gap", "positive_part", "section_facing", "section_gap", "section_support",
+           "segment_gap", "slip_traction",
            "spatial_friction_supported", "spatial_outward_normal", "spatial_slip",
            "spatial_slip_traction", "spatial_stick_density", "stick_density",
            "tangential_slip", "tube_gap"]
@@ -199,6 +211,170 @@ def tube_gap(obstacle: Obstacle, r, radius):
     distance minus the radius (exact for a plane, a sphere and a cylinder; a box: its
     face-plane distance, conservative near edges and corners)."""
     return point_gap(obstacle, r) - radius
+
+
+def _abs_smooth(value):
+    """|value| (its derivative sign(value), 0 at 0: a section face parallel to a plane)."""
+    return abs(value)
+
+
+def _plane_section_gap(point, normal, r, d2, d3, parts):
+    """The gap of the section (`fe_beam.model.obstacles.section_parts`) to the half-space
+    behind the plane through ``point`` with unit ``normal``: the support function, the
+    centreline's distance less the section's reach toward the plane (a rectangle's nearest
+    corner: half2 |n.d2| + half3 |n.d3|; a disc's rim: rho |n - (n.d1) d1|)."""
+    n = ufl.as_vector(normal) if isinstance(normal, (tuple, list, np.ndarray)) else normal
+    p = ufl.as_vector(point) if isinstance(point, (tuple, list, np.ndarray)) else point
+    base = ufl.dot(r - p, n)
+    n2, n3 = ufl.dot(d2, n), ufl.dot(d3, n)
+    if "disc" in parts:
+        return base - parts["disc"] * ufl.sqrt(n2**2 + n3**2 + 1e-300)
+    result = None
+    for offset, a2, a3 in parts["rectangles"]:
+        gap = base + offset * n2 - a2 * _abs_smooth(n2) - a3 * _abs_smooth(n3)
+        result = gap if result is None else _smaller(result, gap)
+    return result
+
+
+def _clip(value, low, high):
+    return _larger(_smaller(value, high), low)
+
+
+def _edge_parameter(numerator, denominator, bound):
+    """clip(-numerator / denominator, -bound, bound) (UFL), the minimiser along an edge,
+    written without the division where it saturates: an edge along the axis (denominator 0,
+    numerator 0) takes the end bound sign(-numerator) = 0 with a zero derivative, as the
+    support function's |n.d| does, instead of 0/0 and a Hessian of 1/denominator."""
+    saturated = ufl.ge(abs(numerator), bound * denominator)
+    return ufl.conditional(saturated, -bound * ufl.sign(numerator),
+                           -numerator / (denominator + 1e-150))
+
+
+def _rectangle_line_distance(w, u, v, a2, a3):
+    """min over |s| <= a2, |t| <= a3 of |w + s u + t v| (UFL; `fe_beam.model.obstacles`
+    twin): the best of the four edges, and 0 where the unconstrained minimiser lies inside
+    (the line pierces the section)."""
+    uu, vv, uv = ufl.dot(u, u), ufl.dot(v, v), ufl.dot(u, v)
+    wu, wv = ufl.dot(w, u), ufl.dot(w, v)
+    tiny = 1e-300
+    # the two opposite edges first: equal in value when the section is symmetric about the
+    # axis (a planar problem: d3 along it), whose min is then their mean with its mean
+    # derivative exactly (sign(0) = 0), as the plane's |n.d3|; min-of-min in another order
+    # would pick one side's out-of-plane derivative by round-off
+    pairs = []
+    for first in (True, False):
+        values = []
+        for sign in (-1.0, 1.0):
+            if first:
+                s = sign * a2
+                t = _edge_parameter(wv + s * uv, vv, a3)
+            else:
+                t = sign * a3
+                s = _edge_parameter(wu + t * uv, uu, a2)
+            e = w + s * u + t * v
+            values.append(ufl.sqrt(ufl.dot(e, e) + tiny))
+        pairs.append(_smaller(*values))
+    best = _smaller(*pairs)
+    det = uu * vv - uv**2
+    safe = det + 1e-12 * uu * vv + 1e-24
+    s0, t0 = (-wu * vv + wv * uv) / safe, (-wv * uu + wu * uv) / safe
+    pierced = ufl.conditional(ufl.And(ufl.gt(det, 1e-12 * uu * vv),
+                                      ufl.And(ufl.le(abs(s0), a2), ufl.le(abs(t0), a3))),
+                              1.0, 0.0)
+    return (1 - pierced) * best
+
+
+def section_gap(obstacle: Obstacle, r, R, parts, axis=None):
+    """Signed distance (UFL) of the spatial rod's section at the centreline point r, rotated
+    by R (columns d1, d2, d3) and of the shape ``parts``
+    (`fe_beam.model.obstacles.section_parts`), to the obstacle: the section's true shape, flat
+    (the end faces at the rod's ends). `fe_beam.model.obstacles.section_distance` is the numpy
+    twin and states where it is exact (plane, sphere, infinite cylinder with rectangles) and
+    where a lower bound (conservative: a disc on a cylinder at an oblique angle, box and
+    finite-cylinder edges). ``axis``: a cylinder's axis as a UFL value (a Constant: FFCx 0.5
+    cannot generate the derivatives of the literal zeros a coordinate axis leaves)."""
+    d1, d2, d3 = (ufl.as_vector([R[0, c], R[1, c], R[2, c]]) for c in range(3))
+    if isinstance(obstacle, Plane):
+        return _plane_section_gap(obstacle.point, obstacle.normal, r, d2, d3, parts)
+    if isinstance(obstacle, Box):
+        result = None
+        for point, normal in obstacle.faces():
+            gap = _plane_section_gap(point, normal, r, d2, d3, parts)
+            result = gap if result is None else _larger(result, gap)
+        return result
+    if isinstance(obstacle, Sphere):
+        c = ufl.as_vector(obstacle.center)
+        if "disc" in parts:
+            q = c - r
+            q = q - ufl.dot(q, d1) * d1
+            size = ufl.sqrt(ufl.dot(q, q) + 1e-300)
+            scale = _smaller(1.0, parts["disc"] / size)
+            e = c - r - scale * q
+            return ufl.sqrt(ufl.dot(e, e) + 1e-300) - obstacle.radius
+        result = None
+        for offset, a2, a3 in parts["rectangles"]:
+            q = c - r - offset * d2
+            s = _clip(ufl.dot(q, d2), -a2, a2)
+            t = _clip(ufl.dot(q, d3), -a3, a3)
+            e = q - s * d2 - t * d3
+            gap = ufl.sqrt(ufl.dot(e, e) + 1e-300)
+            result = gap if result is None else _smaller(result, gap)
+        return result - obstacle.radius
+    if isinstance(obstacle, Cylinder):
+        a = ufl.as_vector(obstacle.axis) if axis is None else axis
+        p = ufl.as_vector(obstacle.point)
+
+        def project(x):
+            return x - ufl.dot(x, a) * a
+
+        if "disc" in parts:
+            w = project(r - p)  # the disc's tube (a lower bound, exact when a = d1)
+            lateral = ufl.sqrt(ufl.dot(w, w) + 1e-300) - parts["disc"] - obstacle.radius
+        else:
+            lateral = None
+            for offset, a2, a3 in parts["rectangles"]:
+                gap = _rectangle_line_distance(project(r + offset * d2 - p), project(d2),
+                                               project(d3), a2, a3)
+                lateral = gap if lateral is None else _smaller(lateral, gap)
+            lateral = lateral - obstacle.radius
+        if obstacle.length is None:
+            return lateral
+        for sign in (-1.0, 1.0):
+            cap = _plane_section_gap(p + sign * obstacle.length / 2 * a, sign * a, r, d2, d3,
+                                     parts)
+            lateral = _larger(lateral, cap)
+        return lateral
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def _part_columns(parts) -> list:
+    """The section's shape as expression columns (`ContactSet._spatial_local` reads them):
+    a disc's radius, or (offset, half2, half3) per rectangle."""
+    if "disc" in parts:
+        return [parts["disc"]]
+    return [value for rectangle in parts["rectangles"] for value in rectangle]
+
+
+def section_support(R, normal, parts):
+    """The body-frame offset (0, eta2, eta3) (UFL) of the section point reaching farthest
+    toward -``normal`` (the obstacle's outward normal): the point of the section in contact
+    with a plane (a rectangle's corner, or the middle of an edge or face parallel to the
+    plane; a disc's rim point), where the spatial friction acts."""
+    m = ufl.dot(ufl.transpose(R), -normal)
+    if "disc" in parts:
+        size = ufl.sqrt(m[1] ** 2 + m[2] ** 2 + 1e-300)
+        return ufl.as_vector([0, parts["disc"] * m[1] / size, parts["disc"] * m[2] / size])
+    best, eta2, eta3 = None, None, None
+    for offset, a2, a3 in parts["rectangles"]:
+        reach = offset * m[1] + a2 * abs(m[1]) + a3 * abs(m[2])
+        e2, e3 = offset + a2 * ufl.sign(m[1]), a3 * ufl.sign(m[2])
+        if best is None:
+            best, eta2, eta3 = reach, e2, e3
+            continue
+        pick = (1 + ufl.sign(reach - best)) / 2
+        eta2, eta3 = pick * e2 + (1 - pick) * eta2, pick * e3 + (1 - pick) * eta3
+        best = _larger(best, reach)
+    return ufl.as_vector([0, eta2, eta3])
 
 
 def _finite_cylinder_gap(rel_axial, rel_radial, radius, length):
@@ -491,7 +667,7 @@ def box_edge_contact(box: Box, r, tangent, below, above, d=None, spacing: float 
 # --- the obstacles of one problem ----------------------------------------------------------------
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
-    `fe_beam.fem.spatial_rod.SpatialRodProblem` (the tube of the section's circumradius):
+    `fe_beam.fem.spatial_rod.SpatialRodProblem` (the section's true shape, `section_gap`):
     multipliers, the energy hook (``energy(problem, parts)``, like
     `fe_beam.fem.tendons.TendonSet`), the Uzawa and friction updates and the measured
     contact state. Built before the problem; attached on the first ``energy``."""
@@ -591,7 +767,8 @@ class ContactSet:
             r = ufl.as_vector([x + d[0], d[1], d[2]])
             if variables:
                 r = ufl.variable(r)
-            return {"r": r, "radius": self._radius, "theta": theta}
+            return {"r": r, "radius": self._radius, "theta": theta, "R": rotation(theta),
+                    "parts": self._parts}
         u, v, theta = parts
         r = ufl.as_vector([x + u, v])
         if variables:
@@ -610,7 +787,8 @@ class ContactSet:
 
     def _gap_of(self, obstacle, geometry):
         if self.spatial:
-            return tube_gap(obstacle, geometry["r"], geometry["radius"])
+            return section_gap(obstacle, geometry["r"], geometry["R"], geometry["parts"],
+                               self._axes.get(id(obstacle)))
         return segment_gap(obstacle, geometry["r"], geometry["d"], geometry["below"],
                            geometry["above"])
 
@@ -687,6 +865,10 @@ class ContactSet:
         if self.spatial:
             self._radius = section_circumradius(model.section, self._s, problem.section_dims,
                                                 problem.section_dims_tip)
+            self._parts = section_parts(model.section, self._s, problem.section_dims,
+                                        problem.section_dims_tip)
+            self._axes = {id(o): fem.Constant(mesh, np.asarray(o.axis, dtype=float))
+                          for o in self.obstacles if isinstance(o, Cylinder)}
         self._build_measures(problem, x)
         self._set_references(None)
         self._committed = self._copy()
@@ -752,8 +934,9 @@ class ContactSet:
         columns = [x] + [r[c] for c in range(self.dim)]
         if self.spatial:
             # the section normal d1 = R e1 (the centreline's tangent): `edge_contact`
-            tangent = ufl.dot(rotation(geometry["theta"]), ufl.as_vector([1.0, 0.0, 0.0]))
-            columns += [geometry["radius"]] + [tangent[c] for c in range(3)]
+            R = geometry["R"]
+            columns += [geometry["radius"]] + [R[c, j] for j in range(3) for c in range(3)]
+            columns += _part_columns(geometry["parts"])
         else:
             columns += [geometry["d"][0], geometry["d"][1], geometry["below"],
                         geometry["above"]]
@@ -826,8 +1009,9 @@ class ContactSet:
         longest = problem.comm.allreduce(float(np.max(lengths)) if len(lengths) else 0.0,
                                          op=MPI.MAX)
         narrowest = min([_feature_size(o) for o in self.obstacles] + [np.inf])
-        count = 9 if not np.isfinite(narrowest) else int(np.clip(
-            np.ceil(8 * longest / narrowest) + 1, 9, 513))
+        # at least 17 per element: also the whole-surface penetration (`surface`)
+        count = 17 if not np.isfinite(narrowest) else int(np.clip(
+            np.ceil(8 * longest / narrowest) + 1, 17, 513))
         self._narrowest = narrowest
         self._dense_expression = compat.expression(
             ufl.as_vector(columns[:self._base_columns]), np.linspace(0.0, 1.0, count)[:, None])
@@ -1124,8 +1308,7 @@ class ContactSet:
             end_pressures.append(np.maximum(trial, 0.0))
         local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
         if self.spatial:
-            local["radius"] = values[:, 4]
-            local["tangent"] = values[:, 5:8]
+            local.update(self._spatial_local(values))
         else:
             local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
         changes = int(comm.allreduce(changes, op=MPI.SUM))
@@ -1236,7 +1419,7 @@ class ContactSet:
 
     def _spatial_point(self, geometry, body):
         """The tube's material point r + rho R m (m the body-frame direction ``body``)."""
-        return geometry["r"] + geometry["radius"] * ufl.dot(rotation(geometry["theta"]), body)
+        return geometry["r"] + ufl.dot(rotation(geometry["theta"]), body)
 
     def _spatial_friction_terms(self, i: int, geometry, pressures, variable: bool = False):
         """Per contact point (interior, then the two ends): (measure, slip 2-vector, stick,
@@ -1290,8 +1473,9 @@ class ContactSet:
         directions, friction forces)."""
         obstacle = self.obstacles[i]
         R = rotation(geometry["theta"])
-        facing = section_facing(R, spatial_outward_normal(obstacle, geometry["r"]))
-        facing_point = geometry["r"] + geometry["radius"] * ufl.dot(R, facing)
+        facing = section_support(R, spatial_outward_normal(obstacle, geometry["r"]),
+                                 geometry["parts"])
+        facing_point = geometry["r"] + ufl.dot(R, facing)
         terms = self._spatial_friction_terms(i, geometry, [pressure] + list(end_pressures),
                                              variable=True)
         where["slip"] = len(columns)
@@ -1494,10 +1678,31 @@ class ContactSet:
         values = np.asarray(values).reshape(-1, self._base_columns)
         local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
         if self.spatial:
-            local["radius"] = values[:, 4]
+            local.update(self._spatial_local(values))
         else:
             local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
         return local
+
+    def _spatial_local(self, values) -> dict:
+        """The spatial columns of an evaluated expression: the circumradius, the directors
+        (``tangent`` = d1, ``d2``, ``d3``) and the section's ``parts`` per point."""
+        local = {"radius": values[:, 4], "tangent": values[:, 5:8], "d2": values[:, 8:11],
+                 "d3": values[:, 11:14]}
+        if "disc" in self._parts:
+            local["parts"] = {"disc": values[:, 14]}
+        else:
+            local["parts"] = {"rectangles": [tuple(values[:, 14 + 3 * j + c] for c in range(3))
+                                             for j in range(len(self._parts["rectangles"]))]}
+        return local
+
+    def _surface_gap(self, obstacle, local) -> np.ndarray:
+        """The numpy twin of the gap at the points of ``local`` (`_dense_local`, `evaluate`):
+        the section's true shape (spatial), the section segment (planar)."""
+        if self.spatial:
+            return section_distance(obstacle, local["r"], local["tangent"], local["d2"],
+                                    local["d3"], local["parts"])
+        return segment_distance(obstacle, local["r"], local["d"], local["below"],
+                                local["above"])
 
     def between_points(self) -> str | None:
         """Why the current state is rejected: an obstacle reaching deeper than a quarter of
@@ -1508,14 +1713,11 @@ class ContactSet:
         local = self._dense_local()
         if not len(local["x"]):
             return None
-        x, r = local["x"], local["r"]
+        x = local["x"]
         thickness = 2 * local["radius"] if self.spatial else local["below"] + local["above"]
         depth = max(10 * self.tolerance, 0.25 * min(float(np.min(thickness)), self._narrowest))
         for obstacle in self.placed():
-            if self.spatial:
-                gap = distance(obstacle, r) - local["radius"]
-            else:
-                gap = segment_distance(obstacle, r, local["d"], local["below"], local["above"])
+            gap = self._surface_gap(obstacle, local)
             if np.min(gap) < -depth:
                 j = int(np.argmin(gap))
                 return (f"contact: obstacle {obstacle.name!r} reaches {-gap[j]:.3g} m into the "
@@ -1559,8 +1761,8 @@ class ContactSet:
             for t in np.linspace(0.0, 1.0, samples + 1)[1:-1]:
                 obstacle = translated(fixed, (1 - t) * then[index] + t * now[index])
                 r = (1 - t) * before["r"] + t * after["r"]
-                if self.spatial:
-                    gap = distance(obstacle, r) - after["radius"]
+                if self.spatial:  # the section as it is now, at the point on the straight path
+                    gap = self._surface_gap(obstacle, dict(after, r=r))
                 else:
                     d = (1 - t) * before["d"] + t * after["d"]
                     d = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
@@ -1630,11 +1832,73 @@ class ContactSet:
         return [np.asarray(p).reshape(cells, -1).max(axis=1) if cells else np.zeros(0)
                 for p in state["pressure"]]
 
+    def surface(self, state: dict | None = None) -> list[dict]:
+        """Per obstacle, the run-time certificate of its contact (collective):
+        ``penetration``, the largest penetration [m] over the rod's whole surface, measured
+        with the numpy twin of the gap (`fe_beam.model.obstacles.section_distance`: the
+        section's true shape; planar: the section segment) at points 1/16 of an element
+        apart or closer (`_dense_local`: the vertices and the rod's ends, i.e. its flat end
+        faces, included), and at the contact points; ``force`` the obstacle's normal force on
+        the rod recomputed from the pressures at the contact points and the ends times the
+        numpy twin's gradient (the obstacle's normal at the section's nearest point, by
+        central differences), and ``balance`` its relative difference from the reported
+        (assembled) normal force."""
+        state = state or self.evaluate(friction=False)
+        comm = self._problem.comm
+        dense = self._dense_local()
+        points = state["local"]
+        length = float(self.model.length)
+        step = 1e-7 * length
+        result = []
+        for i, obstacle in enumerate(self.placed()):
+            depth = 0.0
+            if len(dense["x"]):
+                depth = max(depth, float(np.max(-self._surface_gap(obstacle, dense))))
+            if len(state["gap"][i]):
+                depth = max(depth, float(np.max(-state["gap"][i])))
+            depth = max(depth, float(np.max(-np.asarray(state["end_gap"][i]))))
+            depth = comm.allreduce(depth, op=MPI.MAX)
+            force = np.zeros(self.dim)
+            pressure = np.asarray(state["pressure"][i])
+            if np.any(pressure > 0):
+                force += np.sum((self._weights * pressure)[:, None]
+                                * self._gradient(obstacle, points, step), axis=0)
+            ends = np.asarray(state["end_pressure"][i], dtype=float)
+            for e, where in enumerate((0.0, length)):
+                # each end is a vertex of one owned cell of one rank: counted once
+                at = np.flatnonzero(np.abs(dense["x"] - where) <= 1e-12 * length)[:1]
+                if ends[e] > 0 and len(at):
+                    force += ends[e] * self._gradient(obstacle, _take(dense, at), step)[0]
+            force = comm.allreduce(force, op=MPI.SUM)
+            reported = np.array([global_sum(comm, fem.assemble_scalar(form))
+                                 for form in self._resultant_forms[i]["normal"][:self.dim]])
+            scale = max(float(np.linalg.norm(reported)), float(np.linalg.norm(force)),
+                        self.force_scale * 1e-9, 1e-300)
+            result.append({"penetration": depth, "force": force,
+                           "balance": float(np.linalg.norm(force - reported)) / scale})
+        return result
+
+    def _gradient(self, obstacle, local, step: float) -> np.ndarray:
+        """d gap / d r (n, dim) of the numpy twin at the points of ``local``, by central
+        differences."""
+        columns = []
+        for c in range(self.dim):
+            shift = np.zeros(self.dim)
+            shift[c] = step
+            plus = self._surface_gap(obstacle, dict(local, r=local["r"] + shift))
+            minus = self._surface_gap(obstacle, dict(local, r=local["r"] - shift))
+            columns.append((plus - minus) / (2 * step))
+        return np.stack(columns, axis=1)
+
     def summary(self, state: dict | None = None) -> list[dict]:
         """Per obstacle, in the order given: {name, force (the obstacle on the rod, global
         axes: [Fx, Fy] planar, [Fx, Fy, Fz] spatial) [N], moment (about the origin: planar
         the counterclockwise scalar, spatial [Mx, My, Mz]) [N m], active (contact intervals
-        [[x0, x1], ...] in the reference x) [m], max_penetration [m], pressure_peak (largest
+        [[x0, x1], ...] in the reference x) [m], max_penetration (over the rod's whole
+        surface: `surface`) [m], contact_point_penetration (at the contact points and ends,
+        where the solver holds the tolerance) [m], force_balance (the normal force recomputed
+        from the pressures
+        and the obstacle's normals against the reported one, relative), pressure_peak (largest
         line pressure at the contact points) [N/m], end_forces (the normal point forces at
         x = 0 and x = L) [N]}; with friction also friction_force (the tangential part of
         force) [N], slip (intervals of slipping points) [m] and end_friction (the tangential
@@ -1644,6 +1908,7 @@ class ContactSet:
         comm = self._problem.comm
         x_all = np.concatenate(comm.allgather(state["local"]["x"]))
         order = np.argsort(x_all, kind="stable")
+        certificates = self.surface(state)
         result = []
         for i, obstacle in enumerate(self.obstacles):
             forms = self._resultant_forms[i]
@@ -1666,8 +1931,11 @@ class ContactSet:
             active = _intervals(
                 x_line, np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
                 touching)
+            # over the whole surface (`surface`): between the contact points, the vertices
+            # and the end faces too
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
-                              float(np.max(-state["end_gap"][i])))
+                              float(np.max(-state["end_gap"][i])),
+                              certificates[i]["penetration"])
             dim = self.dim
             entry = {
                 "name": obstacle.name,
@@ -1678,8 +1946,13 @@ class ContactSet:
                            else float(resultants[dim])),
                 "active": active,
                 "max_penetration": penetration,
+                # where the solver holds the tolerance: the contact points and the ends
+                "contact_point_penetration": max(
+                    0.0, float(np.max(-gap)) if len(gap) else 0.0,
+                    float(np.max(-state["end_gap"][i]))),
                 "pressure_peak": peak,
                 "end_forces": [float(e) for e in ends],
+                "force_balance": certificates[i]["balance"],
             }
             if friction is not None:
                 f, flags = state["friction"][i], self._friction[i]
@@ -1703,6 +1976,17 @@ class ContactSet:
                     else [float(t) for t in f["end_traction"]])
             result.append(entry)
         return result
+
+
+def _take(local: dict, at) -> dict:
+    """The points ``at`` of a `ContactSet._dense_local` / `evaluate` geometry."""
+    taken = {k: v[at] for k, v in local.items() if k != "parts"}
+    if "parts" in local:
+        parts = local["parts"]
+        taken["parts"] = ({"disc": parts["disc"][at]} if "disc" in parts else
+                          {"rectangles": [tuple(np.asarray(v)[at] for v in rectangle)
+                                          for rectangle in parts["rectangles"]]})
+    return taken
 
 
 def _intervals(x: np.ndarray, active: np.ndarray, touching: np.ndarray) -> list:

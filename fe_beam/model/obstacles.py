@@ -31,7 +31,8 @@ from fe_beam.timefunctions import TimeFunctionError, parse_formula
 
 __all__ = ["MOTION_VARIABLES", "OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Motion",
            "Obstacle", "Plane", "Sphere", "check_clear_of_rod", "distance",
-           "section_circumradius", "section_extents", "segment_distance", "translated"]
+           "section_circumradius", "section_distance", "section_extents", "section_parts",
+           "segment_distance", "translated"]
 
 
 def _vector(name: str, value, dim: int, where: str) -> tuple[float, ...]:
@@ -403,6 +404,135 @@ def section_circumradius(section, s, dims: dict | None = None, dims_tip: dict | 
     return ((h / 2) ** 2 + (b / 2) ** 2) ** 0.5
 
 
+def section_parts(section, s, dims: dict | None = None, dims_tip: dict | None = None) -> dict:
+    """The spatial rod's true section shape in its (d2, d3) plane at s = x / L (floats, arrays
+    or UFL: plain arithmetic), about the centroid: ``{"disc": rho}`` (circle and tube: the
+    outer circle, d/2) or ``{"rectangles": [(offset, half2, half3), ...]}``, a union of
+    rectangles |eta2 - offset| <= half2 along d2 (the h direction), |eta3| <= half3 along d3
+    (the b direction): a rectangle h x b; a t-section its web (tw wide, from the foot) and
+    flange (b x tf, on the +d2 side, as `section_extents`); a custom section h x b (b
+    defaulting to h)."""
+    base = section.dims if dims is None else dims
+    tip = section.dims_tip if dims_tip is None else dims_tip
+    at = {n: v + (tip[n] - v) * s if n in tip else v for n, v in base.items()}
+    if section.shape in ("circle", "tube"):
+        return {"disc": at["d"] / 2}
+    if section.shape == "rectangle":
+        return {"rectangles": [(0.0 * at["h"], at["h"] / 2, at["b"] / 2)]}
+    if section.shape == "t-section":
+        below, _ = section_extents(section, s, dims, dims_tip)
+        h, tf = at["h"], at["tf"]
+        web = ((h - tf) / 2 - below, (h - tf) / 2, at["tw"] / 2)
+        flange = (h - tf / 2 - below, tf / 2, at["b"] / 2)
+        return {"rectangles": [web, flange]}
+    h = section.properties(s, dims, dims_tip).h
+    return {"rectangles": [(0.0 * h, h / 2, at.get("b", h) / 2)]}
+
+
+def describe_section(section, s: float = 0.0) -> str:
+    """The spatial contact surface's section in words (the refusal messages)."""
+    parts = section_parts(section, s)
+    if "disc" in parts:
+        return f"a disc of radius {float(parts['disc']):.4g} m"
+    shown = [f"{2 * float(a3):.4g} x {2 * float(a2):.4g} m (b x h)"
+             for _, a2, a3 in parts["rectangles"]]
+    return "the rectangle " + " and ".join(shown) + " in the section plane"
+
+
+def _frames(d1, d2, d3, n: int):
+    return [np.broadcast_to(np.asarray(d, dtype=float), (n, 3)) for d in (d1, d2, d3)]
+
+
+def _rectangle_line_distance(w, u, v, a2, a3):
+    """min over |s| <= a2, |t| <= a3 of |w + s u + t v| (w, u, v: (n, k) vectors; exact: the
+    unconstrained minimiser when inside the rectangle, else the best of the four edges)."""
+    uu, vv, uv = (np.sum(u * u, axis=1), np.sum(v * v, axis=1), np.sum(u * v, axis=1))
+    wu, wv = np.sum(w * u, axis=1), np.sum(w * v, axis=1)
+    best = np.full(len(w), np.inf)
+    for sign in (-1.0, 1.0):
+        s = sign * a2
+        t = np.clip(-(wv + s * uv) / np.maximum(vv, 1e-300), -a3, a3)
+        best = np.minimum(best, np.linalg.norm(w + s[:, None] * u + t[:, None] * v, axis=1))
+        t = sign * a3
+        s = np.clip(-(wu + t * uv) / np.maximum(uu, 1e-300), -a2, a2)
+        best = np.minimum(best, np.linalg.norm(w + s[:, None] * u + t[:, None] * v, axis=1))
+    det = uu * vv - uv**2
+    ok = det > 1e-12 * np.maximum(uu * vv, 1e-300)
+    safe = np.where(ok, det, 1.0)
+    s0, t0 = (-wu * vv + wv * uv) / safe, (-wv * uu + wu * uv) / safe
+    inside = ok & (np.abs(s0) <= a2) & (np.abs(t0) <= a3)
+    inner = np.linalg.norm(w + s0[:, None] * u + t0[:, None] * v, axis=1)
+    return np.where(inside, np.minimum(inner, best), best)
+
+
+def section_distance(obstacle: Obstacle, r, d1, d2, d3, parts: dict) -> np.ndarray:
+    """Signed distance (numpy) of the spatial rod's section at the centreline points r (n, 3)
+    with directors d1 (the section normal), d2, d3 ((n, 3) or (3,)) and its shape ``parts``
+    (`section_parts`, entries floats or (n,) arrays) to the obstacle: the minimum over the
+    section of the points' signed distances. `fe_beam.fem.contact.section_gap` is the UFL
+    twin. Plane: exact (the support function: the nearest corner, or the disc's rim point);
+    sphere: exact (the section point nearest the centre); infinite cylinder: exact for
+    rectangles (the nearest point of the rectangle to the axis line), for a disc its
+    tube (a lower bound of the distance, exact when the axis is along d1); box
+    and finite cylinder: the largest of the gaps to the half-spaces (faces, caps) and the
+    lateral surface (exact on the faces, below the true distance near edges: conservative).
+    The section is flat: at the rod's ends these are the end faces."""
+    r = np.atleast_2d(np.asarray(r, dtype=float))
+    n = len(r)
+    d1, d2, d3 = _frames(d1, d2, d3, n)
+    if isinstance(obstacle, Plane):
+        return _plane_section_distance(np.array(obstacle.point), np.array(obstacle.normal),
+                                       r, d1, d2, d3, parts)
+    if isinstance(obstacle, Box):
+        gaps = [_plane_section_distance(np.array(p), np.array(m), r, d1, d2, d3, parts)
+                for p, m in obstacle.faces()]
+        return np.max(gaps, axis=0)
+    if isinstance(obstacle, Sphere):
+        c = np.array(obstacle.center)
+        if "disc" in parts:
+            q = c - r
+            q = q - np.sum(q * d1, axis=1)[:, None] * d1
+            size = np.linalg.norm(q, axis=1)
+            scale = np.minimum(1.0, np.asarray(parts["disc"]) / np.maximum(size, 1e-300))
+            return np.linalg.norm(c - r - scale[:, None] * q, axis=1) - obstacle.radius
+        gaps = []
+        for offset, a2, a3 in parts["rectangles"]:
+            q = c - r - np.asarray(offset)[..., None] * d2
+            s = np.clip(np.sum(q * d2, axis=1), -a2, a2)
+            t = np.clip(np.sum(q * d3, axis=1), -a3, a3)
+            gaps.append(np.linalg.norm(q - s[:, None] * d2 - t[:, None] * d3, axis=1))
+        return np.min(gaps, axis=0) - obstacle.radius
+    if isinstance(obstacle, Cylinder):
+        a = np.array(obstacle.axis)
+        project = lambda x: x - np.outer(x @ a, a)  # noqa: E731
+        p = np.array(obstacle.point)
+        if "disc" in parts:
+            lateral = (np.linalg.norm(project(r - p), axis=1) - np.asarray(parts["disc"])
+                       - obstacle.radius)
+        else:
+            lateral = np.min([_rectangle_line_distance(
+                project(r + np.asarray(offset)[..., None] * d2 - p), project(d2), project(d3),
+                np.broadcast_to(a2, (n,)), np.broadcast_to(a3, (n,))) for offset, a2, a3
+                in parts["rectangles"]], axis=0) - obstacle.radius
+        if obstacle.length is None:
+            return lateral
+        caps = [_plane_section_distance(p + sign * obstacle.length / 2 * a, sign * a,
+                                        r, d1, d2, d3, parts) for sign in (-1.0, 1.0)]
+        return np.max([lateral] + caps, axis=0)
+    raise TypeError(f"not an obstacle: {obstacle!r}")
+
+
+def _plane_section_distance(point, normal, r, d1, d2, d3, parts):
+    base = (r - point) @ normal
+    n2, n3 = d2 @ normal, d3 @ normal
+    if "disc" in parts:
+        return base - np.asarray(parts["disc"]) * np.hypot(n2, n3)
+    return np.min([base + np.asarray(offset) * n2 - np.asarray(a2) * np.abs(n2)
+                   - np.asarray(a3) * np.abs(n3) for offset, a2, a3 in parts["rectangles"]],
+                  axis=0)
+
+
+
 def distance(obstacle: Obstacle, points: np.ndarray) -> np.ndarray:
     """Signed distance of points (n, dim) to the obstacle (>= 0 outside)."""
     p = np.atleast_2d(np.asarray(points, dtype=float))
@@ -455,14 +585,15 @@ def segment_distance(obstacle: Obstacle, r: np.ndarray, d: np.ndarray, below, ab
 
 def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int = 2001) -> None:
     """ConfigError when the obstacle touches or intersects the undeformed rod (the surface:
-    the straight centreline (x, 0) offset by the section's extent toward the obstacle,
-    sampled at ``samples`` stations along x)."""
+    the straight centreline (x, 0) with the section's true shape, sampled at ``samples``
+    stations along x: planar the section segment, spatial `section_distance` with the flat end
+    faces)."""
     x = np.linspace(0.0, length, samples)
     r = np.column_stack([x, np.zeros_like(x)] + ([np.zeros_like(x)] if obstacle.dim == 3
                                                   else []))
-    if obstacle.dim == 3:  # the spatial rod's contact tube
-        radius = section_circumradius(section, x / length)
-        gap = distance(obstacle, r) - radius
+    if obstacle.dim == 3:  # the section in the reference frame d1, d2, d3 = x, y, z
+        e = np.eye(3)
+        gap = section_distance(obstacle, r, e[0], e[1], e[2], section_parts(section, x / length))
     else:
         d = np.zeros_like(r)
         d[:, 1] = 1.0
@@ -474,8 +605,8 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
         def at(value) -> float:
             return float(np.broadcast_to(np.asarray(value, dtype=float), x.shape)[worst])
 
-        extent = (f"the section taken as a tube of radius {at(radius):.4g} m (its "
-                  "circumradius) about the centreline" if obstacle.dim == 3 else
+        extent = (f"the section taken as {describe_section(section, x[worst] / length)}, "
+                  "with flat end faces" if obstacle.dim == 3 else
                   f"the section reaching from y = {-at(below):.4g} to {at(above):.4g} m")
         depth = -float(gap[worst])
         where = (f"it touches the rod's surface at x = {x[worst]:.4g} m" if depth <= 0 else
@@ -484,4 +615,4 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
         raise ConfigError(
             f"{obstacle.where} the {obstacle.shape} {verb} the undeformed rod ({where}; "
             f"{extent}); move it clear of the rod (the rod starts straight along x with its "
-            "section centred on y = 0)")
+            "section centred on the x axis)")
