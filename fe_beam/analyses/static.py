@@ -325,7 +325,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
         plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
         return
     plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                         obstacles=result.obstacles or config.obstacles)
+                         obstacles=result.obstacles or config.obstacles, section=m.section)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)
