@@ -459,3 +459,72 @@ def test_refine_table_gives_defaults(tmp_path, monkeypatch):
     assert code == 0, err
     assert (seen["plan"].levels, seen["plan"].ratio) == (3, 2.0)
     assert math.isclose(seen["plan"].base, 4)
+
+
+# --- the error estimate's certificate (issue 28) -------------------------------------------------
+def stand_in_values(values: dict, checks=None):
+    """``run_solid`` whose tip v is ``values[mesh_size]`` (and ``checks`` in its summary)."""
+
+    def run_solid(raw, out, comm, progress=False):
+        h = raw["solid"]["mesh_size"]
+        v = next(value for size, value in values.items() if abs(size - h) < 1e-12)
+        return {"steps": [{"load_factor": 1.0, "tip": {"u": 0.0, "v": v, "theta": 0.0}}],
+                "dofs": int(1 / h**3), "cells": int(0.1 / h**3), "wall_time_s": 0.1,
+                "status": "converged", **({"checks": checks} if checks else {})}
+
+    return run_solid
+
+
+SIZES = [0.004, 0.002, 0.001, 0.0005]
+
+
+def refine_with(tmp_path, monkeypatch, values, checks=None, levels=4):
+    stand_in = types.ModuleType("fe_beam.analyses.solid_driver")  # no validation: cheap
+    stand_in.run_solid = stand_in_values(dict(zip(SIZES, values, strict=True)), checks)
+    monkeypatch.setitem(sys.modules, "fe_beam.analyses.solid_driver", stand_in)
+    config = "[solid]\nmesh_size = 0.004\n"
+    code, _, err, out, _ = run_refine(tmp_path, config, "--levels", str(levels),
+                                      "--quantity", "tip.v")
+    assert (out / "refinement.json").is_file(), err
+    return code, err, json.loads((out / "refinement.json").read_text())
+
+
+@pytest.mark.parametrize("order", [1.3, 2.0])
+def test_refine_error_estimate_is_a_bound_for_a_power_law(tmp_path, monkeypatch, order):
+    """q = q* + C h^p: the estimate of level 2 is its true error, and the change to level 3
+    is (1 - 2^-p) of it (closed form): the check passes."""
+    values = [0.02 - 3.0 * h**order for h in SIZES]
+    code, err, summary = refine_with(tmp_path, monkeypatch, values)
+    assert code == 0, err
+    (check,) = summary["checks"]
+    assert check["name"] == "refine_error_estimate" and check["passed"]
+    assert check["value"] == pytest.approx(1 - 2.0**-order, rel=1e-6)
+
+
+def test_refine_error_estimate_fails_when_convergence_stalls(tmp_path, monkeypatch):
+    """Order 2.4 on the first three levels, then a change that does not shrink (the issue's
+    3D tip angle): the estimate of level 2 is 4x below the change to level 3: exit 3, status
+    failed, the message names the check; with 3 levels no check is made."""
+    d1 = 1e-4
+    d2 = d1 / 2**2.4
+    values = [0.0, d1, d1 + d2, d1 + 2 * d2]
+    code, err, summary = refine_with(tmp_path / "a", monkeypatch, values)
+    assert code == 3, err
+    assert summary["status"] == "failed"
+    assert "refine_error_estimate" in summary["message"]
+    assert summary["checks"][-1]["value"] == pytest.approx(2**2.4 - 1, rel=1e-6)
+    code, err, summary = refine_with(tmp_path / "b", monkeypatch, values[:3] + [0.0], levels=3)
+    assert code == 0 and "checks" not in summary
+
+
+def test_refine_carries_each_level_s_checks(tmp_path, monkeypatch):
+    """A level whose solid failed its own certificate fails the study (exit 3)."""
+    from fe_beam import certify
+
+    bad = [certify.entry("solid_global_equilibrium", 1e-3, 1e-6)]
+    values = [0.02 - 3.0 * h**2 for h in SIZES]
+    code, err, summary = refine_with(tmp_path, monkeypatch, values, checks=bad, levels=3)
+    assert code == 3, err
+    assert summary["status"] == "failed" and "solid_global_equilibrium" in summary["message"]
+    assert [c["detail"].split(":")[0] for c in summary["checks"]] == [
+        "level 0", "level 1", "level 2"]

@@ -167,6 +167,14 @@ def test_fe_beam_solid_writes_the_contact_entries_per_step(tmp_path):
                          "extent", "contact_length"}
     assert -last["force"][0] == pytest.approx(P_TOUCH, rel=2e-3)
     assert last["max_penetration"] <= TOLERANCE
+    # issue 28: the clamp's reaction, the tip force and the wall's force balance (the wall's
+    # force integrated from its traction, apart from the residual)
+    (check,) = summary["checks"]
+    balance = summary["steps"][-1]["equilibrium"]
+    print(f"block on a wall: equilibrium {check['value']:.3g}, reaction "
+          f"{balance['reaction_force']}, wall {last['force']}")
+    assert check["name"] == "solid_global_equilibrium" and check["passed"]
+    assert balance["value"] < 1e-6
 
 
 @pytest.mark.parametrize("changes, fragment", [

@@ -120,7 +120,8 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
             comm.barrier()
             state = compat.local_array(problem.w).copy()
             writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-                problem, out / "buckling_modes.xdmf" if static.output.xdmf else None)
+                problem, out / "buckling_modes.xdmf" if static.output.xdmf else None,
+                sections=False)  # normalised shapes: their strains and forces mean nothing
             for index, shape in enumerate(result.shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
                 writer.write(float(index))

@@ -55,7 +55,7 @@ from mpi4py import MPI
 
 from fe_beam import exports, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
-from fe_beam.analyses.solid import SolidRun, draw_obstacles_in_view
+from fe_beam.analyses.solid import SolidRun, draw_obstacles_in_view, equilibrium_check
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_distance, tip_frame
 from fe_beam.config.compare import (  # noqa: F401  (their home; re-exported)
     COMPARE_KEYS,
@@ -202,19 +202,26 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
     summary["dofs"] = run.dofs
     summary["linear_solver_resolved"] = run.problem.linear_solver
     files.start(current())  # status "running" from the start
+    balances = []  # every converged solid step's equilibrium (the certificate)
+
+    def on_step(record: dict, last: dict) -> None:
+        last.update(record)
+        balances.append({k: record[k] for k in ("load_factor", "equilibrium")})
+
     try:
         for factor in config.load_factors:
             last = {}
             try:
-                run.advance(factor, solid.stepping, last.update, progress=progress,
-                            label=f"solid to {factor:.3g}")
+                run.advance(factor, solid.stepping, lambda r, last=last: on_step(r, last),
+                            progress=progress, label=f"solid to {factor:.3g}")
             except LoadSteppingFailed as failure:
                 summary |= {"status": "failed", "message": str(failure)}
                 break
             row = {"load_factor": factor}
             row |= {k: last[k] for k in ("tension", "tensions") if k in last}
             row["solid"] = {k: last[k] for k in ("tip", "backbone", "max_principal_stretch",
-                                                 "max_principal_stretch_bulk", "contact")
+                                                 "max_principal_stretch_bulk", "contact",
+                                                 "equilibrium")
                             if k in last}
             row["rod"] = {}
             for law in config.laws:
@@ -249,6 +256,8 @@ def compare_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = 
         raise
     finally:
         run.destroy()
+        if balances:  # the solid's global equilibrium over all its steps
+            summary["checks"] = [equilibrium_check(balances)]
         files.finish(current())  # pictures unless interrupted (then those of the last point)
     if out is not None:
         comm.barrier()  # the files are complete on return, whichever rank looks

@@ -17,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.analyses.static import StaticResult, contact_line, solve_static
 from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
@@ -136,6 +137,11 @@ def solve_inverse(
                                            max(abs(getattr(tendon, control)), 1e-9))
         value = tension_for_target(lambda v: miss(v) + target.value, target.value, bracket)
         final = solve(value)
+        check = equilibrium_entry(
+            run.problem, config.solver.rtol,
+            run.contact.summary() if run.contact is not None else None,
+            "at the inverse solve's answer", tensions=final["tensions"],
+            contact_tolerance=config.contact.force_tolerance if config.obstacles else 0.0)
     except ConfigError as error:
         # the configuration was valid (the sweep converged): the target is out of reach
         best = min(reached, key=lambda pair: abs(pair[1] - target.value))
@@ -151,6 +157,7 @@ def solve_inverse(
         "tip": final["tip"],
         "evaluations": len(evaluations),
         "wall_time_s": time.perf_counter() - started,
+        "check": check,
     }
     if target.key == "tip_angle":
         answer["target_tip_angle"] = target.value
@@ -253,11 +260,13 @@ def run_finger(
                 inverse["best_reached"] = {control: error.best[0],
                                            target.key: error.best[1]}
         except runctl.Interrupted as stop:
-            result.extra = extra | stop.stopped(
+            result.extra = result.extra | stop.stopped(
                 "the inverse solve (the sweep is complete)", "during the inverse solve")
             after.finish(result.summary())
             raise
-    result.extra = extra | ({"inverse": inverse} if inverse else {})
+    if inverse and "check" in inverse:  # the answer's global equilibrium, with the sweep's
+        result.extra.setdefault("checks", []).append(inverse.pop("check"))
+    result.extra = result.extra | ({"inverse": inverse} if inverse else {})
     after.finish(result.summary())
     return result, inverse
 

@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 from fe_beam import exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry
 from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid import SolidRun, check_solid_work
 from fe_beam.analyses.static import (
@@ -464,6 +465,13 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         if result.status == "failed":
             summary["message"] = (f"path stopped at load factor {run.load_factor:.6g}: "
                                   f"{result.message}")
+        if result.status == "converged" and summary["path"]:
+            contact = run.contact.summary() if run.contact is not None else None
+            tensions = run.tendons.tension_values() if run.tendons else ()
+            summary.setdefault("checks", []).append(equilibrium_entry(
+                problem, static.solver.rtol, contact, "at the last path point",
+                tensions=tensions, contact_tolerance=static.contact.force_tolerance
+                if static.obstacles else 0.0))
     except runctl.Interrupted as stop:
         _interrupted(summary, stop)
         raise
@@ -473,7 +481,7 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
             modes = [(i, c) for i, c in enumerate(result.critical_points) if c.mode is not None]
             state = compat.local_array(problem.w).copy()
             modes_writer = (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-                problem, out / "critical_modes.xdmf")
+                problem, out / "critical_modes.xdmf", sections=False)  # shapes only
             for number, (index, point) in enumerate(modes, start=1):
                 compat.local_array(problem.w)[:] = point.mode
                 modes_writer.write(float(number))

@@ -24,7 +24,7 @@ import sys
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
-from fe_beam import analyses, runctl
+from fe_beam import analyses, certify, runctl
 from fe_beam.analyses.result import EXIT_FAILED, Report, Result, world
 from fe_beam.config.refine import (
     QUANTITIES,
@@ -242,6 +242,7 @@ def _solve_solid(plan: RefinementPlan, level: int, comm) -> dict:
         "dofs": summary.get("dofs"),
         "cells": summary.get("cells"),
         "wall_time_s": summary.get("wall_time_s"),
+        "checks": list(summary.get("checks") or []),
     }
 
 
@@ -270,9 +271,38 @@ def _level_record(plan: RefinementPlan, level: int, solved: dict) -> dict:
         if solved["tip"] is not None and solved["status"] == "converged"
         else {},
     }
+    if solved.get("checks"):  # the level's own certificates (the solid's equilibrium)
+        record["checks"] = solved["checks"]
     if solved["status"] != "converged":
         record["message"] = solved["message"]
     return record
+
+
+def estimate_check(analysis: dict) -> dict | None:
+    """The certificate ``refine_error_estimate``: with 4 levels or more, the error estimated for
+    the level before the finest (from its own three levels) must be at least the change to the
+    finest level (with monotone convergence the error of a level exceeds its distance to any
+    finer one): value = max over the quantities of |d_N| / e_(N-1). None when no quantity has
+    such an estimate (3 levels, or no extrapolation at N-1: the notes say why)."""
+    worst = None
+    for quantity, result in analysis.items():
+        levels = result["levels"]
+        if len(levels) < 4 or levels[-2]["error_estimate"] is None:
+            continue
+        change = abs(levels[-1]["difference"])
+        estimate = levels[-2]["error_estimate"]
+        noise = NOISE_RTOL * max(abs(level["value"]) for level in levels)
+        value = 0.0 if change <= noise else (change / estimate if estimate > 0 else math.inf)
+        if worst is None or value > worst[0]:
+            worst = (value, quantity)
+    if worst is None:
+        return None
+    return certify.entry(
+        "refine_error_estimate", worst[0], 1.0,
+        detail=(f"|q_N - q_(N-1)| / (the error estimated for level N-1), worst for "
+                f"{worst[1]}: the estimate is a bound only if this is <= 1"),
+        remedy="the levels are not in the asymptotic range: add a finer level (--levels) "
+               "before trusting the extrapolated value and its error")
 
 
 def study_summary(plan: RefinementPlan, records: list[dict], config_path: str = "") -> dict:
@@ -284,6 +314,11 @@ def study_summary(plan: RefinementPlan, records: list[dict], config_path: str = 
             result = analyse_sequence([r["values"][quantity] for r in done], plan.ratio)
             analysis[quantity] = result.as_dict() | {"unit": UNITS[quantity]}
     failed = [r for r in records if r["status"] != "converged"]
+    checks = [check | {"detail": f"level {r['level']}: {check.get('detail', '')}"}
+              for r in records for check in r.get("checks", [])]
+    estimate = estimate_check(analysis)
+    if estimate is not None:
+        checks.append(estimate)
     return {
         "config": config_path,
         "kind": plan.kind,
@@ -296,7 +331,7 @@ def study_summary(plan: RefinementPlan, records: list[dict], config_path: str = 
         "notes": list(plan.notes),
         "levels": records,
         "analysis": analysis,
-    }
+    } | ({"checks": checks} if checks else {})
 
 
 def run_refinement(

@@ -14,12 +14,13 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import runctl
+from fe_beam import certify, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid_modes import modes_table, run_solid_modes
 from fe_beam.analyses.solid_rod import backbone_distance, run_rod, tip_frame, write_rod_xdmf
 from fe_beam.analyses.static import beam_dofs_estimate
 from fe_beam.config.solid import SolidConfig, parse_solid, solid_dofs_estimate
+from fe_beam.errors import ConfigError
 from fe_beam.exports import (
     Column,
     CSVExport,
@@ -50,7 +51,8 @@ def _import_gmsh() -> None:
 
 _import_gmsh()
 
-__all__ = ["run", "SolidRun", "check_solid_work", "rotation_vector", "run_solid"]
+__all__ = ["run", "SolidRun", "check_solid_work", "equilibrium_check", "rotation_vector",
+           "run_solid"]
 
 # --- the 3D run ---------------------------------------------------------------------------------
 
@@ -185,6 +187,7 @@ class SolidRun:
             "linear_iterations": int(linear_iterations),
             **stretch_keys(self.problem.max_principal_stretches()),
             **({"contact": self.problem.contact.summary()} if self.problem.contact else {}),
+            "equilibrium": self.problem.equilibrium(),
         }
 
     def destroy(self) -> None:
@@ -251,6 +254,13 @@ def solid_run(parsed, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = Tr
         last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
         summary |= stop.stopped(f"load factor {last:.4g}", f"at load factor {last:.6g}")
         raise
+    except ConfigError:
+        raise
+    except Exception as error:  # the converged steps so far stay; the run is "failed"
+        last = summary["steps"][-1]["load_factor"] if summary["steps"] else 0.0
+        summary |= {"status": "failed",
+                    "message": f"{type(error).__name__}: {error} (stopped after load factor "
+                               f"{last:.6g}; the converged steps are written)"}
     finally:
         files.finish(content())  # pictures only for a finished analysis (not interrupted)
     if out is not None:
@@ -362,6 +372,8 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
         if writer is not None:
             writer.close()
         run.destroy()
+        if summary["steps"]:
+            summary.setdefault("checks", []).append(equilibrium_check(summary["steps"]))
     if rod is not None and rod["backbone"] is not None and summary["steps"]:
         last_rod = rod["steps"][-1]["load_factor"] if rod["steps"] else 0.0
         last = summary["steps"][-1]
@@ -377,6 +389,28 @@ def _run_solid(config: SolidConfig, out: Path | None, comm, progress: bool, summ
                 "tip_frame_rotation_vector": frame["rotation_vector"],
             }
     return summary
+
+
+#: tolerance of the solid's global equilibrium, relative to the largest load (Newton stops at a
+#: residual ~1e-10 of the first one; the clamp's reaction sums it over the clamped face)
+EQUILIBRIUM_TOLERANCE = 1e-6
+
+
+def equilibrium_check(steps: list[dict], tolerance: float | None = None) -> dict:
+    """The certificate ``solid_global_equilibrium`` of the converged ``steps``: the largest over
+    them of the imbalance of the clamp's reaction, the tip force and the contact forces (forces
+    and moments about the origin, the moment over L), relative to the largest load (the tendon
+    tensions count as loads for the scale; their cables are internal: `SolidFingerProblem.
+    equilibrium`)."""
+    tolerance = EQUILIBRIUM_TOLERANCE if tolerance is None else tolerance
+    worst = max(steps, key=lambda s: s["equilibrium"]["value"])
+    value = worst["equilibrium"]["value"]
+    return certify.entry(
+        "solid_global_equilibrium", value, tolerance,
+        detail=("max over the load steps of max(|R_clamp + F_tip + F_contact|, |moments| / L) / "
+                f"largest load (worst at load factor {worst['load_factor']:.4g})"),
+        remedy="tighten [solver] rtol, or use [solid] solver = \"mumps\" (an inexact Krylov "
+               "solve leaves a larger residual)")
 
 
 def _write_tables(out: Path, summary: dict) -> None:

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from fe_beam import exports, runctl
+from fe_beam import certify, exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry, stability_entry
 from fe_beam.analyses.result import Report, Result, closing_of_steps
 from fe_beam.exports.obstacles import bounding_box, write_obstacle_surfaces
 from fe_beam.exports.outputs import BeamXDMFWriter, plot_deformed_shapes, plot_load_displacement
@@ -51,12 +52,15 @@ class StaticResult:
     extra: dict = field(default_factory=dict)
     #: the obstacles at their place in the last state (moving obstacles: translated)
     obstacles: tuple = ()
+    #: run-time certificates (`fe_beam.certify.entry`), summary.json's ``checks``
+    checks: list[dict] = field(default_factory=list)
 
     def summary(self, extra: dict | None = None) -> dict:
         """summary.json's content; ``extra["notes"]`` (set-up notes) come before the run's;
         without ``extra``, the driver's own (``self.extra``)."""
         extra = dict(self.extra if extra is None else extra)
         notes = list(extra.pop("notes", []))
+        checks = list(self.checks) + list(extra.pop("checks", []))
         data = {
             "status": self.status,
             "message": self.message,
@@ -67,6 +71,8 @@ class StaticResult:
         }
         if self.strain_range is not None:
             data["strain_range"] = self.strain_range
+        if checks:
+            data["checks"] = checks
         return data | (extra or {})
 
 
@@ -94,6 +100,45 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
     return record
 
 
+#: the written moment field against the support's reaction moment (relative): an identity of
+#: the discrete equilibrium, round-off (measured 1e-15) when both are right
+MOMENT_FIELD_TOLERANCE = 1e-9
+
+
+def moment_field_checks(problem: BeamProblem, writer, run) -> list[dict]:
+    """Certificates ``moment_field_x0`` / ``moment_field_xL`` of a planar rod's written section
+    fields: at each end whose rotation is held, the end moment the fields M, T, eps imply
+    (`fe_beam.exports.outputs.BeamXDMFWriter.end_moment`, from the output expressions at the
+    energy's Gauss points) against the support's reaction moment (the residual assembled at
+    the end's rotation dof, the number the global equilibrium is made of), relative to the
+    larger of the two and of the reaction forces times L. None where another load acts on the
+    end element's rotations (tendons, contact, a tip moment or follower force at a held tip)
+    or nothing is recorded (spatial rods write no moment)."""
+    if (writer is None or problem.spatial or problem.extra_energy is not None
+            or problem.extra_work is not None or getattr(run, "contact", None) is not None):
+        return []
+    writer.update()
+    loads, checks = problem.model.loads, []
+    for end in ("x0", "xL"):
+        if "theta" not in problem.model.supports.fixed(end) or (
+                end == "xL" and (loads.tip_moment or loads.follower)):
+            continue
+        implied = writer.end_moment(problem.end_x[end], problem.point_tolerance)
+        if implied is None:
+            continue
+        reaction = problem.end_reaction(end)
+        scale = max(abs(reaction["M"]), abs(implied),
+                    (abs(reaction["Fx"]) + abs(reaction["Fy"])) * problem.model.length)
+        value = abs(implied - reaction["M"]) / scale if scale > 0 else 0.0
+        checks.append(certify.entry(
+            f"moment_field_{end}", value, MOMENT_FIELD_TOLERANCE,
+            detail=f"|end moment of the written M, T - support reaction moment at {end}| / "
+                   "scale",
+            remedy="the fields written for ParaView disagree with the solved equilibrium: "
+                   "report it (a compiler or version fault), the tip values are not affected"))
+    return checks
+
+
 def solve_static(
     config: StaticConfig,
     out: Path | None = None,
@@ -104,6 +149,7 @@ def solve_static(
     record_shapes: bool = True,
     stability: bool | None = None,
     extra_exports: list | None = None,
+    certify_equilibrium: bool = True,
 ) -> StaticResult:
     """Run the static load stepping of a configuration; writes results under ``out`` if given.
 
@@ -121,6 +167,8 @@ def solve_static(
     written and the result has status "failed"; on SIGINT/SIGTERM (`fe_beam.runctl.Interrupted`)
     it is written with status "interrupted" and the exception is re-raised. ``extra_exports``: more
     `fe_beam.exports.Export` objects fed with the step records (e.g. the finger's sweep table).
+    ``certify_equilibrium``: a converged run's summary gets the ``checks`` "global_equilibrium"
+    (`fe_beam.analyses.certificates`) and, where the stability was checked, "stability".
 
     The problem and solver come from `fe_beam.solvers.realtime.acquire`: a second solve of the same
     kind of model (same mesh, law, section shape, supports, ...) reuses the built ones.
@@ -178,10 +226,21 @@ def solve_static(
     try:
         run.advance(1.0, config.stepping, on_converged=record, progress=progress)
         result.status = "converged"
+        result.checks += moment_field_checks(problem, writer, run)
         checked = run.stability() if (record_shapes if stability is None else stability) \
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        if certify_equilibrium and result.steps:
+            checks = result.checks
+            checks.append(equilibrium_entry(problem, config.solver.rtol,
+                                            result.steps[-1].get("contact"),
+                                            tensions=result.steps[-1].get("tensions", ()),
+                                            contact_tolerance=config.contact.force_tolerance
+                                            if config.obstacles else 0.0))
+            stable = stability_entry(checked)
+            if stable is not None:
+                checks.append(stable)
     except LoadSteppingFailed as failure:
         result.status, result.message = "failed", str(failure)
     except runctl.Interrupted as stop:

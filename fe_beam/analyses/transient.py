@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import exports, runctl
+from fe_beam import certify, exports, runctl
+from fe_beam.analyses.certificates import equilibrium_entry
 from fe_beam.analyses.static import StaticContinuation, check_beam_work, contact_columns
 from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
@@ -430,11 +431,12 @@ def _interruptible(load_time, comm, every: int = 200):
 ENERGIES = ("kinetic", "strain", "external_work", "dissipated")
 
 
-def _writer(problem, path, contact=None):
+def _writer(problem, path, contact=None, sections: bool = True):
     """The XDMF writer of a rod problem (the spatial rod's has the directors); with
-    ``contact`` (a `fe_beam.fem.contact.ContactSet`) the contact fields."""
+    ``contact`` (a `fe_beam.fem.contact.ContactSet`) the contact fields; ``sections=False``:
+    no strains and section forces (mode shapes)."""
     return (SpatialXDMFWriter if problem.spatial else BeamXDMFWriter)(
-        problem, path, contact=contact if path is not None else None)
+        problem, path, contact=contact if path is not None else None, sections=sections)
 
 
 SPATIAL_MOMENTA = tuple(f"momentum_{k}" for k in "xyz") + tuple(
@@ -622,6 +624,11 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
             if out is not None and comm.rank == 0:
                 atomic_write_json(out / "summary.json", summary)
             return summary
+    prestate_check = None
+    if modes["prestress"]:  # the pre-state's equilibrium, before the modes take the state
+        prestate_check = equilibrium_entry(
+            problem, static.solver.rtol, label="of the static pre-state",
+            tensions=tendons.tension_values() if tendons else ())
     result = natural_frequencies(problem, modes["count"])
     summary = {"status": "completed", "frequencies_hz": result.frequencies_hz,
                "transverse_fraction": result.transverse_fraction,
@@ -629,6 +636,7 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                * problem.space.dofmap.index_map_bs,
                "wall_time_s": time.perf_counter() - started}
     summary.update(_modes_summary(result))
+    summary["checks"] = ([prestate_check] if prestate_check else []) + mode_checks(result)
     if modes["prestress"]:
         # strains of the pre-state outside the range the model is meant for: warnings
         summary["strain_range"] = watch.summary()
@@ -646,7 +654,8 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
                              ("unstable_modes.xdmf", [m.shape for m in result.unstable])):
             if name == "unstable_modes.xdmf" and not shapes:
                 continue
-            writer = _writer(problem, out / name if static.output.xdmf else None)
+            writer = _writer(problem, out / name if static.output.xdmf else None,
+                             sections=False)  # normalised shapes: no strains or forces
             family = _family_field(problem, writer) if name == "modes.xdmf" else None
             for index, shape in enumerate(shapes, start=1):
                 compat.local_array(problem.w)[:] = compat.local_array(shape)
@@ -659,6 +668,35 @@ def run_modes(static: StaticConfig, modes: dict, out: Path | None, comm=MPI.COMM
             atomic_write_json(out / "summary.json", summary)
             _write_modes_csv(out / "modes.csv", summary)
     return summary
+
+
+#: the eigenpair residual a reported mode must reach (SLEPc converges to 1e-12)
+EIGENPAIR_TOLERANCE = 1e-8
+#: the largest normalised x_i^T M x_j (i != j) of the reported modes
+ORTHOGONALITY_TOLERANCE = 1e-6
+
+
+def mode_checks(result) -> list[dict]:
+    """The run-time certificates of the reported modes (`fe_beam.solvers.modes.Modes`): the
+    largest eigenpair residual and, for a symmetric pencil, their M-orthogonality."""
+    checks = []
+    if result.residuals:
+        worst = max(result.residuals)
+        index = result.residuals.index(worst) + 1
+        checks.append(certify.entry(
+            "eigenpair_residual", worst, EIGENPAIR_TOLERANCE,
+            detail=f"max over the {len(result.residuals)} reported modes of ||K x - w^2 M x|| "
+                   f"/ (||K x|| + w^2 ||M x||) (mode {index})",
+            remedy="the eigensolver did not converge: ask for fewer modes ([modes] count) or "
+                   "refine less; please report it"))
+    if result.orthogonality is not None and len(result.shapes) > 1:
+        checks.append(certify.entry(
+            "mode_orthogonality", result.orthogonality, ORTHOGONALITY_TOLERANCE,
+            detail="max |x_i^T M x_j| / sqrt(x_i^T M x_i x_j^T M x_j), i != j, of the reported "
+                   "modes",
+            remedy="repeated or clustered frequencies the eigensolver did not separate: ask "
+                   "for fewer modes; please report it"))
+    return checks
 
 
 #: the code of each mode's family in modes.xdmf's "family" field

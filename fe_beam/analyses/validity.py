@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import analyses, runctl
+from fe_beam import analyses, certify, runctl
 from fe_beam.analyses.result import Report, Result, exit_code
 from fe_beam.analyses.solid_rod import tip_distance, tip_frame
 from fe_beam.analyses.validity_workers import worker_point, worker_start
@@ -55,6 +55,7 @@ from fe_beam.config.validity import (  # noqa: F401  (their home; re-exported)
     ValidityConfig,
     parse_validity,
     second_mesh,
+    third_mesh_ratio,
 )
 from fe_beam.exports.outputs import atomic_write_json, figure, write_csv
 from fe_beam.progress import ProgressBar
@@ -108,18 +109,26 @@ def _tip_error(rod_tip: dict, solid_tip: dict, length: float) -> dict:
             "frame_angle": tip_frame(rod_tip, solid_tip)["angle"]}
 
 
-def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig, comm) -> dict:
-    """Solve the point's solid on the second mesh (the code of ``fe-beam compare``:
-    `fe_beam.analyses.solid.SolidRun`) and estimate the configured mesh's error."""
-    ratio, order = config.second_mesh_ratio, config.order
+def _solve_mesh(point: GridPoint, ratio: float, comm, label: str) -> tuple[dict, object, int]:
+    """The point's solid with ``[solid] mesh_size / ratio`` (the code of ``fe-beam compare``:
+    `fe_beam.analyses.solid.SolidRun`): (its last record, its configuration, its dofs)."""
     parsed = parse_compare(second_mesh(point.raw, point.parsed, ratio)).solid
     run = analyses.solid.SolidRun(parsed, comm)
     last = {}
     try:
-        run.advance(1.0, parsed.stepping, last.update, progress=False, label="second mesh")
+        run.advance(1.0, parsed.stepping, last.update, progress=False, label=label)
         dofs = run.dofs
     finally:
         run.destroy()
+    return last, parsed, dofs
+
+
+def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig, comm) -> dict:
+    """Solve the point's solid on the second mesh and estimate the configured mesh's error with
+    the assumed order; then certify the estimate (`mesh_check`) with a third, coarser mesh
+    (sizes h R, h, h / R for a finer second mesh, h R^2, h R, h for a coarser one: cheap)."""
+    ratio, order = config.second_mesh_ratio, config.order
+    last, parsed, dofs = _solve_mesh(point, ratio, comm, "second mesh")
     length = parsed.length
     tip, other = solid["tip"], last["tip"]
     # the planar map's estimate over (u, v); a spatial rod's over (u, v, w)
@@ -130,17 +139,81 @@ def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig,
     du, _ = richardson_error(a["u"], b["u"], ratio, order)
     dv, _ = richardson_error(a["v"], b["v"], ratio, order)
     dw = richardson_error(a["w"], b["w"], ratio, order)[0] if point.parsed.spatial else 0.0
-    return {
+    estimate = {
         "tip": float(np.linalg.norm([error[0], error[1]] + list(error[3:]))) / length,
         "rotation": abs(float(error[2])),
         "backbone": float(np.max(np.sqrt(du**2 + dv**2 + dw**2))) / length,
+    }
+    third, third_parsed, _ = _solve_mesh(point, third_mesh_ratio(ratio), comm, "third mesh")
+    configured = {"tip": tip, "backbone": solid["backbone"]}
+    levels = ([third, configured, last] if ratio > 1 else [third, last, configured])
+    check = mesh_check(levels, max(ratio, 1.0 / ratio), order, estimate, length,
+                       configured_finest=ratio < 1, spatial=point.parsed.spatial)
+    return estimate | {
         "second_mesh_size": parsed.sizes.size,
         "second_dofs": dofs,
         "second_tip": other,
         "extrapolated_tip": dict(zip(keys, map(float, extrapolated), strict=True)),
         "order": order,
         "measure": "Richardson: |q* - q_h|, q* = q_fine + (q_fine - q_coarse) / (R^p - 1)",
+        "mesh_check": check | {"third_mesh_size": third_parsed.sizes.size,
+                               "third_tip": third["tip"]},
     }
+
+
+#: changes below this (relative: of L for positions, of 1 rad for angles) are round-off
+MESH_CHECK_NOISE = 1e-10
+
+
+def mesh_check(levels: list[dict], ratio: float, order: float, estimate: dict, length: float,
+               configured_finest: bool, spatial: bool = False) -> dict:
+    """Is the reported error (`_discretisation_error`, Richardson with the assumed ``order``)
+    an honest bound? ``levels`` are three solid records ({"tip", "backbone"}) on meshes
+    h R, h, h / R (coarse to fine, ``ratio`` = R > 1), the configured one the middle level
+    (``configured_finest``: the last). Per quantity (the tip position / L, the tip rotation
+    theta, the backbone / L: the largest over the stations) with d1, d2 the successive changes
+    (vectors for positions):
+
+        p_obs = log(|d1| / |d2|) / log R            (observed order)
+        e_obs = |d2| R^p_obs / (R^p_obs - 1)       (middle level) or |d2| / (R^p_obs - 1)
+        value = e_obs / (the reported estimate)     (<= 1: the reported error is a bound)
+
+    A change that does not shrink (p_obs <= 0) or reverses (d1 . d2 < 0) has no error bound:
+    value inf. Changes at round-off (`MESH_CHECK_NOISE`) give 0. Returns {"value" (the
+    largest), "quantities": {name: {"value", "observed_order", "changes"}}}."""
+    keys = ("u", "v", "w") if spatial else ("u", "v")
+
+    def tip_vector(record):
+        return np.array([record["tip"].get(k, 0.0) for k in keys]) / length
+
+    def backbone(record):
+        b = record["backbone"]
+        return np.array([b[k] for k in keys]).T / length  # (stations, components)
+
+    quantities = {}
+    series = {
+        "tip": [tip_vector(r) for r in levels],
+        "rotation": [np.array([r["tip"]["theta"]]) for r in levels],
+        "backbone": [backbone(r) for r in levels],
+    }
+    for name, (q0, q1, q2) in series.items():
+        d1, d2 = q1 - q0, q2 - q1
+        n1 = float(np.max(np.linalg.norm(np.atleast_2d(d1), axis=-1)))
+        n2 = float(np.max(np.linalg.norm(np.atleast_2d(d2), axis=-1)))
+        reported = estimate[name]
+        observed = None
+        if n2 <= MESH_CHECK_NOISE:
+            value = 0.0
+        elif n1 <= MESH_CHECK_NOISE or float(np.sum(d1 * d2)) <= 0 or n2 >= n1:
+            value = math.inf
+        else:
+            observed = math.log(n1 / n2) / math.log(ratio)
+            factor = ratio**observed - 1.0
+            bound = n2 / factor if configured_finest else n2 * ratio**observed / factor
+            value = bound / reported if reported > 0 else math.inf
+        quantities[name] = {"value": value, "observed_order": observed, "changes": [n1, n2]}
+    return {"value": max(q["value"] for q in quantities.values()), "quantities": quantities,
+            "order": order}
 
 
 def solve_point(point: GridPoint, config: ValidityConfig, comm) -> dict:
@@ -440,11 +513,45 @@ def _write(out: Path, config: ValidityConfig, started: float, status: str | None
         "departures": _statements(points, config, total),
         "points": points,
     }
+    check = mesh_estimate_check(points)
+    if check is not None:
+        summary["checks"] = [check]
     atomic_write_json(out / "summary.json", summary)
     _write_csv(out / "validity.csv", points, config)
     if _plots(config) and points and status != "running":
         _plot(out / "validity.png", points, config)
     return summary
+
+
+def mesh_estimate_check(points: list[dict]) -> dict | None:
+    """The certificate ``solid_discretisation_error`` of the map: the largest over the points
+    (and the tip, rotation and backbone) of `mesh_check`'s value, the error bound with the
+    order observed on three meshes over the reported (assumed-order) estimate; None without
+    a second mesh."""
+    worst, where = None, None
+    for point in points:
+        error = (point.get("solid") or {}).get("discretisation_error") or {}
+        check = error.get("mesh_check")
+        if check is None:
+            continue
+        for name, quantity in check["quantities"].items():
+            value = quantity["value"]
+            if worst is None or value > worst:
+                worst, where = value, (point, name, quantity)
+    if worst is None:
+        return None
+    point, name, quantity = where
+    order = quantity["observed_order"]
+    return certify.entry(
+        "solid_discretisation_error", worst, 1.0,
+        detail=(f"largest over the points of the {name} error bound with the order observed "
+                "on three meshes over the reported estimate (assumed order); worst at "
+                f"x = {point['x']:g}" + (f", y = {point['y']:g}" if point.get("y") is not None
+                                         else "")
+                + (f", observed order {order:.3g}" if order is not None
+                   else ", the change does not shrink")),
+        remedy="set [validity] order to the observed order (or lower), or refine [solid] "
+               "mesh_size until the three meshes are in the asymptotic range")
 
 
 def _plots(config: ValidityConfig) -> bool:

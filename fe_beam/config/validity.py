@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 DEFAULT_LAWS = ("nonstandard", "reissner")
-DEFAULT_ORDER = 2.0
+DEFAULT_ORDER = 1.0
 VALIDITY_KEYS = {
     "x": Key((str,), None, "the config key of the map's x axis, a dotted path such as "
              "\"tendons.0.tension\" (required)"),
@@ -52,7 +52,8 @@ VALIDITY_KEYS = {
     "second_mesh_ratio": Key(NUMBER, None, "r: the solid is solved again with [solid] mesh_size "
                              "/ r (r = 2: twice as fine) for a Richardson estimate of its error"),
     "order": Key(NUMBER, DEFAULT_ORDER, "convergence order p of the solid assumed by the "
-                 "Richardson estimate"),
+                 "Richardson estimate (default 1: the clamped face's edges limit the order; "
+                 "certified on a third, coarser mesh: check solid_discretisation_error)"),
     "workers": Key((int,), 1, "points solved at once in separate processes (serial runs; "
                    "under mpirun the ranks share the points)"),
     "metric": Key((str,), "backbone_distance", "the quantity the map shows (validity.png, the "
@@ -315,16 +316,25 @@ def parse_validity(raw: dict) -> ValidityConfig:
             try:
                 check_values(point)
                 parsed = parse_compare(point)
-                if ratio is not None:
+                if ratio is not None:  # the second mesh and the third (coarsest) one
                     parse_compare(second_mesh(point, parsed, ratio))
+                    parse_compare(second_mesh(point, parsed, third_mesh_ratio(ratio)))
             except ConfigError as error:
                 raise ConfigError(f"[validity] the point {where}: {error}") from None
             points.append(GridPoint(i, j, float(xv), None if yv is None else float(yv), point,
                                     parsed, config_hash(point | {"__map__": {
-                                        "second_mesh_ratio": ratio, "order": order}})))
+                                        "second_mesh_ratio": ratio, "order": order,
+                                        "mesh_check": 1}})))
     return ValidityConfig(given["x"], x_values, y, y_values, tuple(laws),
                           None if ratio is None else float(ratio), float(order), tuple(points),
                           workers, metric)
+
+
+def third_mesh_ratio(ratio: float) -> float:
+    """The ``ratio`` (for `second_mesh`) of the third, coarsest mesh that certifies the
+    Richardson estimate: sizes h R, h, h / R for a finer second mesh (ratio > 1), h R^2, h R,
+    h for a coarser one."""
+    return 1.0 / ratio if ratio > 1 else ratio**2
 
 
 def second_mesh(point: dict, parsed: CompareConfig, ratio: float) -> dict:

@@ -393,10 +393,54 @@ def gather_line(problem, functions: dict) -> dict | None:
     return {key: value[order] for key, value in merged.items()}
 
 
+class SectionFields:
+    """The strains and section forces of a rod problem as cellwise (DG0) fields, recovered where
+    the solver uses them: the L2 projection onto DG0 with the energy's own Gauss rule, i.e. the
+    Gauss-weighted mean of the values at the energy's Gauss points (`BeamProblem.energy_rule`).
+
+    With the default degree 2 the energy is integrated with 2 points per element (reduced
+    integration, locking-free): the shear strain, and the forces, of the quadratic fields are
+    right at the Gauss points only and oscillate between them, so a value sampled at the
+    element midpoint is wrong (issue 28, item 6: T = 119 N for a 1 N tip load). The Gauss
+    values of a tip-loaded cantilever are the exact (L - x) P and P, so their mean is exact at
+    the midpoint: a linear resultant's midpoint value, a constant one's value. Degree 1 (one
+    point: the midpoint) is unchanged."""
+
+    def __init__(self, problem, expressions: dict, space):
+        mesh = problem.mesh
+        reference, weights = problem.energy_rule()
+        self.weights = np.asarray(weights, dtype=float)
+        self.names = list(expressions)
+        self._compiled = compat.expression(
+            ufl.as_vector([ufl.as_ufl(e) for e in expressions.values()]), reference)
+        owned = mesh.topology.index_map(mesh.topology.dim).size_local
+        self._cells = np.arange(owned, dtype=np.int32)
+        self._dofs = compat.cell_dofs(space)[:owned, 0]
+        self._mesh = mesh
+        self.reference = np.asarray(reference, dtype=float).ravel()
+        #: the values at the Gauss points of the last update: (owned cells, points, names)
+        self.values = np.zeros((owned, len(self.weights), len(self.names)))
+
+    def update(self, functions: list) -> None:
+        """Put the recovered values into ``functions`` (DG0, in the order of the names)."""
+        values = compat.evaluate_expression(self._compiled, self._mesh, self._cells)
+        values = np.asarray(values).reshape(len(self._cells), len(self.weights), len(self.names))
+        self.values = values
+        means = np.einsum("q,cqf->cf", self.weights, values)
+        for i, function in enumerate(functions):
+            function.x.array[self._dofs] = means[:, i]
+            function.x.scatter_forward()
+
+
 class BeamXDMFWriter:
     """XDMF time series of a `BeamProblem`: u, v, theta and a displacement vector (P1, at the
     vertices; "Warp By Vector" in ParaView shows the deformed beam), and the strains eps, gamma,
-    kappa and resultants N, T, M, axial force (DG0, at element midpoints).
+    kappa and resultants N, T, M, axial force (DG0: one value per element, the Gauss-weighted
+    mean of their values at the energy's Gauss points, see `SectionFields`).
+
+    ``sections=False`` leaves the strains and resultants out: mode-shape files (buckling,
+    critical points, vibration modes) hold normalised shapes, whose nonlinear strains and
+    forces mean nothing.
 
     With ``contact`` (a `fe_beam.fem.contact.ContactSet`), per obstacle i (the order of
     [[obstacles]]) also ``contact_gap_i`` (P1: the signed gap [m] of the rod's surface at the
@@ -404,31 +448,77 @@ class BeamXDMFWriter:
     largest line pressure [N/m] at the cell's contact points, the values whose maximum is the
     summary's pressure_peak)."""
 
-    def __init__(self, problem, path: str | Path | None, contact=None):
+    def __init__(self, problem, path: str | Path | None, contact=None, sections: bool = True):
         self.problem = problem
         mesh = problem.mesh
         self.functions = {}
         self._expressions = []
         plan = self._plan(problem)
+        cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
+        self._sections = None
+        self.section_names: list[str] = []
+        if sections:
+            expressions = problem.output_expressions()
+            self._sections = SectionFields(problem, expressions, cellwise)
+            self.section_names = list(expressions)
         self.contact = contact
         self._pressures = []
+        gaps = []
         if contact is not None:
             scalar = next(space for name, _, space in plan if name == "u")  # P1, as u
-            plan += [(name, expr, scalar)
-                     for name, expr in contact.output_expressions(problem).items()]
-            cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
+            gaps = [(name, expr, scalar)
+                    for name, expr in contact.output_expressions(problem).items()]
             owned = mesh.topology.index_map(mesh.topology.dim).size_local
             dofs = compat.cell_dofs(cellwise)[:owned, 0]
             for i in range(len(contact.obstacles)):
                 function = fem.Function(cellwise, name=f"contact_pressure_{i}")
                 self.functions[function.name] = function
                 self._pressures.append((function, dofs))
-        for name, expr, space in plan:
+        for name, expr, space in plan + gaps:
             function = fem.Function(space, name=name)
             self.functions[name] = function
             self._expressions.append((function, compat.interpolation_expression(
                 ufl.as_ufl(expr), space)))
+            if name == plan[-1][0]:  # the section fields after the nodal ones (file order)
+                for section in self.section_names:
+                    self.functions[section] = fem.Function(cellwise, name=section)
         self._file = XDMFSeries(mesh, path) if path is not None else None
+
+    def end_moment(self, x_end: float, tolerance: float) -> float | None:
+        """The moment at the rod's end ``x_end`` that the written fields M, T, eps imply
+        (collective; None without the planar section fields), for a certificate against the
+        support's reaction moment (`BeamProblem.end_reaction`, assembled from the residual).
+
+        The rotation row of the end's vertex is the discrete moment equilibrium of the element
+        at the end: with phi the degree-p Lagrange basis function of the end vertex and the
+        values at the energy's Gauss points (the ones the fields are the means of),
+
+            R_theta = sum_q w_q h (M_q phi'(x_q) - lambda_q T_q phi(x_q)),
+
+        since dW/dtheta = -(r' x F).e_z = -lambda T for every objective law (lambda = |r'| =
+        sqrt(1 + 2 eps), T = F.n). Equal to the reaction when no other load acts on the end
+        element's rotations (tendons, contact: the caller decides)."""
+        if self._sections is None or not {"M", "T", "eps"} <= set(self.section_names):
+            return None
+        sections = self._sections
+        x = compat.cell_vertex_x(self.problem.mesh)[: len(sections.values)]
+        local = 0.0
+        degree = len(sections.weights)
+        for cell in np.flatnonzero(np.min(np.abs(x - x_end), axis=1) <= tolerance):
+            a, b = x[cell]
+            nodes = a + (b - a) * np.linspace(0.0, 1.0, degree + 1)
+            end = int(np.argmin(np.abs(nodes - x_end)))
+            others = np.delete(nodes, end)
+            points = a + (b - a) * sections.reference
+            phi = np.prod([(points - o) / (nodes[end] - o) for o in others], axis=0)
+            dphi = sum(np.prod([(points - o) / (nodes[end] - o) for o in others if o != skip],
+                               axis=0) / (nodes[end] - skip) for skip in others)
+            values = sections.values[cell]
+            column = {n: values[:, i] for i, n in enumerate(sections.names)}
+            stretch = np.sqrt(1 + 2 * column["eps"])
+            local += abs(b - a) * float(np.sum(sections.weights * (
+                column["M"] * dphi - stretch * column["T"] * phi)))
+        return float(self.problem.comm.allreduce(local))
 
     @property
     def contact_names(self) -> tuple[list[str], list[str]]:
@@ -441,24 +531,24 @@ class BeamXDMFWriter:
 
     @staticmethod
     def _plan(problem) -> list:
-        """(name, UFL expression, output space) of every field written."""
+        """(name, UFL expression, output space) of every nodal field written (interpolated at
+        the vertices; the strains and section forces are `SectionFields`)."""
         mesh = problem.mesh
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=2))
-        cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
         u, v, theta, _ = problem.fields()
-        plan = [
+        return [
             ("u", u, scalar),
             ("v", v, scalar),
             ("theta", theta, scalar),
             ("displacement", ufl.as_vector([u, v]), vector),
         ]
-        return plan + [(name, expr, cellwise)
-                       for name, expr in problem.output_expressions().items()]
 
     def update(self) -> None:
         for function, expression in self._expressions:
             function.interpolate(expression)
+        if self._sections is not None:
+            self._sections.update([self.functions[n] for n in self.section_names])
         if self._pressures:
             for (function, dofs), values in zip(self._pressures, self.contact.cell_pressures(),
                                                 strict=True):
@@ -485,14 +575,9 @@ class BeamXDMFWriter:
         gaps, _ = self.contact_names
         nodal = gather_line(self.problem, {k: self.functions[k]
                                            for k in ("u", "v", "theta", *gaps)})
-        cellwise = gather_line(
-            self.problem,
-            {
-                k: f
-                for k, f in self.functions.items()
-                if k not in ("u", "v", "theta", "displacement", *gaps)
-            },
-        )
+        cells = {k: f for k, f in self.functions.items()
+                 if k not in ("u", "v", "theta", "displacement", *gaps)}
+        cellwise = gather_line(self.problem, cells) if cells else None
         if nodal is not None:
             nodal["cells"] = cellwise
         return nodal

@@ -26,22 +26,20 @@ class SpatialXDMFWriter(BeamXDMFWriter):
     """XDMF time series of a `fe_beam.fem.spatial_rod.SpatialRodProblem`: the displacement
     (a 3-vector, P1 at the vertices: "Warp By Vector"), the rotation vector, the directors
     d1, d2, d3 (3-vectors: "Glyph" shows the section frames) and the strains v1, v2, v3 and
-    curvatures twist, curvature_y, curvature_z (DG0, at element midpoints)."""
+    curvatures twist, curvature_y, curvature_z (DG0: the Gauss-weighted mean of their values at
+    the energy's Gauss points, see `fe_beam.exports.outputs.SectionFields`)."""
 
     @staticmethod
     def _plan(problem) -> list:
         mesh = problem.mesh
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=3))
-        cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
         d, theta, _ = problem.fields()
         plan = [(name, d[i] if i < 3 else theta[i - 3], scalar)
                 for i, name in enumerate(NODAL)]
         plan += [("displacement", d, vector), ("rotation_vector", theta, vector)]
-        plan += [(f"d{i + 1}", director, vector)
-                 for i, director in enumerate(problem.directors())]
-        return plan + [(name, expr, cellwise)
-                       for name, expr in problem.output_expressions().items()]
+        return plan + [(f"d{i + 1}", director, vector)
+                       for i, director in enumerate(problem.directors())]
 
     def vertex_values(self, update: bool = True) -> dict | None:
         """Nodal u, v, w, the rotation vector and x, and the directors d2, d3 (arrays of
@@ -61,9 +59,9 @@ class SpatialXDMFWriter(BeamXDMFWriter):
                 xs = np.concatenate([g[0] for g in gathered])
                 frames[name] = np.concatenate([g[1] for g in gathered])[np.argsort(
                     xs, kind="stable")]
-        cellwise = gather_line(self.problem, {k: f for k, f in self.functions.items()
-                                              if k in self.problem.output_expressions()
-                                              or k in pressures})
+        cells = {k: f for k, f in self.functions.items()
+                 if k in self.section_names or k in pressures}
+        cellwise = gather_line(self.problem, cells) if cells else None
         if nodal is not None:
             nodal.update(frames)
             nodal["cells"] = cellwise

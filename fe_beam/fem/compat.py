@@ -17,10 +17,13 @@ import ufl
 from dolfinx import fem, mesh
 from mpi4py import MPI
 from petsc4py import PETSc
+from ufl.algorithms.apply_algebra_lowering import apply_algebra_lowering
+from ufl.algorithms.apply_derivatives import apply_derivatives
 
 __all__ = [
     "DOLFINX_VERSION",
     "LEGACY",
+    "POINT_RTOL",
     "XDMFFile",
     "apply_lifting",
     "atan2",
@@ -362,7 +365,19 @@ def interpolation_expression(expr: ufl.core.expr.Expr, space: fem.FunctionSpace)
     points = space.element.interpolation_points
     if callable(points):  # later dolfinx versions turned it into a method
         points = points()
-    return fem.Expression(expr, points)
+    return fem.Expression(_derivatives_applied(expr), points)
+
+
+def _derivatives_applied(expr: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """``expr`` with its derivatives (``ufl.diff``, ``ufl.derivative``) carried out.
+
+    FFCx 0.5 numbers an Expression's constants after applying the derivatives, dolfinx 0.5.2
+    packs those of the expression as given: a ``fem.Constant`` the differentiation removes
+    (a stiffness of a term that does not depend on the variable) shifts every later constant
+    into the wrong slot (issue 28, item 5: the moment M = dW/dkappa was E G b^3 / 12 kappa,
+    1e6..1e18 too large). Differentiated beforehand, both lists are the same. Harmless on the
+    later stacks (FFCx would apply the same rules itself)."""
+    return apply_derivatives(apply_algebra_lowering(ufl.as_ufl(expr)))
 
 
 # --- solid ---
@@ -377,27 +392,86 @@ def bounding_box_tree(msh: mesh.Mesh, dim: int):
     return geometry.bb_tree(msh, dim)
 
 
-def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray) -> np.ndarray:
-    """For each point (n, 3), the first local cell containing it, or -1."""
+#: relative tolerance of point location: a point within this fraction of a cell's size of the
+#: cell counts as in it (a point on a shared facet or vertex belongs to one of its cells)
+POINT_RTOL = 1e-8
+
+
+def first_colliding_cells(msh: mesh.Mesh, tree, points: np.ndarray,
+                          rtol: float = POINT_RTOL) -> np.ndarray:
+    """For each point (n, 3), the first local cell containing it, or -1.
+
+    dolfinx's ``compute_colliding_cells`` accepts a candidate cell of the bounding-box tree only
+    when its GJK distance to the point is below an absolute 1e-10 m (0.5.2: squared distance
+    < 1e-20), while GJK stops on a relative criterion: a point within ~1e-9 m of a facet shared
+    by millimetre cells (an interior point, all barycentric coordinates >= 0) comes back at a
+    distance of ~6e-10 m from every cell sharing the facet and is lost. A point none of the
+    candidates claims is therefore located again among the candidates with a tolerance relative
+    to the cell's size: by its barycentric coordinates (straight simplex cells: the cell whose
+    smallest coordinate is largest, accepted down to -``rtol``, with the distance off the
+    cell's plane at most ``rtol`` times its size), else by GJK's distance at most ``rtol``
+    times the cell's size.
+    """
     from dolfinx import geometry
 
     points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    if LEGACY:
-        candidates = geometry.compute_collisions(tree, points)
-    else:
-        candidates = geometry.compute_collisions_points(tree, points)
+
+    def candidates_of(where):
+        if LEGACY:
+            return geometry.compute_collisions(tree, where)
+        return geometry.compute_collisions_points(tree, where)
+
+    candidates = candidates_of(points)
     colliding = geometry.compute_colliding_cells(msh, candidates, points)
     cells = np.full(len(points), -1, dtype=np.int32)
     for i in range(len(points)):
         links = colliding.links(i)
         if len(links) > 0:
             cells[i] = links[0]
+    missing = np.flatnonzero(cells < 0)
+    if len(missing) and rtol > 0:
+        for i in missing:
+            cells[i] = _closest_candidate(msh, candidates.links(int(i)), points[i], rtol)
     return cells
+
+
+def _closest_candidate(msh: mesh.Mesh, candidates: np.ndarray, point: np.ndarray,
+                       rtol: float) -> int:
+    """The candidate cell holding ``point`` to the relative tolerance ``rtol``, or -1."""
+    from dolfinx import geometry
+
+    candidates = np.asarray(candidates, dtype=np.int32)
+    if len(candidates) == 0:
+        return -1
+    tdim = msh.topology.dim
+    x = msh.geometry.x
+    nodes = geometry_cell_nodes(msh)
+    best, best_score = -1, -np.inf
+    simplex = geometry_degree(msh) == 1 and nodes.shape[1] == tdim + 1
+    for cell in candidates:
+        vertices = x[nodes[cell]]
+        size = float(np.max(np.ptp(vertices, axis=0)))
+        if simplex:
+            edges = (vertices[1:] - vertices[0]).T  # (3, tdim)
+            local, *_ = np.linalg.lstsq(edges, point - vertices[0], rcond=None)
+            off_plane = float(np.linalg.norm(edges @ local - (point - vertices[0])))
+            if off_plane > rtol * size:
+                continue
+            score = float(min(1.0 - local.sum(), local.min()))
+            if score >= -rtol and score > best_score:
+                best, best_score = int(cell), score
+        else:
+            distance = float(np.sqrt(geometry.squared_distance(
+                msh, tdim, np.array([cell], dtype=np.int32), point.reshape(1, 3))[0]))
+            if distance <= rtol * size and -distance > best_score:
+                best, best_score = int(cell), -distance
+    return best
 
 
 def expression(expr: ufl.core.expr.Expr, reference_points: np.ndarray) -> fem.Expression:
     """A compiled expression evaluated at fixed points of the reference cell."""
-    return fem.Expression(expr, np.asarray(reference_points, dtype=np.float64))
+    return fem.Expression(_derivatives_applied(expr),
+                          np.asarray(reference_points, dtype=np.float64))
 
 
 def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndarray) -> np.ndarray:

@@ -702,13 +702,19 @@ class BeamProblem:
             tangent = (w_kk - w_ek**2 / w_ee) / self.stiffness.EI
         else:
             tangent = ufl.as_ufl(1.0) + 0 * s.eps
-        points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)
-        reference = ((points + 1) / 2).reshape(-1, 1)
+        reference, _ = self.energy_rule()
         columns = [s.one_plus_e, s.eps, gamma, tangent]
         stretches = self.law.fibre_stretches(s)
         if stretches:  # the extreme fibres' 1 + e + eta kappa and E11
             columns += stretches + [(x**2 + s.g**2 - 1) / 2 for x in stretches]
         return compat.expression(ufl.as_vector(columns), reference), len(columns)
+
+    def energy_rule(self) -> tuple[np.ndarray, np.ndarray]:
+        """The Gauss rule of the energy integrals (``dx_energy``: p Gauss-Legendre points, exact
+        to degree 2p - 1) on the reference interval [0, 1]: points (p, 1), weights (p,) summing
+        to 1. The solver sees the strains and section forces at these points only."""
+        points, weights = np.polynomial.legendre.leggauss(self.model.mesh.degree)
+        return ((points + 1) / 2).reshape(-1, 1), weights / 2
 
     def strain_energy_form(self) -> fem.Form:
         u, v, theta, _ = self.fields()

@@ -400,8 +400,7 @@ class SpatialRodProblem(BeamProblem):
             s = self.strains((d, theta))
             shear = ufl.sqrt(s.v[1] ** 2 + s.v[2] ** 2)
             columns = [s.v[0], s.eps, compat.atan2(shear, s.v[0]), ufl.sqrt(ufl.dot(theta, theta))]
-            points, _ = np.polynomial.legendre.leggauss(self.model.mesh.degree)
-            reference = ((points + 1) / 2).reshape(-1, 1)
+            reference, _ = self.energy_rule()
             self._strain_expression = compat.expression(ufl.as_vector(columns), reference)
         cells = np.arange(self.mesh.topology.index_map(1).size_local, dtype=np.int32)
         values = compat.evaluate_expression(self._strain_expression, self.mesh, cells)

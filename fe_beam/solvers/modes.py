@@ -94,6 +94,11 @@ class Modes:
     #: per mode, the shares of its mass norm by family (`BeamProblem.mode_shares`; spatial
     #: rods: axial, torsion, bending about y, bending about z, and "transverse")
     shares: list[dict] = field(default_factory=list)
+    #: per reported mode, ||K x - lambda M x|| / (||K x|| + |lambda| ||M x||) (`eigenpair_residual`)
+    residuals: list[float] = field(default_factory=list)
+    #: the largest normalised |x_i^T M x_j| of the reported modes (`mass_orthogonality`); None
+    #: for a non-symmetric pencil (follower loads), whose modes are not M-orthogonal
+    orthogonality: float | None = None
 
     def bending(self) -> list[float]:
         """Frequencies of the elastic modes that are mainly transverse (bending)."""
@@ -183,8 +188,6 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     pairs = [(value, shape) for value, shape in pairs if imaginary.get(id(shape), 0.0) == 0
              or id(shape) in flutter]
     shares = {id(shape): _rigid_share(shape, rigid, M) for _, shape in pairs}
-    K.destroy()
-    M.destroy()
     for vector in rigid:
         vector.destroy()
     is_rigid = set()
@@ -237,10 +240,63 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     for (_value, shape), share in zip(chosen, family_shares, strict=True):
         kinds.append("rigid" if id(shape) in is_rigid else problem.mode_kind(share))
     frequencies = [math.sqrt(value) / (2 * math.pi) for value, _ in chosen]
+    computed = {id(shape): value for value, shape in pairs}
+    residuals = [eigenpair_residual(K, M, computed[id(shape)], shape,
+                                    rigid=id(shape) in is_rigid) for _, shape in chosen]
+    orthogonality = (mass_orthogonality(M, [shape for _, shape in chosen]) if symmetric
+                     else None)
+    K.destroy()
+    M.destroy()
     return Modes(frequencies, [s for _, s in chosen], transverse,
                  eigenvalues=[value for value, _ in chosen], kinds=kinds,
                  rigid_body_modes=len(rigid_pairs), unstable=unstable,
-                 unstable_count=int(unstable_count), notes=notes, shares=family_shares)
+                 unstable_count=int(unstable_count), notes=notes, shares=family_shares,
+                 residuals=residuals, orthogonality=orthogonality)
+
+
+def eigenpair_residual(K: PETSc.Mat, M: PETSc.Mat, value: float, shape: fem.Function,
+                       rigid: bool = False) -> float:
+    """||K x - lambda M x|| / (||K x|| + |lambda| ||M x||) of one eigenpair, lambda the
+    eigenvalue the eigensolver returned: a run-time certificate of the pair, independent of
+    the eigensolver's own convergence test (0 when x is zero). A ``rigid`` mode (K x and lambda
+    both round-off) is measured by its backward error ||K x - lambda M x|| / ((||K|| + |lambda|
+    ||M||) ||x||) instead (infinity norms): against the matrices' scale, not its own."""
+    x = compat.vector_of(shape)
+    kx, mx = K.createVecLeft(), M.createVecLeft()
+    K.mult(x, kx)
+    M.mult(x, mx)
+    if rigid:
+        infinity = PETSc.NormType.INFINITY
+        scale = (K.norm(infinity) + abs(value) * M.norm(infinity)) * x.norm(infinity)
+    else:
+        scale = kx.norm() + abs(value) * mx.norm()
+    kx.axpy(-value, mx)
+    residual = kx.norm(PETSc.NormType.INFINITY) if rigid else kx.norm()
+    kx.destroy()
+    mx.destroy()
+    return float(residual / scale) if scale > 0 else 0.0
+
+
+def mass_orthogonality(M: PETSc.Mat, shapes: list[fem.Function]) -> float:
+    """max over i != j of |x_i^T M x_j| / sqrt(x_i^T M x_i x_j^T M x_j) of the given modes: the
+    M-orthogonality the eigenvectors of a symmetric pencil have (0 for fewer than two)."""
+    vectors = [compat.vector_of(shape) for shape in shapes]
+    products = []
+    for x in vectors:
+        mx = M.createVecLeft()
+        M.mult(x, mx)
+        products.append(mx)
+    n = len(vectors)
+    gram = np.array([[vectors[i].dot(products[j]) for j in range(n)] for i in range(n)])
+    for mx in products:
+        mx.destroy()
+    worst = 0.0
+    for i in range(n):
+        for j in range(i + 1, n):
+            norm = math.sqrt(abs(gram[i, i] * gram[j, j]))
+            if norm > 0:
+                worst = max(worst, abs(gram[i, j]) / norm)
+    return float(worst)
 
 
 def _solve(SLEPc, K, M, sigma, nev, fixed, problem, symmetric=False):

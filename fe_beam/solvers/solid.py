@@ -234,15 +234,39 @@ class SolidFingerProblem:
 
     def _cables(self) -> None:
         length = self.finger.geometry.length
-        face = self._tip_face_vertices() if self.anchor == "face" else None
+        face = self._tip_face_nodes() if self.anchor == "face" else None
         self.cables = []
         for chain, tendon in zip(self.finger.tendon_chains, self.finger.geometry.tendons,
                                  strict=True):
             patch = None
             if face is not None and abs(chain[-1][0] - length) <= 1e-9 * length:
-                patch = (face[0], plate_weights(face[0], face[1], chain[-1]))
+                patch = (face[0], consistent_plate_weights(face[0], face[1], chain[-1]))
             self.cables.append(TendonCable(self.V, chain, 0.0, name=tendon.name,
                                            anchor_patch=patch))
+
+    def _tip_face_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the displacement space's nodes on the tip face (m, 3), their load moments (m, 3):
+        int_tip phi_j (1, Y, Z) dA, phi_j the node's scalar shape function), on every rank:
+        the consistent nodal loads of a traction linear in (Y, Z) (`consistent_plate_weights`).
+        """
+        S = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange",
+                                                             self.discretization.degree))
+        v = ufl.TestFunction(S)
+        X = ufl.SpatialCoordinate(self.mesh)
+        one = fem.Constant(self.mesh, PETSc.ScalarType(1.0))
+        fdim = self.mesh.topology.dim - 1
+        dofs = fem.locate_dofs_topological(S, fdim, self.finger.facet_tags.find(TIP_TAG))
+        dofs = dofs[dofs < S.dofmap.index_map.size_local]
+        columns = []
+        for density in (one, X[1], X[2]):
+            vector = compat.assemble_vector(fem.form(density * v * self.ds(TIP_TAG)))
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            columns.append(vector.getArray(readonly=True)[dofs].copy())
+            vector.destroy()
+        points = S.tabulate_dof_coordinates()[dofs][:, :3]
+        moments = np.column_stack(columns)
+        return (np.concatenate(self.comm.allgather(points)),
+                np.concatenate(self.comm.allgather(moments)))
 
     def _tip_face_vertices(self) -> tuple[np.ndarray, np.ndarray]:
         """(vertices (m, 3), lumped areas (m,)) of the whole tip face, on every rank."""
@@ -447,6 +471,83 @@ class SolidFingerProblem:
             "normal_angle": float(math.atan2(n[1], n[0])),
         }
 
+    def _displacement_nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned displacement nodes (n, 3) local dof indices of W, their reference
+        coordinates (n, 3)), built once."""
+        if getattr(self, "_u_nodes", None) is None:
+            owned = self.W.dofmap.index_map.size_local * self.W.dofmap.index_map_bs
+            if self.p is None:
+                n = self.W.dofmap.index_map.size_local
+                nodes = np.arange(3 * n).reshape(-1, 3)
+                coordinates = self.W.tabulate_dof_coordinates()[:n]
+            else:  # V0's dofs come in nodes of 3 components (`UPFieldSplit`)
+                V0, u_map = compat.sub_space_collapsed(self.W, 0)
+                nodes = np.asarray(u_map, dtype=np.int64).reshape(-1, 3)
+                coordinates = V0.tabulate_dof_coordinates()[: len(nodes)]
+                keep = np.all(nodes < owned, axis=1)
+                nodes, coordinates = nodes[keep], coordinates[keep]
+            self._u_nodes, self._u_X = nodes, np.asarray(coordinates, dtype=float)[:, :3]
+        return self._u_nodes, self._u_X
+
+    def equilibrium(self) -> dict:
+        """Global equilibrium of the current state (collective): the support reaction at the
+        clamped face, read off the rows of the assembled residual (no boundary conditions, the
+        cables' contributions included) that the clamp fixes, against the external loads
+        computed apart: the dead tip force lambda * tip_force with its moment (Xc + u_tip) x F
+        (a uniform traction), and each obstacle's contact force and moment (its traction
+        integrated over the surface, `SolidContact.summary`, `SolidContact.moments`). The
+        tendons are internal (a cable's energy tau l is invariant under rigid motions: its
+        forces on the body sum to zero, force and moment), so the reaction balances the
+        external loads only.
+
+        Returns {"reaction_force", "reaction_moment" (about the origin, deformed positions),
+        "force_imbalance", "moment_imbalance" (|sum|), "scale" (the largest load: the tip
+        force, a contact force, a tendon tension, the reaction [N]; with nothing loaded the
+        force of a unit strain on the tip face, mu A), "value" (max(|force sum|, |moment sum|
+        / L) / scale)}."""
+        x = compat.vector_of(self.w)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        b = compat.create_vector(self.problem.residual_form)
+        with b.localForm() as local:
+            local.set(0.0)
+        compat.assemble_vector(b, self.problem.residual_form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        for term in self.problem.contributions:
+            term.add_to_residual(x, b)
+        b.assemble()
+        residual = b.getArray(readonly=True).copy()
+        state = x.getArray(readonly=True)
+        b.destroy()
+        nodes, X = self._displacement_nodes()
+        clamped = np.zeros(len(residual), dtype=bool)
+        clamped[compat.owned_bc_dofs(self.bcs)] = True
+        on_clamp = clamped[nodes[:, 0]]
+        reaction = residual[nodes[on_clamp]]  # R = f_int - f_ext: the support's force there
+        positions = X[on_clamp] + state[nodes[on_clamp]]
+        force = global_sum(self.comm, reaction.sum(axis=0))
+        moment = global_sum(self.comm, np.cross(positions, reaction).sum(axis=0))
+        applied = self.load_factor * self.tip_force
+        centre = self.tip_centroid + self.tip_displacement()
+        total_force = force + applied
+        total_moment = moment + np.cross(centre, applied)
+        loads = [float(np.linalg.norm(applied)), *(abs(t) for t in self.tensions())]
+        if self.contact is not None:
+            forces = [np.asarray(e["force"]) for e in self.contact.summary()]
+            for f, m in zip(forces, self.contact.moments(), strict=True):
+                total_force = total_force + f
+                total_moment = total_moment + m
+                loads.append(float(np.linalg.norm(f)))
+        # the largest load (the reaction too: a spurious one must not set a small scale);
+        # nothing loaded: the force of a unit strain on the tip face, mu A
+        scale = (max(*loads, float(np.linalg.norm(force))) if max(loads) > 0
+                 else self.material.shear_modulus * self.tip_area)
+        length = self.finger.geometry.length
+        imbalance = (float(np.linalg.norm(total_force)), float(np.linalg.norm(total_moment)))
+        value = max(imbalance[0], imbalance[1] / length) / scale
+        return {"reaction_force": force.tolist(), "reaction_moment": moment.tolist(),
+                "force_imbalance": imbalance[0], "moment_imbalance": imbalance[1],
+                "scale": scale, "value": value}
+
     def backbone(self, xs: Sequence[float] | None = None, n_gauss: int = 4) -> dict:
         """Deformed area centroids of the reference sections X = xs (default 21 stations).
 
@@ -530,6 +631,25 @@ def plate_weights(vertices: np.ndarray, lumped: np.ndarray, anchor: np.ndarray) 
     system = moments @ (base[:, None] * moments.T)
     multipliers = np.linalg.solve(system, target - moments @ base)
     return base * (1.0 + moments.T @ multipliers)
+
+
+def consistent_plate_weights(points: np.ndarray, moments: np.ndarray,
+                             anchor: np.ndarray) -> np.ndarray:
+    """Weights w_j of the face nodes ``points`` (m, 3) for an anchor plate at ``anchor``: the
+    consistent nodal loads w_j = int_tip phi_j t dA of the traction t = a + b Y + c Z (per
+    unit force) with resultant 1 and moment arm the anchor's (y, z), i.e. sum w_j = 1 and
+    sum w_j (y_j, z_j) = (y_a, z_a) (exact: Y and Z lie in the nodal space). ``moments`` holds
+    int_tip phi_j (1, Y, Z) dA (`SolidFingerProblem._tip_face_nodes`).
+
+    Unlike `plate_weights` (the same traction lumped to the P1 vertices, which for P2 elements
+    is a set of point forces at the vertices: local singularities of the discrete solution
+    right on the tip face, so that the face's best-fit rotation converged erratically under
+    refinement), this is the traction itself as the finite element sees it."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    moments = np.asarray(moments, dtype=float).reshape(-1, 3)
+    arms = np.vstack([np.ones(len(points)), points[:, 1], points[:, 2]])  # (3, m)
+    coefficients = np.linalg.solve(arms @ moments, np.array([1.0, anchor[1], anchor[2]]))
+    return moments @ coefficients
 
 
 TENDON_TUBE = 0.1  # radius of the tube around a tendon left out of the bulk, / section height

@@ -4,6 +4,7 @@ tension sweep of the finger (3D solid vs the rod with the non-standard and Reiss
 import csv
 import json
 
+import numpy as np
 import pytest
 from test_solid_driver import DROP, FINGER, assert_usage_error, edited, run_cli, shared_folder
 
@@ -157,3 +158,16 @@ def test_csv_and_plots(sweep_run):
         summary["table"][1]["rod"]["nonstandard"]["distance_over_L"])
     for name in ("backbones.png", "tip_vs_tension.png"):
         assert (out / name).stat().st_size > 1000, name
+
+
+def test_solid_equilibrium_is_certified(sweep_run):
+    """issue 28: the solid's global equilibrium over every step of the sweep (a tendon-only
+    finger: no net reaction at the clamp)."""
+    _, summary = sweep_run
+    (check,) = summary["checks"]
+    assert check["name"] == "solid_global_equilibrium" and check["passed"]
+    assert check["value"] < 1e-8
+    for row in summary["table"]:
+        balance = row["solid"]["equilibrium"]
+        assert np.linalg.norm(balance["reaction_force"]) < 1e-8 * row["tension"]
+        assert balance["scale"] == pytest.approx(row["tension"], rel=1e-12)

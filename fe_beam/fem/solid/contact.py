@@ -175,6 +175,9 @@ class SolidContact:
         self._force = [[fem.form(solid_traction(o, X, u, lam, k)[i] * self.ds)
                         for i in range(3)]
                        for o, lam in zip(self.obstacles, self.multipliers, strict=True)]
+        self._moment = [[fem.form(ufl.cross(X + u, solid_traction(o, X, u, lam, k))[i] * self.ds)
+                         for i in range(3)]
+                        for o, lam in zip(self.obstacles, self.multipliers, strict=True)]
         self._area = [fem.form(ufl.conditional(ufl.gt(contact_pressure(lam, solid_gap(o, X, u),
                                                                        k), 0), 1.0, 0.0)
                                * self.ds)
@@ -320,6 +323,11 @@ class SolidContact:
                 "contact_length": 0.0 if extent is None else extent[1] - extent[0],
             })
         return entries
+
+    def moments(self) -> list[np.ndarray]:
+        """Per obstacle, the moment about the origin of the force it exerts on the solid,
+        int (X + u) x t dA (deformed positions; collective)."""
+        return [np.array([assemble_scalar(f) for f in forms]) for forms in self._moment]
 
     def contact_extent(self, pressure: np.ndarray) -> list[float] | None:
         """[min x, max x] of the reference positions of the owned exterior-facet vertices
