@@ -7,6 +7,7 @@ moment at x = 0, the spatial rod against the rotated planar answer and a mid-spa
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -227,3 +228,62 @@ def test_dynamic_step_moment_oscillates_about_the_static_answer():
     energies = summary["history"][-1]["energies"]  # the point moment's work is accounted
     assert energies["external_work"] > 0
     assert abs(energies["balance_residual"]) < 0.03 * energies["external_work"]
+
+
+def equilibrium_config(spatial):
+    """Moments inside (on vertices of 8 elements, one where 2 ranks meet, and between them),
+    at x = L, with a force: the global balance needs each moment once."""
+    moments = [[0.375, 40.0], [0.5, -25.0], [0.61, 15.0], [L, 10.0]]
+    if spatial:
+        moments = [[x, 0.3 * m, -0.5 * m, m] for x, m in moments]
+    return config(elements=8, spatial=spatial, steps=3, point_moments=moments,
+                  tip_force=[0.0, -30.0] + ([10.0] if spatial else []))
+
+
+@pytest.mark.parametrize("spatial", [False, True])
+def test_point_moments_enter_the_global_equilibrium(spatial):
+    """The static run's global_equilibrium check balances the reactions against the point
+    moments (without them the imbalance is ~1: exit 3)."""
+    import fe_beam
+
+    cfg = equilibrium_config(spatial)
+    cfg["output"] = {"xdmf": False, "plots": False}
+    summary = fe_beam.run("static", cfg, None)
+    assert summary["status"] == "converged", summary.get("message")
+    (check,) = [c for c in summary["checks"] if c["name"] == "global_equilibrium"]
+    assert check["passed"] and check["value"] < 1e-9
+
+
+def test_a_point_moment_off_by_one_percent_fails_the_balance(tmp_path, monkeypatch):
+    from tomlio import dump_toml
+
+    from fe_beam.fem import equilibrium
+
+    original = equilibrium._point_moments
+    monkeypatch.setattr(equilibrium, "_point_moments",
+                        lambda problem, factor: original(problem, 1.01 * factor))
+    path = tmp_path / "c.toml"
+    path.write_text(dump_toml(equilibrium_config(False)))
+    assert main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "failed" and "global_equilibrium" in summary["message"]
+
+
+@pytest.mark.mpi
+def test_two_ranks_balance_the_point_moments_like_one():
+    """Under mpirun -n 2: each point moment's wrench (its nodal values on the owning rank)
+    equals the serial one."""
+    from fe_beam.fem import equilibrium
+
+    parsed = parse_static(equilibrium_config(True))
+    terms = {}
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        run = StaticContinuation(parsed, comm)
+        run.advance(1.0, parsed.stepping)
+        terms[comm.size] = [t for t in equilibrium.rod_wrenches(run.problem)
+                            if t.name.startswith("point moment")]
+        run.destroy()
+    assert len(terms[1]) == 4
+    for world, alone in zip(terms[MPI.COMM_WORLD.size], terms[1], strict=True):
+        assert world.name == alone.name
+        np.testing.assert_allclose(world.moment, alone.moment, rtol=1e-12)
