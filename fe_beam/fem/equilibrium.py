@@ -7,8 +7,8 @@ their definitions on the deformed shape (tip force and moment, dead or follower,
 loads and gravity, point forces, point moments) and the contact forces of the contact report
 must sum to zero, forces and moments (about the origin, with the deformed positions).
 Tendons: the potential tau * l is invariant under rigid motions of the rod, so a tendon
-anchored in the rod exerts no net force or moment on it (its entry force on a supported node is part of that support's
-reaction); it enters the balance as zero.
+anchored in the rod exerts no net force or moment on it (its entry force on a supported node
+is part of that support's reaction); it enters the balance as zero.
 
 A Galerkin solution balances exactly for the translations and, in the plane, for the rotation
 (the rigid motions lie in the finite-element space): what remains is the Newton residual at the
