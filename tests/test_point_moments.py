@@ -307,3 +307,17 @@ def test_moments_on_held_ends_keep_the_moment_field_certificates(tmp_path):
     names = {c["name"]: c for c in summary["checks"]}
     for name in ("moment_field_x0", "moment_field_xL", "global_equilibrium"):
         assert names[name]["passed"] and names[name]["value"] < 1e-9, name
+
+
+@pytest.mark.parametrize("command", ["buckling", "path"])
+def test_a_point_moment_alone_is_a_load_to_follow(command):
+    """buckling (the reference load) and path (the followed load) accept point moments as
+    the only load; all-zero moments are still no load (exit 2, naming point_moments)."""
+    from fe_beam.config.buckling import parse_buckling
+    from fe_beam.config.path import parse_path
+
+    parse = parse_buckling if command == "buckling" else parse_path
+    kind, static, _ = parse(config(point_moments=[[0.5, 1.0]]))
+    assert kind == "rod" and static.model.loads.point_moments == ((0.5, 1.0),)
+    with pytest.raises(ConfigError, match="point_moments"):
+        parse(config(point_moments=[[0.5, 0.0]]))
