@@ -139,6 +139,7 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
         try:
             with deferred:  # SIGINT/SIGTERM stop at a step boundary (runctl.Interrupted)
                 if folder is None:  # nothing written: the driver alone
+                    cli.check_communicators(world, command)
                     results.append(cli.run_driver(command, validated, raw, None, world,
                                                   progress=progress, echo=echo))
                 else:
@@ -149,6 +150,8 @@ def run(command: str, config: str | os.PathLike | Mapping, out: str | os.PathLik
     finally:
         if out is None and folder is not None:
             _remove(folder, world)
+    summary = results.pop().summary()
+    cli.free_parallel_garbage(world)  # every rank returned here (an error did not)
     for note in notes:  # what the CLI prints as notes (unused tables): warnings here
         warnings.warn(f"fe-beam {command}: {note}", stacklevel=2)
-    return results[0].summary()
+    return summary

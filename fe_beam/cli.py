@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import gc
 import os
 import re
 import sys
@@ -326,6 +327,64 @@ def _world():
     return MPI.COMM_WORLD
 
 
+# --- MPI communicators: MPICH allows 2048 per process ---------------------------------------------
+#: A command does not start with fewer spare communicators than this (exit 2): a solve that runs
+#: out of them mid-way ends in MUMPS or PETSc with a crash, not a message.
+MIN_SPARE_COMMUNICATORS = 64
+
+
+class CommunicatorsExhausted(runctl.TooLarge):
+    """Too few MPI communicators are left in this process to start a command (exit 2)."""
+
+
+def spare_communicators(comm, up_to: int = MIN_SPARE_COMMUNICATORS) -> int:
+    """How many more communicators this process can make (on every rank of ``comm``), counted
+    up to ``up_to``: ``comm`` is duplicated until MPI refuses or ``up_to`` are made, then the
+    duplicates are freed. Cheap (``up_to`` MPI_Comm_dup); collective."""
+    from mpi4py import MPI
+
+    handler = comm.Get_errhandler()
+    comm.Set_errhandler(MPI.ERRORS_RETURN)  # a refused duplicate raises, not aborts
+    made = []
+    try:
+        while len(made) < up_to:
+            try:
+                made.append(comm.Dup())
+            except MPI.Exception:
+                break
+    finally:
+        for duplicate in made:
+            duplicate.Free()
+        comm.Set_errhandler(handler)
+        handler.Free()
+    return int(comm.allreduce(len(made), op=MPI.MIN))
+
+
+def check_communicators(comm, command: str) -> None:
+    """CommunicatorsExhausted when fewer than MIN_SPARE_COMMUNICATORS are left. Collective."""
+    spare = spare_communicators(comm)
+    if spare < MIN_SPARE_COMMUNICATORS:
+        raise CommunicatorsExhausted(
+            f"only {spare} MPI communicators are left in this process (fewer than "
+            f"{MIN_SPARE_COMMUNICATORS}; MPICH allows 2048 per process), too few to start "
+            f"'{command}': run it in a new process (a script that runs many commands should "
+            "drop their results and call fe_beam.cli.free_parallel_garbage)")
+
+
+def free_parallel_garbage(comm) -> None:
+    """Free the PETSc objects of the commands run so far on several ranks: petsc4py destroys an
+    unreferenced object on a communicator of several ranks only collectively, so it waits on
+    its communicator's garbage list (with its MPI communicators, of which MPICH allows 2048 per
+    process) until ``PETSc.garbage_cleanup``. Collective on ``comm``: every rank calls it at
+    the same point (after each command, by the CLI and `fe_beam.run`). A serial run has none."""
+    if comm.size == 1:
+        return
+    gc.collect()  # unreachable cycles holding PETSc objects put them on the garbage lists
+    from petsc4py import PETSc
+
+    PETSc.garbage_cleanup(comm)
+
+
 def check_solver_options(validated) -> None:
     """PETSc's verdict on the configuration's PETSc options (ConfigError naming the first one
     it rejects), before the run starts: the finite-element stack is loaded by now."""
@@ -367,6 +426,7 @@ def execute(args, validated, config: dict, comm, on_session=None, on_result=None
     progress, echo)``) inside the output folder's session (given to ``on_session``); its
     report goes to ``echo(stream, text)`` (default: printed on rank 0), its `Result` to
     ``on_result``; returns its exit code. FolderBusy, TooLarge and Interrupted propagate."""
+    check_communicators(comm, args.command)
     with runctl.output_session(args.out, args.command, comm) as session:
         if on_session is not None:
             on_session(session)
@@ -399,6 +459,7 @@ def _main(argv: list[str] | None = None) -> int:
         quiet_jit_logging()
         check_solver_options(validated)
         code = _run_locked(args, validated, config, world)
+        free_parallel_garbage(world)  # every rank returned here (an error did not)
         for note in notes if code != EXIT_USAGE else []:  # a usage error is one sentence
             _say(comm, f"fe-beam {args.command}: note: {note}", sys.stderr)
         return code

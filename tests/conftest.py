@@ -66,6 +66,25 @@ _GUARDED = False
 _guard_sigterm()
 
 
+_UNDER_MPIRUN = any(name.startswith(("OMPI_COMM_WORLD", "PMI_", "PMIX_", "MPI_LOCALNRANKS"))
+                    for name in os.environ)
+
+
+@pytest.fixture(autouse=True)
+def _parallel_garbage():
+    """Under mpirun: after every test, every rank frees the PETSc objects the test dropped
+    (petsc4py destroys those of a communicator of several ranks only collectively; left on
+    their garbage lists they hold MPI communicators, of which MPICH allows 2048 per process:
+    the PyPI stack's 2-rank suite ran out of them)."""
+    yield
+    if _UNDER_MPIRUN:
+        from mpi4py import MPI
+
+        from fe_beam.cli import free_parallel_garbage
+
+        free_parallel_garbage(MPI.COMM_WORLD)
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _quiet_jit():
     from fe_beam.cli import quiet_jit_logging

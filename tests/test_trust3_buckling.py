@@ -30,8 +30,7 @@ def buckle(raw):
     return run_buckling(copy.deepcopy(raw), None, MPI.COMM_WORLD, progress=False)
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 @pytest.mark.parametrize("law, constraint", [("reissner", "inextensible-unshearable"),
                                              ("nonstandard", "inextensible"),
                                              ("nonstandard", "unshearable")])
@@ -47,8 +46,7 @@ def test_constrained_rod_in_tension_does_not_buckle(law, constraint, elements):
     assert abs(-summary["reversed_load_factors"][0] - euler) <= 2e-4 * euler
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 def test_reissner_tensile_shear_buckling_on_every_mesh():
     """The linearised factors about the unloaded state (linearised_load_factors) sit at
     GA / (1 - GA/EA)^2 plus a bending term, on every mesh. The nonlinear path of the stretched
@@ -78,8 +76,7 @@ def test_reissner_tensile_shear_buckling_on_every_mesh():
     assert max(firsts) - min(firsts) <= 1e-9 * exact, firsts
 
 
-# not under mpirun for now: on the PyPI stack's 2-rank phase a rank of these runs ended the
-# job (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 def test_compressed_column_factors_are_kept():
     """Pinned-roller column: the verification keeps every genuine factor. Under compression
     the (verified) linearised factors are exactly the reversed (unverified) factors of the same

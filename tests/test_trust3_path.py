@@ -29,8 +29,7 @@ def closed(case, length, b, h, count, force=1000.0):
     return [P / force for P in loads]
 
 
-# not under mpirun for now: on the PyPI stack's 2 ranks the pinned-pinned case ended the job
-# (exit 15; Debian's 2 ranks pass): open, see the session note
+@pytest.mark.mpi
 @pytest.mark.parametrize("case, supports, length, b, h, elements, arc, top, count", [
     # cantilever: factors 0.288, 2.59, 7.19; the first step (to 3) crosses two
     ("clamped-free", ("clamped", "free"), 1.0, 0.02, 0.01, 64, 3.0, 8.0, 3),

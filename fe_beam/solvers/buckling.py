@@ -42,7 +42,11 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_max, global_sum
 from fe_beam.model.loads import scaled
-from fe_beam.solvers.inertia import inertia, rod_unstable_count, solid_unstable_count
+from fe_beam.solvers.inertia import (
+    InertiaFactor,
+    rod_unstable_count,
+    solid_unstable_count,
+)
 from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, LoadStepping, LoadSteppingFailed
 
 __all__ = ["Buckling", "LinearisedProblem", "PathCheck", "PathCritical", "buckling_modes",
@@ -256,16 +260,24 @@ class _InertiaCount:
 
     def __init__(self, K, G):
         self.K, self.G, self.cache = K, G, {}
+        # K_T + lambda K_geo in one matrix of the union pattern, factored by one MUMPS
+        # instance (symbolic analysis once: see InertiaFactor)
+        self.pencil = K.copy()
+        self.pencil.axpy(1.0, G, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self.factor = InertiaFactor()
         self.base = self._negative(0.0)
 
     def _negative(self, value: float) -> int:
-        A = self.K.copy()
-        try:
-            if value:
-                A.axpy(value, self.G)
-            return inertia(A)[0]
-        finally:
-            A.destroy()
+        subset = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+        self.pencil.zeroEntries()
+        self.pencil.axpy(1.0, self.K, structure=subset)
+        if value:
+            self.pencil.axpy(value, self.G, structure=subset)
+        return self.factor.count(self.pencil)[0]
+
+    def destroy(self) -> None:
+        self.factor.destroy()
+        self.pencil.destroy()
 
     def __call__(self, value: float) -> int:
         if value not in self.cache:
@@ -280,6 +292,14 @@ def _verified_positive(SLEPc, K, G, B, positive, pairs, count, fixed, problem, n
     brackets) when the one about 0 found fewer or missed one (e.g. behind the many negative
     factors of a fine mesh)."""
     counter = _InertiaCount(K, G)
+    try:
+        return _verified_by(counter, SLEPc, K, B, positive, pairs, count, fixed, problem, notes)
+    finally:
+        counter.destroy()
+
+
+def _verified_by(counter, SLEPc, K, B, positive, pairs, count, fixed, problem, notes):
+    """`_verified_positive` with the inertia counts of ``counter``."""
     dropped: list[float] = []
 
     def verify(candidates):

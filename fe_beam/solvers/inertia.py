@@ -21,11 +21,13 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam.fem import compat
 
-__all__ = ["constraint_rows", "inertia", "rod_unstable_count", "solid_unstable_count"]
+__all__ = ["InertiaFactor", "constraint_rows", "inertia", "rod_unstable_count",
+           "solid_unstable_count"]
 
 _PREFIXES = itertools.count()
 
@@ -35,39 +37,104 @@ def inertia(A: PETSc.Mat, symmetrize: bool = True) -> tuple[int, int, int]:
     communicator; collective) from a MUMPS LDL^T factorisation. ``symmetrize``: factor
     (A + A^T)/2 (an assembled tangent is symmetric up to round-off; MUMPS reads one
     triangle). Zero counts are MUMPS's null pivots (``icntl 24``) and are only indicative:
-    round-off makes a singular pivot small of either sign."""
-    if symmetrize:
-        B = A.copy()
-        T = A.transpose(PETSc.Mat())
-        B.axpy(1.0, T, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        B.scale(0.5)
-        T.destroy()
-    else:
-        B = A
-    B.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    prefix = f"fe_beam_inertia_{next(_PREFIXES)}_"
-    options = PETSc.Options()
-    settings = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
-    for key, value in settings.items():
-        options[prefix + key] = value
-    ksp = PETSc.KSP().create(B.getComm())
+    round-off makes a singular pivot small of either sign. One factorisation: counts of many
+    matrices of one sparsity pattern should share an `InertiaFactor`."""
+    factor = InertiaFactor()
     try:
-        ksp.setOptionsPrefix(prefix)
-        ksp.setOperators(B)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("cholesky")
-        pc.setFactorSolverType("mumps")
-        ksp.setFromOptions()
-        ksp.setUp()
-        negative, zero, positive = pc.getFactorMatrix().getInertia()
+        return factor.count(A, symmetrize)
     finally:
-        ksp.destroy()
-        for key in settings:
-            options.delValue(prefix + key)
-        if symmetrize:
-            B.destroy()
-    return int(negative), int(zero), int(positive)
+        factor.destroy()
+
+
+class InertiaFactor:
+    """Inertia counts of symmetric matrices of one sparsity pattern by one MUMPS LDL^T factor:
+    the symbolic analysis once, a numerical factorisation per count (`count`, same answer as
+    `inertia`). A matrix of another pattern starts the factor anew.
+
+    Why: each MUMPS instance on several ranks keeps MPI communicators after it is destroyed
+    (5 with PETSc 3.25 and MPICH, which allows 2048 per process), so a factor per count ran
+    long parallel sessions (a path, a buckling search, a test suite) out of communicators."""
+
+    SETTINGS = {"mat_mumps_icntl_13": 1, "mat_mumps_icntl_24": 1}
+
+    def __init__(self):
+        self._ksp: PETSc.KSP | None = None
+        self._matrix: PETSc.Mat | None = None  # the factored operator (values copied in)
+        self._pattern: tuple | None = None
+        self._prefix = f"fe_beam_inertia_{next(_PREFIXES)}_"
+        self.analyses = 0  # symbolic analyses made (one per pattern)
+
+    def count(self, A: PETSc.Mat, symmetrize: bool = True) -> tuple[int, int, int]:
+        """(negative, zero, positive) counts of ``A`` (see `inertia`). Collective."""
+        B = _symmetric_part(A) if symmetrize else A
+        try:
+            pattern = _pattern_of(B)
+            if self._matrix is not None and _same_pattern(self._pattern, pattern,
+                                                          B.getComm().tompi4py()):
+                B.copy(self._matrix, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+            else:
+                self.destroy()
+                self._matrix = B.copy()
+                self._pattern = pattern
+                self.analyses += 1
+            self._matrix.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+            options = PETSc.Options()
+            for key, value in self.SETTINGS.items():
+                options[self._prefix + key] = value
+            try:
+                if self._ksp is None:
+                    self._ksp = PETSc.KSP().create(self._matrix.getComm())
+                    self._ksp.setOptionsPrefix(self._prefix)
+                    self._ksp.setOperators(self._matrix)
+                    self._ksp.setType("preonly")
+                    pc = self._ksp.getPC()
+                    pc.setType("cholesky")
+                    pc.setFactorSolverType("mumps")
+                    self._ksp.setFromOptions()
+                # the same matrix with new values: PCSetUp refactors numerically only
+                self._ksp.setOperators(self._matrix)
+                self._ksp.setUp()
+                negative, zero, positive = self._ksp.getPC().getFactorMatrix().getInertia()
+            finally:
+                for key in self.SETTINGS:
+                    options.delValue(self._prefix + key)
+        finally:
+            if symmetrize:
+                B.destroy()
+        return int(negative), int(zero), int(positive)
+
+    def destroy(self) -> None:
+        """Free the factor (collective)."""
+        if self._ksp is not None:
+            self._ksp.destroy()
+        if self._matrix is not None:
+            self._matrix.destroy()
+        self._ksp = self._matrix = self._pattern = None
+
+
+def _symmetric_part(A: PETSc.Mat) -> PETSc.Mat:
+    """(A + A^T)/2, a new matrix."""
+    B = A.copy()
+    T = A.transpose(PETSc.Mat())
+    try:
+        B.axpy(1.0, T, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    finally:
+        T.destroy()
+    B.scale(0.5)
+    return B
+
+
+def _pattern_of(A: PETSc.Mat) -> tuple:
+    """This rank's sparsity pattern of ``A`` (sizes, owned rows, CSR indices)."""
+    rows, columns, _ = A.getValuesCSR()
+    return A.getSizes(), A.getOwnershipRange(), np.array(rows), np.array(columns)
+
+
+def _same_pattern(old: tuple | None, new: tuple, comm) -> bool:
+    """Whether ``old`` and ``new`` are the same pattern on every rank of ``comm``."""
+    same = old is not None and old[:2] == new[:2] and all(
+        a.shape == b.shape and np.array_equal(a, b) for a, b in zip(old[2:], new[2:], strict=True))
+    return comm.allreduce(int(same), op=MPI.MIN) == 1
 
 
 def constraint_rows(A: PETSc.Mat, multiplier_rows: np.ndarray) -> int:
@@ -88,6 +155,15 @@ def constraint_rows(A: PETSc.Mat, multiplier_rows: np.ndarray) -> int:
     return int(A.getComm().tompi4py().allreduce(count))
 
 
+def factor_of(owner) -> InertiaFactor:
+    """The `InertiaFactor` kept with ``owner`` (a problem: its tangents share one pattern)."""
+    factor = getattr(owner, "_inertia_factor", None)
+    if factor is None:
+        factor = InertiaFactor()
+        owner._inertia_factor = factor
+    return factor
+
+
 def rod_unstable_count(run) -> int:
     """Energy-decreasing directions of the rod's tangent at ``run``'s current state (a
     `fe_beam.analyses.static.StaticContinuation`, conservative loads): negative(KKT) minus the
@@ -106,7 +182,7 @@ def rod_unstable_count(run) -> int:
     local = local[local < owned]
     start = A.getOwnershipRange()[0]
     m = constraint_rows(A, local + start)
-    negative, _, _ = inertia(A)
+    negative, _, _ = factor_of(nonlinear).count(A)
     return negative - m
 
 
@@ -133,7 +209,7 @@ def solid_unstable_count(problem) -> int | None:
     A = compat.assemble_matrix(form, bcs=problem.bcs)
     A.assemble()
     try:
-        negative, _, _ = inertia(A)
+        negative, _, _ = factor_of(problem).count(A)
     finally:
         A.destroy()
     pressure = 0

@@ -9,6 +9,7 @@ step growth on easy steps and a branch check. Nothing here writes files.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -264,7 +265,15 @@ class SNESSolver:
         self._initial_fnorm = 0.0
         self._reference_fnorm: float | None = None
         self._largest_fnorm = 0.0
-        self.snes.setConvergenceTest(self._converged)
+        # through a weak reference: PETSc keeps its callbacks where Python's garbage collector
+        # cannot see them, and a bound method would keep this solver (its problem, mesh and
+        # their MPI communicators) alive until the process ends (MPICH allows 2048
+        # communicators per process: a long session or test suite ran out of them)
+        self.snes.setConvergenceTest(_WeakConvergenceTest(self))
+        # petsc4py 3.18 (Debian) keeps an unreferenced SNES (with its Python callbacks: the
+        # problem, its mesh) alive: a dropped serial solver destroys it (on several ranks
+        # destroying is collective: petsc4py's delayed destroy, fe_beam.cli.free_parallel_garbage)
+        weakref.finalize(self, _destroy_if_serial, self.snes)
         self._x = problem.b.duplicate()
         self.linear_iterations = 0
 
@@ -358,6 +367,25 @@ class SNESSolver:
         for key in self._option_keys:
             options.delValue(key)
         self._option_keys = []
+
+
+class _WeakConvergenceTest:
+    """``solver._converged`` called through a weak reference to ``solver`` (see
+    `SNESSolver.__init__`)."""
+
+    def __init__(self, solver: SNESSolver):
+        self._solver = weakref.ref(solver)
+
+    def __call__(self, snes, iteration, norms):
+        solver = self._solver()
+        if solver is None:  # its SNES outlived it (not in fe_beam's use): stop
+            return PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_DOMAIN
+        return solver._converged(snes, iteration, norms)
+
+
+def _destroy_if_serial(snes: PETSc.SNES) -> None:
+    if snes.handle and snes.getComm().getSize() == 1:
+        snes.destroy()
 
 
 def _reason_name(reason: int) -> str:
