@@ -23,6 +23,7 @@ EXAMPLE = {
 }
 VALUES = {"tip_force": [0.0, -2.0], "tip_moment": 0.5, "distributed": [0.0, -1.0],
           "gravity": [0.0, -9.81], "point_forces": [[0.5, 0.0, -1.0]],
+          "point_moments": [[0.5, 0.2]],
           "end_displacement": [0.0, -0.01], "end_rotation": 0.1}
 
 

@@ -562,6 +562,7 @@ def _load_factors(model, data: CalibrationData, spec: CalibrationSpec) -> np.nda
         ("distributed", loads.distributed),
         ("gravity", loads.gravity if float(model.config.model.material.rho) else 0.0),
         ("point_forces", [f[1:] for f in loads.point_forces] or 0.0),
+        ("point_moments", [m[1:] for m in loads.point_moments] or 0.0),
         ("end_displacement", loads.end_displacement or 0.0),
         ("end_rotation", loads.end_rotation or 0.0))
         if np.any(np.asarray(value, dtype=float) != 0)]

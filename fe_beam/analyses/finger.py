@@ -32,7 +32,12 @@ from fe_beam.config.finger import (  # noqa: F401  (their home; re-exported)
     with_defaults,
 )
 from fe_beam.errors import ConfigError
-from fe_beam.exports.outputs import atomic_write_json, draw_obstacles, virtual_display
+from fe_beam.exports.outputs import (
+    atomic_write_json,
+    draw_obstacles,
+    draw_section_faces,
+    virtual_display,
+)
 from fe_beam.exports.plotting import legend_inside
 from fe_beam.exports.spatial import plot_spatial_load_displacement, plot_spatial_shapes
 from fe_beam.model.studies import StaticConfig
@@ -313,9 +318,11 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
     with exports.figure(out / "fig3_9_backbone.png", figsize=(6, 5), layout=False) as (_, axis):
         every = max(1, len(result.shapes) // 8)
         shapes = list(zip(result.shapes, result.steps, strict=True))[every - 1 :: every]
-        for (_, shape), step in shapes:
-            axis.plot(shape["x"] + shape["u"], shape["v"],
-                      label=f"tension {step['tensions'][0]:.3g} N")
+        for index, ((_, shape), step) in enumerate(shapes):
+            line, = axis.plot(shape["x"] + shape["u"], shape["v"],
+                              label=f"tension {step['tensions'][0]:.3g} N")
+            draw_section_faces(axis, shape, config.model.section, config.model.length,
+                               line.get_color(), fill=index == len(shapes) - 1)
         if config.obstacles:
             draw_obstacles(axis, result.obstacles or config.obstacles, [s for s, _ in shapes],
                            config.model.length)

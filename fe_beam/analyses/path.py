@@ -511,7 +511,7 @@ def _path_shapes(out, shapes: list, static) -> None:
                             obstacles=static.obstacles)
     else:
         plot_deformed_shapes(chosen, out / "deformed_shapes.png", title, model.length,
-                             obstacles=static.obstacles)
+                             obstacles=static.obstacles, section=model.section)
 
 
 def _run_solid_path(config, settings, out, comm, progress, started) -> dict:

@@ -94,11 +94,13 @@ def _loaded(static):
     given = (any(loads.tip_force) or (any(moment) if isinstance(moment, tuple) else moment)
              or any(loads.distributed)
              or any(loads.gravity) or any(any(f[1:]) for f in loads.point_forces)
+             or any(any(m[1:]) for m in loads.point_moments)
              or any(model.supports.prescribed_x0.values())
              or any(model.supports.prescribed_xL.values())
              or any(t.tension for t in static.tendons))
     if not given:
         raise ConfigError("[loads] are all zero: fe-beam buckling needs a load to buckle under "
-                          "(tip_force, point_forces, end_displacement, ... or tendon tensions); "
+                          "(tip_force, point_forces, point_moments, end_displacement, ... or "
+                          "tendon tensions); "
                           "the load factors are multiples of it")
     return static

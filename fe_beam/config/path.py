@@ -110,7 +110,8 @@ def parse_path(config: dict):
                           "follower = true the stability is not checked, so no bifurcation is "
                           "detected; use branch_switch = \"none\" or dead loads")
     others = (any(loads.tip_force) or loads.tip_moment or any(loads.distributed)
-              or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces))
+              or any(loads.gravity) or any(f[1] or f[2] for f in loads.point_forces)
+              or any(any(m[1:]) for m in loads.point_moments))
     prescribed = loads.end_displacement is not None or loads.end_rotation is not None
     if settings.parameter == "tension":
         if not tendons:
@@ -139,7 +140,8 @@ def parse_path(config: dict):
                               "\"load_factor\"")
     elif not (others or prescribed or any(t.tension for t in tendons)):
         raise ConfigError("[loads] are all zero: fe-beam path needs a load to follow "
-                          "(tip_force, point_forces, end_displacement, ... or tendon tensions)")
+                          "(tip_force, point_forces, point_moments, end_displacement, ... or "
+                          "tendon tensions)")
     return "rod", static, settings
 
 

@@ -233,7 +233,7 @@ def parse_model(config: dict) -> BeamModel | SpatialRodModel:
 
 #: the [loads] keys the model's loads take (planar `Loads` and `SpatialLoads` alike)
 LOAD_KEYS = ("tip_force", "tip_moment", "follower", "distributed", "gravity", "point_forces",
-             "end_displacement", "end_rotation")
+             "point_moments", "end_displacement", "end_rotation")
 
 
 def _support(spec):

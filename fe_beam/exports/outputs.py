@@ -45,6 +45,7 @@ __all__ = [
     "figure",
     "gather_line",
     "plot_deformed_shapes",
+    "section_faces",
     "plot_load_displacement",
     "write_csv",
 ]
@@ -662,6 +663,40 @@ def figure(path: str | Path | None, *args, layout: bool = True, dpi: int = 130, 
         plt.close(drawn)
 
 
+def section_faces(shape: dict, section, length: float):
+    """The section's bottom and top faces of a planar deformed shape: (lower, upper) arrays
+    (n, 2) of the centreline (x + u, v) offset by y_min(x) and y_max(x) (`Section.y_extent`:
+    -h/2 and +h/2 of a symmetric section) along the section's normal d2 = (-sin theta,
+    cos theta) at the nodes ``shape["x"]``; None when the section's shape is not known (a
+    custom section)."""
+    x = np.asarray(shape["x"], dtype=float)
+    extents = [section.y_extent(float(s)) for s in x / length]
+    if any(e is None for e in extents):
+        return None
+    low, high = np.array(extents, dtype=float).T
+    theta = np.asarray(shape["theta"], dtype=float)
+    centre = np.column_stack([x + np.asarray(shape["u"]), np.asarray(shape["v"])])
+    normal = np.column_stack([-np.sin(theta), np.cos(theta)])
+    return centre + low[:, None] * normal, centre + high[:, None] * normal
+
+
+def draw_section_faces(axes, shape: dict, section, length: float, colour,
+                       fill: bool = False) -> None:
+    """The section's outline around a drawn centreline: the bottom and top faces
+    (`section_faces`) and the end sections as a thin closed line (a finger touching an
+    obstacle with a face is seen touching it), on a light band if ``fill`` (the last shape:
+    overlapping bands of every shape would hide each other); nothing without a known
+    section."""
+    faces = None if section is None else section_faces(shape, section, length)
+    if faces is None:
+        return
+    lower, upper = faces
+    outline = np.concatenate([lower, upper[::-1], lower[:1]])
+    if fill:
+        axes.fill(outline[:, 0], outline[:, 1], color=colour, alpha=0.15, lw=0)
+    axes.plot(outline[:, 0], outline[:, 1], color=colour, lw=0.6, alpha=0.8)
+
+
 def plot_deformed_shapes(
     shapes: list[tuple[str, dict]],
     path: str | Path,
@@ -669,15 +704,19 @@ def plot_deformed_shapes(
     length: float,
     reference: list[tuple[str, float, float]] = (),
     obstacles=(),
+    section=None,
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points;
-    ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey."""
+    ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey; ``section`` (a
+    `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`)."""
 
     with figure(path, figsize=(7, 5), layout=False) as (_, axes):
         colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
         axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
-        for (label, shape), colour in zip(shapes, colours, strict=False):
+        for index, ((label, shape), colour) in enumerate(zip(shapes, colours, strict=False)):
             axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
+            draw_section_faces(axes, shape, section, length, colour,
+                               fill=index == len(shapes) - 1)
         if obstacles:
             draw_obstacles(axes, obstacles, shapes, length)
         for i, (label, x, y) in enumerate(reference):

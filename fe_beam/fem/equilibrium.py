@@ -4,11 +4,11 @@ Newton drove to zero (a run-time certificate, issue 28).
 The rod as a free body: the support reactions (the assembled residual at the supported dofs,
 rows Newton never solves for: what the supports must supply), the applied loads evaluated from
 their definitions on the deformed shape (tip force and moment, dead or follower, distributed
-loads and gravity, point forces) and the contact forces of the contact report must sum to zero,
-forces and moments (about the origin, with the deformed positions). Tendons: the potential
-tau * l is invariant under rigid motions of the rod, so a tendon anchored in the rod exerts no
-net force or moment on it (its entry force on a supported node is part of that support's
-reaction); it enters the balance as zero.
+loads and gravity, point forces, point moments) and the contact forces of the contact report
+must sum to zero, forces and moments (about the origin, with the deformed positions).
+Tendons: the potential tau * l is invariant under rigid motions of the rod, so a tendon
+anchored in the rod exerts no net force or moment on it (its entry force on a supported node
+is part of that support's reaction); it enters the balance as zero.
 
 A Galerkin solution balances exactly for the translations and, in the plane, for the rotation
 (the rigid motions lie in the finite-element space): what remains is the Newton residual at the
@@ -204,6 +204,26 @@ def _point_forces(problem, factor: float) -> list[Wrench]:
     return result
 
 
+def _point_moments(problem, factor: float) -> list[Wrench]:
+    """The point moments (dead, world axes: a couple, the same about every point) from their
+    nodal fields' owned values at each x (a vertex shared by two ranks counts once)."""
+    rows = problem.model.loads.point_moments
+    fields = getattr(problem, "point_moment_fields", None)
+    if not rows or not fields:
+        return []
+    space = fields[0].function_space
+    owned = space.dofmap.index_map.size_local
+    result = []
+    for x in sorted({float(row[0]) for row in rows}):
+        dofs = compat.locate_dofs_geometrical(space, problem.point_marker(x))
+        dofs = np.asarray(dofs)[np.asarray(dofs) < owned]
+        moment = factor * np.array([global_sum(problem.comm, f.x.array[dofs].sum())
+                                    for f in fields])
+        result.append(Wrench(f"point moment at x = {x:g}", np.zeros(3),
+                             moment if problem.spatial else np.array([0.0, 0.0, moment[0]])))
+    return result
+
+
 def _contact(entries) -> list[Wrench]:
     result = []
     for entry in entries or ():
@@ -220,7 +240,8 @@ def rod_wrenches(problem, contact_entries=None) -> list[Wrench]:
     load constants, the point forces' nodal values: what a path's parameter scales), and the
     forces of ``contact_entries`` (`fe_beam.fem.contact.ContactSet.summary`)."""
     factor = float(problem.load_factor.value)
-    terms = _reactions(problem) + _tip(problem, factor) + _point_forces(problem, factor)
+    terms = (_reactions(problem) + _tip(problem, factor) + _point_forces(problem, factor)
+             + _point_moments(problem, factor))
     body = _body(problem, factor)
     if body is not None:
         terms.append(body)

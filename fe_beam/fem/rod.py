@@ -257,8 +257,9 @@ class BeamProblem:
         test)`` the virtual work of non-potential forces on the rod (e.g. slipping friction),
         subtracted from the residual."""
         self.model = model
-        # every point force sits on a mesh vertex (its work is a vertex integral)
-        breakpoints = tuple(breakpoints) + tuple(f[0] for f in model.loads.point_forces)
+        # every point force and moment sits on a mesh vertex (its work is a vertex integral)
+        breakpoints = tuple(breakpoints) + tuple(
+            f[0] for f in model.loads.point_forces + model.loads.point_moments)
         self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         self.comm = comm
         degree = model.mesh.degree
@@ -371,22 +372,29 @@ class BeamProblem:
                                    "exactly one")
 
     def _point_force_measures(self) -> None:
-        """(measure, nodal force field, at an end) per kind of vertex carrying point forces:
-        interior vertices (interior facets of the interval mesh), x = L and x = 0 (boundary
-        facets)."""
-        self.point_forces = []
-        forces = self.model.loads.point_forces
-        if not forces:
-            return
-        # one nodal (P1) force field for all the forces: its vertex values are the forces, so
-        # the work is one vertex integral per kind of vertex (interior, x = L, x = 0) however
-        # many forces there are (a Constant and an integral each took ~2 min for 1000 forces)
+        """The point forces' and point moments' (measure, nodal field, at an end) lists
+        (`_point_measures`)."""
+        loads = self.model.loads
+        self.point_forces, self.point_force_fields = self._point_measures(loads.point_forces)
+        self.point_moments, self.point_moment_fields = self._point_measures(loads.point_moments)
+
+    def _point_measures(self, rows) -> tuple[list, list]:
+        """(measure, nodal value field, at an end) per kind of vertex carrying the point loads
+        ``rows`` ((x, components...), ...): interior vertices (interior facets of the interval
+        mesh), x = L and x = 0 (boundary facets); and the nodal fields (one per component).
+
+        One nodal (P1) field per component for all the rows: its vertex values are the loads,
+        so the work is one vertex integral per kind of vertex however many loads there are (a
+        Constant and an integral each took ~2 min for 1000 forces). An interior facet is
+        integrated by its owning rank only: a load at a vertex between two ranks counts once."""
+        if not rows:
+            return [], []
         space = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange", 1))
-        nodal = [fem.Function(space) for _ in forces[0][1:]]  # a field per force component
+        nodal = [fem.Function(space) for _ in rows[0][1:]]  # a field per component
         interior, at = [], set()
-        for x, *force in forces:
+        for x, *values in rows:
             dofs = compat.locate_dofs_geometrical(space, self.point_marker(x))
-            for function, value in zip(nodal, force, strict=True):
+            for function, value in zip(nodal, values, strict=True):
                 function.x.array[dofs] += value
             if abs(x - self.model.length) <= self.point_tolerance:
                 at.add("tip")
@@ -396,29 +404,38 @@ class BeamProblem:
                 at.add("start")
             else:
                 interior.append(compat.locate_entities(self.mesh, 0, self.point_marker(x)))
-        self.point_force_fields = nodal  # scaled alone by `fe-beam path` parameter point_force
-        force = ufl.as_vector(nodal)
+        field = ufl.as_vector(nodal)
+        measures = []
         if interior:
             self.mesh.topology.create_connectivity(0, 1)
             vertices = np.unique(np.concatenate(interior)).astype(np.int32)
             tags = compat.meshtags(self.mesh, 0, vertices, np.ones(len(vertices), np.int32))
             measure = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)(1)
-            self.point_forces.append((measure, force, False))
+            measures.append((measure, field, False))
         for name, measure in (("tip", self.ds_tip), ("start", self.ds_start)):
             if name in at:
-                self.point_forces.append((measure, force, True))
+                measures.append((measure, field, True))
+        return measures, nodal
+
+    @staticmethod
+    def point_work(measures, density):
+        """sum over ``measures`` ((measure, field, at an end), ...) of ``density(field)`` at
+        the points (the interior vertices' value is continuous: avg is the value)."""
+        work = 0
+        for measure, field, at_end in measures:
+            value = density(field)
+            work += (value if at_end else ufl.avg(value)) * measure
+        return work
 
     def point_force_work(self, parts):
         """Work of the point forces (at load factor 1) on the state ``parts``."""
-        u, v = parts[0], parts[1]
-        work = 0
-        for measure, force, at_end in self.point_forces:
-            displacement = ufl.as_vector([u, v])
-            if at_end:
-                work += ufl.dot(force, displacement) * measure
-            else:
-                work += ufl.avg(ufl.dot(force, displacement)) * measure
-        return work
+        displacement = ufl.as_vector([parts[0], parts[1]])
+        return self.point_work(self.point_forces, lambda force: ufl.dot(force, displacement))
+
+    def point_moment_work(self, parts):
+        """Work of the planar point moments (at load factor 1): M theta at each point."""
+        theta = parts[2]
+        return self.point_work(self.point_moments, lambda moment: moment[0] * theta)
 
     def point_marker(self, x: float):
         """Marker (for locate_dofs_geometrical / locate_entities) of the point x."""
@@ -488,6 +505,8 @@ class BeamProblem:
             work += lam * ufl.dot(self.tip_force, ufl.as_vector([u, v])) * self.ds_tip
         if self.point_forces:
             work += lam * self.point_force_work(parts)
+        if self.point_moments:
+            work += lam * self.point_moment_work(parts)
         return work
 
     def constraint_term(self, parts, multipliers):

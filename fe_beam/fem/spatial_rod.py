@@ -126,6 +126,12 @@ def stress_free_shape(model: SpatialRodModel, xs: np.ndarray, substeps: int = 64
     return np.array(positions), np.array(vectors)
 
 
+def dead_moment_work(moment, theta, dtheta):
+    """Virtual work of a dead moment ``moment`` (world axes) on the rotation vector ``theta``
+    varied by ``dtheta``: M . T(theta) dtheta, T the tangent operator (the spatial spin)."""
+    return ufl.dot(moment, ufl.dot(spin_map(theta), dtheta))
+
+
 def _arc_chord(h: float, k: np.ndarray) -> np.ndarray:
     """int_0^h exp(s k^) e1 ds = h T(h k) e1 (the chord of an arc of constant curvature)."""
     theta = h * k
@@ -290,9 +296,7 @@ class SpatialRodProblem(BeamProblem):
         work = lam * ufl.dot(body, d) * self.dx_loads
         if not self.model.loads.follower:
             work += lam * ufl.dot(self.tip_force, d) * self.ds_tip
-        for measure, force, at_end in self.point_forces:
-            work += lam * (ufl.dot(force, d) if at_end else ufl.avg(ufl.dot(force, d))) * measure
-        return work
+        return work + lam * self.point_work(self.point_forces, lambda force: ufl.dot(force, d))
 
     def constraint_term(self, parts, multipliers):
         if not multipliers:
@@ -308,34 +312,44 @@ class SpatialRodProblem(BeamProblem):
 
     def nonconservative_work(self, parts, test):
         """Virtual work of the tip moment (dead: M . T(theta) dtheta, the spatial spin; follower:
-        (R M) . T(theta) dtheta) and of a follower tip force (R F) . dd."""
+        (R M) . T(theta) dtheta), of the point moments (dead, the same term at their points)
+        and of a follower tip force (R F) . dd."""
         d, theta = parts
         pieces = ufl.split(test)
         dd, dtheta = ufl.as_vector(pieces[0:3]), ufl.as_vector(pieces[3:6])
-        spin = ufl.dot(spin_map(theta), dtheta)
         follower = self.model.loads.follower
         R = rotation(theta)
         moment = ufl.dot(R, self.tip_moment) if follower else self.tip_moment
-        work = ufl.dot(moment, spin)
+        work = dead_moment_work(moment, theta, dtheta)
         if follower:
             work += ufl.dot(ufl.dot(R, self.tip_force), dd)
-        return self.load_factor * work * self.ds_tip
+        work = work * self.ds_tip
+        if self.point_moments:
+            work += self.point_work(self.point_moments,
+                                    lambda point: dead_moment_work(point, theta, dtheta))
+        return self.load_factor * work
 
     def _residual(self):
         test = ufl.TestFunction(self.space)
         residual = ufl.derivative(self.potential(), self.w, test)
         loads = self.model.loads
-        if any(loads.tip_moment) or loads.follower:
+        if self.moment_loads or loads.follower:
             residual -= self.nonconservative_work(self.state_parts(), test)
         if self.extra_work is not None:
             residual -= self.extra_work(self, self.state_parts(), test)
         return residual
 
     @property
+    def moment_loads(self) -> bool:
+        """A tip moment or point moments act (their work has no potential)."""
+        loads = self.model.loads
+        return bool(any(loads.tip_moment) or any(any(m[1:]) for m in loads.point_moments))
+
+    @property
     def conservative(self) -> bool:
         """The loads derive from a potential (a symmetric tangent): no tip moment, no
         follower force."""
-        return not (any(self.model.loads.tip_moment) or self.model.loads.follower
+        return not (self.moment_loads or self.model.loads.follower
                     or self.extra_work is not None)
 
     def multiplier_dofs(self) -> np.ndarray:

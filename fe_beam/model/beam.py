@@ -225,7 +225,9 @@ class Loads:
     reference length; ``gravity`` an acceleration (force rho A g per unit length).
 
     ``point_forces``: dead forces ((x, Px, Py), ...) at points 0 < x <= L (each x becomes a
-    mesh vertex). ``end_displacement`` (du, dv) and ``end_rotation``: the end x = L moved to
+    mesh vertex). ``point_moments``: dead moments ((x, M), ...) about z (counterclockwise) at
+    points 0 <= x <= L (each x a mesh vertex; work M theta(x)). ``end_displacement`` (du, dv)
+    and ``end_rotation``: the end x = L moved to
     (u, v) = lambda (du, dv), turned to theta = lambda end_rotation (displacement control: the
     components become Dirichlet conditions at x = L, `BeamModel` adds them to the supports).
     """
@@ -236,6 +238,7 @@ class Loads:
     distributed: tuple = (0.0, 0.0)
     gravity: tuple = (0.0, 0.0)
     point_forces: tuple = ()
+    point_moments: tuple = ()
     end_displacement: tuple | None = None
     end_rotation: float | None = None
 
@@ -249,6 +252,10 @@ class Loads:
         if not isinstance(self.follower, bool):
             raise ValueError(f"loads.follower must be true or false, got {self.follower!r}")
         object.__setattr__(self, "point_forces", _point_forces(self.point_forces))
+        object.__setattr__(self, "point_moments", point_rows(
+            "point_moments", self.point_moments, 2, "[x, M] (two numbers: the position [m] and "
+            "the moment about z [N m])", "[x, Mx, My, Mz] needs [model] kinematics = "
+            "\"spatial\""))
         if self.end_displacement is not None:
             object.__setattr__(self, "end_displacement",
                                _pair("end_displacement", self.end_displacement))
@@ -303,9 +310,29 @@ def _point_forces(value) -> tuple:
     return tuple(forces)
 
 
+def point_rows(name: str, value, size: int, form: str, hint: str = "") -> tuple:
+    """``loads.<name>`` as a tuple of rows of ``size`` floats (ValueError naming the key and the
+    row's ``form`` otherwise; ``hint`` is added when a row has the other kinematics' size)."""
+    if not isinstance(value, (list, tuple)):
+        raise ValueError(f"loads.{name} must be a list of rows {form}, got {value!r}")
+    rows = []
+    for index, entry in enumerate(value):
+        ok = (isinstance(entry, (list, tuple)) and len(entry) == size
+              and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in entry)
+              and all(_finite(c) for c in entry))
+        if not ok:
+            other = hint and isinstance(entry, (list, tuple)) and len(entry) != size \
+                and len(entry) in (2, 4)
+            raise ValueError(f"loads.{name}[{index}] must be {form}; got {entry!r}"
+                             + (f" ({hint})" if other else ""))
+        rows.append(tuple(float(c) for c in entry))
+    return tuple(rows)
+
+
 def check_rod(length, material: Material, loads) -> None:
     """What every rod model checks: a length > 0, gravity with a density, point forces on the
-    rod (0 < x <= L); ValueError naming the key otherwise."""
+    rod (0 < x <= L), point moments on it (0 <= x <= L), none of them on an end whose motion is
+    prescribed; ValueError naming the key otherwise."""
     ok = isinstance(length, (int, float)) and not isinstance(length, bool)
     if not ok or not _finite(length) or length <= 0:
         raise ValueError(f"beam.length must be a number > 0, got {length!r}")
@@ -315,6 +342,15 @@ def check_rod(length, material: Material, loads) -> None:
         if not 0 < force[0] <= length:
             raise ValueError(f"loads.point_forces[{index}]: x = {force[0]!r} is outside the beam "
                              f"(0 < x <= L = {length!r})")
+    for index, moment in enumerate(loads.point_moments):
+        if not 0 <= moment[0] <= length:
+            raise ValueError(f"loads.point_moments[{index}]: x = {moment[0]!r} is outside the "
+                             f"beam (0 <= x <= L = {length!r})")
+        if loads.end_rotation is not None and length - moment[0] <= 1e-9 * length \
+                and any(moment[1:]):
+            raise ValueError(f"loads.end_rotation prescribes the tip rotation: loads.point_"
+                             f"moments[{index}] at x = L would be taken by the support; give "
+                             "one or the other")
 
 
 @dataclass(frozen=True)

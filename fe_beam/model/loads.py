@@ -69,6 +69,8 @@ LOADS: dict[str, LoadKind] = {kind.name: kind for kind in (
     LoadKind("gravity", "vector", "[gx, gy] acceleration [m/s^2]", realtime=True,
              differentiable=True),
     LoadKind("point_forces", "points", "[[x, Px, Py], ...] dead forces at 0 < x <= L [m, N]"),
+    LoadKind("point_moments", "points", "[[x, M], ...] dead moments about z at 0 <= x <= L "
+             "[m, N m] (spatial: [[x, Mx, My, Mz], ...], world axes)"),
     LoadKind("end_displacement", "vector", "[du, dv] prescribed at x = L [m]", motion=True),
     LoadKind("end_rotation", "scalar", "rotation prescribed at x = L [rad]", motion=True),
 )}

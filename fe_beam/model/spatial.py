@@ -21,7 +21,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fe_beam.model.beam import Discretisation, ModelOptions, _finite, _rank, check_rod
+from fe_beam.model.beam import (
+    Discretisation,
+    ModelOptions,
+    _finite,
+    _rank,
+    check_rod,
+    point_rows,
+)
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import MOMENT_ORDERS, Section
 from fe_beam.timefunctions import Profile, TimeFunctionError, parse_profile
@@ -248,7 +255,9 @@ class SpatialLoads:
     m(L) = M, and its work is not a potential: the tangent is not symmetric) unless
     ``follower``, in which case both are given in the tip frame (d1, d2, d3) and turn with it.
     ``distributed`` is a dead force per unit reference length, ``gravity`` an acceleration.
-    ``point_forces``: ((x, Px, Py, Pz), ...). ``end_displacement`` (3) and ``end_rotation``
+    ``point_forces``: ((x, Px, Py, Pz), ...). ``point_moments``: dead moments ((x, Mx, My, Mz),
+    ...) in world axes at 0 <= x <= L (virtual work M . T(theta) dtheta, as the dead tip
+    moment). ``end_displacement`` (3) and ``end_rotation``
     (a rotation vector, 3): the end x = L moved and turned by the load factor times them."""
 
     tip_force: tuple = (0.0, 0.0, 0.0)
@@ -257,6 +266,7 @@ class SpatialLoads:
     distributed: tuple = (0.0, 0.0, 0.0)
     gravity: tuple = (0.0, 0.0, 0.0)
     point_forces: tuple = ()
+    point_moments: tuple = ()
     end_displacement: tuple | None = None
     end_rotation: tuple | None = None
 
@@ -279,6 +289,10 @@ class SpatialLoads:
                                  f"position [m] and the force [N]); got {entry!r}")
             forces.append(tuple(float(c) for c in entry) + (0.0,) * (4 - len(entry)))
         object.__setattr__(self, "point_forces", tuple(forces))
+        object.__setattr__(self, "point_moments", point_rows(
+            "point_moments", self.point_moments, 4, "[x, Mx, My, Mz] (the position [m] and the "
+            "moment in world axes [N m])", "[x, M] is the planar form: a spatial rod takes the "
+            "three components"))
         if self.end_displacement is not None:
             object.__setattr__(self, "end_displacement",
                                _vector("end_displacement", self.end_displacement))
