@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from fe_beam import exports, runctl
+from fe_beam import certify, exports, runctl
 from fe_beam.analyses.static import StaticContinuation, check_beam_work, contact_columns
 from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
@@ -164,6 +164,45 @@ class DynamicResult:
     strain_range: dict | None = None
     #: the last converged static pre-state of a run whose pre-state failed (summary "prestate")
     prestate: dict | None = None
+    #: the run-time certificates (summary "checks", `dynamic_checks`) and their measurements
+    checks: list = field(default_factory=list)
+    certificates: dict = field(default_factory=dict)
+
+
+def dynamic_checks(certificates: dict) -> tuple[list, list]:
+    """The certificates of a time integration (`StepDriver.certificates`) as summary "checks"
+    entries: ``energy_balance`` and, with a free flight, ``linear_momentum`` and
+    ``angular_momentum``; and the notes on what was not checked."""
+    checks, notes = [], []
+    energy = certificates.get("energy_balance")
+    if energy and energy["checked"]:
+        judged = ("|R|" if energy["conserving"] else
+                  "max(R, 0) (rho_inf < 1 or contact dissipate: a loss is numerical dissipation, "
+                  f"measured as {energy['numerical_dissipation']:.4g} J = "
+                  f"{energy['relative_numerical_dissipation']:.3g} of S at the end)")
+        failed = energy.get("failed")
+        checks.append(certify.entry(
+            "energy_balance", energy["value"], energy["tolerance"],
+            passed=False if failed else None,
+            detail=(f"largest over the steps of {judged} / S, R = kinetic + strain + dissipated"
+                    " - external work - initial energy, S the largest of these terms (at t = "
+                    f"{energy['t']:.4g} s); a step failing it was halved"
+                    + (f"; it failed at t = {failed['t']:.6g} s at the smallest step: "
+                       f"{failed['reason']}" if failed else "")),
+            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar)"))
+    elif energy:
+        notes.append("the energy balance is not checked: prescribed end motions do work that "
+                     "is not measured (kinetic + strain - external work is not conserved)")
+    momentum = certificates.get("momentum")
+    if momentum:
+        for key in ("linear", "angular"):
+            checks.append(certify.entry(
+                f"{key}_momentum", momentum[key], momentum["tolerance"],
+                detail=(f"largest drift of the {key} momentum over {momentum['steps']} free-"
+                        f"flight steps (from t = {momentum['from']:.4g} s: no supports, loads, "
+                        "damping c, tendons or contact) relative to its scale"),
+                remedy="a smaller [time] dt (rho_inf = 1 conserves the momenta exactly)"))
+    return checks, notes
 
 
 def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
@@ -279,6 +318,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.status = "completed"
     except DynamicsFailed as failure:
         result.status, result.message = "failed", str(failure)
+        if not result.history or integrator.time > result.history[-1]["t"]:
+            record(integrator.time, -1)  # the last good state
     except runctl.Interrupted as stop:
         # the state is the last accepted step: record it unless it was the last output
         if not result.history or integrator.time > result.history[-1]["t"]:
@@ -288,6 +329,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         raise
     finally:
         integrator.solver.destroy()
+        result.certificates = integrator.certificates()
+        result.checks, unchecked = dynamic_checks(result.certificates)
+        for note in unchecked:
+            if note not in notes:
+                notes.append(note)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
         if contact is not None and writing and root:  # the obstacles at the last state
@@ -497,7 +543,9 @@ def dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -
         "scheme": config.time.scheme,
         "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
         "notes": list(result.notes),
-    } | ({"strain_range": result.strain_range} if result.strain_range else {}) | (
+    } | ({"checks": [dict(c) for c in result.checks]} if result.checks else {}) | (
+        {"certificates": result.certificates} if result.certificates else {}) | (
+        {"strain_range": result.strain_range} if result.strain_range else {}) | (
         {"prestate": result.prestate} if result.prestate is not None else {})
 
 
