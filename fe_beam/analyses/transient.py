@@ -318,6 +318,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.status = "completed"
     except DynamicsFailed as failure:
         result.status, result.message = "failed", str(failure)
+        result.info = dict(getattr(integrator, "run_info", None) or result.info)
         if not result.history or integrator.time > result.history[-1]["t"]:
             record(integrator.time, -1)  # the last good state
     except runctl.Interrupted as stop:

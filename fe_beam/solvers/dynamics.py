@@ -410,6 +410,9 @@ class StepDriver:
                     refused = (self.time, spent)
                     if trial / 2 < smallest_energy_step * (1 - 1e-9):
                         guard.refuse(verdict, t_failed)
+                        self.run_info = {"steps": steps, "rejected_steps": rejected,
+                                         "energy_refinements": refined,
+                                         "newton_iterations": newton}
                         raise DynamicsFailed(
                             f"the energy balance check failed at t = {t_failed:.6g} s with the "
                             f"step {trial:.3g} s ({verdict}; steps down to "
