@@ -187,7 +187,7 @@ def dynamic_checks(certificates: dict) -> tuple[list, list]:
             detail=(f"largest over the steps of {judged} / S, R = kinetic + strain + dissipated"
                     " - external work - initial energy, S the largest of these terms (at t = "
                     f"{energy['t']:.4g} s); a step failing it was halved"
-                    + (f"; it failed at t = {failed['t']:.6g} s at the smallest step: "
+                    + (f"; it failed first at t = {failed['t']:.6g} s at the smallest step: "
                        f"{failed['reason']}" if failed else "")),
             remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar)"))
     elif energy:
@@ -214,7 +214,9 @@ def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
 
 
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
-                progress: bool = True) -> DynamicResult:
+                progress: bool = True, strict: bool = True) -> DynamicResult:
+    """Integrate; ``strict`` ([checks] strict): a step that fails the energy balance at the
+    smallest step stops the run (exit 3), else it is kept and the certificate fails."""
     if config.time.scheme.startswith("fd-"):
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
@@ -276,6 +278,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                       config.load_function, config.motion_function,
                                       config.static.solver, tendons=tendons, contact=contact)
     integrator.watch = watch
+    integrator.energy_stop = strict
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
     if writing and root:

@@ -168,7 +168,7 @@ class EnergyGuard:
     def refuse(self, verdict: str, t: float) -> None:
         """The run stops: the step at time t failed the balance at the smallest step."""
         residual, scale, _ = self._trial
-        self.failed = {"t": t, "reason": verdict}
+        self.failed = self.failed or {"t": t, "reason": verdict}
         self.scale = max(self.scale, scale)
         if self.judged(residual) > self.worst:
             self.worst, self.worst_time = self.judged(residual), t
@@ -278,6 +278,9 @@ class StepDriver:
     #: the relative energy-balance tolerance (`EnergyGuard`) and whether the scheme conserves
     #: energy without numerical dissipation (a subclass or instance may say otherwise)
     energy_tolerance = ENERGY_TOLERANCE
+    #: whether a step that fails the energy balance at the smallest step stops the run (else it
+    #: is kept and the certificate fails: [checks] strict = false)
+    energy_stop = True
 
     @property
     def conserving(self) -> bool:
@@ -399,6 +402,11 @@ class StepDriver:
                         and spent > 0.5 * refused[1]:
                     # halving did not help (a start-up transient, self-similar in dt): accept
                     guard.unresolved += 1
+                    verdict = None
+                if (verdict is not None and not self.energy_stop
+                        and trial / 2 < smallest_energy_step * (1 - 1e-9)):
+                    # [checks] strict = false: the step is kept, the certificate fails
+                    guard.refuse(verdict, self.time)
                     verdict = None
                 if verdict is not None:
                     t_failed = self.time
