@@ -165,13 +165,16 @@ class EnergyGuard:
                     f"{self.tolerance:.3g}"), spent
         return None, spent
 
-    def refuse(self, verdict: str, t: float) -> None:
-        """The run stops: the step at time t failed the balance at the smallest step."""
+    def refuse(self, verdict: str, t: float, spent: float) -> None:
+        """The step at time t failed the balance at the smallest step (the run stops, or keeps
+        it under [checks] strict = false), having spent ``spent`` times its share: the
+        certificate's value is then at least the tolerance times that."""
         residual, scale, _ = self._trial
         self.failed = self.failed or {"t": t, "reason": verdict}
         self.scale = max(self.scale, scale)
         if self.judged(residual) > self.worst:
             self.worst, self.worst_time = self.judged(residual), t
+        self.floor = max(getattr(self, "floor", 0.0), self.tolerance * spent)
 
     def commit(self) -> None:
         residual, scale, t = self._trial
@@ -183,6 +186,7 @@ class EnergyGuard:
     def report(self) -> dict:
         scale = self.scale
         value = self.worst / scale if scale > 0 else (0.0 if self.worst == 0 else math.inf)
+        value = max(value, getattr(self, "floor", 0.0))
         return {"value": value, "tolerance": self.tolerance, "t": self.worst_time,
                 "conserving": self.conserving, "checked": self.enabled, "scale": scale,
                 "failed": self.failed, "unresolved_steps": self.unresolved,
@@ -333,6 +337,24 @@ class StepDriver:
     def _commit(self) -> None:
         """The accepted step passed its checks (a subclass commits what cannot be undone)."""
 
+    def _rotation_note(self) -> str:
+        """For a spatial rod whose rotation vector nears its singularity |theta| = 2 pi (where
+        generalised-alpha on the rotation vector breaks down): a clause saying so."""
+        p = self.problem
+        if not getattr(p, "spatial", False):
+            return ""
+        w = compat.local_array(p.w)
+        parts = [np.asarray(compat.sub_space_collapsed(p.space, i)[1])
+                 for i, name in enumerate(p.components) if name.startswith("theta")]
+        if len(parts) != 3:
+            return ""
+        local = float(np.max(np.sqrt(sum(w[d] ** 2 for d in parts)), initial=0.0))
+        largest = global_max(p.comm, local)
+        if largest < 1.5 * math.pi:
+            return ""
+        return (f"; the rotation vector reaches |theta| = {largest:.3g} rad, near its "
+                "singularity 2 pi, where the rotation-vector scheme is not fit")
+
     def run(self, on_output: Callable[[float, int], None] | None = None,
             progress: bool = True) -> dict:
         """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps.
@@ -406,10 +428,10 @@ class StepDriver:
                 if (verdict is not None and not self.energy_stop
                         and trial / 2 < smallest_energy_step * (1 - 1e-9)):
                     # [checks] strict = false: the step is kept, the certificate fails
-                    guard.refuse(verdict, self.time)
+                    guard.refuse(verdict, self.time, spent)
                     verdict = None
                 if verdict is not None:
-                    t_failed = self.time
+                    t_failed, where = self.time, self._rotation_note()
                     self._restore(saved)
                     self.reject()
                     rejected += 1
@@ -417,13 +439,13 @@ class StepDriver:
                     calm = 0
                     refused = (self.time, spent)
                     if trial / 2 < smallest_energy_step * (1 - 1e-9):
-                        guard.refuse(verdict, t_failed)
+                        guard.refuse(verdict + where, t_failed, spent)
                         self.run_info = {"steps": steps, "rejected_steps": rejected,
                                          "energy_refinements": refined,
                                          "newton_iterations": newton}
                         raise DynamicsFailed(
                             f"the energy balance check failed at t = {t_failed:.6g} s with the "
-                            f"step {trial:.3g} s ({verdict}; steps down to "
+                            f"step {trial:.3g} s ({verdict}{where}; steps down to "
                             f"{smallest_energy_step:.3g} s tried); the integration is not "
                             f"trustworthy beyond t = {self.time:.6g} s, the last good state "
                             "(use a smaller [time] dt, or scheme = \"energy-conserving\" for a "
