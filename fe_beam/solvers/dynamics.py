@@ -62,7 +62,10 @@ CONTACT_INERTIA_FACTOR = 10.0
 ENERGY_TOLERANCE = 2e-2
 #: the share of the energy tolerance one step may spend: its fraction dt / t_end of the run,
 #: but at least this (a step that spends more is halved)
-ENERGY_STEP_SHARE = 0.05
+ENERGY_STEP_SHARE = 0.25
+#: the energy scale below which nothing is judged, relative to E A_max L (the strain energy of
+#: an axial strain of about 1.4e-6): a rod at rest has no energy to judge a balance against
+ENERGY_FLOOR = 1e-12
 #: the most halvings of the given step the energy balance may ask for before the run stops
 ENERGY_HALVINGS = 6
 #: free flight (no supports, loads, damping c, tendons or contact): the drift of the linear and
@@ -117,18 +120,19 @@ class EnergyGuard:
     judged.
 
     Each step: its change of the judged R may spend its share of the tolerance, tolerance * S *
-    max(dt / t_end, `ENERGY_STEP_SHARE`) (S so far); a step that spends more is halved, as long
+    max(dt / t_end, `ENERGY_STEP_SHARE`) (S so far, at least `ENERGY_FLOOR` E A L); a step
+    that spends more is halved, as long
     as halving helps (the halved step spends less than half as much: a start-up transient whose
     relative error does not shrink with dt is accepted, and judged at the end). The certificate
     is the largest judged R over the steps relative to the run's S."""
 
     def __init__(self, energies: dict, tolerance: float, conserving: bool, t_end: float,
-                 enabled: bool = True):
+                 enabled: bool = True, floor: float = 0.0):
         self.tolerance, self.conserving, self.t_end = tolerance, conserving, t_end
         self.enabled = enabled
         self.initial = energies["kinetic"] + energies["strain"]
         self.residual = energies.get("balance_residual", 0.0)
-        self.scale = self._scale(energies, 0.0)
+        self.scale = self._scale(energies, floor)
         self.worst = 0.0  # the largest judged R (J) over the accepted steps
         self.worst_time = 0.0
         self.dissipation = 0.0  # max(-R, 0) of the last accepted step
@@ -367,8 +371,11 @@ class StepDriver:
         s = self.settings
         dt, steps, rejected, newton, refined = s.dt, 0, 0, 0, 0
         length = self.problem.model.length
+        model = self.problem.model
+        floor = ENERGY_FLOOR * float(model.material.E) * model.length * max(
+            float(model.section.properties(x).A) for x in (0.0, 1.0))
         guard = EnergyGuard(self.energies(), self.energy_tolerance, self.conserving, s.t_end,
-                            enabled=self.energy_measured())
+                            enabled=self.energy_measured(), floor=floor)
         momentum = MomentumWatch(MOMENTUM_TOLERANCE["conserving" if self.conserving
                                                     else "dissipative"])
         self.guard, self.momentum_watch = guard, momentum
