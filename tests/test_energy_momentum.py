@@ -221,10 +221,12 @@ def test_damped_energy_loss_equals_dissipated_work(damping):
     assert final["dissipated"] > 0.02 * final["external_work"]
 
 
-def test_first_peak_agrees_with_generalised_alpha():
+def test_first_peak_agrees_with_generalised_alpha(monkeypatch):
     """Step-loaded cantilever (k = 2, L/h = 200) at dt = T1/200: the first (lowest) tip
     deflection of the two schemes agrees within 1e-4 L (measured ~9e-6 L); peaks located by a
-    parabola through the three samples around the minimum."""
+    parabola through the three samples around the minimum (equally spaced: the plain
+    generalised-alpha at a fixed step, the energy balance check would halve some)."""
+    monkeypatch.setattr(GeneralizedAlpha, "energy_tolerance", math.inf)
     peaks = []
     for scheme in (EnergyMomentum, GeneralizedAlpha):
         problem = BeamProblem(step_loaded())

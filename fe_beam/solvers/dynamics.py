@@ -62,7 +62,7 @@ CONTACT_INERTIA_FACTOR = 10.0
 ENERGY_TOLERANCE = 2e-2
 #: the share of the energy tolerance one step may spend: its fraction dt / t_end of the run,
 #: but at least this (a step that spends more is halved)
-ENERGY_STEP_SHARE = 0.25
+ENERGY_STEP_SHARE = 0.05
 #: the energy scale below which nothing is judged, relative to E A_max L (the strain energy of
 #: an axial strain of about 1.4e-6): a rod at rest has no energy to judge a balance against
 ENERGY_FLOOR = 1e-12
@@ -120,8 +120,8 @@ class EnergyGuard:
     judged.
 
     Each step: its change of the judged R may spend its share of the tolerance, tolerance * S *
-    max(dt / t_end, `ENERGY_STEP_SHARE`) (S so far, at least `ENERGY_FLOOR` E A L); a step
-    that spends more is halved, as long
+    max(dt / t_end, `ENERGY_STEP_SHARE`) (S so far, at least `ENERGY_FLOOR` E A L), and may
+    not raise it above tolerance * S; a step that does is halved, as long
     as halving helps (the halved step spends less than half as much: a start-up transient whose
     relative error does not shrink with dt is accepted, and judged at the end). The certificate
     is the largest judged R over the steps relative to the run's S."""
@@ -167,6 +167,9 @@ class EnergyGuard:
             return (f"the step changed the energy balance by {change / scale:.3g} of the largest "
                     f"energy term, more than its share {share / scale:.3g} of the tolerance "
                     f"{self.tolerance:.3g}"), spent
+        if change > 0 and self.judged(residual) > self.tolerance * scale:
+            return (f"the energy balance reaches {self.judged(residual) / scale:.3g} of the "
+                    f"largest energy term > {self.tolerance:.3g}"), max(spent, 1.0)
         return None, spent
 
     def refuse(self, verdict: str, t: float, spent: float) -> None:
