@@ -7,6 +7,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from fe_beam import certify
 from fe_beam.analyses.result import EXIT_FAILED, Report, Result
 from fe_beam.analyses.transient import dynamic_summary, run_dynamic
 
@@ -16,7 +17,8 @@ __all__ = ["run"]
 def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
         echo=None) -> Result:
     config = validated.parsed
-    result = run_dynamic(config, out, comm, progress=progress)
+    result = run_dynamic(config, out, comm, progress=progress,
+                         strict=certify.strict_of(getattr(validated, "config", None)))
     report = Report(echo)
     if result.history:
         last = result.history[-1]

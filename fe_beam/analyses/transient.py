@@ -165,6 +165,45 @@ class DynamicResult:
     strain_range: dict | None = None
     #: the last converged static pre-state of a run whose pre-state failed (summary "prestate")
     prestate: dict | None = None
+    #: the run-time certificates (summary "checks", `dynamic_checks`) and their measurements
+    checks: list = field(default_factory=list)
+    certificates: dict = field(default_factory=dict)
+
+
+def dynamic_checks(certificates: dict) -> tuple[list, list]:
+    """The certificates of a time integration (`StepDriver.certificates`) as summary "checks"
+    entries: ``energy_balance`` and, with a free flight, ``linear_momentum`` and
+    ``angular_momentum``; and the notes on what was not checked."""
+    checks, notes = [], []
+    energy = certificates.get("energy_balance")
+    if energy and energy["checked"]:
+        judged = ("|R|" if energy["conserving"] else
+                  "max(R, 0) (rho_inf < 1 or contact dissipate: a loss is numerical dissipation, "
+                  f"measured as {energy['numerical_dissipation']:.4g} J = "
+                  f"{energy['relative_numerical_dissipation']:.3g} of S at the end)")
+        failed = energy.get("failed")
+        checks.append(certify.entry(
+            "energy_balance", energy["value"], energy["tolerance"],
+            passed=False if failed else None,
+            detail=(f"largest over the steps of {judged} / S, R = kinetic + strain + dissipated"
+                    " - external work - initial energy, S the largest of these terms (at t = "
+                    f"{energy['t']:.4g} s); a step failing it was halved"
+                    + (f"; it failed first at t = {failed['t']:.6g} s at the smallest step: "
+                       f"{failed['reason']}" if failed else "")),
+            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar)"))
+    elif energy:
+        notes.append("the energy balance is not checked: prescribed end motions do work that "
+                     "is not measured (kinetic + strain - external work is not conserved)")
+    momentum = certificates.get("momentum")
+    if momentum:
+        for key in ("linear", "angular"):
+            checks.append(certify.entry(
+                f"{key}_momentum", momentum[key], momentum["tolerance"],
+                detail=(f"largest drift of the {key} momentum over {momentum['steps']} free-"
+                        f"flight steps (from t = {momentum['from']:.4g} s: no supports, loads, "
+                        "damping c, tendons or contact) relative to its scale"),
+                remedy="a smaller [time] dt (rho_inf = 1 conserves the momenta exactly)"))
+    return checks, notes
 
 
 def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
@@ -176,7 +215,9 @@ def _config_notes(config: DynamicConfig, out: Path | None, comm) -> list:
 
 
 def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
-                progress: bool = True) -> DynamicResult:
+                progress: bool = True, strict: bool = True) -> DynamicResult:
+    """Integrate; ``strict`` ([checks] strict): a step that fails the energy balance at the
+    smallest step stops the run (exit 3), else it is kept and the certificate fails."""
     if config.time.scheme.startswith("fd-"):
         return _run_finite_differences(config, out, comm)
     started = time.perf_counter()
@@ -238,6 +279,7 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                       config.load_function, config.motion_function,
                                       config.static.solver, tendons=tendons, contact=contact)
     integrator.watch = watch
+    integrator.energy_stop = strict
     integrator.initialise(config.velocity)
     root, writing = comm.rank == 0, out is not None
     if writing and root:
@@ -280,6 +322,9 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         result.status = "completed"
     except DynamicsFailed as failure:
         result.status, result.message = "failed", str(failure)
+        result.info = dict(getattr(integrator, "run_info", None) or result.info)
+        if not result.history or integrator.time > result.history[-1]["t"]:
+            record(integrator.time, -1)  # the last good state
     except runctl.Interrupted as stop:
         # the state is the last accepted step: record it unless it was the last output
         if not result.history or integrator.time > result.history[-1]["t"]:
@@ -289,6 +334,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         raise
     finally:
         integrator.solver.destroy()
+        result.certificates = integrator.certificates()
+        result.checks, unchecked = dynamic_checks(result.certificates)
+        for note in unchecked:
+            if note not in notes:
+                notes.append(note)
         result.notes, result.strain_range = notes + watch.notes(), watch.summary()
         result.info["wall_time_s"] = time.perf_counter() - started
         if contact is not None and writing and root:  # the obstacles at the last state
@@ -499,7 +549,9 @@ def dynamic_summary(result: DynamicResult, config: DynamicConfig, wall: float) -
         "scheme": config.time.scheme,
         "rho_inf": None if config.time.scheme == "energy-conserving" else config.time.rho_inf,
         "notes": list(result.notes),
-    } | ({"strain_range": result.strain_range} if result.strain_range else {}) | (
+    } | ({"checks": [dict(c) for c in result.checks]} if result.checks else {}) | (
+        {"certificates": result.certificates} if result.certificates else {}) | (
+        {"strain_range": result.strain_range} if result.strain_range else {}) | (
         {"prestate": result.prestate} if result.prestate is not None else {})
 
 

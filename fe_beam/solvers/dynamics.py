@@ -31,6 +31,7 @@ contact points of the last accepted step (docs/theory.md, Contact in dynamics).
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from collections.abc import Callable
@@ -49,11 +50,27 @@ from fe_beam.solvers.contact import ContactSolver
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 from fe_beam.solvers.pull_in import PullInSolver
 
-__all__ = ["Damping", "DynamicsFailed", "GeneralizedAlpha", "StepDriver", "TimeSettings",
-           "alpha_parameters"]
+__all__ = ["Damping", "DynamicsFailed", "EnergyGuard", "GeneralizedAlpha", "MomentumWatch",
+           "StepDriver", "TimeSettings", "alpha_parameters"]
 
 #: the dynamic contact stiffness k relative to the step's inertia stiffness rho A / (beta dt^2)
 CONTACT_INERTIA_FACTOR = 10.0
+
+#: the energy-balance certificate of generalised-alpha: kinetic + strain + dissipated - external
+#: work - initial energy, relative to the largest of these terms so far (an energy gain; for the
+#: non-dissipative rho_inf = 1 without contact, either sign)
+ENERGY_TOLERANCE = 2e-2
+#: the share of the energy tolerance one step may spend: its fraction dt / t_end of the run,
+#: but at least this (a step that spends more is halved)
+ENERGY_STEP_SHARE = 0.05
+#: the energy scale below which nothing is judged, relative to E A_max L (the strain energy of
+#: an axial strain of about 1.4e-6): a rod at rest has no energy to judge a balance against
+ENERGY_FLOOR = 1e-12
+#: the most halvings of the given step the energy balance may ask for before the run stops
+ENERGY_HALVINGS = 6
+#: free flight (no supports, loads, damping c, tendons or contact): the drift of the linear and
+#: angular momenta relative to their scale, per scheme kind (conserving / dissipative)
+MOMENTUM_TOLERANCE = {"conserving": 1e-6, "dissipative": 1e-2}
 
 
 class DynamicsFailed(RuntimeError):
@@ -87,6 +104,145 @@ def strain_rates(parts, rates):
         return sum(ufl.diff(quantity, variable) * direction for variable, direction in directions)
 
     return rate(s.eps), rate(s.g), rate(s.kappa)
+
+
+class EnergyGuard:
+    """The energy balance of a time integration (the certificate ``energy_balance``): the
+    residual R = kinetic + strain + dissipated - external work - initial energy
+    (`StepDriver.energies` "balance_residual") relative to the scale S, the largest of
+    |kinetic|, |strain|, |external work|, |dissipated| and the initial energy over the run.
+
+    ``conserving`` schemes (energy-conserving, generalised-alpha with rho_inf = 1 and no contact)
+    have no numerical dissipation: |R| is judged. Dissipative ones (rho_inf < 1, contact) lose
+    energy by design, and the loss is measured, not bounded: ``numerical_dissipation`` =
+    max(-R, 0) (the energy the scheme removed beyond the damping and contact work it accounts
+    for); a gain R > 0 is an error of the scheme (no discrete force creates energy) and is
+    judged.
+
+    Each step: its change of the judged R may spend its share of the tolerance, tolerance * S *
+    max(dt / t_end, `ENERGY_STEP_SHARE`) (S so far, at least `ENERGY_FLOOR` E A L), and may
+    not raise it above tolerance * S; a step that does is halved, as long
+    as halving helps (the halved step spends less than half as much: a start-up transient whose
+    relative error does not shrink with dt is accepted, and judged at the end). The certificate
+    is the largest judged R over the steps relative to the run's S."""
+
+    def __init__(self, energies: dict, tolerance: float, conserving: bool, t_end: float,
+                 enabled: bool = True, floor: float = 0.0):
+        self.tolerance, self.conserving, self.t_end = tolerance, conserving, t_end
+        self.enabled = enabled
+        self.initial = energies["kinetic"] + energies["strain"]
+        self.residual = energies.get("balance_residual", 0.0)
+        self.scale = self._scale(energies, floor)
+        self.worst = 0.0  # the largest judged R (J) over the accepted steps
+        self.worst_time = 0.0
+        self.dissipation = 0.0  # max(-R, 0) of the last accepted step
+        self.failed = None  # {t, reason} of the step that stopped the run
+        self.unresolved = 0  # steps accepted although refining them did not help
+        self._trial = None
+
+    def _scale(self, energies: dict, previous: float) -> float:
+        terms = [abs(energies.get(k, 0.0)) for k in ("kinetic", "strain", "external_work",
+                                                     "dissipated")]
+        return max(previous, abs(self.initial), *terms)
+
+    def judged(self, residual: float) -> float:
+        """The part of R the balance judges (J)."""
+        return abs(residual) if self.conserving else max(residual, 0.0)
+
+    def judge(self, energies: dict, dt: float, t: float) -> tuple[str | None, float]:
+        """The accepted candidate's energies at time t after a step dt: (None or why the step
+        fails, the share of the step's tolerance it spent). The candidate is kept for
+        `commit`."""
+        residual = energies["balance_residual"]
+        scale = self._scale(energies, self.scale)
+        self._trial = (residual, scale, t)
+        if not self.enabled:
+            return None, 0.0
+        if not math.isfinite(residual):
+            return "the energy balance is not a finite number", math.inf
+        change = self.judged(residual) - self.judged(self.residual)
+        share = self.tolerance * max(dt / self.t_end, ENERGY_STEP_SHARE) * scale
+        spent = max(change, 0.0) / share if share > 0 else 0.0
+        if spent > 1:
+            return (f"the step changed the energy balance by {change / scale:.3g} of the largest "
+                    f"energy term, more than its share {share / scale:.3g} of the tolerance "
+                    f"{self.tolerance:.3g}"), spent
+        if change > 0 and self.judged(residual) > self.tolerance * scale:
+            return (f"the energy balance reaches {self.judged(residual) / scale:.3g} of the "
+                    f"largest energy term > {self.tolerance:.3g}"), max(spent, 1.0)
+        return None, spent
+
+    def refuse(self, verdict: str, t: float, spent: float) -> None:
+        """The step at time t failed the balance at the smallest step (the run stops, or keeps
+        it under [checks] strict = false), having spent ``spent`` times its share: the
+        certificate's value is then at least the tolerance times that."""
+        residual, scale, _ = self._trial
+        self.failed = self.failed or {"t": t, "reason": verdict}
+        self.scale = max(self.scale, scale)
+        if self.judged(residual) > self.worst:
+            self.worst, self.worst_time = self.judged(residual), t
+        self.floor = max(getattr(self, "floor", 0.0), self.tolerance * spent)
+
+    def commit(self) -> None:
+        residual, scale, t = self._trial
+        self.residual, self.scale = residual, scale
+        if self.judged(residual) > self.worst:
+            self.worst, self.worst_time = self.judged(residual), t
+        self.dissipation = max(-residual, 0.0)
+
+    def report(self) -> dict:
+        scale = self.scale
+        value = self.worst / scale if scale > 0 else (0.0 if self.worst == 0 else math.inf)
+        value = max(value, getattr(self, "floor", 0.0))
+        return {"value": value, "tolerance": self.tolerance, "t": self.worst_time,
+                "conserving": self.conserving, "checked": self.enabled, "scale": scale,
+                "failed": self.failed, "unresolved_steps": self.unresolved,
+                "numerical_dissipation": self.dissipation,
+                "relative_numerical_dissipation": self.dissipation / scale if scale else 0.0}
+
+
+class MomentumWatch:
+    """The linear and angular momenta over free flight (the certificates ``linear_momentum``
+    and ``angular_momentum``): steps with no supports, no load at either end of the step, no
+    viscous damping c, tendons or contact. The drift from the momenta at the start of each
+    free-flight phase, relative to the scale max(|P_0|, sqrt(2 m K_0)) (linear) and max(|L_0|,
+    R sqrt(2 m K_0)) (angular, R the rod's reach from the origin), m the rod's mass."""
+
+    def __init__(self, tolerance: float):
+        self.tolerance = tolerance
+        self.reference = None
+        self.worst = {"linear": 0.0, "angular": 0.0}
+        self.steps = 0
+        self.time = None  # the first free-flight time
+
+    def start(self, momenta: dict, mass: float, kinetic: float, reach: float, t: float) -> None:
+        linear = np.array([v for k, v in momenta.items() if not k.startswith("angular")])
+        angular = np.array([v for k, v in momenta.items() if k.startswith("angular")])
+        speed = math.sqrt(max(2 * mass * kinetic, 0.0))
+        self.reference = (linear, angular, max(float(np.linalg.norm(linear)), speed),
+                          max(float(np.linalg.norm(angular)), reach * speed))
+        if self.time is None:
+            self.time = t
+
+    def stop(self) -> None:
+        self.reference = None
+
+    def observe(self, momenta: dict) -> None:
+        linear0, angular0, scale_p, scale_l = self.reference
+        linear = np.array([v for k, v in momenta.items() if not k.startswith("angular")])
+        angular = np.array([v for k, v in momenta.items() if k.startswith("angular")])
+        self.steps += 1
+        for key, now, then, scale in (("linear", linear, linear0, scale_p),
+                                      ("angular", angular, angular0, scale_l)):
+            drift = float(np.max(np.abs(now - then), initial=0.0))
+            value = drift / scale if scale > 0 else (0.0 if drift == 0 else math.inf)
+            self.worst[key] = max(self.worst[key], value)
+
+    def report(self) -> dict | None:
+        if not self.steps:
+            return None
+        return {"linear": self.worst["linear"], "angular": self.worst["angular"],
+                "tolerance": self.tolerance, "steps": self.steps, "from": self.time}
 
 
 class StepDriver:
@@ -130,12 +286,105 @@ class StepDriver:
                     for i in range(self.problem.motion_count)]
             self._motion = np.concatenate(dofs)
         return self._motion
+    #: the relative energy-balance tolerance (`EnergyGuard`) and whether the scheme conserves
+    #: energy without numerical dissipation (a subclass or instance may say otherwise)
+    energy_tolerance = ENERGY_TOLERANCE
+    #: whether a step that fails the energy balance at the smallest step stops the run (else it
+    #: is kept and the certificate fails: [checks] strict = false)
+    energy_stop = True
+
+    @property
+    def conserving(self) -> bool:
+        return False
+
+    def energy_measured(self) -> bool:
+        """Whether kinetic + strain + dissipated - external work is the whole balance: not with
+        prescribed non-zero end motions (their reactions' work is not measured)."""
+        return not getattr(self.problem, "_prescribed", None)
+
+    def free_flight(self, t_old: float, t_new: float) -> bool:
+        """A step with no supports, no load at either end, no viscous damping, tendons or
+        contact: the momenta are constants of the motion."""
+        p = self.problem
+        return (not p.bcs and self.damping.c == 0 and getattr(self, "tendons", None) is None
+                and getattr(self, "contact", None) is None
+                and self.load_function(t_old) == 0 and self.load_function(t_new) == 0)
+
+    def _mass_and_reach(self) -> tuple[float, float]:
+        """The rod's mass (rho A_max L) and its reach from the origin (L + |tip position|)."""
+        model = self.problem.model
+        length = model.length
+        area = max(float(model.section.properties(s).A) for s in (0.0, 1.0))
+        tip = self.problem.end_values("xL")
+        position = np.array([length + tip["u"], tip["v"], tip.get("w", 0.0)])
+        return float(model.material.rho) * area * length, length + float(np.linalg.norm(position))
+
+    # --- the state of the accepted step, to take a step back (energy refinement) -----------
+    #: the Functions and attributes that hold the accepted state (subclasses extend)
+    _state_functions: tuple = ("q_old", "v_old")
+    _state_attributes: tuple = ("time",)
+
+    def _snapshot(self) -> dict:
+        functions = {name: compat.local_array(getattr(self, name)).copy()
+                     for name in self._state_functions}
+        attributes = {name: copy.deepcopy(getattr(self, name)) for name in self._state_attributes
+                      if hasattr(self, name)}
+        return {"functions": functions, "attributes": attributes,
+                "watch": copy.copy(getattr(self.watch, "worst", None))}
+
+    def _restore(self, snapshot: dict) -> None:
+        for name, values in snapshot["functions"].items():
+            function = getattr(self, name)
+            compat.local_array(function)[:] = values
+            function.x.scatter_forward()
+        for name, value in snapshot["attributes"].items():
+            setattr(self, name, value)
+        self.watch.worst = snapshot["watch"]
+
+    def _commit(self) -> None:
+        """The accepted step passed its checks (a subclass commits what cannot be undone)."""
+
+    def _rotation_note(self) -> str:
+        """For a spatial rod whose rotation vector nears its singularity |theta| = 2 pi (where
+        generalised-alpha on the rotation vector breaks down): a clause saying so."""
+        p = self.problem
+        if not getattr(p, "spatial", False):
+            return ""
+        w = compat.local_array(p.w)
+        parts = [np.asarray(compat.sub_space_collapsed(p.space, i)[1])
+                 for i, name in enumerate(p.components) if name.startswith("theta")]
+        if len(parts) != 3:
+            return ""
+        local = float(np.max(np.sqrt(sum(w[d] ** 2 for d in parts)), initial=0.0))
+        largest = global_max(p.comm, local)
+        if largest < 1.5 * math.pi:
+            return ""
+        return (f"; the rotation vector reaches |theta| = {largest:.3g} rad, near its "
+                "singularity 2 pi, where the rotation-vector scheme is not fit")
+
     def run(self, on_output: Callable[[float, int], None] | None = None,
             progress: bool = True) -> dict:
-        """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps."""
+        """Integrate to t_end; ``on_output(t, step)`` after every ``output_every`` steps.
+
+        Every accepted step is judged by the energy balance (`EnergyGuard`): a step that fails
+        it is taken back and halved (at most `ENERGY_HALVINGS` times below the given dt, and
+        grows back after 4 good steps); at the smallest step the run stops (DynamicsFailed, the
+        state the last accepted one). The certificates' values are in the returned ``checks``.
+        """
         s = self.settings
-        dt, steps, rejected, newton = s.dt, 0, 0, 0
+        dt, steps, rejected, newton, refined = s.dt, 0, 0, 0, 0
         length = self.problem.model.length
+        model = self.problem.model
+        floor = ENERGY_FLOOR * float(model.material.E) * model.length * max(
+            float(model.section.properties(x).A) for x in (0.0, 1.0))
+        guard = EnergyGuard(self.energies(), self.energy_tolerance, self.conserving, s.t_end,
+                            enabled=self.energy_measured(), floor=floor)
+        momentum = MomentumWatch(MOMENTUM_TOLERANCE["conserving" if self.conserving
+                                                    else "dissipative"])
+        self.guard, self.momentum_watch = guard, momentum
+        smallest_energy_step = max(s.smallest_step, s.dt / 2**ENERGY_HALVINGS)
+        calm = 0  # accepted steps since the last energy refinement
+        refused = None  # (time, spent share) of the last step the energy balance refused
         bar = ProgressBar(self.problem.comm, total=s.t_end, label="time", enabled=progress,
                           unit="s")
         started = time.perf_counter()
@@ -144,6 +393,13 @@ class StepDriver:
         try:
             while self.time < s.t_end * (1 - 1e-12):
                 trial = min(dt, s.t_end - self.time)
+                free = self.free_flight(self.time, self.time + trial)
+                if free and momentum.reference is None:
+                    mass, reach = self._mass_and_reach()
+                    momentum.start(self.momenta(), mass, self.energies()["kinetic"], reach,
+                                   self.time)
+                elif not free:
+                    momentum.stop()
                 try:
                     iterations = self.step(trial)
                 except SolveFailed as failure:
@@ -166,10 +422,54 @@ class StepDriver:
                         rejected += 1
                         dt = max(trial * max(0.2, factor), s.smallest_step)
                         continue
-                    dt = min(trial * min(2.0, max(0.2, factor)), s.largest_step)
-                elif dt < s.dt and iterations <= 4:
-                    dt = min(2 * dt, s.dt)  # grow back after a cut-back
+                    next_dt = min(trial * min(2.0, max(0.2, factor)), s.largest_step)
+                elif dt < s.dt and iterations <= 4 and calm >= 4:
+                    next_dt = min(2 * dt, s.dt)  # grow back after a cut-back
+                else:
+                    next_dt = dt
+                saved, t_start = self._snapshot(), self.time
                 self.accept()
+                verdict, spent = guard.judge(self.energies(), trial, self.time)
+                if verdict is not None and refused is not None and refused[0] == t_start \
+                        and spent > 0.5 * refused[1]:
+                    # halving did not help (a start-up transient, self-similar in dt): accept
+                    guard.unresolved += 1
+                    verdict = None
+                if (verdict is not None and not self.energy_stop
+                        and trial / 2 < smallest_energy_step * (1 - 1e-9)):
+                    # [checks] strict = false: the step is kept, the certificate fails
+                    guard.refuse(verdict, self.time, spent)
+                    verdict = None
+                if verdict is not None:
+                    t_failed, where = self.time, self._rotation_note()
+                    self._restore(saved)
+                    self.reject()
+                    rejected += 1
+                    refined += 1
+                    calm = 0
+                    refused = (self.time, spent)
+                    if trial / 2 < smallest_energy_step * (1 - 1e-9):
+                        guard.refuse(verdict + where, t_failed, spent)
+                        self.run_info = {"steps": steps, "rejected_steps": rejected,
+                                         "energy_refinements": refined,
+                                         "newton_iterations": newton}
+                        raise DynamicsFailed(
+                            f"the energy balance check failed at t = {t_failed:.6g} s with the "
+                            f"step {trial:.3g} s ({verdict}{where}; steps down to "
+                            f"{smallest_energy_step:.3g} s tried); the integration is not "
+                            f"trustworthy beyond t = {self.time:.6g} s, the last good state "
+                            "(use a smaller [time] dt, or scheme = \"energy-conserving\" for a "
+                            "planar rod)", self.time)
+                    dt = trial / 2
+                    bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({verdict})")
+                    continue
+                refused = None
+                guard.commit()
+                self._commit()
+                if free:
+                    momentum.observe(self.momenta())
+                dt = next_dt
+                calm += 1
                 steps += 1
                 newton += iterations
                 bar.update(self.time, f"t = {self.time:.4g} s, dt = {trial:.3g} s")
@@ -178,8 +478,18 @@ class StepDriver:
                     on_output(self.time, steps)
         finally:
             bar.close()
-        return {"steps": steps, "rejected_steps": rejected, "newton_iterations": newton,
-                "wall_time_s": time.perf_counter() - started}
+        return {"steps": steps, "rejected_steps": rejected, "energy_refinements": refined,
+                "newton_iterations": newton, "wall_time_s": time.perf_counter() - started}
+
+    def certificates(self) -> dict:
+        """The energy balance and the free-flight momenta of the run so far (`run` sets them:
+        empty before)."""
+        guard = getattr(self, "guard", None)
+        if guard is None:
+            return {}
+        momentum = self.momentum_watch.report()
+        return {"energy_balance": guard.report()} | (
+            {"momentum": momentum} if momentum is not None else {})
 
 
 class GeneralizedAlpha(StepDriver):
@@ -455,7 +765,6 @@ class GeneralizedAlpha(StepDriver):
             work = assemble_scalar(self.forms["contact_work"])
             self._contact_work += work
             self._work += work
-            self.contact.commit()
         load_mid = ((1 - alpha_f) * self.load_function(t_new)
                     + alpha_f * self.load_function(t_old))
         compat.local_array(self.q_old)[:] = w
@@ -473,6 +782,19 @@ class GeneralizedAlpha(StepDriver):
         self.time = t_new
         if self._trial_range is not None:
             self.watch.observe(self._trial_range)
+
+    _state_functions = ("q_old", "v_old", "a_old")
+    _state_attributes = ("time", "_work", "_dissipated", "_contact_work", "_load_energy",
+                         "_tendon_work", "_tendon_lengths")
+
+    @property
+    def conserving(self) -> bool:
+        """rho_inf = 1 (no numerical dissipation) and no contact (whose scheme dissipates)."""
+        return self.settings.rho_inf == 1 and self.contact is None
+
+    def _commit(self) -> None:
+        if self.contact is not None:  # the accepted state's pressures and references
+            self.contact.commit()
 
     def reject(self) -> None:
         compat.local_array(self.problem.w)[:] = compat.local_array(self.q_old)

@@ -446,6 +446,13 @@ class EnergyMomentum(StepDriver):
         if self._trial_range is not None:
             self.watch.observe(self._trial_range)
 
+    #: the scheme conserves energy to the Newton tolerance: the balance is judged both ways
+    energy_tolerance = 1e-6
+    conserving = True
+    _state_functions = ("q_old", "v_old", "theta_q", "kappa_q")
+    _state_attributes = ("time", "_a_prev", "_work", "_dissipated", "_load_energy",
+                         "_potential_values", "_potential_work")
+
     def reject(self) -> None:
         p = self.problem
         compat.local_array(p.w)[:] = compat.local_array(self.q_old)
