@@ -56,8 +56,12 @@ def line(check: dict) -> str:
     helps."""
     value = check["value"]
     shown = f"{value:.3g}" if isinstance(value, float) else str(value)
-    text = (f"check '{check['name']}' {'passed' if check.get('passed') else 'failed'}: "
-            f"{shown} {'<=' if check.get('passed') else 'exceeds'} {check['tolerance']:.3g}")
+    passed = check.get("passed")
+    above = isinstance(value, float) and value > check["tolerance"]
+    relation = "<=" if passed else ("exceeds" if above or not isinstance(value, float)
+                                    else "against the tolerance")
+    text = (f"check '{check['name']}' {'passed' if passed else 'failed'}: "
+            f"{shown} {relation} {check['tolerance']:.3g}")
     if check.get("detail"):
         text += f" ({check['detail']})"
     if not check.get("passed") and check.get("remedy"):

@@ -115,3 +115,10 @@ def test_cli_exit_code_of_a_failed_check(monkeypatch, tmp_path, capsys):
     code = cli.main(["static", str(path), "--out", str(tmp_path / "o"), "--quiet"])
     assert code == 3
     assert "not certified" in capsys.readouterr().err
+
+
+def test_line_says_why_a_check_failed():
+    assert "exceeds" in certify.line(certify.entry("a", 2.0, 1.0))
+    forced = certify.line(certify.entry("b", 0.0, 0.0, passed=False))
+    assert "failed" in forced and "exceeds" not in forced
+    assert "<=" in certify.line(certify.entry("c", 0.5, 1.0))
