@@ -489,6 +489,12 @@ def box_edge_contact(box: Box, r, tangent, below, above, d=None, spacing: float 
 
 
 # --- the obstacles of one problem ----------------------------------------------------------------
+#: a point of an accepted state whose gap is below this share of the penetration tolerance
+#: (below the tolerance where the obstacle is not pressed yet: a first touch) grazes the
+#: obstacle: the next solve starts with it active (`ContactSet.restore`)
+GRAZING = 1e-2
+
+
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
     `fe_beam.fem.spatial_rod.SpatialRodProblem` (the tube of the section's circumradius):
@@ -938,8 +944,22 @@ class ContactSet:
                          for form in self._end_forms[i]["point"][e]])
 
     def restore(self) -> None:
-        """Multipliers back to those of the last accepted state (`commit`)."""
+        """Multipliers back to those of the last accepted state (`commit`), and its active
+        set: the pressed points and those that graze it unpressed (GRAZING).
+        A grazing first touch at the end of a load step leaves points at g ~ 0 with no
+        pressure; started inactive, the next step's first Newton solve would sink the rod
+        through the obstacle and the active set would then chatter back over tens of
+        updates; started active, they hold at g = 0 and are released if pulled."""
         self._set(self._committed)
+        touching = getattr(self, "_touching", None)
+        if touching is None:
+            return
+        for i, (interior, ends) in enumerate(touching):
+            active = self.active[i]
+            active.x.array[self._dofs] = np.maximum(active.x.array[self._dofs], interior)
+            active.x.scatter_forward()
+            for flag, end in zip(self.end_active[i], ends, strict=True):
+                flag.value = max(float(flag.value), float(end))
         if self.spatial and self._friction:  # a solve starts with the wide regularisation
             self._regularisation.value = float(self.tolerance)
 
@@ -973,6 +993,14 @@ class ContactSet:
         self._pressed = [(np.asarray(state["pressure"][i]) > 0,
                           np.asarray(state["end_pressure"][i]) > 0)
                          for i in range(len(self.obstacles))]
+        self._touching = []
+        for i, (interior, ends) in enumerate(self._pressed):
+            # not yet pressed (a first touch): every point within the tolerance grazes
+            pressed = self._problem.comm.allreduce(bool(interior.any() or ends.any()),
+                                                   op=MPI.LOR)
+            grazing = (GRAZING if pressed else 1.0) * self.tolerance
+            self._touching.append((np.asarray(state["gap"][i]) <= grazing,
+                                   np.asarray(state["end_gap"][i]) <= grazing))
 
     def save(self):
         """The accepted contact state (multipliers, friction state, positions, pressed
@@ -980,13 +1008,13 @@ class ContactSet:
         if self._problem is None:
             return None
         return (self._committed, self._positions, self._pressed,
-                getattr(self, "_positions_offsets", None))
+                getattr(self, "_positions_offsets", None), getattr(self, "_touching", None))
 
     def load(self, saved) -> None:
         """Back to a `save`d accepted state (its multipliers and active set in place)."""
         if saved is None or self._problem is None:
             return
-        self._committed, self._positions, self._pressed, offsets = saved
+        self._committed, self._positions, self._pressed, offsets, self._touching = saved
         if offsets is not None:
             self._positions_offsets = offsets
         self.restore()
@@ -1100,6 +1128,7 @@ class ContactSet:
         self._committed = self._copy()
         self._positions = None
         self._pressed = None
+        self._touching = None
 
     def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and
