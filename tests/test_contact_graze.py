@@ -45,3 +45,34 @@ def test_a_first_touch_at_a_step_end_takes_few_iterations_and_the_right_reaction
         reaction = 3 * load * L / 8 - 3 * EI * GAP / L**3
         # small deflection: g / L = 8e-3 leaves a geometric correction of order (g / L)
         assert step["contact"][0]["force"][1] == pytest.approx(reaction, rel=2e-2)
+
+
+def test_a_first_touch_of_a_post_under_a_mesh_vertex_at_a_step_end():
+    """A cylinder (a post of radius 0.1 m) under the mesh vertex x = a = L / 2 of a uniformly
+    loaded cantilever, touched exactly at the end of the first step: the next steps follow the
+    cantilever propped at a, R = 3 EI (v_q(a) - g) / a^3 with v_q(a) = q a^2 (6 L^2 - 4 L a +
+    a^2) / (24 EI), in few iterations (before: 20 in the step after the touch; after: 9)."""
+    a, radius, gap, steps = L / 2, 0.1, 2e-3, 3
+    touch = 24 * EI * gap / (a**2 * (6 * L**2 - 4 * L * a + a**2))
+    q = steps * touch
+    config = {
+        "beam": {"length": L},
+        "section": {"shape": "rectangle", "b": B, "h": H},
+        "material": {"E": E, "nu": 0.3},
+        "model": {"law": "nonstandard"},
+        "mesh": {"elements": 24, "degree": 2},
+        "loads": {"distributed": [0.0, -q], "steps": steps},
+        "obstacles": [{"shape": "cylinder", "name": "post",
+                       "point": [a, -H / 2 - gap - radius], "radius": radius}],
+        "output": {"xdmf": False, "plots": False},
+    }
+    result = solve_static(validate("static", config).parsed, None, progress=False,
+                          record_shapes=False)
+    assert result.status == "converged", result.message
+    assert len(result.steps) == steps
+    assert result.steps[1]["newton_iterations"] <= 14, result.steps[1]["newton_iterations"]
+    for step in result.steps[1:]:
+        load = step["load_factor"] * q
+        free = load * a**2 * (6 * L**2 - 4 * L * a + a**2) / (24 * EI)
+        reaction = 3 * EI * (free - gap) / a**3
+        assert step["contact"][0]["force"][1] == pytest.approx(reaction, rel=2e-2)
