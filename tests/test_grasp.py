@@ -63,7 +63,7 @@ def test_designed_offset_gives_the_target_grasp_force_in_fe_beam_finger(tmp_path
     grasp = summary["grasp"]
     tolerance, target = grasp["tolerance"], grasp["target"]
     assert summary["status"] == "converged", summary["message"]
-    assert (target, tolerance) == (1.0, 1e-3)
+    assert (target, tolerance) == (1.0, 1e-2)
     assert abs(grasp["value"] - target) <= tolerance
     assert abs(math.hypot(*grasp["contact"]["force"]) - grasp["value"]) < 1e-12
     # the accuracy check: 10x tighter contact, the force still within the tolerance
@@ -138,6 +138,7 @@ def test_a_design_met_only_at_a_loose_penetration_tolerance_is_not_met():
     design's tolerance, so the design is not met (was: "converged" at a force 0.016 N from the
     exact contact's)."""
     config = example("finger_grasp_design.toml")
+    config["design"]["tolerance"] = 1e-3
     config["contact"] = {"force_tolerance": 1.0}
     summary = run_design(config, None, MPI.COMM_WORLD)
     check = summary["grasp"]["contact_check"]
@@ -154,6 +155,7 @@ def test_the_default_force_tolerance_makes_the_loose_design_exact():
     the check at 10x tighter penetration agrees within the design's tolerance, at the offset
     the example's tight settings (penalty 100, 1e-7 m) find."""
     config = example("finger_grasp_design.toml")
+    config["design"]["tolerance"] = 1e-3
     tight = run_design(config, None, MPI.COMM_WORLD)
     config.pop("contact")
     summary = run_design(config, None, MPI.COMM_WORLD)
@@ -363,3 +365,19 @@ def test_realtime_update_with_an_obstacle_keeps_the_contact_converged():
     expected = reference.steps[-1]
     assert math.hypot(*entry["force"]) == pytest.approx(grasp_force(expected)[0], rel=1e-2)
     assert math.hypot(tip["u"] - expected["tip"]["u"], tip["v"] - expected["tip"]["v"]) < 1e-3 * 0.1
+
+
+def test_the_grasp_design_tolerance_covers_the_mesh_error():
+    """The design example's tolerance is honest: the grasp force at its designed offset
+    (examples/finger_grasp.toml) moves by less than it when the mesh is refined from 20 to 40
+    and 80 elements (measured: 1.0004, 1.0079, 1.0098 N; was: 1 N +- 1e-3 N claimed at 20)."""
+    design = example("finger_grasp_design.toml")
+    tolerance = design["design"]["tolerance"]
+    forces = []
+    for elements in (20, 40, 80):
+        config = example("finger_grasp.toml")
+        config["mesh"]["elements"] = elements
+        _, result = sweep(config)
+        forces.append(math.hypot(*result.steps[-1]["contact"][0]["force"][:2]))
+    assert abs(forces[0] - design["design"]["target"]["force"]) <= tolerance
+    assert max(forces) - min(forces) <= tolerance, forces

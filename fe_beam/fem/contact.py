@@ -665,6 +665,12 @@ def box_edge_contact(box: Box, r, tangent, below, above, d=None, spacing: float 
 
 
 # --- the obstacles of one problem ----------------------------------------------------------------
+#: a point of an accepted state whose gap is below this share of the penetration tolerance
+#: (below the tolerance where the obstacle is not pressed yet: a first touch) grazes the
+#: obstacle: the next solve starts with it active (`ContactSet.restore`)
+GRAZING = 1e-2
+
+
 class ContactSet:
     """The obstacles of one `fe_beam.fem.rod.BeamProblem` (planar: the section segment) or
     `fe_beam.fem.spatial_rod.SpatialRodProblem` (the section's true shape, `section_gap`):
@@ -724,7 +730,7 @@ class ContactSet:
                     end = f["ends"][e]
                     slip = tangential_slip(obstacle, point, end["reference"])
                     total += stick_density(end["multiplier"], end["stick"], slip,
-                                           self.k_end) * measure
+                                           self.k_end_friction) * measure
         return total
 
     def work(self, problem, parts, test):
@@ -815,21 +821,33 @@ class ContactSet:
         self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=tags, subdomain_id=1,
                               metadata={"quadrature_degree": degree})
         self._end_measures = (problem.ds_start, problem.ds_tip)
-        # k = penalty EI_min / h_e^4 (line pressure per unit gap), k_e = k h_e at the ends
+        # k = penalty EI_min / h_e^4 (line pressure per unit gap); at the ends the point
+        # stiffness k_e = penalty max(EI_min / h_e^3, EA_min / h_e) = k * end_length: an end
+        # pushed along the rod's axis (into a wall) acts against the axial stiffness, which
+        # for a slender rod is (h_e / h)^2 times the bending one; a penalty below it leaves the
+        # Uzawa updates converging at the rate 1 - k_e / (EA / L) (tens of updates per step)
         if self.spatial:
             props = [model.section.spatial_properties(s) for s in (0.0, 1.0)]
             inertia = min(min(float(p.Iz), float(p.Iy)) for p in props)
         else:
-            inertia = min(float(model.section.properties(s).I) for s in (0.0, 1.0))
+            props = [model.section.properties(s) for s in (0.0, 1.0)]
+            inertia = min(float(p.I) for p in props)
+        area = min(float(p.A) for p in props)
         bending = float(model.material.E) * inertia
         h_e = float(problem.h_min)
         self.k_value = self.settings.penalty * bending / h_e**4
+        #: k_e / k [m]: h_e, or h_e (EA h_e^2 / EI) where the axial stiffness is the larger
+        self.end_length = h_e * max(1.0, area * h_e**2 / inertia)
         #: the rod's force scale EI_min / L^2 [N]: the floor of the contact forces' accuracy
         #: (`fe_beam.solvers.contact.ContactSolver`: error <= force_tolerance (F + this))
         self.force_scale = bending / float(model.length) ** 2
         self._base_k = self.k_value
         self.k = fem.Constant(mesh, self.k_value)
-        self.k_end = fem.Constant(mesh, self.k_value * h_e)
+        self.k_end = fem.Constant(mesh, self.k_value * self.end_length)
+        #: the ends' tangential (stick) stiffness k h_e: a slip of an end is resisted by the
+        #: rod's bending
+        self.friction_end_length = h_e
+        self.k_end_friction = fem.Constant(mesh, self.k_value * h_e)
         count = len(self.obstacles)
         self.multipliers = [fem.Function(self.space, name=f"contact_multiplier_{i}")
                             for i in range(count)]
@@ -881,7 +899,8 @@ class ContactSet:
         pressures (independent of k): the converged state does not depend on it."""
         self.k_value = float(k)
         self.k.value = self.k_value
-        self.k_end.value = self.k_value * float(self._problem.h_min)
+        self.k_end.value = self.k_value * self.end_length
+        self.k_end_friction.value = self.k_value * self.friction_end_length
 
     @property
     def base_stiffness(self) -> float:
@@ -975,7 +994,7 @@ class ContactSet:
                     end_slip = tangential_slip(obstacle, point, end["reference"])
                     end_slips.append(end_slip)
                     end_tractions.append(end["stick"] * (end["multiplier"]
-                                                        - self.k_end * end_slip)
+                                                        - self.k_end_friction * end_slip)
                                          + (1 - end["stick"]) * slip_traction(
                                              end["direction"], f["mu"], end_pressures[e]))
                 parts_of.append((traction, end_tractions, (slip, end_slips), "friction"))
@@ -1109,8 +1128,22 @@ class ContactSet:
                          for form in self._end_forms[i]["point"][e]])
 
     def restore(self) -> None:
-        """Multipliers back to those of the last accepted state (`commit`)."""
+        """Multipliers back to those of the last accepted state (`commit`), and its active
+        set: the pressed points and those that graze it unpressed (GRAZING).
+        A grazing first touch at the end of a load step leaves points at g ~ 0 with no
+        pressure; started inactive, the next step's first Newton solve would sink the rod
+        through the obstacle and the active set would then chatter back over tens of
+        updates; started active, they hold at g = 0 and are released if pulled."""
         self._set(self._committed)
+        touching = getattr(self, "_touching", None)
+        if touching is None:
+            return
+        for i, (interior, ends) in enumerate(touching):
+            active = self.active[i]
+            active.x.array[self._dofs] = np.maximum(active.x.array[self._dofs], interior)
+            active.x.scatter_forward()
+            for flag, end in zip(self.end_active[i], ends, strict=True):
+                flag.value = max(float(flag.value), float(end))
         if self.spatial and self._friction:  # a solve starts with the wide regularisation
             self._regularisation.value = float(self.tolerance)
 
@@ -1144,6 +1177,14 @@ class ContactSet:
         self._pressed = [(np.asarray(state["pressure"][i]) > 0,
                           np.asarray(state["end_pressure"][i]) > 0)
                          for i in range(len(self.obstacles))]
+        self._touching = []
+        for i, (interior, ends) in enumerate(self._pressed):
+            # not yet pressed (a first touch): every point within the tolerance grazes
+            pressed = self._problem.comm.allreduce(bool(interior.any() or ends.any()),
+                                                   op=MPI.LOR)
+            grazing = (GRAZING if pressed else 1.0) * self.tolerance
+            self._touching.append((np.asarray(state["gap"][i]) <= grazing,
+                                   np.asarray(state["end_gap"][i]) <= grazing))
 
     def save(self):
         """The accepted contact state (multipliers, friction state, positions, pressed
@@ -1151,13 +1192,13 @@ class ContactSet:
         if self._problem is None:
             return None
         return (self._committed, self._positions, self._pressed,
-                getattr(self, "_positions_offsets", None))
+                getattr(self, "_positions_offsets", None), getattr(self, "_touching", None))
 
     def load(self, saved) -> None:
         """Back to a `save`d accepted state (its multipliers and active set in place)."""
         if saved is None or self._problem is None:
             return
-        self._committed, self._positions, self._pressed, offsets = saved
+        self._committed, self._positions, self._pressed, offsets, self._touching = saved
         if offsets is not None:
             self._positions_offsets = offsets
         self.restore()
@@ -1271,6 +1312,7 @@ class ContactSet:
         self._committed = self._copy()
         self._positions = None
         self._pressed = None
+        self._touching = None
 
     def evaluate(self, friction: bool = True) -> dict:
         """The contact state of the current iterate (collective): per obstacle the gaps and
@@ -1286,7 +1328,7 @@ class ContactSet:
                                             self._owned_cells)
         values = np.asarray(values).reshape(-1, self._columns)
         comm = self._problem.comm
-        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        k, k_end = self.k_value, self.k_value * self.end_length
         gaps, pressures, end_gaps, end_pressures = [], [], [], []
         changes = 0  # points whose active set disagrees with their pressure
         tiny = 1e-6 * k * self.tolerance  # pressures below it are round-off
@@ -1303,8 +1345,8 @@ class ContactSet:
             trial = np.array([float(c.value) for c in self.end_multipliers[i]]) - k_end * ends
             chi = np.array([float(c.value) for c in self.end_active[i]]) > 0.5
             if comm.rank == 0:  # the ends are global numbers: counted once
-                changes += int(np.count_nonzero((chi & (trial < -tiny * float(
-                    self._problem.h_min))) | (~chi & (trial > tiny * float(self._problem.h_min)))))
+                changes += int(np.count_nonzero((chi & (trial < -tiny * self.end_length))
+                                                 | (~chi & (trial > tiny * self.end_length))))
             end_pressures.append(np.maximum(trial, 0.0))
         local = {"x": values[:, 0], "r": values[:, 1:1 + self.dim]}
         if self.spatial:
@@ -1321,7 +1363,7 @@ class ContactSet:
 
     def _evaluate_friction(self, state, values) -> None:
         comm = self._problem.comm
-        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        k, k_end = self.k_value, self.k_value * self.friction_end_length
         tolerance = self.tolerance
         changes = 0
         for i, f in self._friction.items():
@@ -1427,7 +1469,7 @@ class ContactSet:
         f, obstacle = self._friction[i], self.obstacles[i]
         interior = (self.dx, ufl.as_vector(f["body"]), ufl.as_vector(f["reference"]), f,
                     self.k)
-        ends = [(measure, end["body"], end["reference"], end, self.k_end)
+        ends = [(measure, end["body"], end["reference"], end, self.k_end_friction)
                 for measure, end in zip(self._end_measures, f["ends"], strict=True)]
         terms = []
         for (measure, body, reference, flags, k), pressure in zip([interior] + ends, pressures,
@@ -1513,7 +1555,7 @@ class ContactSet:
         """`_evaluate_friction` of one obstacle of a spatial rod: 2-vector slips and
         tractions, `coulomb_state_2d`; returns the inconsistent points (counted once)."""
         comm = self._problem.comm
-        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        k, k_end = self.k_value, self.k_value * self.friction_end_length
         f, where, tolerance = self._friction[i], self._obstacle_columns[i], self.tolerance
         mu = float(f["mu"].value)
 
@@ -1641,7 +1683,7 @@ class ContactSet:
         ``multipliers``, the Uzawa update lambda <- <lambda - k g>_+; with friction the
         stick/slip state (`coulomb_state`) and, with ``multipliers``, lambda_t <- p_t."""
         state = state or self.evaluate()
-        k, k_end = self.k_value, self.k_value * float(self._problem.h_min)
+        k, k_end = self.k_value, self.k_value * self.end_length
         for i, function in enumerate(self.multipliers):
             lam = function.x.array[self._dofs]
             trial = lam - k * state["gap"][i]
@@ -1928,11 +1970,16 @@ class ContactSet:
             touching = np.concatenate([[end_gap[0] <= self.tolerance],
                                        gap[order] <= self.tolerance,
                                        [end_gap[1] <= self.tolerance]])
-            active = _intervals(
-                x_line, np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]]),
-                touching)
-            # over the whole surface (`surface`): between the contact points, the vertices
-            # and the end faces too
+            pressed = np.concatenate([[ends[0] > 0], pressure[order] > 0.0, [ends[1] > 0]])
+            # a rod end that touches (gap within the tolerance), joined to a pressed point by
+            # touching points, closes that point's interval: a rod lying on the obstacle up to
+            # its free end carries no point force there (M = V = 0), and the points near the
+            # end may touch unloaded within the tolerance
+            pressed[0] |= _touching_run(pressed, touching)
+            pressed[-1] |= _touching_run(pressed[::-1], touching[::-1])
+            active = _intervals(x_line, pressed, touching)
+            # the penetration over the whole surface (`surface`): between the contact points,
+            # the vertices and the end faces too
             penetration = max(0.0, float(np.max(-gap)) if len(gap) else 0.0,
                               float(np.max(-state["end_gap"][i])),
                               certificates[i]["penetration"])
@@ -1987,6 +2034,12 @@ def _take(local: dict, at) -> dict:
                           {"rectangles": [tuple(np.asarray(v)[at] for v in rectangle)
                                           for rectangle in parts["rectangles"]]})
     return taken
+
+
+def _touching_run(pressed: np.ndarray, touching: np.ndarray) -> bool:
+    """Does the first point touch, and every point from it to the first pressed one?"""
+    on = np.flatnonzero(pressed)
+    return bool(len(on) and on[0] > 0 and np.all(touching[:on[0]]))
 
 
 def _intervals(x: np.ndarray, active: np.ndarray, touching: np.ndarray) -> list:
