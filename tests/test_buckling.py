@@ -394,3 +394,28 @@ def test_follower_force_warns_of_flutter(tmp_path, capsys):
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["load_factors"] == []
     assert any("flutter" in note for note in summary["notes"]), summary["notes"]
+
+
+def test_the_table_says_stable_only_below_a_stable_bracket(tmp_path, capsys):
+    """A clamped-free aluminium tube linearised past its first load (prestress 1.4 P_cr): the
+    second critical point's bracket starts with one energy-decreasing direction; the table
+    said "stable at" it (was: "stable at ... (1 energy-decreasing directions)")."""
+    d, t, length = 0.03, 0.003, 1.5
+    config = {"beam": {"length": length}, "section": {"shape": "tube", "d": d, "t": t},
+              "material": {"E": 7e10, "nu": 0.33}, "model": {"law": "nonstandard"},
+              "mesh": {"elements": 8}, "supports": {"x0": "clamped", "xL": "free"},
+              "loads": {"tip_force": [-500.0, 0.0], "steps": 2},
+              "buckling": {"count": 1, "prestress": 5.0},
+              "output": {"xdmf": False, "plots": False}}
+    path = write_config(tmp_path / "tube.toml", config)
+    assert main(["buckling", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    inertia = math.pi * (d**4 - (d - 2 * t) ** 4) / 64
+    first = math.pi**2 * 7e10 * inertia / (4 * length**2) / 500.0
+    assert 1.5 * first > 5.0 > first
+    (point,) = summary["critical_points"]
+    assert point["unstable_below"] == 1 and point["unstable_above"] == 2
+    assert point["load_factor"] == pytest.approx(9 * first, rel=1e-2)
+    row = [line for line in capsys.readouterr().out.splitlines()
+           if line.strip().startswith("1 ")][0]
+    assert "stable at" not in row and "1 energy-decreasing direction(s) at" in row

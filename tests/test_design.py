@@ -327,3 +327,44 @@ def test_an_override_of_a_defaulted_table_applies_to_the_default():
     assert override_defaults("static", rod) is None
     assert apply_overrides({}, ["tendons.0.tension=3.0"], override_defaults("finger", {}))[
         "tendons"][0] == {**DEFAULT_FINGER["tendons"][0], "tension": 3.0}
+
+
+def _tube_under_a_tip_force():
+    """A steel tube under a tip force and gravity whose force is the design variable."""
+    return {
+        "beam": {"length": 0.6},
+        "section": {"shape": "tube", "d": 0.012, "t": 0.001},
+        "material": {"E": 2.1e11, "nu": 0.29, "rho": 7800.0},
+        "model": {"law": "nonstandard"},
+        "mesh": {"elements": 3, "degree": 2},
+        "loads": {"tip_force": [0.0, -5.0], "gravity": [0.0, -9.81], "steps": 2},
+        "output": {"plots": False, "xdmf": False},
+        "design": {"variables": ["loads.tip_force.1"], "bounds": [[-60.0, 0.0]],
+                   "objective": "tip_pose", "target": {"theta": -0.05}},
+    }
+
+
+def test_the_design_answer_carries_its_global_equilibrium(tmp_path):
+    """The answer of `fe-beam design` is a static equilibrium: it carries the
+    global_equilibrium check (it carried no check before)."""
+    path = tmp_path / "tube.toml"
+    path.write_text(dump_toml(_tube_under_a_tip_force()))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    (check,) = [c for c in summary["checks"] if c["name"] == "global_equilibrium"]
+    assert check["passed"] and check["value"] <= check["tolerance"]
+    assert summary["status"] == "converged" and summary["checks_passed"] is True
+
+
+def test_a_design_answer_out_of_balance_fails_with_exit_3(tmp_path, monkeypatch):
+    """A load the balance misses by 2 % (monkeypatched): status "failed", exit 3."""
+    from fe_beam.fem import equilibrium
+
+    original = equilibrium._body
+    monkeypatch.setattr(equilibrium, "_body",
+                        lambda problem, factor: original(problem, 1.02 * factor))
+    path = tmp_path / "tube.toml"
+    path.write_text(dump_toml(_tube_under_a_tip_force()))
+    assert main(["design", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "failed" and "global_equilibrium" in summary["message"]

@@ -113,6 +113,7 @@ def test_newton_stopped_early_fails(tmp_path):
 
 def test_lenient_run_keeps_its_status_with_a_note(monkeypatch):
     monkeypatch.setattr(certificates, "equilibrium_tolerance", lambda rtol: 1e-30)
+    monkeypatch.setattr(certificates, "roundoff_force", lambda problem: 0.0)
     summary = fe_beam.run("static", case("tip"), None, **{"checks.strict": False})
     assert summary["status"] == "converged" and summary["checks_passed"] is False
     assert any("global_equilibrium" in note for note in summary["notes"])
@@ -281,3 +282,52 @@ def test_a_couple_alone_is_measured_against_its_own_scale():
              equilibrium.Wrench("reaction", np.array([1e-15, 0.0, 0.0]),
                                 np.array([0.0, 0.0, -2.0]))]
     assert equilibrium.balance(terms, 0.5)["force"] == pytest.approx(1e-15 / 4.0)
+
+
+def _tiny_load_on_a_stiff_rod(kinematics):
+    """A steel round bar (EA = 6.3e7 N, non-standard law) under a tip load of 1e-3 N (2.5e-6
+    EI/L^2): the strains are differences of O(1) numbers, so the reactions carry round-off of
+    about eps EA = 1.4e-8 N, 1e-5 of the load (measured 3.3e-9 N)."""
+    config = copy.deepcopy(BASE)
+    config["beam"]["length"] = 2.0
+    config["section"] = {"shape": "circle", "d": 0.02}
+    config["material"] = {"E": 2e11, "nu": 0.3}
+    config["model"] = {"law": "nonstandard"}
+    config["mesh"]["elements"] = 3
+    config["loads"] = {"tip_force": [0.0, -1e-3], "steps": 1}
+    if kinematics == "planar":
+        return config
+    config = spatial(config)
+    config["loads"]["tip_force"] = [0.0, -1e-3, 0.0]
+    return config
+
+
+@pytest.mark.parametrize("kinematics", ["planar", "spatial"])
+def test_a_tiny_load_on_a_stiff_rod_is_balanced_to_round_off(kinematics):
+    """The certificate allows the reactions' round-off (10 eps EA): a correct linear solve of a
+    load far below EA is certified (it failed at 3.3e-6 > 1e-6 before), and the deflection is
+    P L^3 / 3 EI + P L / GA."""
+    config = _tiny_load_on_a_stiff_rod(kinematics)
+    summary = fe_beam.run("static", config, None)
+    assert summary["status"] == "converged", summary.get("message")
+    (check,) = checks(summary)
+    assert check["passed"]
+    area, inertia = np.pi * 0.02**2 / 4, np.pi * 0.02**4 / 64
+    expected = 1e-3 * 2.0**3 / (3 * 2e11 * inertia) + 1e-3 * 2.0 / (2e11 / 2.6 * area)
+    assert summary["steps"][-1]["tip"]["v"] == pytest.approx(-expected, rel=1e-6)
+
+
+def test_a_tiny_load_off_by_one_percent_still_fails(monkeypatch):
+    """The round-off allowance does not hide a wrong load: 1 % of 1e-3 N is 70 times the
+    round-off."""
+    original = equilibrium._tip
+
+    def scaled(problem, factor):
+        return original(problem, 1.01 * factor)
+
+    monkeypatch.setattr(equilibrium, "_tip", scaled)
+    summary = fe_beam.run("static", _tiny_load_on_a_stiff_rod("planar"), None)
+    (check,) = checks(summary)
+    assert summary["status"] == "failed" and not check["passed"]
+    # 1 % of the load less the round-off allowance (10 eps EA / P = 1.4e-4)
+    assert 0.0097 < check["value"] < 0.01 / 1.01

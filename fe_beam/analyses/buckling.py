@@ -291,8 +291,11 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
                     for _ in range(point["multiplicity"])]
         for index, (factor, point) in enumerate(
                 zip(summary["load_factors"], brackets, strict=False), start=1):
-            report.out(f"{index:>4}  {factor:>14.8g}  stable at {point['bracket'][0]:.8g} "
-                       f"({point['unstable_below']} energy-decreasing directions), "
+            below = point["unstable_below"]
+            # "stable" only where it is (a prestress past a critical point starts unstable)
+            state = ("stable" if below == 0 else
+                     f"{below} energy-decreasing direction(s)")
+            report.out(f"{index:>4}  {factor:>14.8g}  {state} at {point['bracket'][0]:.8g}, "
                        f"{point['unstable_above']} at {point['bracket'][1]:.8g}")
     else:
         report.out(f"{'mode':>4}  {'load factor':>14}  about the state at load factor "

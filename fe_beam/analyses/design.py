@@ -69,6 +69,7 @@ from pathlib import Path
 import numpy as np
 
 from fe_beam import analyses
+from fe_beam.analyses.certificates import equilibrium_entry
 from fe_beam.analyses.result import Report, Result, failed, fit_report, world
 from fe_beam.analyses.static import solve_static
 from fe_beam.config.design import (
@@ -375,6 +376,7 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         evaluator.solver.update(parameters=evaluator.values(t0))
         start_shape = _shape(evaluator)
         evaluator.solver.update(parameters=evaluator.values(t))
+        check = _answer_equilibrium(evaluator)
     finally:
         evaluator.close()
     names = []
@@ -400,8 +402,21 @@ def optimise(design: DesignProblem, config, comm, raw: dict | None = None) -> di
         "wall_time_s": time.perf_counter() - started,
         "notes": _target_notes(design, final, conditions) + _gradient_notes(
             design, gradient_kind[0]),
+        "checks": [check],
     }
     return summary | {"_shapes": (start_shape, shape)}
+
+
+def _answer_equilibrium(evaluator) -> dict:
+    """The global equilibrium of the design's answer (the solver's current state) as a check:
+    the reactions, the loads, the tendons (internal) and the contact forces balance
+    (`fe_beam.analyses.certificates.equilibrium_entry`). Collective."""
+    solver, config = evaluator.solver, evaluator.config
+    contact = solver.contact.summary() if solver.contact is not None else None
+    return equilibrium_entry(
+        solver.problem, config.solver.rtol, contact, "at the design's answer",
+        tensions=solver.tension_values(),
+        contact_tolerance=config.contact.force_tolerance if config.obstacles else 0.0)
 
 
 def _minimised(design: DesignProblem, evaluator, t, t0) -> dict:
