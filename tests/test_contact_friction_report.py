@@ -82,6 +82,6 @@ def test_stuck_friction_report_is_the_applied_traction(spatial):
         assert np.abs(friction[0] - applied[0]) <= 1e-9 * scale, (friction, applied)
         assert np.abs(np.asarray(entry["force"]) - applied[:dim]).max() <= 1e-9 * scale
         assert check["value"] <= EQUILIBRIUM_FLOOR, check["detail"]  # 1e-7; stale: 7e-7
-        assert again == entry  # reporting twice changes nothing
+        assert again == [entry]  # reporting twice changes nothing
     if not spatial:
         assert slipped  # a slipping step's report is right too
