@@ -1094,56 +1094,78 @@ class ContactSet:
 
     def _set_references(self, state: dict | None) -> None:
         """The friction reference points: the contact points of ``state`` (None: the
-        undeformed rod's)."""
+        undeformed rod's), installed now."""
+        self._references = self._reference_values(state)
+        self._install_references(self._references)
+
+    def _reference_values(self, state: dict | None) -> dict:
+        """Per obstacle with friction, the reference points of the slip: the contact points
+        of ``state`` (None: the undeformed rod's), interior and ends, and (spatial) the
+        material points facing the obstacle there."""
+        references = {}
         if not self._friction:
-            return
-        for i, f in self._friction.items():
+            return references
+        values = None
+        for i in self._friction:
             if state is None:
                 # the undeformed contact point (x, +-extent): the current (zero) state's
-                values = self.evaluate(friction=False)
+                values = values if values is not None else self.evaluate(friction=False)
                 where = self._obstacle_columns[i]["point"]
-                points = values["raw"][:, where:where + self.dim]
+                points = values["raw"][:, where:where + self.dim].copy()
                 ends = [self._assemble_end_point(i, e) for e in range(2)]
             else:
-                points = state["friction"][i]["point"]
-                ends = state["friction"][i]["end_point"]
-            for c, function in enumerate(f["reference"]):
-                function.x.array[self._dofs] = points[:, c]
-                function.x.scatter_forward()
-            for end, point in zip(f["ends"], ends, strict=True):
-                end["reference"].value[:] = point
+                points = np.array(state["friction"][i]["point"], dtype=float)
+                ends = [np.array(p, dtype=float) for p in state["friction"][i]["end_point"]]
+            entry = {"points": points, "ends": ends}
             if self.spatial:  # the material points facing the obstacle now
                 where = self._obstacle_columns[i]["facing"]
                 raw = values["raw"] if state is None else state["raw"]
+                entry["body"] = raw[:, where:where + 3].copy()
+                entry["end_body"] = [np.array([global_sum(self._problem.comm,
+                                                          fem.assemble_scalar(form))
+                                               for form in self._end_forms[i]["facing"][e]])
+                                     for e in range(2)]
+            references[i] = entry
+        return references
+
+    def _install_references(self, references: dict) -> None:
+        """Put `_reference_values` into the forms' reference functions and constants."""
+        for i, entry in references.items():
+            f = self._friction[i]
+            for c, function in enumerate(f["reference"]):
+                function.x.array[self._dofs] = entry["points"][:, c]
+                function.x.scatter_forward()
+            for end, point in zip(f["ends"], entry["ends"], strict=True):
+                end["reference"].value[:] = point
+            if self.spatial:
                 for c, function in enumerate(f["body"]):
-                    function.x.array[self._dofs] = raw[:, where + c]
+                    function.x.array[self._dofs] = entry["body"][:, c]
                     function.x.scatter_forward()
-                for e, end in enumerate(f["ends"]):
-                    end["body"].value[:] = [global_sum(self._problem.comm,
-                                                       fem.assemble_scalar(form))
-                                            for form in self._end_forms[i]["facing"][e]]
+                for end, body in zip(f["ends"], entry["end_body"], strict=True):
+                    end["body"].value[:] = body
 
     def _assemble_end_point(self, i, e) -> np.ndarray:
         return np.array([global_sum(self._problem.comm, fem.assemble_scalar(form))
                          for form in self._end_forms[i]["point"][e]])
 
     def restore(self) -> None:
-        """Multipliers back to those of the last accepted state (`commit`), and its active
-        set: the pressed points and those that graze it unpressed (GRAZING).
+        """Multipliers back to those of the last accepted state (`commit`), the friction's
+        reference points to its contact points (a solve measures its slip from them), and its
+        active set: the pressed points and those that graze it unpressed (GRAZING).
         A grazing first touch at the end of a load step leaves points at g ~ 0 with no
         pressure; started inactive, the next step's first Newton solve would sink the rod
         through the obstacle and the active set would then chatter back over tens of
         updates; started active, they hold at g = 0 and are released if pulled."""
         self._set(self._committed)
+        self._install_references(self._references)
         touching = getattr(self, "_touching", None)
-        if touching is None:
-            return
-        for i, (interior, ends) in enumerate(touching):
-            active = self.active[i]
-            active.x.array[self._dofs] = np.maximum(active.x.array[self._dofs], interior)
-            active.x.scatter_forward()
-            for flag, end in zip(self.end_active[i], ends, strict=True):
-                flag.value = max(float(flag.value), float(end))
+        if touching is not None:
+            for i, (interior, ends) in enumerate(touching):
+                active = self.active[i]
+                active.x.array[self._dofs] = np.maximum(active.x.array[self._dofs], interior)
+                active.x.scatter_forward()
+                for flag, end in zip(self.end_active[i], ends, strict=True):
+                    flag.value = max(float(flag.value), float(end))
         if self.spatial and self._friction:  # a solve starts with the wide regularisation
             self._regularisation.value = float(self.tolerance)
 
@@ -1151,7 +1173,11 @@ class ContactSet:
         """The current state is accepted: its pressures and friction tractions start the next
         solve (warm start), its contact points are the friction's reference (the slip of the
         next step is measured from them) and its surface positions the reference of the
-        tunnelling check."""
+        tunnelling check. The new multipliers and references are stored, not installed: until
+        the next solve (`restore`) the forms keep the multipliers, stick/slip state and slip
+        of the accepted solve, so `summary`, `cell_pressures` and the result files report the
+        forces the solver applied (reference points moved now would zero the stuck points'
+        slip, and their traction lambda_t - k s would read the stale lambda_t)."""
         state = self.evaluate()
         interior = []
         for i, _ in enumerate(self.obstacles):
@@ -1171,7 +1197,7 @@ class ContactSet:
                                self._state_values(entry, "end_").items()} for e in range(2)]
             friction[i] = copies
         self._committed = (interior, ends, friction)  # ghosts: set by `_set`'s scatter
-        self._set_references(state)
+        self._references = self._reference_values(state)
         self._positions = self._dense_local()
         self._positions_offsets = self.translations()
         self._pressed = [(np.asarray(state["pressure"][i]) > 0,
@@ -1192,13 +1218,15 @@ class ContactSet:
         if self._problem is None:
             return None
         return (self._committed, self._positions, self._pressed,
-                getattr(self, "_positions_offsets", None), getattr(self, "_touching", None))
+                getattr(self, "_positions_offsets", None), getattr(self, "_touching", None),
+                self._references)
 
     def load(self, saved) -> None:
         """Back to a `save`d accepted state (its multipliers and active set in place)."""
         if saved is None or self._problem is None:
             return
-        self._committed, self._positions, self._pressed, offsets, self._touching = saved
+        (self._committed, self._positions, self._pressed, offsets, self._touching,
+         self._references) = saved
         if offsets is not None:
             self._positions_offsets = offsets
         self.restore()
