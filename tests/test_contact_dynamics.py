@@ -140,8 +140,10 @@ def test_plane_moved_onto_the_tip_large_deflection_against_the_elastica():
 # --- dynamics ------------------------------------------------------------------------------------
 def free_rod(friction: float, velocity=(1.0, 0.0, 0.0), floor_motion: dict | None = None,
              t_end: float = 0.3, dt: float = 0.005, spatial: bool = False) -> dict:
-    """A free rod of L = 0.2 m lying on a floor (1e-7 m below it) under gravity."""
-    reach = (B**2 + H**2) ** 0.5 / 2 if spatial else H / 2
+    """A free rod of L = 0.2 m lying on a floor (1e-7 m below it) under gravity: its face
+    h (along y) down, H / 2 below the centreline for both kinematics (the spatial contact
+    is the section's true shape, not its circumscribed tube)."""
+    reach = H / 2
     floor = {"shape": "plane", "name": "floor", "point": [0.0, -reach - 1e-7]
              + ([0.0] if spatial else []), "normal": [0.0, 1.0] + ([0.0] if spatial else []),
              **({"friction": friction} if friction else {}), **(floor_motion or {})}
