@@ -293,7 +293,8 @@ def test_spatial_rod_slides_on_a_floor():
     last = summary["history"][-1]
     assert last["momenta"]["momentum_x"] == pytest.approx(mass * v0, rel=1e-9)
     assert last["tip"]["u"] == pytest.approx(v0 * last["t"], abs=1e-9)
-    # the rod rocks on its edge (+-5 % of the weight from step to step): the mean carries it
+    # the rod rocks between its face's two edges (the support function's kink at n.d3 = 0:
+    # -5 .. +8 % of the weight from step to step): the mean carries it (measured +0.8 %)
     forces = np.array([h["contact"][0]["force"] for h in summary["history"][1:]])
     assert np.mean(forces[:, 1]) == pytest.approx(weight, rel=2e-2)
     assert np.all(forces[:, 0] == 0.0) and np.all(forces[:, 2] == 0.0)
