@@ -105,19 +105,26 @@ def test_elastica_path_onto_a_floor_matches_closed_form_and_load_stepping():
 
 
 def test_spatial_rod_path_onto_a_plane_keeps_the_touching_force_and_matches_load_stepping():
-    """A spatial cantilever (circular section, its contact tube) pushed by a dead tip force
-    onto a plane below it: once the tip rests on the plane the shape is that of the touching
-    force P_touch, so the plane carries P - P_touch (the same P_touch at every point in
-    contact), and the last point agrees with `fe-beam static` at the same load."""
-    force = 0.02
+    """A spatial cantilever (circular section: its true shape, the end face a disc) pushed by
+    a dead tip force onto a plane below it: once the tip rests on the plane, the end face's
+    lowest rim point is on the plane at every path point (not the centreline a radius above
+    it: the tip is tilted by phi), the plane's force acts there (its reported moment about the
+    origin is rim x F), and the last point agrees with `fe-beam static` at the same load. The
+    touching force P - F_plane is not constant (as it would be for a force at the
+    centreline): the rim point lies e = rho sin(phi) behind the tip, so the plane's force F
+    adds a couple F e to the tip force, and with the tip held on the plane the linear
+    cantilever needs dP_touch/dF = -3 e / (2 L) (e and phi small: 1e-3 here)."""
+    from fe_beam.model.spatial import rotation_matrix
+
+    force, rho, floor = 0.02, 0.005, -0.1
     config = {
         "beam": {"length": L},
-        "section": {"shape": "circle", "d": 0.01},
+        "section": {"shape": "circle", "d": 2 * rho},
         "material": {"E": 1e7, "nu": 0.3},
         "model": {"law": "reissner", "kinematics": "spatial"},
         "mesh": {"elements": 16, "degree": 2},
         "loads": {"tip_force": [0.0, 0.0, -force], "steps": 5},
-        "obstacles": [{"shape": "plane", "point": [0.0, 0.0, -0.1],
+        "obstacles": [{"shape": "plane", "point": [0.0, 0.0, floor],
                        "normal": [0.0, 0.0, 1.0]}],
         "contact": {"penetration_tolerance": 1e-7},
         "path": {"arc_length": 0.1, "max_steps": 40},
@@ -128,11 +135,27 @@ def test_spatial_rod_path_onto_a_plane_keeps_the_touching_force_and_matches_load
     _penetration_below_tolerance(summary, 1e-7)
     pressed = [p for p in summary["path"] if p["contact"][0]["active"]]
     assert len(pressed) >= 3
-    touching = [force * p["load_factor"] - p["contact"][0]["force"][2] for p in pressed]
-    assert max(touching) - min(touching) <= 1e-6 * force, touching
+    n = np.array([0.0, 0.0, 1.0])
+    touching, plane, offsets = [], [], []
     for point in pressed:
-        assert point["contact"][0]["active"] == [[L, L]]
-        assert point["tip"]["w"] == pytest.approx(-0.1 + 0.005, abs=1e-7)
+        entry = point["contact"][0]
+        assert entry["active"] == [[L, L]]
+        d1 = np.array(rotation_matrix(point["tip"]["rotation_vector"]))[:, 0]
+        tip = np.array([L + point["tip"]["u"], point["tip"]["v"], point["tip"]["w"]])
+        toward = -n + (n @ d1) * d1  # the end face's direction of steepest descent
+        rim = tip + rho * toward / np.linalg.norm(toward)
+        assert rim[2] == pytest.approx(floor, abs=1e-7)
+        F = np.array(entry["force"])
+        assert np.asarray(entry["moment"]) == pytest.approx(np.cross(rim, F),
+                                                            abs=1e-9 * np.linalg.norm(F))
+        touching.append(force * point["load_factor"] - F[2])
+        plane.append(F[2])
+        offsets.append(tip[0] - rim[0])
+    e = np.array(offsets)
+    assert np.all(e > 0.5 * rho * 0.1)  # tilted: the rim point behind the tip
+    slope = np.diff(touching) / np.diff(plane)
+    expected = -1.5 * 0.5 * (e[1:] + e[:-1]) / L
+    assert slope == pytest.approx(expected, rel=0.05)
     last = summary["path"][-1]
     static = copy.deepcopy(config)
     del static["path"]

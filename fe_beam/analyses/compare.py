@@ -38,7 +38,8 @@ against the 3D ones, the planar rod against their sections by z = 0
 (`fe_beam.config.solid.planar_obstacles`: obstacles the same in every plane z = const across the
 finger; any other is a configuration error). Per sweep point the solid's ``contact`` entries
 (force, active_area, max_penetration, pressure_peak, extent, contact_length) and each rod's
-(force, moment, active, max_penetration, pressure_peak, contact_length) are in the table, with
+(force, moment, active, max_penetration, contact_point_penetration, pressure_peak,
+contact_length) are in the table, with
 per obstacle ``contact_force_difference`` = |F_rod - F_solid| / max(|F_rod|, |F_solid|) (0 when
 neither touches; the planar rod's F_z is 0) and the contact lengths: the rod's is the total
 length of its active intervals, the solid's the extent along the reference x of its contact
@@ -107,7 +108,7 @@ def rod_contact(entries: list[dict], solid: list[dict]) -> dict:
     """A rod's contact entries at a sweep point (``contact_length`` added) and, per obstacle,
     the relative force difference to the solid's and the contact lengths' difference."""
     rod = [{k: e[k] for k in ("name", "force", "moment", "active", "max_penetration",
-                              "pressure_peak") if k in e}
+                              "contact_point_penetration", "pressure_peak") if k in e}
            | {"contact_length": active_length(e["active"])} for e in entries]
     differences = [force_difference(r["force"], s["force"]) for r, s in zip(rod, solid,
                                                                           strict=True)]

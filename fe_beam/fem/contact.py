@@ -773,7 +773,10 @@ class ContactSet:
             r = ufl.as_vector([x + d[0], d[1], d[2]])
             if variables:
                 r = ufl.variable(r)
-            return {"r": r, "radius": self._radius, "theta": theta, "R": rotation(theta),
+            R = rotation(theta)
+            if variables:
+                R = ufl.variable(R)
+            return {"r": r, "radius": self._radius, "theta": theta, "R": R,
                     "parts": self._parts}
         u, v, theta = parts
         r = ufl.as_vector([x + u, v])
@@ -1056,7 +1059,16 @@ class ContactSet:
         r = geometry["r"]
         g_r = ufl.diff(g, r)
         if self.spatial:
+            # the moment the solver applies: the virtual work of p g under a rigid rotation
+            # (delta r = w x r, delta d_c = w x d_c) is w . (r x dg/dr + sum_c d_c x dg/dd_c),
+            # the section's orientation term the true shape's gap (its support point off
+            # the centreline) adds to the centreline's moment
+            R = geometry["R"]
             moment = ufl.cross(r, g_r)
+            g_R = ufl.diff(g, R)
+            for c in range(3):
+                moment = moment + ufl.cross(ufl.as_vector([R[j, c] for j in range(3)]),
+                                            ufl.as_vector([g_R[j, c] for j in range(3)]))
             return [g_r[c] for c in range(3)] + [moment[c] for c in range(3)]
         return [g_r[0], g_r[1], r[0] * g_r[1] - r[1] * g_r[0] + ufl.diff(g, geometry["theta"])]
 
