@@ -69,8 +69,10 @@ def test_writing_per_step_does_not_grow_with_the_steps(command, tmp_path, capsys
         wall = time.perf_counter() - started
         assert len(summary["steps" if command == "static" else "history"]) >= steps
         for name in ("summary.json", "beam.xdmf"):
-            # the start, the first step, then at most once a second, the end
-            assert rewrites["count"][name] <= 3 + wall / 1.0, (steps, wall, rewrites)
+            # the start, the first step, then at most once a second, the end; summary.json
+            # once more for the run-time checks' verdict (`settle_checks`: checks_passed)
+            verdict = 1 if name == "summary.json" else 0
+            assert rewrites["count"][name] <= 3 + verdict + wall / 1.0, (steps, wall, rewrites)
     # the appends, measured with the files brought up to date after every step (how often
     # the throttle lets them be depends on the machine's speed: each update appends the steps
     # since the last one to the hidden copy, so the bytes per step are the same only when the
