@@ -54,6 +54,18 @@ def _failed(failure, prestress, dofs, started, prestate, out, comm) -> dict:
     return summary
 
 
+def _with_confirmation(summary: dict, extra: dict, checks: list, work_notes: list) -> None:
+    """The path confirmation's keys, message and checks (`_confirmed`) and the set-up notes
+    into ``summary`` (in place)."""
+    message = extra.pop("message", None)
+    summary.update(extra)
+    if message:
+        summary["message"] = message
+    if checks:
+        summary["checks"] = checks
+    summary["notes"] = work_notes + summary["notes"]
+
+
 def _summary(result: Buckling, settings, dofs: int, started: float, critical: list) -> dict:
     return {
         "status": "completed",
@@ -106,13 +118,7 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
             for record, factor in zip(critical, result.load_factors, strict=True):
                 record["tensions"] = [factor * t.tension for t in static.tendons]
         summary = _summary(result, settings, problem.global_dofs, started, critical)
-        message = extra.pop("message", None)
-        summary.update(extra)
-        if message:
-            summary["message"] = message
-        if checks:
-            summary["checks"] = checks
-        summary["notes"] = work_notes + summary["notes"]
+        _with_confirmation(summary, extra, checks, work_notes)
         summary["prestate_tip"] = prestate_tip
         if out is not None:
             if comm.rank == 0:
@@ -245,13 +251,7 @@ def _run_solid(config, settings, out, comm, progress) -> dict:
                        {"load_factor": float(run.load_factor)}, out, comm)
     critical = [{"tip_force": [f * c for c in config.tip_force]} for f in result.load_factors]
     summary = _summary(result, settings, run.dofs, started, critical)
-    message = extra.pop("message", None)
-    summary.update(extra)
-    if message:
-        summary["message"] = message
-    if checks:
-        summary["checks"] = checks
-    summary["notes"] = work_notes + summary["notes"]
+    _with_confirmation(summary, extra, checks, work_notes)
     summary["model"] = "solid"
     if out is not None:
         if comm.rank == 0:

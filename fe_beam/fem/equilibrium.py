@@ -199,19 +199,24 @@ def _tip(problem, factor: float) -> list[Wrench]:
     return [Wrench("tip load", _vector3(force), moment_of(position, force) + moment3)]
 
 
-def _point_forces(problem, factor: float) -> list[Wrench]:
-    rows = problem.model.loads.point_forces
-    fields = getattr(problem, "point_force_fields", None)
+def _point_sums(problem, rows, fields, factor: float):
+    """(x, the nodal fields' owned values summed over the ranks at x, times ``factor``) for
+    each position of ``rows`` (a vertex shared by two ranks counts once)."""
     if not rows or not fields:
-        return []
+        return
     space = fields[0].function_space
     owned = space.dofmap.index_map.size_local
-    result = []
     for x in sorted({float(row[0]) for row in rows}):
         dofs = compat.locate_dofs_geometrical(space, problem.point_marker(x))
         dofs = np.asarray(dofs)[np.asarray(dofs) < owned]
-        force = factor * np.array([global_sum(problem.comm, f.x.array[dofs].sum())
-                                   for f in fields])
+        yield x, factor * np.array([global_sum(problem.comm, f.x.array[dofs].sum())
+                                    for f in fields])
+
+
+def _point_forces(problem, factor: float) -> list[Wrench]:
+    result = []
+    for x, force in _point_sums(problem, problem.model.loads.point_forces,
+                                getattr(problem, "point_force_fields", None), factor):
         values = problem.point_values(x)
         position = np.array([x + values["u"], values["v"]]
                             + ([values["w"]] if problem.spatial else []))
@@ -221,23 +226,11 @@ def _point_forces(problem, factor: float) -> list[Wrench]:
 
 
 def _point_moments(problem, factor: float) -> list[Wrench]:
-    """The point moments (dead, world axes: a couple, the same about every point) from their
-    nodal fields' owned values at each x (a vertex shared by two ranks counts once)."""
-    rows = problem.model.loads.point_moments
-    fields = getattr(problem, "point_moment_fields", None)
-    if not rows or not fields:
-        return []
-    space = fields[0].function_space
-    owned = space.dofmap.index_map.size_local
-    result = []
-    for x in sorted({float(row[0]) for row in rows}):
-        dofs = compat.locate_dofs_geometrical(space, problem.point_marker(x))
-        dofs = np.asarray(dofs)[np.asarray(dofs) < owned]
-        moment = factor * np.array([global_sum(problem.comm, f.x.array[dofs].sum())
-                                    for f in fields])
-        result.append(Wrench(f"point moment at x = {x:g}", np.zeros(3),
-                             moment if problem.spatial else np.array([0.0, 0.0, moment[0]])))
-    return result
+    """The point moments (dead, world axes: a couple, the same about every point)."""
+    return [Wrench(f"point moment at x = {x:g}", np.zeros(3),
+                   moment if problem.spatial else np.array([0.0, 0.0, moment[0]]))
+            for x, moment in _point_sums(problem, problem.model.loads.point_moments,
+                                         getattr(problem, "point_moment_fields", None), factor)]
 
 
 def _contact(entries) -> list[Wrench]:
