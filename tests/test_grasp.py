@@ -381,3 +381,62 @@ def test_the_grasp_design_tolerance_covers_the_mesh_error():
         forces.append(math.hypot(*result.steps[-1]["contact"][0]["force"][:2]))
     assert abs(forces[0] - design["design"]["target"]["force"]) <= tolerance
     assert max(forces) - min(forces) <= tolerance, forces
+
+
+def _plane_design(share: float = 5.0):
+    """A cantilever under a uniform load above a plane, designed for a tip reaction
+    (tests/test_contact.py): the load q within [-8, -2] q1 whose plane force is
+    R = 3 q L / 8 - 3 EI g / L^3 at ``share`` q1."""
+    from test_contact import EI, GAP, Q1, L, cantilever
+
+    config = cantilever(4 * Q1, steps=2, elements=16)
+    target = 3 * share * Q1 * L / 8 - 3 * EI * GAP / L**3
+    config["design"] = {"variables": ["loads.distributed.1"], "bounds": [[-8 * Q1, -2 * Q1]],
+                        "objective": "grasp_force", "target": {"force": target},
+                        "tolerance": 1e-4 * target}
+    return config, target
+
+
+def test_grasp_design_answer_is_certified_by_a_fresh_solve():
+    """A met grasp design carries checks (was: none): the design re-solved afresh at its
+    answer meets the target within the tolerance (grasp_force_target), and that state's
+    global equilibrium (reactions, the distributed load and the plane's force) and contact
+    certificates pass."""
+    config, target = _plane_design(share=6.5)
+    summary = run_design(config, None, MPI.COMM_WORLD)
+    assert summary["status"] == "converged", summary["message"]
+    checks = {c["name"]: c for c in summary["checks"]}
+    assert {"grasp_force_target", "global_equilibrium", "surface_penetration",
+            "contact_force_balance"} <= set(checks)
+    assert all(c["passed"] for c in checks.values()), checks
+    assert checks["grasp_force_target"]["value"] <= 1e-4 * target
+    assert checks["grasp_force_target"]["tolerance"] == pytest.approx(1e-4 * target)
+    assert checks["global_equilibrium"]["value"] < 1e-9
+    # the answer against the closed form: q = 6.5 q1
+    from test_contact import Q1
+    assert -summary["variables"]["loads.distributed.1"] == pytest.approx(6.5 * Q1, rel=1e-3)
+
+
+def test_grasp_design_that_does_not_reproduce_fails_exit_3(tmp_path, monkeypatch, capfd):
+    """The check broken on purpose: a re-solve 1 % off the reported grasp force makes the
+    design status "failed", exit 3, the message naming grasp_force_target."""
+    from fe_beam.analyses import design as design_module
+
+    config, _ = _plane_design(share=3.5)
+    path = tmp_path / "design.toml"
+    path.write_text(dump_toml(config))
+    original = design_module.GraspEvaluator.resolve
+
+    def off(self, x):
+        resolved = original(self, x)
+        return resolved | {"grasp": 1.01 * resolved["grasp"]}
+
+    monkeypatch.setattr(design_module.GraspEvaluator, "resolve", off)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "--quiet"]) == 3
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed"
+    assert "grasp_force_target" in summary["message"]
+    failed = [c["name"] for c in summary["checks"] if not c["passed"]]
+    assert failed == ["grasp_force_target"]
+    assert "grasp_force_target" in capfd.readouterr().err

@@ -50,6 +50,8 @@ jumping across it, or one met at the given penetration tolerance only, is status
 converged" (exit 3). summary.json then
 has ``grasp`` ({obstacle, component, target, tolerance, value, initial, contact,
 contact_check}),
+``checks`` (a met design: ``grasp_force_target``, the design re-solved afresh at its answer
+within the tolerance of the target, and that state's static certificates, `grasp_checks`),
 ``kkt_residual``/``kkt`` null and ``gradient`` "none (bracketing root solve)". The other
 objectives refuse ``[[obstacles]]`` (exit 2): their gradients do not see contact.
 
@@ -68,7 +70,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fe_beam import analyses
+from fe_beam import analyses, certify
 from fe_beam.analyses.certificates import equilibrium_entry
 from fe_beam.analyses.result import Report, Result, failed, fit_report, world
 from fe_beam.analyses.static import solve_static
@@ -597,6 +599,20 @@ class GraspEvaluator:
         entry = result.steps[-1]["contact"][self.design.target["index"]]
         return grasp_value(entry, self.design.target["component"]), tolerance
 
+    def resolve(self, x: float) -> dict:
+        """The trial x solved afresh (not from the cache: what `fe-beam finger` / `static`
+        with the reported value gives, the ``reproduce`` command): {"grasp": F [N], "checks":
+        the state's certificates (global equilibrium with the contact forces, the surface
+        penetration, the contact force balance)}. Collective."""
+        result = solve_static(self.trial(x), None, self.comm, progress=False,
+                              record_shapes=False, stability=False)
+        if result.status != "converged" or not result.steps:
+            return {"grasp": math.nan, "checks": list(result.checks),
+                    "message": result.message}
+        entry = result.steps[-1]["contact"][self.design.target["index"]]
+        return {"grasp": grasp_value(entry, self.design.target["component"]),
+                "checks": list(result.checks), "message": ""}
+
     def shape(self, x: float):
         """The deformed shape (vertex values) of the trial design at load factor 1 (rank 0)."""
         result = solve_static(self.trial(x), None, self.comm, progress=False,
@@ -701,6 +717,8 @@ def grasp_design(design: DesignProblem, config, comm) -> dict:
                    f"(tolerance {tolerance:g} N): set a smaller [contact] "
                    "penetration_tolerance (and a larger penalty) or a larger [design] "
                    "tolerance")
+    checks = grasp_checks(evaluator, final["x"], target["value"], tolerance, what) \
+        if status == "converged" else []
     return {
         "status": status,
         "message": message,
@@ -723,8 +741,29 @@ def grasp_design(design: DesignProblem, config, comm) -> dict:
         "history": evaluator.history,
         "wall_time_s": time.perf_counter() - started,
         "notes": [],
+        "checks": checks,
         "_shapes": (x0, final["x"], evaluator),
     }
+
+
+def grasp_checks(evaluator: GraspEvaluator, x: float, target: float, tolerance: float,
+                 what: str) -> list[dict]:
+    """The certificates of a grasp design's answer: the design re-solved afresh at the
+    reported value (`GraspEvaluator.resolve`, the load stepping the ``reproduce`` command
+    runs) must give the target to the design's tolerance (``grasp_force_target``: |F - target|
+    [N]), and that state carries the static certificates (``global_equilibrium`` of the
+    reactions, loads and contact forces, ``surface_penetration``, ``contact_force_balance``).
+    Collective."""
+    resolved = evaluator.resolve(x)
+    value = abs(resolved["grasp"] - target)
+    detail = (f"|{what} re-solved at {evaluator.key} = {x:.8g} - target| [N] "
+              f"({resolved['grasp']:.8g} N against {target:.8g} N)")
+    if resolved["message"]:
+        detail += f"; the re-solve stopped: {resolved['message']}"
+    return [certify.entry(
+        "grasp_force_target", value, tolerance, detail=detail,
+        remedy="the answer does not reproduce: narrow the [design] bounds or set a larger "
+               "[design] tolerance; please report it")] + resolved["checks"]
 
 
 def run_design(config: dict, out: Path | None, comm, progress: bool = False,
