@@ -217,3 +217,22 @@ def test_two_ranks_match_serial():
     assert parallel["rigid_body_modes"] == serial["rigid_body_modes"] == 6
     assert np.allclose(parallel["frequencies_hz"][6:], serial["frequencies_hz"][6:], rtol=1e-8)
 
+
+
+@pytest.mark.parametrize("kinematics, loads, words", [
+    ("spatial", {"tip_moment": [0.0, 0.3, 0.2]}, "a dead moment on a spatial rod"),
+    ("planar", {"tip_force": [0.0, 0.5], "follower": True}, "a follower tip load"),
+])
+def test_non_symmetric_note_names_its_cause(kinematics, loads, words):
+    """A spatial rod's dead end moment makes the stiffness non-symmetric (its work has no
+    potential): the note names that, not "follower loads" (was: "(follower loads)" for a dead
+    moment); a planar follower force is still named as such."""
+    cfg = config(0.02, 0.01, kinematics=kinematics, elements=6, count=3)
+    cfg["loads"] = loads | {"steps": 2}
+    cfg["modes"]["prestress"] = True
+    _, summary = modes_of(cfg)
+    assert summary["status"] == "completed"
+    notes = [n for n in summary["notes"] if "not symmetric" in n]
+    assert len(notes) == 1 and words in notes[0], summary["notes"]
+    if kinematics == "spatial":
+        assert "follower" not in notes[0]

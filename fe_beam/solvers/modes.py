@@ -151,8 +151,9 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                 break
             sigma *= 4.0
     else:
-        notes.append("the stiffness is not symmetric (follower loads): unstable directions are "
-                     "those the eigensolver finds, not counted by inertia")
+        notes.append(f"the stiffness is not symmetric ({nonsymmetric_reason(problem)}): "
+                     "unstable directions are those the eigensolver finds, not counted by "
+                     "inertia")
     wanted_unstable = min(unstable_count, MAX_UNSTABLE) if unstable_count is not None else 0
     pairs = []
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
@@ -209,8 +210,9 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
             # known limitation: the non-symmetric pencil with the singular mass of the
             # multiplier rows can return spurious negative or complex eigenvalues when many
             # modes are asked for; they are kept (a false alarm rather than a hidden one)
-            notes.append("follower loads with constraint multipliers: the non-symmetric "
-                         "eigenproblem may report spurious unstable modes (more so for large "
+            notes.append(f"the non-symmetric eigenproblem ({nonsymmetric_reason(problem)}) "
+                         "with constraint multipliers may report spurious unstable modes "
+                         "(more so for large "
                          "[modes] count); confirm them with a smaller count or constraint = "
                          "\"none\"")
     elif found_unstable < wanted_unstable:
@@ -379,6 +381,23 @@ class _EigenvalueCounter:
             pc.destroy()
             shifted.destroy()
         return max(int(negative) - self.multipliers, 0)
+
+
+def nonsymmetric_reason(problem) -> str:
+    """What makes the stiffness of ``problem`` non-symmetric, in words: a follower force, a
+    spatial rod's dead moment (its virtual work M . T(theta) dtheta has no potential), a
+    non-potential load of a coupled model, or (none of those) the assembled matrix itself."""
+    loads = problem.model.loads
+    reasons = []
+    if loads.follower:
+        reasons.append("a follower tip load")
+    if getattr(problem, "spatial", False) and getattr(problem, "moment_loads", False) \
+            and not loads.follower:
+        reasons.append("a dead moment on a spatial rod: its work M . T(theta) dtheta has no "
+                       "potential")
+    if getattr(problem, "extra_work", None) is not None:
+        reasons.append("contact friction")
+    return "; ".join(reasons) or "the assembled tangent is not symmetric"
 
 
 def _is_symmetric(K: PETSc.Mat) -> bool:
