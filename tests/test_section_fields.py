@@ -264,7 +264,7 @@ def test_moment_field_certificate_catches_a_wrong_moment(tmp_path, monkeypatch):
 
 def test_moment_field_certificate_exit_code(tmp_path, monkeypatch):
     """Through the CLI: the check broken on purpose (a 1e-6 error in the implied moment) is
-    exit code 3 and status "failed"; the check is left out for spatial rods (no moment)."""
+    exit code 3 and status "failed"."""
     import json
 
     from tomlio import dump_toml
@@ -280,8 +280,99 @@ def test_moment_field_certificate_exit_code(tmp_path, monkeypatch):
     code = cli.main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"])
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert code == 3 and summary["status"] == "failed", summary["message"]
-    spatial = fe_beam.run("static", config("reissner", 1, [0.0, 0.0, -1.0], spatial=True))
-    assert not any(c["name"].startswith("moment_field") for c in spatial.get("checks", []))
+
+
+
+# --- the spatial rod's section forces and moments (issue 28, trust4: no moment field before) --
+SPATIAL_RESULTANTS = ("n1", "n2", "n3", "m1", "m2", "m3")
+
+
+@pytest.mark.parametrize("law,degree", [("reissner", 2), ("nonstandard", 1)])
+def test_spatial_section_forces_are_the_closed_forms(tmp_path, law, degree):
+    """A spatial cantilever under a small tip force across its axis, skew to both section
+    axes, F = (0, Fy, Fz): the written section force n = (., Fy, Fz) and moment
+    m = (0, -(L - x) Fz, (L - x) Fy) (the section frame is the world's to 1e-4) at the
+    midpoints, and the clamp's moment_field_x0 certificate to round-off."""
+    P = 1e-4 * EI / L**2
+    force = np.array([0.0, 0.6 * P, -0.8 * P])
+    summary = fe_beam.run("static", config(law, degree, force, spatial=True), tmp_path / "skew")
+    assert summary["status"] == "converged", summary["message"]
+    f = read_steps(tmp_path / "skew" / "beam.h5")[-1]
+    assert set(SPATIAL) | set(SPATIAL_RESULTANTS) <= set(f)
+    arm = L - midpoints()
+    expected = {"n2": force[1] + 0 * arm, "n3": force[2] + 0 * arm, "m1": 0 * arm,
+                "m2": -arm * force[2], "m3": arm * force[1]}
+    for name, values in expected.items():
+        scale = P * L if name.startswith("m") else P
+        assert np.max(np.abs(f[name] - values)) < 1e-7 * scale, (name, f[name], values)
+    assert np.max(np.abs(f["n1"])) < 1e-3 * P  # second order: P theta
+    # the moment is the law's of the written curvatures (Reissner: EI u)
+    if law == "reissner":
+        assert np.allclose(f["m2"], EI * f["curvature_y"], rtol=1e-12, atol=1e-12 * P * L)
+    checks = {c["name"]: c for c in summary["checks"]}
+    assert checks["moment_field_x0"]["passed"] and checks["moment_field_x0"]["value"] < 1e-12
+    assert "moment_field_xL" not in checks  # a free tip
+
+
+def spatial_held(law: str, degree: int, constraint: str = "none", xL: str = "clamped",
+                 end_rotation=None) -> dict:
+    """A spatial rod clamped at x = 0 (and held at x = L) under out-of-plane loads."""
+    raw = config(law, degree, [0.0, 0.0, 0.0], spatial=True)
+    raw["model"]["constraint"] = constraint
+    raw["supports"] = {"x0": "clamped", "xL": xL}
+    raw["mesh"]["elements"] = 3
+    P = 2 * EI / L**2
+    raw["loads"] = {"distributed": [0.1 * P / L, -P / L, 0.5 * P / L],
+                    "point_forces": [[L / 3, 0.0, 0.3 * P, P]], "steps": 2}
+    if end_rotation is not None:
+        raw["loads"]["end_rotation"] = list(end_rotation)
+    return raw
+
+
+@pytest.mark.parametrize("law,degree,constraint,xL,end_rotation", [
+    ("reissner", 2, "none", "clamped", (0.0, 0.4, -0.2)),  # a turned clamp at x = L
+    ("nonstandard", 1, "inextensible-unshearable", "free", None),  # the multipliers' forces
+])
+def test_spatial_moment_field_certificate_at_held_ends(tmp_path, law, degree, constraint, xL,
+                                                       end_rotation):
+    """moment_field_<end> of a spatial rod: the rotation rows that the written n, m imply
+    at a held end against the reaction rows of the assembled residual, to round-off, also
+    at a clamp turned by a prescribed rotation and with constraint multipliers."""
+    summary = fe_beam.run("static", spatial_held(law, degree, constraint, xL, end_rotation),
+                          tmp_path / "run")
+    assert summary["status"] == "converged", summary["message"]
+    checks = {c["name"]: c for c in summary["checks"]}
+    ends = ("x0", "xL") if xL == "clamped" else ("x0",)
+    for end in ends:
+        check = checks[f"moment_field_{end}"]
+        assert check["passed"] and check["value"] < 1e-12, check
+    assert set(ends) == {n[len("moment_field_"):] for n in checks if n.startswith("moment")}
+
+
+def test_spatial_moment_field_certificate_catches_a_wrong_moment(tmp_path, monkeypatch):
+    """The spatial check broken on purpose: the Gauss values of m2 1e-6 off make the CLI
+    exit 3, status "failed", the message naming moment_field_x0."""
+    import json
+
+    from tomlio import dump_toml
+
+    from fe_beam import cli
+    from fe_beam.exports import outputs
+
+    original = outputs.SectionFields.update
+
+    def wrong(self, functions):
+        original(self, functions)
+        if "m2" in self.names:
+            self.values[..., self.names.index("m2")] *= 1 + 1e-6
+
+    monkeypatch.setattr(outputs.SectionFields, "update", wrong)
+    path = tmp_path / "case.toml"
+    path.write_text(dump_toml(config("reissner", 1, [0.0, 0.2, -1.0], spatial=True)))
+    code = cli.main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert code == 3 and summary["status"] == "failed", summary["message"]
+    assert "moment_field_x0" in summary["message"]
 
 
 def test_compiled_expressions_keep_their_constants_in_place():

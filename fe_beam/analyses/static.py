@@ -6,6 +6,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from mpi4py import MPI
 
 from fe_beam import certify, exports, runctl
@@ -109,39 +110,58 @@ MOMENT_FIELD_TOLERANCE = 1e-9
 
 
 def moment_field_checks(problem: BeamProblem, writer, run) -> list[dict]:
-    """Certificates ``moment_field_x0`` / ``moment_field_xL`` of a planar rod's written section
-    fields: at each end whose rotation is held, the end moment the fields M, T, eps imply
-    (`fe_beam.exports.outputs.BeamXDMFWriter.end_moment`, from the output expressions at the
-    energy's Gauss points) against the support's reaction moment (the residual assembled at
-    the end's rotation dof, the number the global equilibrium is made of), relative to the
-    larger of the two and of the reaction forces times L. None where another load acts on the
-    end element's rotations (tendons, contact, a tip moment or follower force at a held tip)
-    or nothing is recorded (spatial rods write no moment)."""
-    if (writer is None or problem.spatial or problem.extra_energy is not None
+    """Certificates ``moment_field_x0`` / ``moment_field_xL`` of a rod's written section
+    fields: at each end whose rotation is held (spatial: all three components), the end moment
+    the fields imply (planar: M, T, eps, `fe_beam.exports.outputs.BeamXDMFWriter.end_moment`;
+    spatial: n1..n3, m1..m3, `fe_beam.exports.spatial.SpatialXDMFWriter.end_moment`, from the
+    output expressions at the energy's Gauss points) against the support's reaction moment
+    (the residual assembled at the end's rotation dofs, the number the global equilibrium is
+    made of), relative to the larger of the two and of the reaction forces times L. None
+    where another load acts on the end element's rotations (tendons, contact, a tip moment
+    or follower force at a held tip; spatial: a point moment at the end) or nothing is
+    recorded."""
+    if (writer is None or problem.extra_energy is not None
             or problem.extra_work is not None or getattr(run, "contact", None) is not None):
         return []
     writer.update()
     loads, checks = problem.model.loads, []
+    spatial = problem.spatial
+    rotations = ("theta_x", "theta_y", "theta_z") if spatial else ("theta",)
     for end in ("x0", "xL"):
-        if "theta" not in problem.model.supports.fixed(end) or (
-                end == "xL" and (loads.tip_moment or loads.follower)):
+        fixed = problem.model.supports.fixed(end)
+        tip_moment = any(loads.tip_moment) if spatial else bool(loads.tip_moment)
+        if not all(name in fixed for name in rotations) or (
+                end == "xL" and (tip_moment or loads.follower)):
             continue
+        at_end = [m for m in loads.point_moments
+                  if abs(m[0] - problem.end_x[end]) <= problem.point_tolerance]
+        if spatial and any(any(m[1:]) for m in at_end):
+            continue  # a dead moment's work at a turned end: not the reaction's
         implied = writer.end_moment(problem.end_x[end], problem.point_tolerance)
         if implied is None:
             continue
         reaction = problem.end_reaction(end)
-        # a point moment on the held end acts on its rotation dof beside the support: the end
-        # moment of the fields is the reaction's and that moment's sum
-        applied = float(problem.load_factor.value) * sum(
-            m for x, m in loads.point_moments
-            if abs(x - problem.end_x[end]) <= problem.point_tolerance)
-        held = reaction["M"] + applied
-        scale = max(abs(held), abs(implied), abs(reaction["M"]),
-                    (abs(reaction["Fx"]) + abs(reaction["Fy"])) * problem.model.length)
-        value = abs(implied - held) / scale if scale > 0 else 0.0
+        if spatial:
+            implied = np.asarray(implied, dtype=float)
+            held = np.array([reaction[k] for k in ("M_theta_x", "M_theta_y", "M_theta_z")])
+            forces = sum(abs(reaction[k]) for k in ("Fx", "Fy", "Fz"))
+            difference = float(np.linalg.norm(implied - held))
+            scale = max(float(np.linalg.norm(held)), float(np.linalg.norm(implied)),
+                        forces * problem.model.length)
+            what = "n, m"
+        else:
+            # a point moment on the held end acts on its rotation dof beside the support: the
+            # end moment of the fields is the reaction's and that moment's sum
+            applied = float(problem.load_factor.value) * sum(m for _, m in at_end)
+            held = reaction["M"] + applied
+            difference = abs(implied - held)
+            scale = max(abs(held), abs(implied), abs(reaction["M"]),
+                        (abs(reaction["Fx"]) + abs(reaction["Fy"])) * problem.model.length)
+            what = "M, T"
+        value = difference / scale if scale > 0 else 0.0
         checks.append(certify.entry(
             f"moment_field_{end}", value, MOMENT_FIELD_TOLERANCE,
-            detail=f"|end moment of the written M, T - support reaction moment at {end}| / "
+            detail=f"|end moment of the written {what} - support reaction moment at {end}| / "
                    "scale",
             remedy="the fields written for ParaView disagree with the solved equilibrium: "
                    "report it (a compiler or version fault), the tip values are not affected"))

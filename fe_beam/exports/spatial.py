@@ -11,6 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import ufl
+from dolfinx import fem
 
 from fe_beam.exports.obstacles import bounding_box, obstacle_surface
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, figure, gather_line
@@ -26,8 +28,9 @@ class SpatialXDMFWriter(BeamXDMFWriter):
     """XDMF time series of a `fe_beam.fem.spatial_rod.SpatialRodProblem`: the displacement
     (a 3-vector, P1 at the vertices: "Warp By Vector"), the rotation vector, the directors
     d1, d2, d3 (3-vectors: "Glyph" shows the section frames) and the strains v1, v2, v3 and
-    curvatures twist, curvature_y, curvature_z (DG0: the Gauss-weighted mean of their values at
-    the energy's Gauss points, see `fe_beam.exports.outputs.SectionFields`)."""
+    curvatures twist, curvature_y, curvature_z and the section force n1, n2, n3 and moment m1,
+    m2, m3 in the section frame (DG0: the Gauss-weighted mean of their values at the energy's
+    Gauss points, see `fe_beam.exports.outputs.SectionFields`)."""
 
     @staticmethod
     def _plan(problem) -> list:
@@ -40,6 +43,55 @@ class SpatialXDMFWriter(BeamXDMFWriter):
         plan += [("displacement", d, vector), ("rotation_vector", theta, vector)]
         return plan + [(f"d{i + 1}", director, vector)
                        for i, director in enumerate(problem.directors())]
+
+    def end_moment(self, x_end: float, tolerance: float) -> np.ndarray | None:
+        """The moment rows at the rod's end ``x_end`` that the written section forces and
+        moments n1..n3, m1..m3 imply (collective; None without them), for a certificate
+        against the support's reaction (`fe_beam.fem.rod.BeamProblem.end_reaction`: the
+        residual assembled at the end's rotation dofs, the work-conjugates of the rotation
+        vector).
+
+        With the values at the energy's Gauss points (the ones the written fields are the
+        means of) and (dv_k, du_k) the variations of the strains for a unit change of the
+        end vertex's rotation-vector component k (`SpatialRodProblem.section_variations`):
+
+            R_k = sum over the end's elements of sum_q w_q h (n_q . dv_k + m_q . du_k),
+
+        the internal virtual work, equal to the reaction when no other load acts on the end
+        element's rotations (tendons, contact, moments at the end: the caller decides)."""
+        names = [f"n{i}" for i in (1, 2, 3)] + [f"m{i}" for i in (1, 2, 3)]
+        if self._sections is None or not set(names) <= set(self.section_names):
+            return None
+        sections, problem = self._sections, self.problem
+        cached = getattr(self, "_end_variations", {})
+        self._end_variations = cached
+        if x_end not in cached:
+            probes = []
+            for name in ("theta_x", "theta_y", "theta_z"):
+                probe = fem.Function(problem.space)
+                probe.x.array[:] = 0.0
+                probe.x.array[problem.point_dofs(name, x_end, "end at")] = 1.0
+                probe.x.scatter_forward()
+                probes.append(probe)
+            reference, _ = problem.energy_rule()
+            compiled = compat.expression(ufl.as_vector(problem.section_variations(probes)),
+                                         reference)
+            x = compat.cell_vertex_x(problem.mesh)[: len(sections.values)]
+            cells = np.flatnonzero(np.min(np.abs(x - x_end), axis=1) <= tolerance)
+            cached[x_end] = (compiled, probes, cells.astype(np.int32),
+                             np.abs(x[cells, 1] - x[cells, 0]))
+        compiled, _, cells, lengths = cached[x_end]
+        local = np.zeros(3)
+        if len(cells):
+            variations = np.asarray(compat.evaluate_expression(
+                compiled, problem.mesh, cells)).reshape(len(cells), len(sections.weights), 3, 6)
+            columns = [sections.names.index(n) for n in names]
+            resultants = sections.values[cells][:, :, columns]  # (cells, points, 6)
+            local = np.einsum("c,q,cqf,cqkf->k", lengths, sections.weights, resultants,
+                              variations)
+        total = np.empty(3)
+        problem.comm.Allreduce(local, total)
+        return total
 
     def vertex_values(self, update: bool = True) -> dict | None:
         """Nodal u, v, w, the rotation vector and x, and the directors d2, d3 (arrays of

@@ -379,10 +379,39 @@ class SpatialRodProblem(BeamProblem):
                              float(displacement[2])]}
 
     def output_expressions(self) -> dict:
+        """UFL expressions of the strains and section resultants for output (not for
+        solving): v1, v2, v3 (v = R^T r'), twist, curvature_y, curvature_z (u - u0), and the
+        section force n1, n2, n3 = dW/dv (the constraint multipliers' terms included) and
+        moment m1, m2, m3 = dW/du in the section frame (d1, d2, d3): the force and moment the
+        part beyond x exerts on the part before it, R n and R m in world axes."""
+        d, theta, multipliers = self.fields()
+        s = self.strains((d, theta))
+        v = ufl.variable(ufl.as_vector(s.v))
+        u = ufl.variable(ufl.as_vector(s.u))
+        varied = SpatialStrains(tuple(v[i] for i in range(3)), tuple(u[i] for i in range(3)))
+        energy = self.law_energy(varied)
+        energy += sum((value * varied.constrained(n) for n, value in multipliers.items()),
+                      ufl.zero())
+        force, moment = ufl.diff(energy, v), ufl.diff(energy, u)
+        return {"v1": s.v[0], "v2": s.v[1], "v3": s.v[2], "twist": s.u[0],
+                "curvature_y": s.u[1], "curvature_z": s.u[2],
+                **{f"n{i + 1}": force[i] for i in range(3)},
+                **{f"m{i + 1}": moment[i] for i in range(3)}}
+
+    def section_variations(self, probes) -> list:
+        """The variations (dv, du) of the strains v = R^T r' and u in the directions
+        ``probes`` (functions of the space, e.g. a unit rotation of one end vertex), UFL
+        scalars in the order dv1, dv2, dv3, du1, du2, du3 per probe: with the section forces
+        n = dW/dv and m = dW/du the internal virtual work is int n . dv + m . du dx."""
         d, theta, _ = self.fields()
         s = self.strains((d, theta))
-        return {"v1": s.v[0], "v2": s.v[1], "v3": s.v[2], "twist": s.u[0],
-                "curvature_y": s.u[1], "curvature_z": s.u[2]}
+        v, u = ufl.as_vector(s.v), ufl.as_vector(s.u)
+        columns = []
+        for probe in probes:
+            dv = ufl.derivative(v, self.w, probe)
+            du = ufl.derivative(u, self.w, probe)
+            columns += [dv[i] for i in range(3)] + [du[i] for i in range(3)]
+        return columns
 
     def directors(self):
         """R's columns d1, d2, d3 (UFL 3-vectors) of the current state."""
