@@ -236,3 +236,38 @@ def test_non_symmetric_note_names_its_cause(kinematics, loads, words):
     assert len(notes) == 1 and words in notes[0], summary["notes"]
     if kinematics == "spatial":
         assert "follower" not in notes[0]
+
+
+@pytest.mark.parametrize("kinematics, direction, inertia, bending", [
+    ("planar", (0.0, 1.0), lambda b, h: b * h**3 / 12, "bending"),
+    ("spatial", (0.0, 0.0, -1.0), lambda b, h: h * b**3 / 12, "bending about y"),
+])
+def test_bent_prestate_modes_are_labelled_in_the_section_frame(kinematics, direction, inertia,
+                                                                bending):
+    """Modes about a cantilever bent by a tip force to a tip angle of 1.215 rad (70 deg;
+    P L^2 / EI = 5): the family shares are measured in the pre-state's section frame, so the
+    first mode of the bent family is bending (was: "axial", 0.42 of its translation normal
+    to the reference axis and 0.58 along x); unloaded the shares are the reference axes'
+    (1 for the bending modes) and the first four labels are the same as about the bent
+    state."""
+    b, h = 0.03, 0.02
+    kinds, shares = [], []
+    for factor in (0.0, 5.0):
+        cfg = config(b, h, kinematics=kinematics, elements=12, count=4)
+        cfg["loads"] = {"tip_force": [c * factor * E * inertia(b, h) / L**2 for c in direction],
+                        "steps": 10}
+        cfg["modes"]["prestress"] = True
+        _, summary = modes_of(cfg)
+        assert summary["status"] == "completed", summary["message"]
+        kinds.append(summary["mode_kinds"][:4])
+        shares.append(summary["mode_shares"][:4])
+    straight, bent = kinds
+    assert bending in bent[:2] and bent == straight, kinds
+    first = bent.index(bending)
+    assert shares[1][first]["transverse"] > 0.9, shares[1][first]
+    if kinematics == "spatial":
+        assert shares[1][first][bending] > 0.9
+    for kind, share in zip(straight, shares[0], strict=True):
+        assert share["transverse"] == pytest.approx(1.0, abs=1e-12), share
+        if kinematics == "spatial":
+            assert share[kind] == pytest.approx(1.0, abs=1e-12)

@@ -806,10 +806,17 @@ class BeamProblem:
         return candidates
 
     def mode_shares(self, shape) -> dict:
-        """{"transverse": the share of the shape's translational energy that is transverse}."""
-        u, v = ufl.split(shape)[0], ufl.split(shape)[1]
-        axial = assemble_scalar(fem.form(self.section_props.A * u**2 * ufl.dx))
-        transverse = assemble_scalar(fem.form(self.section_props.A * v**2 * ufl.dx))
+        """{"transverse": the share of the shape's translational energy that is transverse}:
+        normal to the current state's section, A (du sin(theta) - dv cos(theta))^2, against
+        along it, A (du cos(theta) + dv sin(theta))^2 (the reference axes' u, v when
+        straight: a bent pre-state's bending mode moves normal to the bent axis, which in
+        reference axes is along x where the rod is turned by more than 45 degrees)."""
+        du, dv = ufl.split(shape)[0], ufl.split(shape)[1]
+        _, _, theta, _ = self.fields()
+        along = du * ufl.cos(theta) + dv * ufl.sin(theta)
+        normal = -du * ufl.sin(theta) + dv * ufl.cos(theta)
+        axial = assemble_scalar(fem.form(self.section_props.A * along**2 * ufl.dx))
+        transverse = assemble_scalar(fem.form(self.section_props.A * normal**2 * ufl.dx))
         total = axial + transverse
         return {"transverse": transverse / total if total > 0 else 0.0}
 

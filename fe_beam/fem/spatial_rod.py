@@ -567,23 +567,27 @@ class SpatialRodProblem(BeamProblem):
         return candidates
 
     def mode_shares(self, shape) -> dict:
-        """The shares of a mode's kinetic energy (its mass norm) by family: axial (rho A u^2),
-        torsion (rho I_p omega_1^2), bending about y (rho A w^2 + rho I_y omega_2^2), bending
-        about z (rho A v^2 + rho I_z omega_3^2), omega = T(-theta) dtheta the body rotation
-        about the current state; and "transverse", the share of v, w in the translational
-        part."""
+        """The shares of a mode's kinetic energy (its mass norm) by family, in the current
+        state's section frame (d1, d2, d3): with dr = R^T dd the displacement in that frame,
+        axial (rho A dr_1^2), torsion (rho I_p omega_1^2), bending about y (rho A dr_3^2 +
+        rho I_y omega_2^2), bending about z (rho A dr_2^2 + rho I_z omega_3^2), omega =
+        T(-theta) dtheta the body rotation about the current state; and "transverse", the share
+        of dr_2, dr_3 in the translational part. Straight (theta = 0) these are the reference
+        axes' u, v, w; about a bent pre-state a bending mode moves normal to the bent axis
+        (in reference axes along x where the rod is turned by more than 45 degrees)."""
         pieces = ufl.split(shape)
         _, theta, _ = self.fields()
         omega = angular_velocity(theta, ufl.as_vector(pieces[3:6]))
+        body = ufl.dot(rotation(theta).T, ufl.as_vector(pieces[0:3]))
         p, rho = self.section_props, self.rho
         rho_area = rho * p.A
         integrands = {
-            "axial": rho_area * pieces[0] ** 2,
+            "axial": rho_area * body[0] ** 2,
             "torsion": rho * (p.Iy + p.Iz) * omega[0] ** 2,
-            "bending about y": rho_area * pieces[2] ** 2 + rho * p.Iy * omega[1] ** 2,
-            "bending about z": rho_area * pieces[1] ** 2 + rho * p.Iz * omega[2] ** 2,
-            "transverse": p.A * (pieces[1] ** 2 + pieces[2] ** 2),
-            "translation": p.A * (pieces[0] ** 2 + pieces[1] ** 2 + pieces[2] ** 2),
+            "bending about y": rho_area * body[2] ** 2 + rho * p.Iy * omega[1] ** 2,
+            "bending about z": rho_area * body[1] ** 2 + rho * p.Iz * omega[2] ** 2,
+            "transverse": p.A * (body[1] ** 2 + body[2] ** 2),
+            "translation": p.A * (body[0] ** 2 + body[1] ** 2 + body[2] ** 2),
         }
         values = {k: assemble_scalar(fem.form(v * self.dx_mass)) for k, v in integrands.items()}
         total = sum(values[k] for k in MODE_FAMILIES)
