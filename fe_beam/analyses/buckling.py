@@ -227,7 +227,20 @@ def _confirmed(run, linear: Buckling, settings, stepping, progress):
             + ", ".join(f"{f:.6g}" for f in below) + "): the others are not critical points "
             "of the path (its stability does not change there) and are not reported as "
             "buckling loads (linearised_load_factors)")
-    result = Buckling(factors, shapes, linear.prestress, linear.negative, notes)
+    # the path is followed in the load's direction only: the factors of the reversed load are
+    # linearised estimates it does not confirm (a bent pre-state's rarely are critical points),
+    # so they are not reported as buckling loads of the reversed load
+    reversed_ = list(linear.negative[: settings.count])
+    extra["linearised_reversed_load_factors"] = reversed_
+    if reversed_:
+        notes.append(
+            "reversed_load_factors is left empty: the factors of the reversed load linearised "
+            f"about the state at load factor {linear.prestress:g} ("
+            + ", ".join(f"{f:.6g}" for f in reversed_) + ", in "
+            "linearised_reversed_load_factors) are not confirmed by the nonlinear path, which "
+            "is followed in the load's direction only; run fe-beam buckling with the loads "
+            "reversed to confirm them")
+    result = Buckling(factors, shapes, linear.prestress, [], notes)
     return result, checks, extra
 
 

@@ -233,7 +233,8 @@ def buckling_modes(problem: LinearisedProblem, count: int, verify: bool = True) 
     passed = sorted(p + mu for mu in negative if 0 < p + mu < p)
     if passed:  # the prestate is past a critical point: the factors above p are not the first
         notes.append(f"[buckling] prestress = {p:g} is past the critical load factor "
-                     f"{passed[0]:.6g} (in reversed_load_factors): the state linearised about "
+                     f"{passed[0]:.6g} (a linearised factor below the prestress): the state "
+                     "linearised about "
                      "is beyond a bifurcation or limit of the path from 0, and load_factors "
                      "(above the prestress only) do not start with the first buckling load; "
                      "use a prestress below it")
