@@ -398,3 +398,23 @@ def test_compiled_expressions_keep_their_constants_in_place():
                                                           np.array([[0.25], [0.5]])),
                                         msh, np.arange(3, dtype=np.int32))
     assert np.allclose(np.asarray(values).reshape(3, 2, 2), [105.0, 525.0], rtol=1e-14)
+
+
+def test_spatial_static_says_when_the_stability_is_not_checked(tmp_path):
+    """A spatial rod's dead end moment (non-conservative: no energy, no inertia count): the
+    summary has no stability entry and a note says why (was: silently left out), naming the
+    dead moment (not "follower loads"); a conservative spatial load keeps its stability
+    check."""
+    raw = config("reissner", 1, [0.0, 0.0, 0.0], spatial=True)
+    raw["loads"]["tip_moment"] = [0.0, 0.3 * EI / L, 0.1 * EI / L]
+    summary = fe_beam.run("static", raw)
+    assert summary["status"] == "converged", summary["message"]
+    assert "stability" not in summary["steps"][-1]
+    assert "stability" not in {c["name"] for c in summary["checks"]}
+    notes = [n for n in summary["notes"] if "stability of the final state is not checked" in n]
+    assert len(notes) == 1 and "a dead moment on a spatial rod" in notes[0], summary["notes"]
+    raw["loads"] = {"tip_force": [0.0, 0.1 * EI / L**2, 0.2 * EI / L**2]}
+    summary = fe_beam.run("static", raw)
+    checks = {c["name"]: c for c in summary["checks"]}
+    assert checks["stability"]["value"] == 0 and summary["steps"][-1]["stability"]["stable"]
+    assert not any("not checked" in n for n in summary["notes"])

@@ -24,6 +24,7 @@ from fe_beam.fem.section_laws import SOLID_NAMES
 from fe_beam.model.obstacles import ContactSettings
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers import realtime
+from fe_beam.solvers.modes import nonsymmetric_reason
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
     StepResult,
@@ -260,6 +261,10 @@ def solve_static(
             else None
         if checked is not None:
             result.steps[-1]["stability"] = checked
+        elif stability:  # asked for (fe-beam static) but the tangent is not an energy's
+            note = unchecked_stability_note(run)
+            if note not in run.notes:
+                run.notes.append(note)
         if run.contact is not None and result.steps:
             result.checks.extend(contact_checks(
                 result.steps[-1].get("contact", []),
@@ -294,6 +299,18 @@ def solve_static(
                                     *bounding_box(result.shapes, config.model.length))
         files.finish(result.summary(extra))  # pictures unless interrupted
     return result
+
+
+def unchecked_stability_note(run) -> str:
+    """Why the final state's stability (`StaticContinuation.stability`) is not checked: the
+    tangent is not that of an energy, so its inertia counts nothing."""
+    pull_in = run.tendons is not None and any(
+        t.controlled_by_pull_in for t in run.tendons.tendons)
+    reason = ("pull-in controlled tendons" if pull_in
+              else nonsymmetric_reason(run.problem))
+    return (f"the stability of the final state is not checked ({reason}); the tangent is not "
+            "that of an energy, so its inertia counts nothing: fe-beam modes with [modes] "
+            "prestress = true finds unstable directions")
 
 
 #: the largest relative difference between an obstacle's reported normal force and the one
