@@ -238,9 +238,15 @@ class SNESSolver:
         prefix: str | None = None,
         near_nullspace: PETSc.NullSpace | None = None,
         state_scale: float = 0.0,
+        residual_floor: float = 0.0,
     ):
+        """``residual_floor``: the residual's absolute round-off floor (the assembled forces'
+        machine epsilon times the stiffness they are made of, e.g.
+        `fe_beam.fem.equilibrium.roundoff_force`): a Newton iteration that has stopped
+        converging (the residual no longer halves) at or below it is converged; 0: none."""
         self.problem = problem
         self.state_scale = float(state_scale)
+        self.residual_floor = float(residual_floor)
         self.settings = settings or SolverSettings()
         check_petsc_options(self.settings.petsc_options)  # ConfigError before any solve
         if prefix is None:
@@ -304,9 +310,13 @@ class SNESSolver:
         # Round-off floor: quadratic convergence has stopped (the residual no longer halves)
         # far below the largest load-step residual this solver has seen (a cut-back step can be
         # so small that its own first residual is already near the floor).
+        # The absolute floor of the problem (its stiffness times machine epsilon) holds even
+        # when the load-step residuals are themselves small: a slender stiff rod with a
+        # constraint (h/L = 1e-4: a load of 1e-9 EA) stagnates at EA eps, which no relative
+        # test reaches.
         largest = max(self._largest_fnorm, getattr(self, "_trial_largest_fnorm", 0.0))
-        if iteration >= 2 and fnorm > 0.5 * previous and fnorm <= STAGNATION_RTOL * max(
-                largest, atol):
+        floor = max(STAGNATION_RTOL * max(largest, atol), self.residual_floor)
+        if iteration >= 2 and fnorm > 0.5 * previous and fnorm <= floor:
             return reason.CONVERGED_FNORM_RELATIVE
         if step_norm <= stol * max(xnorm, self.state_scale):
             return reason.CONVERGED_SNORM_RELATIVE

@@ -42,6 +42,7 @@ from mpi4py import MPI
 
 from fe_beam.errors import UpdateFailed  # noqa: F401  (its home; re-exported)
 from fe_beam.fem import compat
+from fe_beam.fem.equilibrium import residual_floor
 from fe_beam.fem.kinematics import strains
 from fe_beam.fem.rod import BeamProblem
 from fe_beam.model.laws import LAW_KINDS
@@ -164,6 +165,8 @@ def apply_config(run, config: StaticConfig) -> None:
     run._trial_range = None
     snes = run.snes
     snes._initial_fnorm, snes._largest_fnorm, snes._reference_fnorm = 0.0, 0.0, None
+    # the round-off floor of the new numbers (the section and modulus set above)
+    snes.residual_floor = residual_floor(problem)
     if hasattr(snes, "_last_fnorm"):
         del snes._last_fnorm
     if run.tendons is not None:

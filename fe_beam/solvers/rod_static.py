@@ -11,6 +11,7 @@ from mpi4py import MPI
 from fe_beam import runctl
 from fe_beam.fem import compat
 from fe_beam.fem.contact import ContactSet
+from fe_beam.fem.equilibrium import residual_floor
 from fe_beam.fem.rod import BeamProblem, StrainWatch
 from fe_beam.fem.spatial_rod import SpatialRodProblem
 from fe_beam.fem.tendons import TendonSet
@@ -66,6 +67,7 @@ class StaticContinuation:
             config.solver.for_problem(self.problem.saddle_point, self.problem.comm),
             prefix=prefix,
             state_scale=config.model.length,
+            residual_floor=residual_floor(self.problem),
         )
         self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
         if self.contact is not None:
