@@ -16,6 +16,7 @@ from fe_beam.analyses.static import (
     beam_dofs_estimate,
     check_beam_work,
     contact_columns,
+    structure_record,
 )
 from fe_beam.config.path import parse_path
 from fe_beam.errors import ConfigError
@@ -89,7 +90,7 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
             "stable": None if found is None else found.unstable == 0,
             "energy_decreasing_directions": None if found is None else found.unstable,
             "branch": branch,
-        }
+        } | structure_record(run.problem)
         if contact is not None:
             entry["contact"] = contact.summary()
         result.path.append(entry)

@@ -37,7 +37,7 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
 
 __all__ = ["StaticContinuation", "StaticResult", "contact_checks", "contact_columns",
            "contact_line", "run",
-           "solve_static"]
+           "solve_static", "structure_record"]
 
 
 @dataclass
@@ -100,7 +100,17 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
     }
     if problem.model.loads.end_motion():  # displacement control: the force it takes
         record["reaction_xL"] = problem.end_reaction("xL")
-    return record
+    return record | structure_record(problem)
+
+
+def structure_record(problem) -> dict:
+    """A chain of rods' per-step outputs: ``rods`` = {name: {tip: [x, y], tip_angle}} (each
+    rod's own end, world axes) and ``joints`` = {name: {force: [Fx, Fy], moment}} (on the
+    first end the joint names, world axes); {} for a single rod."""
+    chain = getattr(problem, "chain", None)
+    if chain is None:
+        return {}
+    return {"rods": chain.rods(), "joints": chain.joints()}
 
 
 #: the written moment field against the support's reaction moment (relative): an identity of
@@ -229,6 +239,8 @@ def solve_static(
         files.on_step(entry)
         if writer is not None and record_shapes:
             shape = writer.vertex_values(update=False)
+            if problem.chain is not None:  # the plots draw the chain in the plane
+                shape = problem.chain.shape(shape)
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
 

@@ -23,8 +23,15 @@ from fe_beam.config.keys import (
     table,
 )
 from fe_beam.config.material_laws import MATERIAL_KEYS, hyperelastic_law
+from fe_beam.config.structure import (
+    STRUCTURE_TABLES,
+    check_structure_tables,
+    is_structure,
+    parse_structure,
+)
 from fe_beam.errors import ConfigError
 from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
+from fe_beam.model.beam import _rank as beam_rank
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
@@ -192,7 +199,74 @@ def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
     return material, {"hyperelastic": law, "section_points": points}
 
 
+def parse_structure_model(config: dict) -> BeamModel:
+    """The `BeamModel` of a structure of [[rods]] (a planar serial chain, `fe_beam.model.
+    structure`): one model along the chain's arc length, its ends' supports those of the
+    chain's end rods, the rods' point loads at chain coordinates; the top-level [section],
+    [material], [model] and [loads] gravity / distributed apply to every rod."""
+    check_structure_tables(config, "static")
+    structure = parse_structure(config)
+    model = table(config, "model")
+    model.pop("kinematics")
+    material, law_options = _rod_material(config, model)
+    section = parse_section(config)
+    if section.dims_tip:
+        raise ConfigError("[section] *_tip (a tapered section) with [[rods]] is not supported "
+                          "yet: each rod has the section of [section]")
+    for rod, entry in zip(structure.rods, config["rods"], strict=True):
+        for key in ("section", "material", "model"):
+            own = entry.get(key)
+            if own is None:
+                continue
+            given = config.get(key, {}) if isinstance(config.get(key), dict) else {}
+            if (given | own) != given:
+                raise ConfigError(f"[[rods]] '{rod.name}' {key}: a rod's own {key} different "
+                                  f"from the top-level [{key}] is not supported yet (every rod "
+                                  f"takes [{key}])")
+    loads = table(config, "loads")
+    forces, moments = structure.chain_point_loads()
+    elements = sum(rod.elements for rod in structure.rods)
+    supports = structure.end_supports
+    return _wrap(
+        BeamModel,
+        length=structure.length,
+        section=section,
+        material=material,
+        options=_wrap(ModelOptions, **model, **law_options),
+        mesh=_wrap(Discretisation, elements=elements, degree=structure.rods[0].degree),
+        supports=_wrap(Supports, x0=supports["x0"], xL=supports["xL"]),
+        loads=_wrap(Loads, distributed=loads["distributed"], gravity=loads["gravity"],
+                    point_forces=forces, point_moments=moments),
+        structure=structure,
+    )
+
+
+def structure_rigid_motions(model: BeamModel) -> list[str]:
+    """The rigid motions a chain's end supports leave free (empty: none), with the ends at
+    their reference positions: a small rigid motion (a, b, w) moves the point (X, Y) by
+    (a - w Y, b + w X) and turns it by w."""
+    structure = model.structure
+    points = {"x0": structure.reference_point(0.0, structure.chain[0]),
+              "xL": structure.reference_point(model.length, structure.chain[-1])}
+    rows = []
+    for end, (X, Y) in points.items():
+        fixed = model.supports.fixed(end)
+        rows += ([(1.0, 0.0, -Y)] if "u" in fixed else []) + \
+            ([(0.0, 1.0, X)] if "v" in fixed else []) + \
+            ([(0.0, 0.0, 1.0)] if "theta" in fixed else [])
+    if rows and _rank(rows, structure.length) == 3:
+        return []
+    return ["a rigid-body motion (support the chain's ends: e.g. clamp one, or pin both)"]
+
+
+def _rank(rows, scale: float) -> int:
+    """The rank of the rigid-motion rows, the rotation column scaled by the chain's length."""
+    return beam_rank([(a, b, c / scale) for a, b, c in rows])
+
+
 def parse_model(config: dict) -> BeamModel | SpatialRodModel:
+    if is_structure(config):
+        return parse_structure_model(config)
     beam = table(config, "beam")
     model = table(config, "model")
     kinematics = model.pop("kinematics")
@@ -316,7 +390,7 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
     beam free to move as a rigid body (free-free, flying) is meaningful; ``motion_variable``:
     the variable of moving obstacles' position formulas ("t" in dynamics)."""
-    check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
+    check_tables(config, tuple(SCHEMA) + OTHER_TABLES + STRUCTURE_TABLES)
     model = parse_model(config)
     settings, stepping, jump = parse_solver(config)
     if model.options.constraint != "none" and settings.linear_solver not in ("auto", "mumps"):
@@ -325,7 +399,13 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
             f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
             "zero diagonal); use linear_solver = \"auto\" or \"mumps\", or constraint = \"none\""
         )
-    free = model.supports.rigid_motions()
+    free = (structure_rigid_motions(model) if getattr(model, "structure", None) is not None
+            else model.supports.rigid_motions())
+    if free and not rigid_motion_allowed and getattr(model, "structure", None) is not None:
+        raise ConfigError(
+            f"[[rods]] supports: the chain's ends ({model.supports.x0} at its start, "
+            f"{model.supports.xL} at its end) leave it free to move as a rigid body; a static "
+            "equilibrium needs supports that prevent it (clamp one end, or pin both)")
     if free and not rigid_motion_allowed:
         raise ConfigError(
             f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "

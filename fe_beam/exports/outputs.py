@@ -482,6 +482,9 @@ class BeamXDMFWriter:
             if name == plan[-1][0]:  # the section fields after the nodal ones (file order)
                 for section in self.section_names:
                     self.functions[section] = fem.Function(cellwise, name=section)
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: the rod of each cell (its index in [[rods]])
+            self.functions["rod"] = chain.rod
         self._file = XDMFSeries(mesh, path) if path is not None else None
 
     def end_moment(self, x_end: float, tolerance: float) -> float | None:
@@ -537,11 +540,16 @@ class BeamXDMFWriter:
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=2))
         u, v, theta, _ = problem.fields()
+        displacement = ufl.as_vector([u, v])
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: from the mesh's (s, 0) to the deformed chain
+            x = ufl.SpatialCoordinate(mesh)[0]
+            displacement = ufl.as_vector([chain.reference[0] + u - x, chain.reference[1] + v])
         return [
             ("u", u, scalar),
             ("v", v, scalar),
             ("theta", theta, scalar),
-            ("displacement", ufl.as_vector([u, v]), vector),
+            ("displacement", displacement, vector),
         ]
 
     def update(self) -> None:
