@@ -271,10 +271,11 @@ class BeamProblem:
         # every point force and moment sits on a mesh vertex (its work is a vertex integral)
         breakpoints = tuple(breakpoints) + tuple(
             f[0] for f in model.loads.point_forces + model.loads.point_moments)
-        if model.structure is None:
+        structure = getattr(model, "structure", None)
+        if structure is None:
             self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         else:  # a chain of rods: each rod's elements, the joints fixed vertices
-            vertices, joints = chain_vertices(model.structure)
+            vertices, joints = chain_vertices(structure)
             self.mesh = interval_mesh(comm, model.mesh.elements, model.length,
                                       breakpoints + joints, vertices=vertices, fixed=joints)
         self.comm = comm
@@ -287,7 +288,7 @@ class BeamProblem:
         self.load_factor = fem.Constant(self.mesh, 0.0)
         self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
         self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
-        self.chain = None if model.structure is None else ChainGeometry(self)
+        self.chain = None if structure is None else ChainGeometry(self)
         self._make_constants()
         self._mark_ends()
         self._check_breakpoints(breakpoints)
