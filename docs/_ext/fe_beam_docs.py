@@ -144,6 +144,11 @@ def config_reference(tables: dict, readers: dict, dims: dict) -> str:
         lines += [f"({table_target(name)})=", f"## {_table_title(name)}", ""]
         if base in _SCHEMA_TABLES:
             lines.append("Read by every command.")
+        elif base in ("rods", "joints", "bodies"):
+            lines.append("A structure of rods (arrays of tables `[[rods]]`, `[[joints]]`, "
+                         "`[[bodies]]`), read by {doc}`fe-beam static </generated/commands/"
+                         "static>` and {doc}`fe-beam path </generated/commands/path>`; "
+                         "see {doc}`/structures`.")
         elif name.endswith("(fe-beam solid)"):
             lines.append("Read by {doc}`fe-beam solid </generated/commands/solid>`.")
         elif who:
