@@ -8,10 +8,13 @@ limit point)."""
 from __future__ import annotations
 
 import copy
+import json
 import math
 
 import numpy as np
 import pytest
+from mpi4py import MPI
+from mpilaunch import mpirun_command
 
 import fe_beam
 from fe_beam.baselines import frame_shooting
@@ -286,3 +289,25 @@ def test_set_overrides_reach_the_rods():
     assert parsed.model.length == 3.0
     assert parsed.model.loads.point_forces == ((2.5, 0.0, -1.0),)
     assert np.isclose(structure.reference_point(3.0)[0], 2.0)
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+                    reason="needs mpirun (and a serial pytest)")
+def test_two_ranks_give_the_serial_structure(tmp_path):
+    """``mpirun -n 2 fe-beam static`` of an L-frame: the same rods and joints as one rank."""
+    from test_mpi_errors import fe_beam as fe_beam_job
+
+    EI, _, _ = _stiffness()
+    config = _l_frame(1.0, 0.6, [0.3 * EI, -1.5 * EI], elements=6)
+    alone = fe_beam.run("static", config)["steps"][-1]
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"))
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "two" / "summary.json").read_text())["steps"][-1]
+    for name in ("column", "beam"):
+        assert together["rods"][name]["tip"] == pytest.approx(alone["rods"][name]["tip"],
+                                                              abs=1e-11)
+    assert together["joints"]["corner"]["force"] == pytest.approx(
+        alone["joints"]["corner"]["force"], rel=1e-9)
+    assert together["joints"]["corner"]["moment"] == pytest.approx(
+        alone["joints"]["corner"]["moment"], rel=1e-9)
