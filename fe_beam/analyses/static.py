@@ -441,8 +441,16 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
                                                                   "rotation_vector")}
         plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
         return
-    plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                         obstacles=result.obstacles or config.obstacles, section=m.section)
+    structure = getattr(m, "structure", None)
+    if structure is not None:  # a chain: its reference polygon, the axes only
+        corners = (0.0, *structure.boundaries(), m.length)
+        undeformed = [structure.reference_point(s, structure.segment_at(min(s, m.length)))
+                      for s in corners]
+        plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                             undeformed=undeformed)
+    else:
+        plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                             obstacles=result.obstacles or config.obstacles, section=m.section)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)

@@ -713,14 +713,18 @@ def plot_deformed_shapes(
     reference: list[tuple[str, float, float]] = (),
     obstacles=(),
     section=None,
+    undeformed=None,
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points;
     ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey; ``section`` (a
-    `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`)."""
+    `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`);
+    ``undeformed``: the reference axis as points ((x, y), ...) (default the x axis to L: a
+    chain of rods gives its corners)."""
 
     with figure(path, figsize=(7, 5), layout=False) as (_, axes):
         colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
-        axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+        xs, ys = ([0, length], [0, 0]) if undeformed is None else zip(*undeformed)
+        axes.plot(list(xs), list(ys), color="0.7", lw=1, ls="--", label="undeformed")
         for index, ((label, shape), colour) in enumerate(zip(shapes, colours, strict=False)):
             axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
             draw_section_faces(axes, shape, section, length, colour,
