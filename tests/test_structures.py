@@ -181,6 +181,12 @@ def test_fixed_body_clamps_the_chain_end():
     one = fe_beam.run("static", supported)["steps"][-1]
     two = fe_beam.run("static", held)["steps"][-1]
     assert two["rods"]["beam"]["tip"] == pytest.approx(one["rods"]["beam"]["tip"], abs=1e-14)
+    # the ground holds the whole frame: its force and moment on the column's start balance
+    # the tip force about the base
+    tip = two["rods"]["beam"]["tip"]
+    base = two["joints"]["base"]
+    assert base["force"] == pytest.approx([-force[0], -force[1]], rel=1e-9)
+    assert base["moment"] == pytest.approx(-(tip[0] * force[1] - tip[1] * force[0]), rel=1e-9)
 
 
 # --- Lee's frame ------------------------------------------------------------------------------
@@ -311,3 +317,38 @@ def test_two_ranks_give_the_serial_structure(tmp_path):
         alone["joints"]["corner"]["force"], rel=1e-9)
     assert together["joints"]["corner"]["moment"] == pytest.approx(
         alone["joints"]["corner"]["moment"], rel=1e-9)
+
+
+def test_joint_force_is_on_the_first_named_end():
+    """Naming the beam's start first reports the force and moment on the beam: the opposite
+    of those on the column's end."""
+    EI, _, _ = _stiffness()
+    config = _l_frame(1.0, 0.5, [0.3 * EI, -0.9 * EI], elements=4)
+    swapped = copy.deepcopy(config)
+    swapped["joints"][0]["at"] = ["beam:start", "column:end"]
+    one = fe_beam.run("static", config)["steps"][-1]["joints"]["corner"]
+    two = fe_beam.run("static", swapped)["steps"][-1]["joints"]["corner"]
+    assert two["force"] == pytest.approx([-f for f in one["force"]], rel=1e-12)
+    assert two["moment"] == pytest.approx(-one["moment"], rel=1e-12)
+
+
+def test_one_rotated_rod_is_the_rotated_rod():
+    """A structure of one rod along (cos a, sin a) under the rotated tip force is the rod
+    along x under the force, turned by a (the reference angle in the kinematics)."""
+    EI, _, _ = _stiffness()
+    angle, length = 0.7, 0.9
+    force = np.array([0.2 * EI, -1.1 * EI])
+    turn = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    straight = _base(elements=6)
+    straight["beam"] = {"length": length}
+    straight["supports"] = {"x0": "clamped", "xL": "free"}
+    straight["loads"]["tip_force"] = force.tolist()
+    turned = _base(elements=6)
+    turned["rods"] = [{"name": "r", "start": [0.3, -0.2], "direction": turn[:, 0].tolist(),
+                       "length": length, "supports": {"x0": "clamped"},
+                       "loads": {"point_forces": [[length, *(turn @ force)]]}}]
+    tip = fe_beam.run("static", straight)["steps"][-1]["tip"]
+    rod = fe_beam.run("static", turned)["steps"][-1]["rods"]["r"]
+    expected = np.array([0.3, -0.2]) + turn @ np.array([length + tip["u"], tip["v"]])
+    assert rod["tip"] == pytest.approx(expected.tolist(), abs=1e-12)
+    assert rod["tip_angle"] == pytest.approx(angle + tip["theta"], abs=1e-12)

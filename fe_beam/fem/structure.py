@@ -128,13 +128,19 @@ class ChainGeometry:
 
     def joints(self) -> dict:
         """{joint name: {force: [Fx, Fy], moment}}: the force and moment (world axes) on the
-        first end named in the joint's ``at``, from the rest of the chain (collective)."""
+        first end named in the joint's ``at``, from the rest of the chain, or from the fixed
+        body (the support's reaction at that chain end) (collective)."""
+        result = {}
+        for name, end, rod_first in self.structure.body_joints:
+            reaction = self.problem.end_reaction(end)
+            sign = 1.0 if rod_first else -1.0
+            result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
+                            "moment": sign * reaction["M"]}
         if not self.structure.joints_on_chain:
-            return {}
+            return result
         if self._joint_form is None:
             self._compile_joint_form()
         dofs = compat.cell_dofs(self._indicator.function_space)[: len(self._segment_of_cell), 0]
-        result = {}
         for joint in self.structure.joints_on_chain:
             self._indicator.x.array[:] = 0.0
             self._indicator.x.array[dofs] = (self._segment_of_cell <= joint.segment)

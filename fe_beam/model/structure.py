@@ -191,6 +191,9 @@ class Structure:
     joints_on_chain: tuple[ChainJoint, ...] = field(init=False, default=())
     #: {"x0" | "xL": support kind} of the chain's two ends
     end_supports: dict = field(init=False, default_factory=dict)
+    #: ((joint name, chain end "x0" | "xL", the rod end is named first), ...): rod ends
+    #: joined to a fixed body
+    body_joints: tuple = field(init=False, default=())
 
     def __post_init__(self):
         object.__setattr__(self, "rods", tuple(self.rods))
@@ -240,7 +243,7 @@ class Structure:
         scale = max(rod.length for rod in self.rods)
         used: dict[tuple[str, str], str] = {}  # rod end -> joint
         links = []  # (joint, (rod, end), (rod, end))
-        clamped: dict[tuple[str, str], str] = {}  # rod end -> body
+        clamped: dict[tuple[str, str], tuple] = {}  # rod end -> (body, joint, rod first)
         for joint in self.joints:
             ends = [self._end(joint, entry) for entry in joint.at]
             rods = [(name, end) for kind, name, end in ends if kind == "rod"]
@@ -265,16 +268,17 @@ class Structure:
                                  f"the reference geometry: {', '.join(joint.at)} are "
                                  f"{distance:.6g} m apart")
             if bodies:
-                clamped[rods[0]] = bodies[0]
+                clamped[rods[0]] = (bodies[0], joint.name,
+                                    joint.at[0].partition(":")[0] != "body")
             else:
                 links.append((joint, rods[0], rods[1]))
-        joined_bodies = set(clamped.values())
+        joined_bodies = {body for body, _, _ in clamped.values()}
         for body in self.bodies:
             if body.name not in joined_bodies:
                 raise ValueError(f"[[bodies]] '{body.name}' is joined to no rod end; name it in "
                                  "a [[joints]] at (e.g. at = [\"rod:start\", "
                                  f"\"body:{body.name}\"]) or remove it")
-        for (name, end), body in clamped.items():
+        for (name, end), (body, _, _) in clamped.items():
             rod = self.rods[self.rod_index(name)]
             if end in rod.supports:
                 raise ValueError(f"[[rods]] '{name}' supports.{'x0' if end == 'start' else 'xL'}"
@@ -352,14 +356,18 @@ class Structure:
                     raise ValueError(f"[[rods]] '{rod.name}' supports.{key}: a support at an "
                                      "end joined to another rod is not supported yet (support "
                                      "the chain's free ends, or join a fixed body there)")
-        supports = {}
+        supports, body_joints = {}, []
         for chain_end, (name, flipped), which in (("x0", order[0], 0), ("xL", order[-1], 1)):
             ends = ("end", "start") if flipped else ("start", "end")
             end = ends[which]
             rod = self.rods[self.rod_index(name)]
             kind = "clamped" if (name, end) in clamped else rod.supports.get(end, "free")
             supports[chain_end] = kind
+            if (name, end) in clamped:
+                _, joint_name, rod_first = clamped[(name, end)]
+                body_joints.append((joint_name, chain_end, rod_first))
         object.__setattr__(self, "end_supports", supports)
+        object.__setattr__(self, "body_joints", tuple(body_joints))
 
     # --- what the finite elements need --------------------------------------------------------
     def chain_point_loads(self) -> tuple[tuple, tuple]:
