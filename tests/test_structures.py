@@ -208,6 +208,14 @@ def test_lee_frame_limit_point(tmp_path, lee_limit):
     reference, _ = lee_limit
     assert abs(found - 18.5) < 0.1
     assert abs(found - reference) <= 1e-4 * reference, (found, reference)
+    # path.csv: the rods' ends and the corner's force per point, as in summary.json
+    import csv
+
+    rows = list(csv.DictReader(open(tmp_path / "out" / "path.csv")))
+    last = summary["path"][-1]
+    assert float(rows[-1]["rod_column_x"]) == last["rods"]["column"]["tip"][0]
+    assert float(rows[-1]["joint_corner_Fy"]) == last["joints"]["corner"]["force"][1]
+    assert float(rows[-1]["joint_corner_M"]) == last["joints"]["corner"]["moment"]
 
 
 # --- mistakes and what this version does not do ------------------------------------------------

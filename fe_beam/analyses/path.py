@@ -16,6 +16,7 @@ from fe_beam.analyses.static import (
     beam_dofs_estimate,
     check_beam_work,
     contact_columns,
+    structure_columns,
     structure_record,
 )
 from fe_beam.config.path import parse_path
@@ -391,7 +392,8 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
 
     files, content = _path_files(out if writing else None, writer, summary, started,
                                  static.output.plots, comm, spatial=problem.spatial,
-                                 extra_columns=contact_columns(len(obstacles), problem.spatial),
+                                 extra_columns=contact_columns(len(obstacles), problem.spatial)
+                                 + structure_columns(static.model),
                                  draw=draw_shapes if drawing else None)
     bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
 

@@ -37,7 +37,7 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
 
 __all__ = ["StaticContinuation", "StaticResult", "contact_checks", "contact_columns",
            "contact_line", "run",
-           "solve_static", "structure_record"]
+           "solve_static", "structure_columns", "structure_record"]
 
 
 @dataclass
@@ -214,7 +214,8 @@ def solve_static(
     files = exports.Exports(states + ([
         exports.CSVExport(out / "load_displacement.csv",
                           (SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS)
-                          + contact_columns(len(config.obstacles), problem.spatial)),
+                          + contact_columns(len(config.obstacles), problem.spatial)
+                          + structure_columns(config.model)),
         exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
         exports.PlotExport(lambda _: _write_plots(out, result, config)
                            if config.output.plots and result.shapes else None),
@@ -363,6 +364,14 @@ def _model_summary(config: StaticConfig) -> dict:
         law["kinematics"] = "spatial"
         law["initial_curvature"] = [p.constant if p.is_constant else p.text
                                     for p in m.initial_curvature]
+    structure = getattr(m, "structure", None)
+    if structure is not None:  # a chain of rods: its rods and joints as given
+        law["structure"] = {
+            "rods": [{"name": r.name, "start": list(r.start), "direction": list(r.direction),
+                      "length": r.length, "elements": r.elements} for r in structure.rods],
+            "joints": [{"name": j.name, "kind": j.kind, "at": list(j.at)}
+                       for j in structure.joints],
+            "chain": [structure.rods[seg.rod].name for seg in structure.chain]}
     return {
         "length": m.length,
         "law": m.options.law,
@@ -401,6 +410,28 @@ SPATIAL_CSV_COLUMNS = [
     *[exports.Column(f"tip_rotation_{k}", lambda s, i=i: s["tip"]["rotation_vector"][i])
       for i, k in enumerate("xyz")],
     exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
+
+
+def structure_columns(model) -> list:
+    """A chain of rods' CSV columns: ``rod_<name>_x``, ``_y``, ``_angle`` (each rod's end,
+    world axes) and ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod)."""
+    structure = getattr(model, "structure", None)
+    if structure is None:
+        return []
+    columns = []
+    for rod in structure.rods:
+        columns += [
+            exports.Column(f"rod_{rod.name}_x", lambda r, n=rod.name: r["rods"][n]["tip"][0]),
+            exports.Column(f"rod_{rod.name}_y", lambda r, n=rod.name: r["rods"][n]["tip"][1]),
+            exports.Column(f"rod_{rod.name}_angle",
+                           lambda r, n=rod.name: r["rods"][n]["tip_angle"])]
+    names = [j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+    for name in names:
+        columns += [
+            exports.Column(f"joint_{name}_Fx", lambda r, n=name: r["joints"][n]["force"][0]),
+            exports.Column(f"joint_{name}_Fy", lambda r, n=name: r["joints"][n]["force"][1]),
+            exports.Column(f"joint_{name}_M", lambda r, n=name: r["joints"][n]["moment"])]
+    return columns
 
 
 def contact_columns(count: int, spatial: bool = False) -> list:
