@@ -360,3 +360,25 @@ def test_one_rotated_rod_is_the_rotated_rod():
     expected = np.array([0.3, -0.2]) + turn @ np.array([length + tip["u"], tip["v"]])
     assert rod["tip"] == pytest.approx(expected.tolist(), abs=1e-12)
     assert rod["tip_angle"] == pytest.approx(angle + tip["theta"], abs=1e-12)
+
+
+def test_xdmf_moves_the_line_onto_the_chain(tmp_path):
+    """beam.xdmf: the mesh's points (s, 0) plus `displacement` are the deformed chain (each
+    rod's end where `rods` has it), and `rod` names each cell's rod."""
+    import h5py
+
+    EI, _, _ = _stiffness()
+    config = _l_frame(1.0, 0.5, [0.3 * EI, -0.9 * EI], elements=4)
+    config["output"] = {"xdmf": True, "plots": False}
+    summary = fe_beam.run("static", config, tmp_path / "out")
+    with h5py.File(tmp_path / "out" / "beam.h5", "r") as h5:
+        points = np.asarray(h5["Mesh"]["mesh"]["geometry"])[:, 0]
+        last = lambda name: np.asarray(  # noqa: E731
+            h5["Function"][name][str(max(int(k) for k in h5["Function"][name]))])
+        displacement, rod = last("displacement"), last("rod").ravel()
+    placed = points[:, None] * np.array([1.0, 0.0]) + displacement[:, :2]
+    rods = summary["steps"][-1]["rods"]
+    for name, s in (("column", 1.0), ("beam", 1.5)):
+        at = int(np.argmin(np.abs(points - s)))
+        assert placed[at] == pytest.approx(rods[name]["tip"], abs=1e-12)
+    assert sorted(set(rod.tolist())) == [0.0, 1.0] and np.count_nonzero(rod == 1.0) == 4
