@@ -382,3 +382,19 @@ def test_xdmf_moves_the_line_onto_the_chain(tmp_path):
         at = int(np.argmin(np.abs(points - s)))
         assert placed[at] == pytest.approx(rods[name]["tip"], abs=1e-12)
     assert sorted(set(rod.tolist())) == [0.0, 1.0] and np.count_nonzero(rod == 1.0) == 4
+
+
+def test_frame_shooting_small_load_is_castigliano():
+    """The shooting baseline itself: an L-frame under a small tip force (Reissner law) against
+    the unit-load method; the section force just before the tip is the tip force."""
+    a, b = 0.8, 0.6
+    EI, EA, GA = _stiffness()
+    P = 1e-7 * EI / b**2
+    frame = frame_shooting.Frame((a, b), (math.pi / 2, 0.0), EI, EA, GA, (0.0, 0.0),
+                                 "clamped", "free", ((a + b, 0.0, -P),))
+    end = frame_shooting.solve_frame(frame).end()
+    v = -P * (b**3 / (3 * EI) + b / GA + a * b**2 / EI + a / EA)
+    u = P * a**2 * b / (2 * EI)
+    assert end[1] - a == pytest.approx(v, rel=1e-6)
+    assert end[0] - b == pytest.approx(u, rel=1e-6)
+    assert end[3:] == pytest.approx([0.0, -P, 0.0], abs=1e-9 * P)
