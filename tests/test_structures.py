@@ -8,6 +8,7 @@ limit point)."""
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import math
 
@@ -398,3 +399,44 @@ def test_frame_shooting_small_load_is_castigliano():
     assert end[1] - a == pytest.approx(v, rel=1e-6)
     assert end[0] - b == pytest.approx(u, rel=1e-6)
     assert end[3:] == pytest.approx([0.0, -P, 0.0], abs=1e-9 * P)
+
+
+def test_rods_with_their_own_section_and_material_against_shooting():
+    """A column of another height and a beam of another material (the rods' own section and
+    material tables over the top level's) under a large tip force, against shooting with the
+    members' own EI, EA, GA."""
+    a, b = 1.0, 0.8
+    h_column, E_beam, nu_beam = 0.035, 5.0e7, 0.45
+    config = _l_frame(a, b, [0.0, 0.0], elements=24)
+    config["rods"][0]["section"] = {"h": h_column}
+    config["rods"][1]["material"] = {"E": E_beam, "nu": nu_beam}
+    EI, EA, GA = _stiffness()
+    column = (E * B * h_column**3 / 12, E * B * h_column, E / (2 * (1 + NU)) * B * h_column)
+    beam = (E_beam * B * H**3 / 12, E_beam * B * H, E_beam / (2 * (1 + nu_beam)) * B * H)
+    force = [0.5 * column[0], -2.0 * column[0]]
+    config["rods"][1]["loads"] = {"point_forces": [[b, *force]]}
+    step = fe_beam.run("static", config)["steps"][-1]
+    frame = frame_shooting.Frame((a, b), (math.pi / 2, 0.0), (column[0], beam[0]),
+                                 (column[1], beam[1]), (column[2], beam[2]), (0.0, 0.0),
+                                 "clamped", "free", ((a + b, *force),))
+    reference = frame_shooting.solve_frame(frame).end()
+    tip = step["rods"]["beam"]["tip"]
+    assert math.hypot(reference[0] - b, reference[1] - a) > 0.3 * b  # large
+    assert math.hypot(tip[0] - reference[0], tip[1] - reference[1]) <= 2e-7 * b
+    # the same frame with the top level's section and material everywhere is another one
+    uniform = frame_shooting.solve_frame(dataclasses.replace(frame, EI=EI, EA=EA, GA=GA)).end()
+    assert math.hypot(tip[0] - uniform[0], tip[1] - uniform[1]) > 1e-2 * b
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda c: c["rods"][0].update(section={"shape": "circle", "d": 0.02}),
+     "a shape different from [section] shape is not supported yet"),
+    (lambda c: c["rods"][0].update(section={"h_tip": 0.02}), "tapered rod"),
+    (lambda c: c["rods"][0].update(material={"rho": 1000.0}), "density different"),
+    (lambda c: c["rods"][0].update(model={"law": "nonstandard"}), "own law or constraint"),
+    (lambda c: c["rods"][0].update(section={"h": -0.01}), "[[rods]] 'column' section:"),
+])
+def test_rods_own_tables_mistakes(change, words):
+    with pytest.raises(ConfigError) as error:
+        validate("static", _edit(change))
+    assert words in str(error.value), str(error.value)

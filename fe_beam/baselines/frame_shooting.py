@@ -34,14 +34,15 @@ __all__ = ["Frame", "FrameSolution", "lee_frame", "limit_load", "solve_frame"]
 
 @dataclass(frozen=True)
 class Frame:
-    """Members (lengths, reference angles), stiffnesses, the start point, end conditions and
-    point forces ((s, Px, Py), ...) at the chain's arc length s (loads at load factor 1)."""
+    """Members (lengths, reference angles), stiffnesses (numbers, or tuples: one per member),
+    the start point, end conditions and point forces ((s, Px, Py), ...) at the chain's arc
+    length s (loads at load factor 1)."""
 
     lengths: tuple
     angles: tuple
-    EI: float
-    EA: float = math.inf
-    GA: float = math.inf
+    EI: float | tuple
+    EA: float | tuple = math.inf
+    GA: float | tuple = math.inf
     start: tuple = (0.0, 0.0)
     start_kind: str = "clamped"
     end_kind: str = "free"
@@ -81,17 +82,24 @@ class FrameSolution:
         return sol.y[:, -1]
 
 
-def _rhs(frame: Frame, factor: float):
+def _member(frame: Frame, k: int) -> tuple[float, float, float]:
+    """(EI, EA, GA) of member k (each a number for every member, or one per member)."""
+    return tuple(float(value[k]) if isinstance(value, (tuple, list)) else float(value)
+                 for value in (frame.EI, frame.EA, frame.GA))
+
+
+def _rhs(frame: Frame, factor: float, k: int = 0):
     fx, fy = (factor * c for c in frame.distributed)
+    EI, EA, GA = _member(frame, k)
 
     def rhs(_s, y):
         _, _, phi, nx, ny, m = y
         c, s = math.cos(phi), math.sin(phi)
         normal, shear = nx * c + ny * s, -nx * s + ny * c
-        e = 0.0 if math.isinf(frame.EA) else normal / frame.EA
-        g = 0.0 if math.isinf(frame.GA) else shear / frame.GA
+        e = 0.0 if math.isinf(EA) else normal / EA
+        g = 0.0 if math.isinf(GA) else shear / GA
         rx, ry = (1 + e) * c - g * s, (1 + e) * s + g * c
-        return [rx, ry, m / frame.EI, -fx, -fy, -(rx * ny - ry * nx)]
+        return [rx, ry, m / EI, -fx, -fy, -(rx * ny - ry * nx)]
 
     return rhs
 
@@ -102,10 +110,11 @@ def _integrate(frame: Frame, factor: float, y0, rtol: float, dense: bool = False
                                             if 0 < p[0] < frame.length})
     points = [0.0] + breaks + [frame.length]
     corners = frame.corners()
-    rhs = _rhs(frame, factor)
     y = np.array(y0, dtype=float)
     pieces = []
     for a, b in zip(points[:-1], points[1:], strict=True):
+        member = sum(1 for corner in corners if corner <= a + 1e-12 * frame.length)
+        rhs = _rhs(frame, factor, member)
         sol = scipy.integrate.solve_ivp(rhs, (a, b), y, method="DOP853", rtol=rtol,
                                         atol=rtol * 1e-3, dense_output=dense)
         y = sol.y[:, -1].copy()
@@ -149,22 +158,23 @@ def _end_residual(frame: Frame, end: np.ndarray) -> np.ndarray:
 
 
 def _scales(frame: Frame) -> np.ndarray:
-    force = frame.EI / frame.length**2
+    force = _member(frame, 0)[0] / frame.length**2
     return np.array([force * frame.length, force, force]) if frame.start_kind == "clamped" \
         else np.array([1.0, force, force])
 
 
 def solve_frame(frame: Frame, factor: float = 1.0, guess=None, rtol: float = 1e-12,
-                dense: bool = True) -> FrameSolution:
+                dense: bool = True, steps: int = 10) -> FrameSolution:
     """The equilibrium at ``factor`` times the loads (shooting from ``guess``: the start's
-    unknowns, default the unloaded state)."""
+    unknowns, default the unloaded state; when that fails, from the equilibria at ``steps``
+    increasing fractions of the load)."""
     scale = _scales(frame)
     if guess is None:
         guess = [0.0, 0.0, 0.0] if frame.start_kind == "clamped" else [frame.angles[0], 0, 0]
-    res_scale = np.array([frame.EI / frame.length, frame.EI / frame.length**2,
-                          frame.EI / frame.length])
+    EI = _member(frame, 0)[0]
+    res_scale = np.array([EI / frame.length, EI / frame.length**2, EI / frame.length])
     if frame.end_kind != "free":
-        res_scale = np.array([frame.length, frame.length, frame.EI / frame.length])
+        res_scale = np.array([frame.length, frame.length, EI / frame.length])
         if frame.end_kind == "clamped":
             res_scale[2] = 1.0
 
@@ -172,10 +182,19 @@ def solve_frame(frame: Frame, factor: float = 1.0, guess=None, rtol: float = 1e-
         end, _ = _integrate(frame, factor, _start_state(frame, z * scale), rtol)
         return _end_residual(frame, end) / res_scale
 
-    found = scipy.optimize.root(residual, np.asarray(guess) / scale, method="hybr",
-                                options={"xtol": 1e-13})
-    if not found.success or np.max(np.abs(found.fun)) > 1e-9:
-        raise RuntimeError(f"frame shooting did not converge: {found.message}")
+    def shoot(z0):
+        found = scipy.optimize.root(residual, z0, method="hybr", options={"xtol": 1e-13})
+        return found if np.max(np.abs(found.fun)) <= 1e-10 else None
+
+    found = shoot(np.asarray(guess) / scale)
+    if found is None and steps > 1:  # large loads: step the load factor from the guess's
+        start = np.asarray(guess, dtype=float)
+        for k in range(1, steps + 1):
+            start = solve_frame(frame, factor * k / steps, start, rtol, dense=False,
+                                steps=1).start_values
+        found = shoot(start / scale)
+    if found is None:
+        raise RuntimeError("frame shooting did not converge")
     values = found.x * scale
     _, pieces = _integrate(frame, factor, _start_state(frame, values), rtol, dense=dense)
     return FrameSolution(frame, factor, values, pieces)
@@ -193,7 +212,8 @@ def _displacement_controlled(frame: Frame, s_point: float, component: int, targe
                              guess, rtol: float):
     """(factor, start unknowns) with the point s_point's ``component`` (0: x, 1: y) at
     ``target``: the load factor is a fourth unknown."""
-    scale = np.append(_scales(frame), frame.EI / frame.length**2)
+    EI = _member(frame, 0)[0]
+    scale = np.append(_scales(frame), EI / frame.length**2)
 
     def residual(z):
         values = z * scale
@@ -201,7 +221,7 @@ def _displacement_controlled(frame: Frame, s_point: float, component: int, targe
         end, pieces = _integrate(frame, values[3], start, rtol, dense=True)
         state = next(sol.sol(s_point) for a, b, sol in pieces if a <= s_point <= b)
         return np.append(_end_residual(frame, end) / np.array([frame.length, frame.length,
-                                                               frame.EI / frame.length]),
+                                                               EI / frame.length]),
                          (state[component] - target) / frame.length)
 
     found = scipy.optimize.root(residual, np.asarray(guess) / scale, method="hybr",

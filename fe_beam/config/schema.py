@@ -7,6 +7,7 @@ what was given; the CLI prints it and exits with code 2.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import stat
 import tomllib
@@ -36,6 +37,7 @@ from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
 from fe_beam.model.spatial import SpatialLoads, SpatialRodModel, SpatialSupports
+from fe_beam.model.structure import Structure
 from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
 
@@ -213,16 +215,7 @@ def parse_structure_model(config: dict) -> BeamModel:
     if section.dims_tip:
         raise ConfigError("[section] *_tip (a tapered section) with [[rods]] is not supported "
                           "yet: each rod has the section of [section]")
-    for rod, entry in zip(structure.rods, config["rods"], strict=True):
-        for key in ("section", "material", "model"):
-            own = entry.get(key)
-            if own is None:
-                continue
-            given = config.get(key, {}) if isinstance(config.get(key), dict) else {}
-            if (given | own) != given:
-                raise ConfigError(f"[[rods]] '{rod.name}' {key}: a rod's own {key} different "
-                                  f"from the top-level [{key}] is not supported yet (every rod "
-                                  f"takes [{key}])")
+    structure = _own_sections(config, structure, section, material, model["law"])
     loads = table(config, "loads")
     forces, moments = structure.chain_point_loads()
     elements = sum(rod.elements for rod in structure.rods)
@@ -239,6 +232,61 @@ def parse_structure_model(config: dict) -> BeamModel:
                     point_forces=forces, point_moments=moments),
         structure=structure,
     )
+
+
+def _own_sections(config: dict, structure, section, material, law: str):
+    """The structure with each rod's section dimensions and (E, G) when a rod has its own
+    ``section`` or ``material`` table (over the top-level ones: the same shape, no taper, the
+    same density); rods' own ``model`` tables are refused."""
+    own_section = own_material = False
+    dims, moduli = [], []
+    for rod, entry in zip(structure.rods, config["rods"], strict=True):
+        where = f"[[rods]] '{rod.name}'"
+        if entry.get("model") is not None:
+            given = config.get("model", {}) if isinstance(config.get("model"), dict) else {}
+            if (given | entry["model"]) != given:
+                raise ConfigError(f"{where} model: a rod's own law or constraint different from "
+                                  "the top-level [model] is not supported yet (every rod takes "
+                                  "[model])")
+        top = config.get("section", {}) if isinstance(config.get("section"), dict) else {}
+        own = entry.get("section") or {}
+        if own.get("shape", top.get("shape", "rectangle")) != top.get("shape", "rectangle"):
+            raise ConfigError(f"{where} section.shape: a shape different from [section] shape "
+                              "is not supported yet (give the rod other dimensions of the same "
+                              "shape)")
+        try:
+            rod_section = parse_section({"section": top | own}) if own else section
+        except ConfigError as error:
+            raise ConfigError(f"{where} section: {error}") from None
+        if rod_section.dims_tip:
+            raise ConfigError(f"{where} section: *_tip (a tapered rod) is not supported yet")
+        own_section = own_section or rod_section.dims != section.dims
+        dims.append(tuple(sorted(rod_section.dims.items())))
+        top = config.get("material", {}) if isinstance(config.get("material"), dict) else {}
+        own = entry.get("material") or {}
+        if own and law == "hyperelastic":
+            raise ConfigError(f"{where} material: a rod's own material with [model] law = "
+                              "\"hyperelastic\" is not supported yet")
+        try:
+            rod_material = _wrap(Material, **table({"material": top | own}, "material")) \
+                if own else material
+        except ConfigError as error:
+            raise ConfigError(f"{where} material: {error}") from None
+        if rod_material.rho != material.rho:
+            raise ConfigError(f"{where} material.rho: a density different from [material] rho "
+                              "is not supported yet")
+        own_material = own_material or (rod_material.E, rod_material.shear_modulus) != (
+            material.E, material.shear_modulus)
+        moduli.append((rod_material.E, rod_material.shear_modulus))
+    if not (own_section or own_material):
+        return structure
+    if own_section and law == "hyperelastic":
+        raise ConfigError("[[rods]] section: a rod's own section with [model] law = "
+                          "\"hyperelastic\" is not supported yet")
+    rods = tuple(dataclasses.replace(rod, section=dims[i] if own_section else (),
+                                     material=moduli[i] if own_material else ())
+                 for i, rod in enumerate(structure.rods))
+    return _wrap(Structure, rods, structure.joints, structure.bodies)
 
 
 def structure_rigid_motions(model: BeamModel) -> list[str]:

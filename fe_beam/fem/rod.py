@@ -321,14 +321,18 @@ class BeamProblem:
         m, sec = self.model, self.model.section
         const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
         dims, dims_tip, x = self._material_constants()
+        E, G = self.E, self.G
+        if self.chain is not None:  # rods with their own sections or materials: DG0 fields
+            dims = self.chain.section_dims() or dims
+            E, G = self.chain.moduli() or (E, G)
         self.section_props = sec.properties(x / m.length, dims, dims_tip)
         p = self.section_props
         self.stiffness = Stiffness(
-            EA=self.E * p.A,
-            GA=self.G * p.A,
-            EI=self.E * p.I,
-            EI3=self.E * p.I3,
-            EI4=self.E * p.I4,
+            EA=E * p.A,
+            GA=G * p.A,
+            EI=E * p.I,
+            EI3=E * p.I3,
+            EI4=E * p.I4,
             shear_correction=self.k_shear,
         )
         self.law = self._make_law(x / m.length, dims, dims_tip)

@@ -71,6 +71,32 @@ class ChainGeometry:
         self._joint_form = None
         self._indicator = None
 
+    def cellwise(self, values) -> fem.Function:
+        """A DG0 field whose value on each cell is ``values[i]`` of the cell's rod i."""
+        field = fem.Function(self.theta0.function_space)
+        dofs = compat.cell_dofs(field.function_space)[: len(self._segment_of_cell), 0]
+        rods = np.array([self.structure.chain[k].rod for k in self._segment_of_cell], dtype=int)
+        field.x.array[dofs] = np.asarray(values, dtype=float)[rods]
+        field.x.scatter_forward()
+        return field
+
+    def section_dims(self) -> dict | None:
+        """{dimension: DG0 field} of the rods' own sections (None: the top-level section)."""
+        rods = self.structure.rods
+        if not rods[0].section:
+            return None
+        names = [name for name, _ in rods[0].section]
+        return {name: self.cellwise([dict(rod.section)[name] for rod in rods])
+                for name in names}
+
+    def moduli(self) -> tuple | None:
+        """(E, G) DG0 fields of the rods' own materials (None: the top-level material)."""
+        rods = self.structure.rods
+        if not rods[0].material:
+            return None
+        return (self.cellwise([rod.material[0] for rod in rods]),
+                self.cellwise([rod.material[1] for rod in rods]))
+
     # --- kinematics -----------------------------------------------------------------------------
     def world_tangent(self, u, v):
         """r' = X' + (u', v') in world axes."""

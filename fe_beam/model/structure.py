@@ -44,6 +44,10 @@ class Rod:
     supports: dict = field(default_factory=dict)
     point_forces: tuple = ()
     point_moments: tuple = ()
+    #: the rod's section dimensions ((name, value), ...) and material ((E, G)) when a rod of
+    #: the structure has its own (every rod then carries its values); () : the top level's
+    section: tuple = ()
+    material: tuple = ()
 
     def __post_init__(self):
         where = f"[[rods]] '{self.name}'"
