@@ -54,8 +54,8 @@ def table_target(name: str) -> str:
 
 
 def _table_title(name: str) -> str:
-    if name == "tendons":
-        return "[[tendons]]"
+    if name in ("tendons", "rods", "joints", "bodies"):
+        return f"[[{name}]]"
     if name.endswith(" (fe-beam solid)"):
         return f"[{name.split()[0]}] of fe-beam solid"
     return f"[{name}]"
