@@ -248,6 +248,8 @@ MISTAKES = [
     (lambda c: c["rods"][0].update(supports={"x0": "pinned", "xL": "clamped"}),
      "supports.xL: a support at an end joined to another rod"),
     (lambda c: c["rods"][1].update(supports={}), "free to move as a rigid body"),
+    (lambda c: c["rods"][0].update(loads={"point_forces": [[0.0, 1.0, 0.0]]}),
+     "would be taken by the support"),
 ]
 UNSUPPORTED = [
     (lambda c: c["joints"][0].update(kind="pin"), "kind = 'pin' is not supported yet"),
@@ -440,3 +442,34 @@ def test_rods_own_tables_mistakes(change, words):
     with pytest.raises(ConfigError) as error:
         validate("static", _edit(change))
     assert words in str(error.value), str(error.value)
+
+
+def test_three_rods_in_any_order_and_orientation_are_the_rod():
+    """A cantilever cut in three rods listed out of order, the middle one given from its end
+    (joined end to end and start to start), and the clamped rod last in the chain's order:
+    the chain is found, and its free end is the single rod's tip."""
+    length = 0.9
+    single = _base(elements=9)
+    single["beam"] = {"length": length}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    single["loads"] |= {"tip_force": [0.4, -1.5], "distributed": [0.0, -1.0]}
+    split = _base(elements=3)
+    split["loads"] |= {"distributed": [0.0, -1.0]}
+    split["rods"] = [
+        {"name": "middle", "start": [0.6, 0.0], "direction": [-1.0, 0.0], "length": 0.3},
+        {"name": "last", "start": [0.6, 0.0], "direction": [1.0, 0.0], "length": 0.3,
+         "loads": {"point_forces": [[0.3, 0.4, -1.5]]}},
+        {"name": "first", "start": [0.0, 0.0], "direction": [1.0, 0.0], "length": 0.3,
+         "supports": {"x0": "clamped"}}]
+    split["joints"] = [{"name": "j2", "at": ["last:start", "middle:start"]},
+                       {"name": "j1", "at": ["middle:end", "first:end"]}]
+    tip = fe_beam.run("static", single)["steps"][-1]["tip"]
+    step = fe_beam.run("static", split)["steps"][-1]
+    assert step["rods"]["last"]["tip"] == pytest.approx([length + tip["u"], tip["v"]],
+                                                        abs=1e-12)
+    assert step["tip"]["theta"] == pytest.approx(tip["theta"], abs=1e-12)
+    # the middle rod's own end is the first joint: its angle is the rod's (pi) + theta there
+    assert step["rods"]["middle"]["tip"] == pytest.approx(step["rods"]["first"]["tip"],
+                                                          abs=1e-14)
+    assert step["rods"]["middle"]["tip_angle"] == pytest.approx(
+        math.pi + step["rods"]["first"]["tip_angle"], abs=1e-14)

@@ -218,6 +218,15 @@ def parse_structure_model(config: dict) -> BeamModel:
     structure = _own_sections(config, structure, section, material, model["law"])
     loads = table(config, "loads")
     forces, moments = structure.chain_point_loads()
+    for s, *_ in forces:
+        if s == 0.0:
+            segment = structure.chain[0]
+            rod = structure.rods[segment.rod]
+            end = "xL" if segment.reversed else "x0"
+            raise ConfigError(f"[[rods]] '{rod.name}' loads.point_forces: a force at the rod's "
+                              f"{end} end, held by supports.{end} = "
+                              f"{structure.end_supports['x0']!r}, would be taken by the support; "
+                              "load a free end or a point of a rod")
     elements = sum(rod.elements for rod in structure.rods)
     supports = structure.end_supports
     return _wrap(

@@ -302,10 +302,24 @@ class Structure:
             raise ValueError(f"[[joints]]: {len(names)} rods and {len(links)} rod-to-rod joints "
                              "do not make one serial chain (closed loops and separate pieces "
                              "are not supported yet)")
-        first = next((n for n in names if len(neighbours[n]) <= 1), None)
-        if first is None:
+        # the chain starts at a free end of an end rod, a held one if there is (the single
+        # rod's convention: x0 supported, the tip free), else the first in [[rods]] order
+        starts = []
+        for n in names:
+            if not neighbours[n]:
+                starts += [(n, "start"), (n, "end")]
+            elif len(neighbours[n]) == 1:
+                joined = neighbours[n][0][1][1]
+                starts.append((n, "end" if joined == "start" else "start"))
+        if not starts:
             raise ValueError("[[joints]]: the rods form a closed loop, which is not supported "
                              "yet")
+
+        def held(start):
+            rod = self.rods[self.rod_index(start[0])]
+            return start in clamped or rod.supports.get(start[1], "free") != "free"
+
+        first, first_end = next((c for c in starts if held(c)), starts[0])
         # walk the chain: each rod entered at one end leaves by the other
         order, entered = [], None
         current, visited = first, set()
@@ -313,9 +327,8 @@ class Structure:
             visited.add(current)
             exits = [link for link in neighbours[current] if entered is None
                      or link[0].name != entered.name]
-            if entered is None:
-                # the first rod: run away from its joint (if any)
-                start_end = "end" if exits and exits[0][1][1] == "start" else "start"
+            if entered is None:  # the first rod: from the chosen end
+                start_end = first_end
             else:
                 start_end = next(link for link in neighbours[current]
                                  if link[0].name == entered.name)[1][1]
