@@ -217,6 +217,12 @@ def test_lee_frame_limit_point(tmp_path, lee_limit):
     assert float(rows[-1]["rod_column_x"]) == last["rods"]["column"]["tip"][0]
     assert float(rows[-1]["joint_corner_Fy"]) == last["joints"]["corner"]["force"][1]
     assert float(rows[-1]["joint_corner_M"]) == last["joints"]["corner"]["moment"]
+    # the column pinned at the origin as a free body: the corner's moment on it balances the
+    # moment of the corner's force about the pin (the multipliers' forces included)
+    for point in summary["path"][1:]:
+        (x, y), joint = point["rods"]["column"]["tip"], point["joints"]["corner"]
+        fx, fy = joint["force"]
+        assert joint["moment"] == pytest.approx(-(x * fy - y * fx), abs=1e-9 * abs(fy))
 
 
 # --- mistakes and what this version does not do ------------------------------------------------
