@@ -103,16 +103,16 @@ def test_l_frame_small_load_is_castigliano():
     v = -P (b^3 / (3 EI) + b / GA + a b^2 / EI + a / EA), u = P a^2 b / (2 EI)."""
     a, b = 0.8, 0.6  # stubby members: shear and axial terms are ~1e-3 of the bending ones
     EI, EA, GA = _stiffness()
-    P = 1e-6 * EI / b**2
+    P = 1e-8 * EI / b**2  # the nonlinear terms: 7e-9, 1.3e-8 relative (measured)
     summary = fe_beam.run("static", _l_frame(a, b, [0.0, -P], elements=8))
     assert summary["status"] == "converged"
     tip = summary["steps"][-1]["tip"]
     v = -P * (b**3 / (3 * EI) + b / GA + a * b**2 / EI + a / EA)
     u = P * a**2 * b / (2 * EI)
     shear_and_axial = P * (b / GA + a / EA)
-    assert abs(tip["v"] - v) <= 1e-6 * abs(v)
-    assert abs(tip["v"] - v) < 1e-2 * shear_and_axial  # the shear and axial terms are resolved
-    assert abs(tip["u"] - u) <= 1e-6 * abs(u)
+    assert abs(tip["v"] - v) <= 1e-7 * abs(v)
+    assert abs(tip["v"] - v) < 1e-4 * shear_and_axial  # the shear and axial terms are resolved
+    assert abs(tip["u"] - u) <= 1e-7 * abs(u)
 
 
 def test_l_frame_large_load_against_shooting_and_joint_equilibrium():
