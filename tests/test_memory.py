@@ -8,8 +8,8 @@ segfault). `fe_beam.fem.compat` puts CPython's fix in place on those versions.
 """
 
 import copy
-import gc
 import functools
+import gc
 import tomllib
 import weakref
 from pathlib import Path
