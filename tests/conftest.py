@@ -45,11 +45,12 @@ def _stray_sigterm(signum, frame):
 
 
 def _guard_sigterm() -> None:
-    """PETSc's import installs C-level signal handlers: PyPI's PETSc ends the process with
-    exit code 15 on SIGTERM, Debian's aborts. A stray SIGTERM (CI runs of the PyPI stack were
-    ended so, at different tests, with no sender found) would end the whole suite silently;
-    the tests that send SIGTERM to this process install fe_beam's own handler first and put
-    this one back."""
+    """PETSc's import installs C-level signal handlers, which end the process quietly (PyPI's
+    PETSc with MPICH's MPI_ERR_OTHER, exit 15). The PyPI suite's exit 15 was not a signal (it
+    was MPICH running out of communicators, tests/test_memory.py); this guard stays so that a
+    stray SIGTERM, should one come, names the test and the process tree instead of ending the
+    suite silently. The tests that send SIGTERM to this process install fe_beam's own handler
+    first and put this one back."""
     if any(name.startswith(("OMPI_COMM_WORLD", "PMI_", "PMIX_", "MPI_LOCALNRANKS"))
            for name in os.environ):
         return  # a rank under mpirun: the launcher's SIGTERM (another rank failed) must end it

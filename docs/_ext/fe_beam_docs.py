@@ -54,8 +54,8 @@ def table_target(name: str) -> str:
 
 
 def _table_title(name: str) -> str:
-    if name == "tendons":
-        return "[[tendons]]"
+    if name in ("tendons", "rods", "joints", "bodies"):
+        return f"[[{name}]]"
     if name.endswith(" (fe-beam solid)"):
         return f"[{name.split()[0]}] of fe-beam solid"
     return f"[{name}]"
@@ -144,6 +144,11 @@ def config_reference(tables: dict, readers: dict, dims: dict) -> str:
         lines += [f"({table_target(name)})=", f"## {_table_title(name)}", ""]
         if base in _SCHEMA_TABLES:
             lines.append("Read by every command.")
+        elif base in ("rods", "joints", "bodies"):
+            lines.append("A structure of rods (arrays of tables `[[rods]]`, `[[joints]]`, "
+                         "`[[bodies]]`), read by {doc}`fe-beam static </generated/commands/"
+                         "static>` and {doc}`fe-beam path </generated/commands/path>`; "
+                         "see {doc}`/structures`.")
         elif name.endswith("(fe-beam solid)"):
             lines.append("Read by {doc}`fe-beam solid </generated/commands/solid>`.")
         elif who:

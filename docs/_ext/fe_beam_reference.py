@@ -116,6 +116,7 @@ def tables() -> dict[str, dict[str, tuple]]:
     from fe_beam.config.keys import NUMBER, SCHEMA
     from fe_beam.config.path import PATH_KEYS
     from fe_beam.config.solid import SOLID_KEYS, SOLID_MODES_KEYS
+    from fe_beam.config.structure import BODY_KEYS, JOINT_KEYS, ROD_KEYS
     from fe_beam.config.transient import (
         DAMPING_KEYS,
         INITIAL_KEYS,
@@ -144,6 +145,9 @@ def tables() -> dict[str, dict[str, tuple]]:
     result["validity"] = _from_keys(VALIDITY_KEYS)
     result["buckling"] = _from_keys(BUCKLING_KEYS)
     result["path"] = _from_keys(PATH_KEYS)
+    result["rods"] = _from_keys(ROD_KEYS)
+    result["joints"] = _from_keys(JOINT_KEYS)
+    result["bodies"] = _from_keys(BODY_KEYS)
     result["design"] = _undocumented(DESIGN_KEYS)
     result["calibrate"] = _undocumented(CALIBRATE_KEYS)
     return result

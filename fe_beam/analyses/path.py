@@ -16,6 +16,8 @@ from fe_beam.analyses.static import (
     beam_dofs_estimate,
     check_beam_work,
     contact_columns,
+    structure_columns,
+    structure_record,
 )
 from fe_beam.config.path import parse_path
 from fe_beam.errors import ConfigError
@@ -89,7 +91,7 @@ def follow_path(run, settings: ArcLength, branch_switch: str = "none", tol: floa
             "stable": None if found is None else found.unstable == 0,
             "energy_decreasing_directions": None if found is None else found.unstable,
             "branch": branch,
-        }
+        } | structure_record(run.problem)
         if contact is not None:
             entry["contact"] = contact.summary()
         result.path.append(entry)
@@ -390,7 +392,8 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
 
     files, content = _path_files(out if writing else None, writer, summary, started,
                                  static.output.plots, comm, spatial=problem.spatial,
-                                 extra_columns=contact_columns(len(obstacles), problem.spatial),
+                                 extra_columns=contact_columns(len(obstacles), problem.spatial)
+                                 + structure_columns(static.model),
                                  draw=draw_shapes if drawing else None)
     bar = ProgressBar(comm, total=settings.max_steps, label="path", enabled=progress)
 

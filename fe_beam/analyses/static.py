@@ -40,7 +40,7 @@ from fe_beam.solvers.rod_static import (  # noqa: F401  (the engine's home; re-e
 
 __all__ = ["StaticContinuation", "StaticResult", "contact_checks", "contact_columns",
            "contact_line", "run",
-           "solve_static"]
+           "solve_static", "structure_columns", "structure_record"]
 
 
 @dataclass
@@ -103,7 +103,17 @@ def _step_record(problem: BeamProblem, step: StepResult) -> dict:
     }
     if problem.model.loads.end_motion():  # displacement control: the force it takes
         record["reaction_xL"] = problem.end_reaction("xL")
-    return record
+    return record | structure_record(problem)
+
+
+def structure_record(problem) -> dict:
+    """A chain of rods' per-step outputs: ``rods`` = {name: {tip: [x, y], tip_angle}} (each
+    rod's own end, world axes) and ``joints`` = {name: {force: [Fx, Fy], moment}} (on the
+    first end the joint names, world axes); {} for a single rod."""
+    chain = getattr(problem, "chain", None)
+    if chain is None:
+        return {}
+    return {"rods": chain.rods(), "joints": chain.joints()}
 
 
 #: the written moment field against the support's reaction moment (relative): an identity of
@@ -231,7 +241,8 @@ def solve_static(
     files = exports.Exports(states + ([
         exports.CSVExport(out / "load_displacement.csv",
                           (SPATIAL_CSV_COLUMNS if problem.spatial else CSV_COLUMNS)
-                          + contact_columns(len(config.obstacles), problem.spatial)),
+                          + contact_columns(len(config.obstacles), problem.spatial)
+                          + structure_columns(config.model)),
         exports.SummaryExport(out / "summary.json", lambda: result.summary(extra)),
         exports.PlotExport(lambda _: _write_plots(out, result, config)
                            if config.output.plots and result.shapes else None),
@@ -256,6 +267,8 @@ def solve_static(
         files.on_step(entry)
         if writer is not None and record_shapes:
             shape = writer.vertex_values(update=False)
+            if problem.chain is not None:  # the plots draw the chain in the plane
+                shape = problem.chain.shape(shape)
             if root:
                 result.shapes.append((f"load factor {step.load_factor:.3g}", shape))
 
@@ -394,6 +407,14 @@ def _model_summary(config: StaticConfig) -> dict:
         law["kinematics"] = "spatial"
         law["initial_curvature"] = [p.constant if p.is_constant else p.text
                                     for p in m.initial_curvature]
+    structure = getattr(m, "structure", None)
+    if structure is not None:  # a chain of rods: its rods and joints as given
+        law["structure"] = {
+            "rods": [{"name": r.name, "start": list(r.start), "direction": list(r.direction),
+                      "length": r.length, "elements": r.elements} for r in structure.rods],
+            "joints": [{"name": j.name, "kind": j.kind, "at": list(j.at)}
+                       for j in structure.joints],
+            "chain": [structure.rods[seg.rod].name for seg in structure.chain]}
     return {
         "length": m.length,
         "law": m.options.law,
@@ -434,6 +455,28 @@ SPATIAL_CSV_COLUMNS = [
     exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 
 
+def structure_columns(model) -> list:
+    """A chain of rods' CSV columns: ``rod_<name>_x``, ``_y``, ``_angle`` (each rod's end,
+    world axes) and ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod)."""
+    structure = getattr(model, "structure", None)
+    if structure is None:
+        return []
+    columns = []
+    for rod in structure.rods:
+        columns += [
+            exports.Column(f"rod_{rod.name}_x", lambda r, n=rod.name: r["rods"][n]["tip"][0]),
+            exports.Column(f"rod_{rod.name}_y", lambda r, n=rod.name: r["rods"][n]["tip"][1]),
+            exports.Column(f"rod_{rod.name}_angle",
+                           lambda r, n=rod.name: r["rods"][n]["tip_angle"])]
+    names = [j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+    for name in names:
+        columns += [
+            exports.Column(f"joint_{name}_Fx", lambda r, n=name: r["joints"][n]["force"][0]),
+            exports.Column(f"joint_{name}_Fy", lambda r, n=name: r["joints"][n]["force"][1]),
+            exports.Column(f"joint_{name}_M", lambda r, n=name: r["joints"][n]["moment"])]
+    return columns
+
+
 def contact_columns(count: int, spatial: bool = False) -> list:
     """load_displacement.csv's columns of obstacle i (in the order of [[obstacles]]): the
     force the obstacle exerts on the rod, its moment about the origin (spatial rods: Fz and
@@ -472,8 +515,16 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
                                                                   "rotation_vector")}
         plot_spatial_load_displacement(factors, tips, out / "load_displacement.png", title)
         return
-    plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                         obstacles=result.obstacles or config.obstacles, section=m.section)
+    structure = getattr(m, "structure", None)
+    if structure is not None:  # a chain: its reference polygon, the axes only
+        corners = (0.0, *structure.boundaries(), m.length)
+        undeformed = [structure.reference_point(s, structure.segment_at(min(s, m.length)))
+                      for s in corners]
+        plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                             undeformed=undeformed)
+    else:
+        plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
+                             obstacles=result.obstacles or config.obstacles, section=m.section)
     factors = [s["load_factor"] for s in result.steps]
     tips = {f"tip {k}": [s["tip"][k] for s in result.steps] for k in ("u", "v", "theta")}
     plot_load_displacement(factors, tips, out / "load_displacement.png", title)

@@ -20,6 +20,7 @@ from fe_beam.config.path import parse_path
 from fe_beam.config.refine import REFINE_ARGUMENTS, plan_refinement
 from fe_beam.config.schema import check_values, parse_static
 from fe_beam.config.solid import parse_solid
+from fe_beam.config.structure import check_structure_tables
 from fe_beam.config.transient import parse_dynamic, parse_modes
 from fe_beam.config.validity import parse_validity
 from fe_beam.errors import ConfigError
@@ -259,6 +260,7 @@ def validate(command: str, config: dict, refine: dict | None = None) -> Validate
         runs = [spec.name for spec in _SPECS if spec.spatial]
         raise ConfigError(f"fe-beam {command} does not run spatial rods yet ([model] kinematics "
                           f"= \"spatial\"); the commands that do: {', '.join(runs)}")
+    check_structure_tables(config, command)
     parsed = REGISTRY[command].parse(config, refine or {})
     options = []
     for settings in _solver_settings(parsed):

@@ -7,6 +7,7 @@ what was given; the CLI prints it and exits with code 2.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import stat
 import tomllib
@@ -23,12 +24,20 @@ from fe_beam.config.keys import (
     table,
 )
 from fe_beam.config.material_laws import MATERIAL_KEYS, hyperelastic_law
+from fe_beam.config.structure import (
+    STRUCTURE_TABLES,
+    check_structure_tables,
+    is_structure,
+    parse_structure,
+)
 from fe_beam.errors import ConfigError
 from fe_beam.model.beam import BeamModel, Discretisation, Loads, ModelOptions, Supports
+from fe_beam.model.beam import _rank as beam_rank
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
 from fe_beam.model.spatial import SpatialLoads, SpatialRodModel, SpatialSupports
+from fe_beam.model.structure import Structure
 from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
 
@@ -192,7 +201,129 @@ def _rod_material(config: dict, model: dict) -> tuple[Material, dict]:
     return material, {"hyperelastic": law, "section_points": points}
 
 
+def parse_structure_model(config: dict) -> BeamModel:
+    """The `BeamModel` of a structure of [[rods]] (a planar serial chain, `fe_beam.model.
+    structure`): one model along the chain's arc length, its ends' supports those of the
+    chain's end rods, the rods' point loads at chain coordinates; the top-level [section],
+    [material], [model] and [loads] gravity / distributed apply to every rod."""
+    check_structure_tables(config, "static")
+    structure = parse_structure(config)
+    model = table(config, "model")
+    model.pop("kinematics")
+    material, law_options = _rod_material(config, model)
+    section = parse_section(config)
+    if section.dims_tip:
+        raise ConfigError("[section] *_tip (a tapered section) with [[rods]] is not supported "
+                          "yet: each rod has the section of [section]")
+    structure = _own_sections(config, structure, section, material, model["law"])
+    loads = table(config, "loads")
+    forces, moments = structure.chain_point_loads()
+    for s, *_ in forces:
+        if s == 0.0:
+            segment = structure.chain[0]
+            rod = structure.rods[segment.rod]
+            end = "xL" if segment.reversed else "x0"
+            raise ConfigError(f"[[rods]] '{rod.name}' loads.point_forces: a force at the rod's "
+                              f"{end} end, held by supports.{end} = "
+                              f"{structure.end_supports['x0']!r}, would be taken by the support; "
+                              "load a free end or a point of a rod")
+    elements = sum(rod.elements for rod in structure.rods)
+    supports = structure.end_supports
+    return _wrap(
+        BeamModel,
+        length=structure.length,
+        section=section,
+        material=material,
+        options=_wrap(ModelOptions, **model, **law_options),
+        mesh=_wrap(Discretisation, elements=elements, degree=structure.rods[0].degree),
+        supports=_wrap(Supports, x0=supports["x0"], xL=supports["xL"]),
+        loads=_wrap(Loads, distributed=loads["distributed"], gravity=loads["gravity"],
+                    point_forces=forces, point_moments=moments),
+        structure=structure,
+    )
+
+
+def _own_sections(config: dict, structure, section, material, law: str):
+    """The structure with each rod's section dimensions and (E, G) when a rod has its own
+    ``section`` or ``material`` table (over the top-level ones: the same shape, no taper, the
+    same density); rods' own ``model`` tables are refused."""
+    own_section = own_material = False
+    dims, moduli = [], []
+    for rod, entry in zip(structure.rods, config["rods"], strict=True):
+        where = f"[[rods]] '{rod.name}'"
+        if entry.get("model") is not None:
+            given = config.get("model", {}) if isinstance(config.get("model"), dict) else {}
+            if (given | entry["model"]) != given:
+                raise ConfigError(f"{where} model: a rod's own law or constraint different from "
+                                  "the top-level [model] is not supported yet (every rod takes "
+                                  "[model])")
+        top = config.get("section", {}) if isinstance(config.get("section"), dict) else {}
+        own = entry.get("section") or {}
+        if own.get("shape", top.get("shape", "rectangle")) != top.get("shape", "rectangle"):
+            raise ConfigError(f"{where} section.shape: a shape different from [section] shape "
+                              "is not supported yet (give the rod other dimensions of the same "
+                              "shape)")
+        try:
+            rod_section = parse_section({"section": top | own}) if own else section
+        except ConfigError as error:
+            raise ConfigError(f"{where} section: {error}") from None
+        if rod_section.dims_tip:
+            raise ConfigError(f"{where} section: *_tip (a tapered rod) is not supported yet")
+        own_section = own_section or rod_section.dims != section.dims
+        dims.append(tuple(sorted(rod_section.dims.items())))
+        top = config.get("material", {}) if isinstance(config.get("material"), dict) else {}
+        own = entry.get("material") or {}
+        if own and law == "hyperelastic":
+            raise ConfigError(f"{where} material: a rod's own material with [model] law = "
+                              "\"hyperelastic\" is not supported yet")
+        try:
+            rod_material = _wrap(Material, **table({"material": top | own}, "material")) \
+                if own else material
+        except ConfigError as error:
+            raise ConfigError(f"{where} material: {error}") from None
+        if rod_material.rho != material.rho:
+            raise ConfigError(f"{where} material.rho: a density different from [material] rho "
+                              "is not supported yet")
+        own_material = own_material or (rod_material.E, rod_material.shear_modulus) != (
+            material.E, material.shear_modulus)
+        moduli.append((rod_material.E, rod_material.shear_modulus))
+    if not (own_section or own_material):
+        return structure
+    if own_section and law == "hyperelastic":
+        raise ConfigError("[[rods]] section: a rod's own section with [model] law = "
+                          "\"hyperelastic\" is not supported yet")
+    rods = tuple(dataclasses.replace(rod, section=dims[i] if own_section else (),
+                                     material=moduli[i] if own_material else ())
+                 for i, rod in enumerate(structure.rods))
+    return _wrap(Structure, rods, structure.joints, structure.bodies)
+
+
+def structure_rigid_motions(model: BeamModel) -> list[str]:
+    """The rigid motions a chain's end supports leave free (empty: none), with the ends at
+    their reference positions: a small rigid motion (a, b, w) moves the point (X, Y) by
+    (a - w Y, b + w X) and turns it by w."""
+    structure = model.structure
+    points = {"x0": structure.reference_point(0.0, structure.chain[0]),
+              "xL": structure.reference_point(model.length, structure.chain[-1])}
+    rows = []
+    for end, (X, Y) in points.items():
+        fixed = model.supports.fixed(end)
+        rows += ([(1.0, 0.0, -Y)] if "u" in fixed else []) + \
+            ([(0.0, 1.0, X)] if "v" in fixed else []) + \
+            ([(0.0, 0.0, 1.0)] if "theta" in fixed else [])
+    if rows and _rank(rows, structure.length) == 3:
+        return []
+    return ["a rigid-body motion (support the chain's ends: e.g. clamp one, or pin both)"]
+
+
+def _rank(rows, scale: float) -> int:
+    """The rank of the rigid-motion rows, the rotation column scaled by the chain's length."""
+    return beam_rank([(a, b, c / scale) for a, b, c in rows])
+
+
 def parse_model(config: dict) -> BeamModel | SpatialRodModel:
+    if is_structure(config):
+        return parse_structure_model(config)
     beam = table(config, "beam")
     model = table(config, "model")
     kinematics = model.pop("kinematics")
@@ -316,7 +447,7 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
     beam free to move as a rigid body (free-free, flying) is meaningful; ``motion_variable``:
     the variable of moving obstacles' position formulas ("t" in dynamics)."""
-    check_tables(config, tuple(SCHEMA) + OTHER_TABLES)
+    check_tables(config, tuple(SCHEMA) + OTHER_TABLES + STRUCTURE_TABLES)
     model = parse_model(config)
     settings, stepping, jump = parse_solver(config)
     if model.options.constraint != "none" and settings.linear_solver not in ("auto", "mumps"):
@@ -325,7 +456,13 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
             f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
             "zero diagonal); use linear_solver = \"auto\" or \"mumps\", or constraint = \"none\""
         )
-    free = model.supports.rigid_motions()
+    free = (structure_rigid_motions(model) if getattr(model, "structure", None) is not None
+            else model.supports.rigid_motions())
+    if free and not rigid_motion_allowed and getattr(model, "structure", None) is not None:
+        raise ConfigError(
+            f"[[rods]] supports: the chain's ends ({model.supports.x0} at its start, "
+            f"{model.supports.xL} at its end) leave it free to move as a rigid body; a static "
+            "equilibrium needs supports that prevent it (clamp one end, or pin both)")
     if free and not rigid_motion_allowed:
         raise ConfigError(
             f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "

@@ -482,6 +482,9 @@ class BeamXDMFWriter:
             if name == plan[-1][0]:  # the section fields after the nodal ones (file order)
                 for section in self.section_names:
                     self.functions[section] = fem.Function(cellwise, name=section)
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: the rod of each cell (its index in [[rods]])
+            self.functions["rod"] = chain.rod
         self._file = XDMFSeries(mesh, path) if path is not None else None
 
     def end_moment(self, x_end: float, tolerance: float) -> float | None:
@@ -537,11 +540,16 @@ class BeamXDMFWriter:
         scalar = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
         vector = compat.function_space(mesh, compat.vector_element(mesh, "Lagrange", 1, dim=2))
         u, v, theta, _ = problem.fields()
+        displacement = ufl.as_vector([u, v])
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: from the mesh's (s, 0) to the deformed chain
+            x = ufl.SpatialCoordinate(mesh)[0]
+            displacement = ufl.as_vector([chain.reference[0] + u - x, chain.reference[1] + v])
         return [
             ("u", u, scalar),
             ("v", v, scalar),
             ("theta", theta, scalar),
-            ("displacement", ufl.as_vector([u, v]), vector),
+            ("displacement", displacement, vector),
         ]
 
     def update(self) -> None:
@@ -705,14 +713,18 @@ def plot_deformed_shapes(
     reference: list[tuple[str, float, float]] = (),
     obstacles=(),
     section=None,
+    undeformed=None,
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points;
     ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey; ``section`` (a
-    `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`)."""
+    `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`);
+    ``undeformed``: the reference axis as points ((x, y), ...) (default the x axis to L: a
+    chain of rods gives its corners)."""
 
     with figure(path, figsize=(7, 5), layout=False) as (_, axes):
         colours = _pyplot().cm.viridis(np.linspace(0, 0.9, max(len(shapes), 1)))
-        axes.plot([0, length], [0, 0], color="0.7", lw=1, ls="--", label="undeformed")
+        xs, ys = ([0, length], [0, 0]) if undeformed is None else zip(*undeformed)
+        axes.plot(list(xs), list(ys), color="0.7", lw=1, ls="--", label="undeformed")
         for index, ((label, shape), colour) in enumerate(zip(shapes, colours, strict=False)):
             axes.plot(shape["x"] + shape["u"], shape["v"], color=colour, lw=1.8, label=label)
             draw_section_faces(axes, shape, section, length, colour,

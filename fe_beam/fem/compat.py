@@ -10,6 +10,9 @@ to another dolfinx touches this file only.
 
 from __future__ import annotations
 
+import functools
+import sys
+
 import dolfinx
 import dolfinx.fem.petsc as fem_petsc
 import numpy as np
@@ -63,6 +66,46 @@ __all__ = [
 DOLFINX_VERSION = dolfinx.__version__
 # dolfinx before 0.6: legacy UFL elements, fem.FunctionSpace, Function.vector, gmshio
 LEGACY = tuple(int(p) for p in DOLFINX_VERSION.split(".")[:2]) < (0, 6)
+
+
+# --- CPython's singledispatchmethod leak (gh-127750) ------------------------------------------
+#: CPython 3.12.0-3.12.8 and 3.13.0-3.13.1 cache the bound method of every instance a
+#: ``functools.singledispatchmethod`` is looked up on, in a WeakKeyDictionary whose values hold
+#: the instance: nothing is ever freed. UFL's DAG traversers (``apply_derivatives``, dolfinx
+#: 0.10+) are such instances, and each keeps the forms it differentiated, their functions and
+#: meshes, and the meshes' MPI communicators (MPICH allows 2048 per process): a long session (the
+#: PyPI stack's test suite, a design study in one process) ran out of them and crashed.
+SINGLEDISPATCHMETHOD_LEAKS = (sys.version_info[:2] == (3, 12) and sys.version_info[2] < 9) or (
+    sys.version_info[:2] == (3, 13) and sys.version_info[2] < 2)
+
+
+def _uncached_get(self, obj, cls=None):
+    """``singledispatchmethod.__get__`` as CPython 3.12.9 / 3.13.2 fixed it: no cache."""
+    dispatch = self.dispatcher.dispatch
+    funcname = getattr(self.func, "__name__", "singledispatchmethod method")
+
+    def _method(*args, **kwargs):
+        if not args:
+            raise TypeError(f"{funcname} requires at least 1 positional argument")
+        return dispatch(args[0].__class__).__get__(obj, cls)(*args, **kwargs)
+
+    _method.__isabstractmethod__ = self.__isabstractmethod__
+    _method.register = self.register
+    functools.update_wrapper(_method, self.func)
+    return _method
+
+
+def fix_singledispatchmethod_leak() -> bool:
+    """Replace the leaking ``singledispatchmethod.__get__`` on the affected CPython versions
+    (every instance, also those UFL made at import, looks it up on the class). Idempotent;
+    True when the patch is (now) in place."""
+    if not SINGLEDISPATCHMETHOD_LEAKS:
+        return False
+    functools.singledispatchmethod.__get__ = _uncached_get
+    return True
+
+
+fix_singledispatchmethod_leak()
 XDMFFile = dolfinx.io.XDMFFile
 DirichletBC = fem.DirichletBCMetaClass if LEGACY else fem.DirichletBC
 create_matrix = fem_petsc.create_matrix

@@ -147,7 +147,8 @@ def _reactions(problem) -> list[Wrench]:
         else:
             force = np.array([reaction["Fx"], reaction["Fy"]])
             moment = np.array([0.0, 0.0, reaction["M"]])
-            position = np.array([problem.end_x[end] + values["u"], values["v"]])
+            X, Y = problem.reference_point(problem.end_x[end])
+            position = np.array([X + values["u"], Y + values["v"]])
         result.append(Wrench(f"reaction {end}", _vector3(force),
                              moment_of(position, force) + _vector3(moment), reaction=True))
     return result
@@ -170,7 +171,11 @@ def _body_forms(problem):
     else:
         u, v = problem.fields()[0], problem.fields()[1]
         forces = [body[0], body[1]]
-        moments = [(x + u) * body[1] - v * body[0]]
+        if getattr(problem, "chain", None) is not None:  # a chain: its reference position
+            X, Y = problem.chain.reference[0], problem.chain.reference[1]
+            moments = [(X + u) * body[1] - (Y + v) * body[0]]
+        else:
+            moments = [(x + u) * body[1] - v * body[0]]
     measure = problem.dx_loads
     cached = ([fem.form(f * measure) for f in forces], [fem.form(m * measure) for m in moments])
     problem._equilibrium_forms = cached
@@ -202,7 +207,8 @@ def _tip(problem, factor: float) -> list[Wrench]:
             force, moment = R @ force, R @ moment
         moment3 = moment
     else:
-        position = np.array([problem.model.length + values["u"], values["v"]])
+        X, Y = problem.reference_point(problem.model.length)
+        position = np.array([X + values["u"], Y + values["v"]])
         if loads.follower:
             theta = values["theta"]
             a1 = np.array([np.cos(theta), np.sin(theta)])
@@ -232,8 +238,11 @@ def _point_forces(problem, factor: float) -> list[Wrench]:
     for x, force in _point_sums(problem, problem.model.loads.point_forces,
                                 getattr(problem, "point_force_fields", None), factor):
         values = problem.point_values(x)
-        position = np.array([x + values["u"], values["v"]]
-                            + ([values["w"]] if problem.spatial else []))
+        if problem.spatial:
+            position = np.array([x + values["u"], values["v"], values["w"]])
+        else:
+            X, Y = problem.reference_point(x)
+            position = np.array([X + values["u"], Y + values["v"]])
         result.append(Wrench(f"point force at x = {x:g}", _vector3(force),
                              moment_of(position, force)))
     return result

@@ -38,6 +38,7 @@ from fe_beam.fem.section_laws import (
     HyperelasticSectionLaw,
     section_rule,
 )
+from fe_beam.fem.structure import ChainGeometry, chain_vertices
 from fe_beam.model.beam import (  # noqa: F401  (the model's home; re-exported)
     COMPONENTS,
     SUPPORT_KINDS,
@@ -204,18 +205,26 @@ class StrainWatch:
         return {k: v for k, v in data.items() if k not in fibre or v is not None}
 
 
-def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=()):
+def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=(), vertices=None,
+                  fixed=()):
     """Uniform mesh of [0, L] in which every breakpoint is a vertex (the nearest uniform vertex
     moves onto it when closer than a quarter element, otherwise a vertex is inserted).
 
     A breakpoint within 1e-9 of an element of a vertex that cannot move (an end, or another
-    breakpoint) is that vertex: inserting it would create an element of round-off size."""
+    breakpoint) is that vertex: inserting it would create an element of round-off size.
+
+    ``vertices``: the starting vertices instead of the uniform ones (a chain of rods), of which
+    ``fixed`` (the joints) never move."""
     interior = sorted({float(x) for x in breakpoints if 0 < x < length})
-    if not interior:
+    if not interior and vertices is None:
         return compat.create_interval(comm, elements, length)
-    vertices = np.linspace(0.0, length, elements + 1)
-    spacing = length / elements
-    placed: set[float] = set()
+    if vertices is None:
+        vertices = np.linspace(0.0, length, elements + 1)
+        spacing = length / elements
+    else:
+        vertices = np.array(vertices, dtype=float)
+        spacing = float(np.min(np.diff(vertices)))
+    placed: set[float] = {float(x) for x in fixed}
     for x in interior:
         nearest = int(np.argmin(np.abs(vertices - x)))
         movable = 0 < nearest < len(vertices) - 1 and vertices[nearest] not in placed
@@ -240,6 +249,8 @@ class BeamProblem:
     #: the unknowns' names, in the mixed space's order (before the multipliers)
     components = COMPONENTS
     spatial = False
+    #: the reference geometry of a chain of rods (`fe_beam.fem.structure.ChainGeometry`)
+    chain = None
     #: (key, component) of `end_reaction`
     reaction_keys = (("Fx", "u"), ("Fy", "v"), ("M", "theta"))
 
@@ -260,7 +271,13 @@ class BeamProblem:
         # every point force and moment sits on a mesh vertex (its work is a vertex integral)
         breakpoints = tuple(breakpoints) + tuple(
             f[0] for f in model.loads.point_forces + model.loads.point_moments)
-        self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
+        structure = getattr(model, "structure", None)
+        if structure is None:
+            self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
+        else:  # a chain of rods: each rod's elements, the joints fixed vertices
+            vertices, joints = chain_vertices(structure)
+            self.mesh = interval_mesh(comm, model.mesh.elements, model.length,
+                                      breakpoints + joints, vertices=vertices, fixed=joints)
         self.comm = comm
         degree = model.mesh.degree
         self.multipliers = self._constrained_strains()
@@ -271,6 +288,7 @@ class BeamProblem:
         self.load_factor = fem.Constant(self.mesh, 0.0)
         self.dx_energy = ufl.dx(metadata={"quadrature_degree": 2 * degree - 1})
         self.dx_loads = ufl.dx(metadata={"quadrature_degree": 2 * degree + 2})
+        self.chain = None if structure is None else ChainGeometry(self)
         self._make_constants()
         self._mark_ends()
         self._check_breakpoints(breakpoints)
@@ -303,14 +321,18 @@ class BeamProblem:
         m, sec = self.model, self.model.section
         const = lambda value: fem.Constant(self.mesh, float(value))  # noqa: E731
         dims, dims_tip, x = self._material_constants()
+        E, G = self.E, self.G
+        if self.chain is not None:  # rods with their own sections or materials: DG0 fields
+            dims = self.chain.section_dims() or dims
+            E, G = self.chain.moduli() or (E, G)
         self.section_props = sec.properties(x / m.length, dims, dims_tip)
         p = self.section_props
         self.stiffness = Stiffness(
-            EA=self.E * p.A,
-            GA=self.G * p.A,
-            EI=self.E * p.I,
-            EI3=self.E * p.I3,
-            EI4=self.E * p.I4,
+            EA=E * p.A,
+            GA=G * p.A,
+            EI=E * p.I,
+            EI3=E * p.I3,
+            EI4=E * p.I4,
             shear_correction=self.k_shear,
         )
         self.law = self._make_law(x / m.length, dims, dims_tip)
@@ -481,6 +503,20 @@ class BeamProblem:
         parts = ufl.split(self.w)
         return parts[0], parts[1], parts[2], dict(zip(self.multipliers, parts[3:], strict=True))
 
+    def strains(self, u, v, theta):
+        """The generalised strains of (u, v, theta): the single rod's, or along a chain of rods
+        those of the tangent in each rod's reference frame (`fe_beam.fem.structure`)."""
+        if self.chain is None:
+            return strains(u, v, theta)
+        return strains_from_gradient(self.chain.local_displacement_tangent(u, v), theta,
+                                     theta.dx(0))
+
+    def reference_point(self, x: float) -> tuple[float, float]:
+        """The reference position (X, Y) of the axis point x (the chain's, or (x, 0))."""
+        if self.chain is None:
+            return float(x), 0.0
+        return self.model.structure.reference_point(x)
+
     def energy_density(self, s):
         """Stored energy per unit reference length of the rod law at the strains ``s`` (a
         `fe_beam.fem.kinematics.Strains`): the one entry point for schemes that need W(strains)."""
@@ -489,7 +525,7 @@ class BeamProblem:
     def stored_energy(self, parts):
         """int W dx (+ extra energy such as tendons) of the state ``parts`` = (u, v, theta)."""
         u, v, theta = parts
-        total = self.law_energy(strains(u, v, theta)) * self.dx_energy
+        total = self.law_energy(self.strains(u, v, theta)) * self.dx_energy
         if self.extra_energy is not None:
             total += self.extra_energy(self, parts)
         return total
@@ -513,7 +549,7 @@ class BeamProblem:
         """int sum_c multiplier_c * strain_c dx (zero without constraints)."""
         if not multipliers:
             return 0  # UFL forms absorb an integer zero; a Zero integrand would have no domain
-        s = strains(*parts)
+        s = self.strains(*parts)
         return sum(value * getattr(s, n) for n, value in multipliers.items()) * self.dx_energy
 
     def follower_virtual_work(self, parts, test):
@@ -627,13 +663,18 @@ class BeamProblem:
     def output_expressions(self) -> dict:
         """UFL expressions of the strains and section resultants for output (not for solving)."""
         u, v, theta, multipliers = self.fields()
-        tangent = ufl.variable(axis_tangent(u, v))
+        if self.chain is None:
+            tangent = ufl.variable(axis_tangent(u, v))
+            local = tangent
+        else:  # F = dW/dr' in world axes: W of the tangent in the rod's frame
+            tangent = ufl.variable(self.chain.world_tangent(u, v))
+            local = self.chain.local_tangent(tangent)
         kappa = ufl.variable(theta.dx(0))
-        s = strains_from_gradient(tangent, theta, kappa)
+        s = strains_from_gradient(local, theta, kappa)
         energy = self.law_energy(s)
         energy += sum((value * getattr(s, n) for n, value in multipliers.items()), ufl.zero())
         normal, shear, moment, axial = section_resultants(energy, tangent, kappa)
-        plain = strains(u, v, theta)
+        plain = self.strains(u, v, theta)
         return {
             "eps": plain.eps,
             "gamma": compat.atan2(plain.g, plain.one_plus_e),
@@ -691,7 +732,7 @@ class BeamProblem:
         """[1 + e, eps, gamma, K_red / EI (, the two extreme fibres' 1 + e + eta kappa, their
         two E11)] at the Gauss points of the energy rule."""
         u, v, theta, _ = self.fields()
-        s = strains(u, v, theta)
+        s = self.strains(u, v, theta)
         gamma = compat.atan2(s.g, s.one_plus_e)
         if self._bending_limit_applies():
             # the law's own energy W(eps, kappa) at gamma = 0, differentiated by UFL
@@ -718,7 +759,7 @@ class BeamProblem:
 
     def strain_energy_form(self) -> fem.Form:
         u, v, theta, _ = self.fields()
-        return fem.form(self.law_energy(strains(u, v, theta)) * self.dx_energy)
+        return fem.form(self.law_energy(self.strains(u, v, theta)) * self.dx_energy)
 
     def rotation_dofs(self) -> np.ndarray:
         return self.component_dofs("theta")

@@ -364,6 +364,9 @@ class BeamModel:
     mesh: Discretisation = field(default_factory=Discretisation)
     supports: Supports = field(default_factory=Supports)
     loads: Loads = field(default_factory=Loads)
+    #: a structure of rods (`fe_beam.model.structure.Structure`, a serial chain laid along
+    #: the arc length x of this model), or None for the single straight rod along x
+    structure: Any = None
 
     def __post_init__(self):
         check_rod(self.length, self.material, self.loads)

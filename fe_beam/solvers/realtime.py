@@ -134,6 +134,8 @@ def structure_key(config: StaticConfig, comm) -> tuple:
         # obstacles are compiled into the contact forms (and the section's extents with them)
         (repr(config.obstacles), repr(config.contact), repr(section)) if config.obstacles
         else (),
+        # a chain of rods: its mesh, reference angles and positions are compiled in
+        repr(getattr(model, "structure", None)),
     )
 
 
