@@ -224,6 +224,7 @@ def preallocated_matrix(A: PETSc.Mat, form, couplings: Sequence[np.ndarray]) -> 
 # A Newton iteration that stalls below this fraction of the load steps' residuals has reached
 # the round-off floor of the residual (a stiff axial term, a multiplier field): accept it.
 STAGNATION_RTOL = 1e-6
+_EPS = float(np.finfo(float).eps)
 
 
 class SNESSolver:
@@ -238,15 +239,15 @@ class SNESSolver:
         prefix: str | None = None,
         near_nullspace: PETSc.NullSpace | None = None,
         state_scale: float = 0.0,
-        residual_floor: float = 0.0,
+        residual_floor: tuple[float, float] = (0.0, 0.0),
     ):
-        """``residual_floor``: the residual's absolute round-off floor (the assembled forces'
-        machine epsilon times the stiffness they are made of, e.g.
-        `fe_beam.fem.equilibrium.roundoff_force`): a Newton iteration that has stopped
-        converging (the residual no longer halves) at or below it is converged; 0: none."""
+        """``residual_floor``: the residual's round-off floor, (absolute [N], stiffness [N/m]):
+        a Newton iteration that has stopped converging (the residual no longer halves) at or
+        below max(absolute, machine epsilon x stiffness x the state's norm) is converged
+        (`fe_beam.fem.equilibrium.residual_floor`); (0, 0): none."""
         self.problem = problem
         self.state_scale = float(state_scale)
-        self.residual_floor = float(residual_floor)
+        self.residual_floor = tuple(float(v) for v in residual_floor)
         self.settings = settings or SolverSettings()
         check_petsc_options(self.settings.petsc_options)  # ConfigError before any solve
         if prefix is None:
@@ -315,7 +316,9 @@ class SNESSolver:
         # constraint (h/L = 1e-4: a load of 1e-9 EA) stagnates at EA eps, which no relative
         # test reaches.
         largest = max(self._largest_fnorm, getattr(self, "_trial_largest_fnorm", 0.0))
-        floor = max(STAGNATION_RTOL * max(largest, atol), self.residual_floor)
+        absolute, stiffness = self.residual_floor
+        floor = max(STAGNATION_RTOL * max(largest, atol), absolute,
+                    _EPS * stiffness * xnorm)
         if iteration >= 2 and fnorm > 0.5 * previous and fnorm <= floor:
             return reason.CONVERGED_FNORM_RELATIVE
         if step_norm <= stol * max(xnorm, self.state_scale):
