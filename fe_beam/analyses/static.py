@@ -414,11 +414,25 @@ SPATIAL_CSV_COLUMNS = [
 
 def structure_columns(model) -> list:
     """A chain of rods' CSV columns: ``rod_<name>_x``, ``_y``, ``_angle`` (each rod's end,
-    world axes) and ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod)."""
+    world axes) and ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod); spatial:
+    ``rod_<name>_x``, ``_y``, ``_z`` and ``joint_<name>_Fx``, ``_Fy``, ``_Fz``, ``_Mx``,
+    ``_My``, ``_Mz``."""
     structure = getattr(model, "structure", None)
     if structure is None:
         return []
     columns = []
+    if structure.dim == 3:  # spatial: each rod's end, each joint's force and moment
+        for rod in structure.rods:
+            columns += [exports.Column(f"rod_{rod.name}_{k}", lambda r, n=rod.name, i=i:
+                                       r["rods"][n]["tip"][i]) for i, k in enumerate("xyz")]
+        names = [j.name for j in structure.joints_on_chain] + [j[0] for j in
+                                                                structure.body_joints]
+        for name in names:
+            columns += [exports.Column(f"joint_{name}_F{k}", lambda r, n=name, i=i:
+                                       r["joints"][n]["force"][i]) for i, k in enumerate("xyz")]
+            columns += [exports.Column(f"joint_{name}_M{k}", lambda r, n=name, i=i:
+                                       r["joints"][n]["moment"][i]) for i, k in enumerate("xyz")]
+        return columns
     for rod in structure.rods:
         columns += [
             exports.Column(f"rod_{rod.name}_x", lambda r, n=rod.name: r["rods"][n]["tip"][0]),

@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import ufl
 
 from fe_beam.exports.obstacles import bounding_box, obstacle_surface
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, figure, gather_line
@@ -37,7 +38,12 @@ class SpatialXDMFWriter(BeamXDMFWriter):
         d, theta, _ = problem.fields()
         plan = [(name, d[i] if i < 3 else theta[i - 3], scalar)
                 for i, name in enumerate(NODAL)]
-        plan += [("displacement", d, vector), ("rotation_vector", theta, vector)]
+        displacement = d
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: from the mesh's (s, 0, 0) to the deformed chain
+            x = ufl.SpatialCoordinate(mesh)[0]
+            displacement = chain.reference + d - ufl.as_vector([x, 0, 0])
+        plan += [("displacement", displacement, vector), ("rotation_vector", theta, vector)]
         return plan + [(f"d{i + 1}", director, vector)
                        for i, director in enumerate(problem.directors())]
 
