@@ -198,9 +198,9 @@ def parse_structure(config: dict, spatial: bool = False) -> Structure:
                     raise ConfigError(f"{where} {error}") from None
                 continue
             if not isinstance(value, str):
+                lists = " or a list of components" if spatial else ""
                 raise ConfigError(f"{where} supports.{key} must be a support name (clamped | "
-                                  f"pinned | roller | free{' or a list of components' if spatial else ''}"
-                                  f"); got {shown(value)}")
+                                  f"pinned | roller | free{lists}); got {shown(value)}")
         loads = entry["loads"]
         unknown = [k for k in loads if k not in ROD_LOAD_KEYS]
         if unknown:
