@@ -416,3 +416,35 @@ def test_two_ranks_give_the_serial_spatial_chain(tmp_path):
     for key in ("force", "moment"):
         assert together["joints"]["corner"][key] == pytest.approx(
             alone["joints"]["corner"][key], rel=1e-9, abs=1e-12)
+
+
+def test_xdmf_moves_the_line_onto_the_spatial_chain(tmp_path):
+    """beam.xdmf: the mesh's points (s, 0, 0) plus `displacement` are the deformed chain (each
+    rod's end where `rods` has it), `d1`..`d3` the world directors (R_inc R0), `rod` the
+    cell's rod."""
+    import h5py
+
+    length = 0.5
+    EIy = _stiffness()[3]
+    config = _out_of_plane(length, [0.2 * EIy, -0.3 * EIy, 1.5 * EIy], 3, "none")
+    config["output"] = {"xdmf": True, "plots": False}
+    summary = fe_beam.run("static", config, tmp_path / "out")
+    with h5py.File(tmp_path / "out" / "beam.h5", "r") as h5:
+        points = np.asarray(h5["Mesh"]["mesh"]["geometry"])[:, 0]
+
+        def last(name):
+            return np.asarray(h5["Function"][name][str(max(int(k) for k in
+                                                           h5["Function"][name]))])
+
+        displacement, rod = last("displacement"), last("rod").ravel()
+        directors = [last(f"d{i}") for i in (1, 2, 3)]
+    placed = points[:, None] * np.array([1.0, 0.0, 0.0]) + displacement[:, :3]
+    rods = summary["steps"][-1]["rods"]
+    for name, s in (("a", length), ("b", 2 * length)):
+        at = int(np.argmin(np.abs(points - s)))
+        assert placed[at] == pytest.approx(rods[name]["tip"], abs=1e-12)
+    at = int(np.argmin(np.abs(points - 2 * length)))
+    frame = np.array(rods["b"]["tip_frame"])
+    for i in range(3):
+        assert directors[i][at, :3] == pytest.approx(frame[:, i], abs=1e-12)
+    assert sorted(set(rod.tolist())) == [0.0, 1.0] and np.count_nonzero(rod == 1.0) == 3

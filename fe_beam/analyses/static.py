@@ -479,8 +479,13 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     m = config.model
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
+        structure = getattr(m, "structure", None)
+        undeformed = None if structure is None else [
+            structure.reference_point(s, structure.segment_at(min(s, m.length)))
+            for s in (0.0, *structure.boundaries(), m.length)]
         plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                            obstacles=result.obstacles or config.obstacles)
+                            obstacles=result.obstacles or config.obstacles,
+                            undeformed=undeformed)
         factors = [s["load_factor"] for s in result.steps]
         tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w",
                                                                   "rotation_vector")}
