@@ -368,7 +368,9 @@ def _model_summary(config: StaticConfig) -> dict:
     if structure is not None:  # a chain of rods: its rods and joints as given
         law["structure"] = {
             "rods": [{"name": r.name, "start": list(r.start), "direction": list(r.direction),
-                      "length": r.length, "elements": r.elements} for r in structure.rods],
+                      "length": r.length, "elements": r.elements}
+                     | ({"normal": list(r.frame[1])} if r.dim == 3 else {})
+                     for r in structure.rods],
             "joints": [{"name": j.name, "kind": j.kind, "at": list(j.at)}
                        for j in structure.joints],
             "chain": [structure.rods[seg.rod].name for seg in structure.chain]}
