@@ -1,0 +1,140 @@
+"""Planar chains of rods ([[rods]], issue 29) in fe-beam modes, buckling, dynamic.
+
+References: the same rod without joints (a split rod is the rod, also turned in the plane),
+the exact transfer-matrix frequencies of `fe_beam.baselines.frame_modes` (extensible
+Timoshenko members with rotary inertia: the Reissner law's linear vibrations) and the
+classical sway-buckling equation of a fixed-base portal frame."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+import fe_beam
+from fe_beam.baselines import frame_modes
+
+E, NU, RHO = 2.0e7, 0.3, 1000.0
+B, H = 0.02, 0.05
+
+
+def _base(elements: int, constraint: str = "none", b: float = B, h: float = H) -> dict:
+    return {
+        "section": {"shape": "rectangle", "b": b, "h": h},
+        "material": {"E": E, "nu": NU, "rho": RHO},
+        "model": {"law": "reissner", "constraint": constraint},
+        "mesh": {"elements": elements, "degree": 2},
+        "output": {"xdmf": False, "plots": False},
+    }
+
+
+def _members(height, span, b=B, h=H):
+    area, inertia = b * h, b * h**3 / 12
+    G = E / (2 * (1 + NU))
+    return frame_modes.portal_frame(height, span, E * inertia, E * area, G * area, RHO * area,
+                                    RHO * inertia)
+
+
+def _portal(elements: int, height: float, span: float, **base) -> dict:
+    config = _base(elements, **base)
+    config["rods"] = [
+        {"name": "left", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": height,
+         "supports": {"x0": "clamped"}},
+        {"name": "beam", "start": [0.0, height], "direction": [1.0, 0.0], "length": span},
+        # the right column given top-down from its base: the chain runs it reversed
+        {"name": "right", "start": [span, 0.0], "direction": [0.0, 1.0], "length": height,
+         "supports": {"x0": "clamped"}}]
+    config["joints"] = [{"name": "k1", "at": ["left:end", "beam:start"]},
+                        {"name": "k2", "at": ["right:end", "beam:end"]}]
+    return config
+
+
+# --- modes -------------------------------------------------------------------------------------
+@pytest.mark.parametrize("direction", [(1.0, 0.0), (0.6, 0.8)])
+def test_modes_split_rod_is_the_rod(direction):
+    """A cantilever split into two rods joined rigidly, laid along any direction, has the
+    single rod's frequencies and kinds to round-off."""
+    length, elements = 1.0, 10
+    single = _base(elements) | {"modes": {"count": 6}}
+    single["beam"] = {"length": length}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    split = _base(elements // 2) | {"modes": {"count": 6}}
+    middle = [0.4 * direction[0], 0.4 * direction[1]]
+    split["rods"] = [
+        {"name": "a", "start": [0.0, 0.0], "direction": list(direction), "length": 0.4,
+         "mesh": {"elements": 4}, "supports": {"x0": "clamped"}},
+        {"name": "b", "start": middle, "direction": list(direction), "length": 0.6,
+         "mesh": {"elements": 6}}]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    one, two = fe_beam.run("modes", single), fe_beam.run("modes", split)
+    assert one["status"] == two["status"] == "completed"
+    assert one["mode_kinds"] == two["mode_kinds"]
+    assert "axial" in one["mode_kinds"]
+    f1, f2 = np.array(one["frequencies_hz"]), np.array(two["frequencies_hz"])
+    assert np.max(np.abs(f1 - f2) / f1) <= 1e-10, (f1, f2)
+
+
+def test_modes_portal_frame_against_transfer_matrices():
+    """A fixed-base portal frame's six lowest frequencies against the exact transfer-matrix
+    solution of its members (same law: extensible, shearable, rotary inertia), converging at
+    order 4 in the element count; the sway mode (the beam moves along its axis, the columns
+    bend) is a bending mode."""
+    height, span = 1.0, 1.2
+    members, supports = _members(height, span)
+    reference = np.array(frame_modes.frame_frequencies(members, supports, 6, 2 * math.pi * 20))
+    assert len(reference) == 6
+    errors = []
+    for elements in (4, 8):
+        summary = fe_beam.run("modes", _portal(elements, height, span) | {"modes": {"count": 6}})
+        assert summary["status"] == "completed"
+        assert summary["mode_kinds"] == ["bending"] * 6
+        errors.append(np.abs(np.array(summary["frequencies_hz"]) - reference) / reference)
+    # measured: 3.5e-6, 9.1e-5, 2.0e-4, 2.3e-4, 1.0e-3, 1.5e-3 with 8 elements per rod
+    assert np.all(errors[1] < [5e-6, 1.2e-4, 2.6e-4, 3e-4, 1.3e-3, 2e-3]), errors[1]
+    orders = np.log2(errors[0] / errors[1])
+    assert np.all((orders > 3.5) & (orders < 4.5)), orders
+
+
+def test_modes_free_l_frame_rigid_motions():
+    """A free-free L-frame away from the origin: three rigid-body modes at 0 Hz (the rotation
+    about the origin through each rod's reference position) and the elastic frequencies of
+    the transfer-matrix solution."""
+    a, b, x0 = 0.7, 0.5, (0.3, -0.2)
+    config = _base(8) | {"modes": {"count": 6}}
+    config["rods"] = [
+        {"name": "column", "start": list(x0), "direction": [0.0, 1.0], "length": a},
+        {"name": "beam", "start": [x0[0], x0[1] + a], "direction": [1.0, 0.0], "length": b}]
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    summary = fe_beam.run("modes", config)
+    assert summary["status"] == "completed"
+    assert summary["rigid_body_modes"] == 3
+    assert summary["frequencies_hz"][:3] == [0.0, 0.0, 0.0]
+    assert not [n for n in summary.get("notes", []) if "were found" in n]
+    members = [frame_modes.Member(x0, math.pi / 2, a, *_stiff()),
+               frame_modes.Member((x0[0], x0[1] + a), 0.0, b, *_stiff())]
+    reference = frame_modes.frame_frequencies(members, {}, 3, 2 * math.pi * 40)
+    found = np.array(summary["frequencies_hz"][3:])
+    # measured: 8.9e-6, 1.7e-4, 2.5e-4 (8 elements per rod)
+    assert np.max(np.abs(found - reference) / reference) < 3.2e-4, (found, reference)
+
+
+def _stiff():
+    area, inertia = B * H, B * H**3 / 12
+    G = E / (2 * (1 + NU))
+    return E * inertia, E * area, G * area, RHO * area, RHO * inertia
+
+
+def test_frame_modes_baseline_is_euler_bernoulli_in_the_slender_limit():
+    """The transfer-matrix solver itself: an inextensible, unshearable cantilever without
+    rotary inertia (split in two members at an angle of the plane) has the Euler-Bernoulli
+    roots beta_n^2 sqrt(EI / rho A) / L^2."""
+    angle = 0.3
+    first = frame_modes.Member((0.0, 0.0), angle, 0.4, 1.0)
+    second = frame_modes.Member(first.end(), angle, 0.6, 1.0)
+    found = frame_modes.frame_frequencies([first, second], {(0.0, 0.0): "clamped"}, 3, 100.0)
+    roots = [scipy.optimize.brentq(lambda x: math.cos(x) * math.cosh(x) + 1, lo, lo + 1.5)
+             for lo in (1.0, 4.0, 7.2)]
+    expected = [r**2 / (2 * math.pi) for r in roots]
+    assert found == pytest.approx(expected, rel=1e-12)
