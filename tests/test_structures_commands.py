@@ -138,3 +138,66 @@ def test_frame_modes_baseline_is_euler_bernoulli_in_the_slender_limit():
              for lo in (1.0, 4.0, 7.2)]
     expected = [r**2 / (2 * math.pi) for r in roots]
     assert found == pytest.approx(expected, rel=1e-12)
+
+
+# --- buckling ----------------------------------------------------------------------------------
+def _loaded_portal(elements: int, height: float, span: float, force: float, beam_h: float):
+    """A fixed-base portal frame (elastica members) with a dead downward force on each column
+    top; the beam of section height ``beam_h``."""
+    config = _portal(elements, height, span, constraint="inextensible-unshearable")
+    config["rods"][1]["section"] = {"h": beam_h}
+    for index in (0, 2):
+        config["rods"][index]["loads"] = {"point_forces": [[height, 0.0, -force]]}
+    return config | {"buckling": {"count": 2}}
+
+
+def test_buckling_portal_frame_sway_against_closed_form():
+    """The sway buckling of a fixed-base portal frame (inextensible, unshearable members, no
+    pre-buckling bending): each column is fixed at its base, free to sway at its top with zero
+    shear and restrained there by the beam bent antisymmetrically (end stiffness 6 EI_b / L):
+    EI w'' + P w = P a, w = a (1 - cos k x) gives tan(k h) = -(k h) EI_c L / (6 EI_b h),
+    k^2 = P / EI_c (k h between pi/2, the free cantilever, and pi, the rigid beam). Order 4 in
+    the element count; the factor is confirmed on the nonlinear path."""
+    height, span, beam_h = 1.0, 1.5, 0.04
+    EI_c, EI_b = E * B * H**3 / 12, E * B * beam_h**3 / 12
+    kh = scipy.optimize.brentq(
+        lambda x: math.tan(x) + x * EI_c * span / (6 * EI_b * height),
+        math.pi / 2 + 1e-9, math.pi - 1e-12, xtol=1e-15)
+    force = EI_c / height**2
+    expected = kh**2  # the load factor of P = EI_c / h^2
+    errors = []
+    for elements in (4, 8):
+        summary = fe_beam.run("buckling", _loaded_portal(elements, height, span, force, beam_h))
+        assert summary["status"] == "completed", summary["message"]
+        assert summary["checks_passed"]
+        assert any(c["name"] == "critical_point_confirmed" for c in summary["checks"])
+        errors.append((summary["load_factors"][0] - expected) / expected)
+    # measured: 3.9e-4, 2.5e-5 (beam_h = h); from above (the finite elements are stiffer)
+    assert 0 < errors[1] < 4e-5, errors
+    assert 3.5 < math.log2(errors[0] / errors[1]) < 4.5, errors
+
+
+@pytest.mark.parametrize("direction", [(0.0, 1.0), (-0.8, 0.6)])
+def test_buckling_split_column_is_the_column(direction):
+    """A clamped column under an axial end force, split into two rods joined rigidly and laid
+    along any direction, has the single column's buckling factors to round-off."""
+    length, force = 1.0, 1.0
+    single = _base(10) | {"buckling": {"count": 3}}
+    single["beam"] = {"length": length}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    single["loads"] = {"tip_force": [-force, 0.0]}
+    split = _base(5) | {"buckling": {"count": 3}}
+    split["rods"] = [
+        {"name": "a", "start": [0.0, 0.0], "direction": list(direction), "length": 0.5,
+         "supports": {"x0": "clamped"}},
+        {"name": "b", "start": [0.5 * direction[0], 0.5 * direction[1]],
+         "direction": list(direction), "length": 0.5,
+         "loads": {"point_forces": [[0.5, -force * direction[0], -force * direction[1]]]}}]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    one, two = fe_beam.run("buckling", single), fe_beam.run("buckling", split)
+    assert one["status"] == two["status"] == "completed"
+    f1, f2 = np.array(one["load_factors"]), np.array(two["load_factors"])
+    assert len(f1) == len(f2) == 3
+    assert np.max(np.abs(f1 - f2) / f1) <= 1e-9, (f1, f2)
+    l1, l2 = np.array(one["linearised_load_factors"]), np.array(two["linearised_load_factors"])
+    assert np.max(np.abs(l1 - l2) / l1) <= 1e-10, (l1, l2)
