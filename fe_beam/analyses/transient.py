@@ -314,6 +314,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         files.on_step(result.history[-1])
         if config.static.output.plots:
             shape = writer.vertex_values(update=False)
+            if getattr(problem, "chain", None) is not None:  # the plots draw the chain
+                shape = problem.chain.shape(shape)
             if root:
                 shapes.append((t, shape))
 
@@ -570,9 +572,13 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
                   contact=None) -> None:
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
+    structure = getattr(config.static.model, "structure", None)
+    # the tip's reference position: (L, 0) of a rod, the last end of a chain of rods
+    tip_x, tip_y = ((length, 0.0) if structure is None
+                    else structure.reference_point(length, structure.chain[-1]))
     with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
-        left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
-                  [h["tip"]["v"] for h in result.history], lw=1.2)
+        left.plot(tip_x + np.array([h["tip"]["u"] for h in result.history]),
+                  tip_y + np.array([h["tip"]["v"] for h in result.history]), lw=1.2)
         left.set_xlabel("tip x [m]")
         left.set_ylabel("tip y [m]")
         left.set_title("tip trajectory")
