@@ -309,3 +309,48 @@ def test_dynamic_refuses_what_chains_do_not_run(tmp_path):
     config["initial"] = {"angular_velocity": 1.0}
     with pytest.raises(ConfigError, match="angular_velocity with \\[\\[rods\\]\\]"):
         validate("dynamic", config)
+
+
+# --- refine ------------------------------------------------------------------------------------
+def test_refine_l_frame_refines_every_rod_at_order_four():
+    """fe-beam refine of a clamped L-frame under a large end force (Reissner law): each level
+    doubles every rod's elements (rods of 3 and 5 elements: 8, 16, 32 in all), the tip's
+    observed order is 4, and the extrapolated tip is the independent shooting solution's."""
+    from fe_beam.baselines import frame_shooting
+
+    a, b = 1.0, 0.7
+    area, inertia = B * H, B * H**3 / 12
+    EI, EA, GA = E * inertia, E * area, E / (2 * (1 + NU)) * area
+    force = [0.8 * EI / a**2, -2.5 * EI / a**2]
+    config = _base(3) | {"loads": {"steps": 4}, "refine": {"levels": 3}}
+    config["rods"] = [
+        {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": a,
+         "supports": {"x0": "clamped"}},
+        {"name": "beam", "start": [0.0, a], "direction": [1.0, 0.0], "length": b,
+         "mesh": {"elements": 5}, "loads": {"point_forces": [[b, *force]]}}]
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    summary = fe_beam.run("refine", config)
+    assert summary["status"] == "completed"
+    assert [level["elements"] for level in summary["levels"]] == [8, 16, 32]
+    frame = frame_shooting.Frame((a, b), (math.pi / 2, 0.0), EI, EA, GA, (0.0, 0.0),
+                                 "clamped", "free", ((a + b, *force),))
+    x, y, angle = frame_shooting.solve_frame(frame, 1.0).end()[:3]
+    reference = {"tip.u": x - b, "tip.v": y - a, "tip.theta": angle}
+    for name, value in reference.items():
+        analysis = summary["analysis"][name]
+        assert 3.7 < analysis["order"] < 4.3, (name, analysis["order"])
+        finest = analysis["levels"][-1]["value"]
+        # the finest level within its estimated error; the extrapolation closer still
+        assert abs(finest - value) <= 2 * analysis["error_estimate"], (name, finest, value)
+        assert abs(analysis["extrapolated"] - value) < 0.2 * abs(finest - value), name
+
+
+def test_refine_refuses_a_fractional_ratio_with_rods():
+    from fe_beam.config import validate
+    from fe_beam.errors import ConfigError
+
+    config = _base(4) | {"refine": {"levels": 3, "ratio": 1.5}}
+    config["rods"] = [{"name": "a", "length": 1.0, "supports": {"x0": "clamped"},
+                       "loads": {"point_forces": [[1.0, 0.0, -1.0]]}}]
+    with pytest.raises(ConfigError, match="ratio 1.5 with \\[\\[rods\\]\\]"):
+        validate("refine", config)

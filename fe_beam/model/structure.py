@@ -14,7 +14,7 @@ the table and key (the config layer turns them into `fe_beam.errors.ConfigError`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from fe_beam.model.beam import SUPPORT_KINDS
 
@@ -385,6 +385,13 @@ class Structure:
                 body_joints.append((joint_name, chain_end, rod_first))
         object.__setattr__(self, "end_supports", supports)
         object.__setattr__(self, "body_joints", tuple(body_joints))
+
+    def refined(self, factor: int) -> Structure:
+        """The same structure with every rod's elements multiplied by ``factor`` (a mesh
+        refinement study of the chain)."""
+        rods = tuple(replace(rod, elements=rod.elements * int(factor))
+                     for rod in self.rods)
+        return Structure(rods, self.joints, self.bodies)
 
     # --- what the finite elements need --------------------------------------------------------
     def chain_point_loads(self) -> tuple[tuple, tuple]:
