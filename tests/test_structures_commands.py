@@ -7,11 +7,14 @@ classical sway-buckling equation of a fixed-base portal frame."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 import scipy.optimize
+from mpi4py import MPI
+from mpilaunch import mpirun_command
 
 import fe_beam
 from fe_beam.baselines import frame_modes
@@ -354,3 +357,27 @@ def test_refine_refuses_a_fractional_ratio_with_rods():
                        "loads": {"point_forces": [[1.0, 0.0, -1.0]]}}]
     with pytest.raises(ConfigError, match="ratio 1.5 with \\[\\[rods\\]\\]"):
         validate("refine", config)
+
+
+# --- two ranks ---------------------------------------------------------------------------------
+@pytest.mark.mpi
+@pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+                    reason="needs mpirun (and a serial pytest)")
+@pytest.mark.parametrize("command", ["modes", "buckling"])
+def test_two_ranks_give_the_serial_portal_frame(tmp_path, command):
+    """``mpirun -n 2 fe-beam modes | buckling`` of a portal frame: one rank's numbers."""
+    from test_mpi_errors import fe_beam as fe_beam_job
+
+    if command == "modes":
+        config = _portal(6, 1.0, 1.2) | {"modes": {"count": 4}}
+        key = "frequencies_hz"
+    else:
+        config = _loaded_portal(6, 1.0, 1.5, E * B * H**3 / 12, 0.04)
+        key = "linearised_load_factors"
+    alone = fe_beam.run(command, config)
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"), command=command)
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "two" / "summary.json").read_text())
+    assert np.allclose(together[key], alone[key], rtol=1e-9, atol=0), (together[key], alone[key])
+    if command == "modes":
+        assert together["mode_kinds"] == alone["mode_kinds"]
