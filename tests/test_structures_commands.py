@@ -381,3 +381,66 @@ def test_two_ranks_give_the_serial_portal_frame(tmp_path, command):
     assert np.allclose(together[key], alone[key], rtol=1e-9, atol=0), (together[key], alone[key])
     if command == "modes":
         assert together["mode_kinds"] == alone["mode_kinds"]
+
+
+# --- design ------------------------------------------------------------------------------------
+def test_design_a_rod_section_by_name():
+    """fe-beam design of an L-frame's beam height (rods.beam.section.h: a field of the beam
+    only, written in place) so that the frame's end is at a target deflection: a fresh static
+    run of the answer (--set rods.beam.section.h, the rod by its name) reaches the target, and
+    only the beam's section changed (the column's is the top-level one)."""
+    EI = E * B * H**3 / 12
+    config = _base(6) | {"loads": {"steps": 2}}
+    config["rods"] = [
+        {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 1.0,
+         "supports": {"x0": "clamped"}},
+        {"name": "beam", "start": [0.0, 1.0], "direction": [1.0, 0.0], "length": 0.7,
+         "loads": {"point_forces": [[0.7, 0.0, -0.5 * EI]]}}]
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    target = -0.31
+    config["design"] = {"variables": ["rods.beam.section.h"], "bounds": [[0.03, 0.08]],
+                        "objective": "tip_pose", "target": {"v": target}}
+    summary = fe_beam.run("design", config)
+    assert summary["status"] == "converged", summary["message"]
+    h = summary["variables"]["rods.beam.section.h"]
+    assert 0.03 < h < 0.08 and abs(h - H) > 1e-3
+    assert summary["reproduce"].endswith(f"--set rods.beam.section.h={h!r}")
+    plain = {k: v for k, v in config.items() if k != "design"}
+    answer = fe_beam.run("static", fe_beam.config.apply_overrides(
+        plain, [f"rods.beam.section.h={h!r}"]))
+    tip = answer["steps"][-1]["tip"]
+    assert tip["v"] == pytest.approx(summary["tip"]["v"], abs=1e-9)
+    assert tip["u"] == pytest.approx(summary["tip"]["u"], abs=1e-9)
+    assert tip["v"] == pytest.approx(target, abs=1e-6)
+    # the column kept its section: the same frame with the column's own h changed differs
+    other = fe_beam.config.apply_overrides(plain, [f"rods.beam.section.h={h!r}",
+                                                   f"rods.column.section.h={h!r}"])
+    assert abs(fe_beam.run("static", other)["steps"][-1]["tip"]["v"] - tip["v"]) > 1e-2
+
+
+@pytest.mark.parametrize(("change", "words"), [
+    ({"objective": "backbone", "points": [[1.0, 0.0, 1.0]]}, "objective = 'backbone' with"),
+    ({"variables": ["section.h"], "bounds": [[0.03, 0.08]]}, None),
+    ({"variables": ["rods.beam.section.h", "section.b"], "bounds": [[0.03, 0.08],
+                                                                   [0.01, 0.03]]},
+     "top-level value"),
+    ({"variables": ["rods.nobody.section.h"]}, "not a design variable of the structure"),
+])
+def test_design_of_a_structure_refuses_what_it_does_not_run(change, words):
+    from fe_beam.config import validate
+    from fe_beam.errors import ConfigError
+
+    config = _base(4)
+    config["rods"] = [
+        {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 1.0,
+         "supports": {"x0": "clamped"}},
+        {"name": "beam", "start": [0.0, 1.0], "direction": [1.0, 0.0], "length": 0.7,
+         "loads": {"point_forces": [[0.7, 0.0, -1.0]]}}]
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    config["design"] = {"variables": ["rods.beam.section.h"], "bounds": [[0.03, 0.08]],
+                        "objective": "tip_pose", "target": {"v": -0.3}} | change
+    if words is None:  # the top-level section of rods without their own: allowed
+        validate("design", config)
+        return
+    with pytest.raises(ConfigError, match=words):
+        validate("design", config)

@@ -19,7 +19,7 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
-STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine")
+STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
 
 ROD_KEYS = {
     "name": Key((str,), REQUIRED, "the rod's name (joints name its ends as \"name:start\", "
