@@ -242,6 +242,11 @@ def test_dynamic_split_rod_is_the_rod(scheme):
         assert abs(b["tip"]["theta"] - a["tip"]["theta"]) <= 1e-11 * scale
         for key in ("kinetic", "strain"):
             assert b["energies"][key] == pytest.approx(a["energies"][key], rel=1e-10)
+        # each step's rods: b's end is the chain's end, a's end the joint
+        assert b["rods"]["b"]["tip"] == pytest.approx(
+            [c + b["tip"]["u"], s + b["tip"]["v"]], abs=1e-12)
+        assert b["rods"]["b"]["tip_angle"] == pytest.approx(math.atan2(s, c)
+                                                            + a["tip"]["theta"], abs=1e-10)
 
 
 def test_dynamic_l_frame_released_from_a_static_load_conserves_energy():
@@ -444,3 +449,24 @@ def test_design_of_a_structure_refuses_what_it_does_not_run(change, words):
         return
     with pytest.raises(ConfigError, match=words):
         validate("design", config)
+
+
+def test_dynamic_history_has_each_rods_end(tmp_path):
+    """history.csv gains rod_<name>_x, _y, _angle (each rod's end, world axes), the values
+    of summary.json's history "rods"."""
+    config = _dynamic(3, "generalized-alpha", t_end=0.02, dt=0.01)
+    config["rods"] = [
+        {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 0.8,
+         "supports": {"x0": "clamped"}, "loads": {"point_forces": [[0.8, 2.0, 0.0]]}},
+        {"name": "beam", "start": [0.0, 0.8], "direction": [1.0, 0.0], "length": 0.6}]
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    summary = fe_beam.run("dynamic", config, tmp_path / "out")
+    assert summary["status"] == "completed"
+    lines = (tmp_path / "out" / "history.csv").read_text().splitlines()
+    header, last = lines[0].split(","), [float(x) for x in lines[-1].split(",")]
+    rods = summary["history"][-1]["rods"]
+    for name in ("column", "beam"):
+        row = [last[header.index(f"rod_{name}_{k}")] for k in ("x", "y", "angle")]
+        assert row == pytest.approx([*rods[name]["tip"], rods[name]["tip_angle"]], rel=1e-12)
+    assert rods["beam"]["tip"][0] == pytest.approx(0.6 + summary["history"][-1]["tip"]["u"])
+    assert abs(rods["column"]["tip"][0]) > 1e-4  # it moved

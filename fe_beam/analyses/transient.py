@@ -28,7 +28,12 @@ from mpi4py import MPI
 
 from fe_beam import certify, exports, runctl
 from fe_beam.analyses.certificates import equilibrium_entry
-from fe_beam.analyses.static import StaticContinuation, check_beam_work, contact_columns
+from fe_beam.analyses.static import (
+    StaticContinuation,
+    check_beam_work,
+    contact_columns,
+    structure_columns,
+)
 from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     DAMPING_KEYS,
@@ -300,6 +305,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
+        if getattr(problem, "chain", None) is not None:  # each rod's end (world axes)
+            result.history[-1]["rods"] = problem.chain.rods()
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
@@ -536,6 +543,8 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         obstacles = len(config.static.obstacles)
         if obstacles:  # each obstacle's force, moment, penetration and peak pressure
             columns = columns + contact_columns(obstacles, spatial)
+        # a chain of rods: each rod's end (its joints' forces would need the inertia: none)
+        columns = columns + structure_columns(config.static.model, joints=False)
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
