@@ -259,7 +259,8 @@ MISTAKES = [
 ]
 UNSUPPORTED = [
     (lambda c: c["joints"][0].update(kind="pin"), "kind = 'pin' is not supported yet"),
-    (lambda c: c["model"].update(kinematics="spatial"), "kinematics = \"spatial\" with [[rods]]"),
+    (lambda c: c["model"].update(kinematics="spatial"),
+     "[model] kinematics = \"spatial\" takes three components"),
     (lambda c: (c["rods"].append({"name": "arm", "start": [0.0, 1.0], "direction": [-1.0, 0.0],
                                   "length": 0.5}),
                 c["joints"].append({"name": "t", "at": ["arm:start", "column:end"]})),

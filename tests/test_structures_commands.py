@@ -470,3 +470,16 @@ def test_dynamic_history_has_each_rods_end(tmp_path):
         assert row == pytest.approx([*rods[name]["tip"], rods[name]["tip_angle"]], rel=1e-12)
     assert rods["beam"]["tip"][0] == pytest.approx(0.6 + summary["history"][-1]["tip"]["u"])
     assert abs(rods["column"]["tip"][0]) > 1e-4  # it moved
+
+
+@pytest.mark.parametrize("command", ["modes", "buckling", "dynamic", "refine", "design"])
+def test_spatial_chains_are_refused_beyond_static_and_path(command):
+    from fe_beam.config import validate
+    from fe_beam.errors import ConfigError
+
+    config = _base(4)
+    config["model"] = {"law": "reissner", "kinematics": "spatial"}
+    config["rods"] = [{"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0],
+                       "length": 1.0, "supports": {"x0": "clamped"}}]
+    with pytest.raises(ConfigError, match=f"fe-beam {command} does not run (a )?spatial"):
+        validate(command, config)

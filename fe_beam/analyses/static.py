@@ -368,7 +368,9 @@ def _model_summary(config: StaticConfig) -> dict:
     if structure is not None:  # a chain of rods: its rods and joints as given
         law["structure"] = {
             "rods": [{"name": r.name, "start": list(r.start), "direction": list(r.direction),
-                      "length": r.length, "elements": r.elements} for r in structure.rods],
+                      "length": r.length, "elements": r.elements}
+                     | ({"normal": list(r.frame[1])} if r.dim == 3 else {})
+                     for r in structure.rods],
             "joints": [{"name": j.name, "kind": j.kind, "at": list(j.at)}
                        for j in structure.joints],
             "chain": [structure.rods[seg.rod].name for seg in structure.chain]}
@@ -414,11 +416,25 @@ SPATIAL_CSV_COLUMNS = [
 
 def structure_columns(model, joints: bool = True) -> list:
     """A chain of rods' CSV columns: ``rod_<name>_x``, ``_y``, ``_angle`` (each rod's end,
-    world axes) and (``joints``) ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod)."""
+    world axes) and (``joints``) ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod);
+    spatial: ``rod_<name>_x``, ``_y``, ``_z`` and ``joint_<name>_Fx``, ``_Fy``, ``_Fz``,
+    ``_Mx``, ``_My``, ``_Mz``."""
     structure = getattr(model, "structure", None)
     if structure is None:
         return []
     columns = []
+    if structure.dim == 3:  # spatial: each rod's end, each joint's force and moment
+        for rod in structure.rods:
+            columns += [exports.Column(f"rod_{rod.name}_{k}", lambda r, n=rod.name, i=i:
+                                       r["rods"][n]["tip"][i]) for i, k in enumerate("xyz")]
+        names = [j.name for j in structure.joints_on_chain] + [j[0] for j in
+                                                                structure.body_joints]
+        for name in names:
+            columns += [exports.Column(f"joint_{name}_F{k}", lambda r, n=name, i=i:
+                                       r["joints"][n]["force"][i]) for i, k in enumerate("xyz")]
+            columns += [exports.Column(f"joint_{name}_M{k}", lambda r, n=name, i=i:
+                                       r["joints"][n]["moment"][i]) for i, k in enumerate("xyz")]
+        return columns
     for rod in structure.rods:
         columns += [
             exports.Column(f"rod_{rod.name}_x", lambda r, n=rod.name: r["rods"][n]["tip"][0]),
@@ -465,8 +481,13 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     m = config.model
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
+        structure = getattr(m, "structure", None)
+        undeformed = None if structure is None else [
+            structure.reference_point(s, structure.segment_at(min(s, m.length)))
+            for s in (0.0, *structure.boundaries(), m.length)]
         plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                            obstacles=result.obstacles or config.obstacles)
+                            obstacles=result.obstacles or config.obstacles,
+                            undeformed=undeformed)
         factors = [s["load_factor"] for s in result.steps]
         tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w",
                                                                   "rotation_vector")}

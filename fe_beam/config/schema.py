@@ -36,7 +36,12 @@ from fe_beam.model.beam import _rank as beam_rank
 from fe_beam.model.materials import Material
 from fe_beam.model.sections import Section
 from fe_beam.model.settings import LoadStepping, SolverSettings
-from fe_beam.model.spatial import SpatialLoads, SpatialRodModel, SpatialSupports
+from fe_beam.model.spatial import (
+    SPATIAL_SUPPORT_KINDS,
+    SpatialLoads,
+    SpatialRodModel,
+    SpatialSupports,
+)
 from fe_beam.model.structure import Structure
 from fe_beam.model.studies import OutputOptions, StaticConfig
 from fe_beam.timefunctions import shown
@@ -211,9 +216,13 @@ def parse_structure_model(config: dict) -> BeamModel:
     chain's end rods, the rods' point loads at chain coordinates; the top-level [section],
     [material], [model] and [loads] gravity / distributed apply to every rod."""
     check_structure_tables(config, "static")
-    structure = parse_structure(config)
     model = table(config, "model")
-    model.pop("kinematics")
+    kinematics = model.pop("kinematics")
+    if kinematics not in ("planar", "spatial"):
+        raise ConfigError(f"[model] kinematics must be \"planar\" or \"spatial\"; got "
+                          f"{shown(kinematics)}")
+    spatial = kinematics == "spatial"
+    structure = parse_structure(config, spatial)
     material, law_options = _rod_material(config, model)
     section = parse_section(config)
     if section.dims_tip:
@@ -233,6 +242,20 @@ def parse_structure_model(config: dict) -> BeamModel:
                               "load a free end or a point of a rod")
     elements = sum(rod.elements for rod in structure.rods)
     supports = structure.end_supports
+    if spatial:
+        return _wrap(
+            SpatialRodModel,
+            length=structure.length,
+            section=section,
+            material=material,
+            options=_wrap(ModelOptions, **model, **law_options),
+            mesh=_wrap(Discretisation, elements=elements, degree=structure.rods[0].degree),
+            supports=_wrap(SpatialSupports, x0=_spatial_chain_support(structure, "x0"),
+                           xL=_spatial_chain_support(structure, "xL")),
+            loads=_wrap(SpatialLoads, distributed=loads["distributed"], gravity=loads["gravity"],
+                        point_forces=forces, point_moments=moments),
+            structure=structure,
+        )
     return _wrap(
         BeamModel,
         length=structure.length,
@@ -245,6 +268,31 @@ def parse_structure_model(config: dict) -> BeamModel:
                     point_forces=forces, point_moments=moments),
         structure=structure,
     )
+
+
+def _spatial_chain_support(structure, end: str) -> tuple:
+    """The world components a spatial chain's end holds: clamped (all), free (none), pinned
+    (the position and the twist about the end rod's direction, which must be a coordinate axis:
+    the rotation components are world axes) or the components given."""
+    kind = structure.end_supports[end]
+    if isinstance(kind, tuple):
+        return kind
+    segment = structure.chain[0 if end == "x0" else -1]
+    rod = structure.rods[segment.rod]
+    key = "x0" if (end == "x0") != segment.reversed else "xL"
+    if kind == "roller":
+        raise ConfigError(f"[[rods]] '{rod.name}' supports.{key} = \"roller\" is planar; a "
+                          "spatial chain takes clamped, pinned, free or a list of components "
+                          "from u, v, w, theta_x, theta_y, theta_z")
+    if kind != "pinned":
+        return SPATIAL_SUPPORT_KINDS[kind]
+    axis = [i for i, c in enumerate(rod.direction) if abs(abs(c) - 1.0) <= 1e-12]
+    if not axis:
+        raise ConfigError(f"[[rods]] '{rod.name}' supports.{key} = \"pinned\" holds the twist "
+                          "about the rod's direction, which is not a coordinate axis here; give "
+                          "the held components as a list (e.g. [\"u\", \"v\", \"w\", "
+                          "\"theta_x\"])")
+    return ("u", "v", "w", ("theta_x", "theta_y", "theta_z")[axis[0]])
 
 
 def _own_sections(config: dict, structure, section, material, law: str):
@@ -318,10 +366,22 @@ def with_rod_sections(model: BeamModel) -> BeamModel:
 def structure_rigid_motions(model: BeamModel) -> list[str]:
     """The rigid motions a chain's end supports leave free (empty: none), with the ends at
     their reference positions: a small rigid motion (a, b, w) moves the point (X, Y) by
-    (a - w Y, b + w X) and turns it by w."""
+    (a - w Y, b + w X) and turns it by w (spatial: a + w x X, turned by w)."""
     structure = model.structure
     points = {"x0": structure.reference_point(0.0, structure.chain[0]),
               "xL": structure.reference_point(model.length, structure.chain[-1])}
+    if structure.dim == 3:
+        scale = structure.length
+        equations = []
+        for end, (X, Y, Z) in points.items():
+            rows = {"u": (1, 0, 0, 0, Z, -Y), "v": (0, 1, 0, -Z, 0, X),
+                    "w": (0, 0, 1, Y, -X, 0), "theta_x": (0, 0, 0, 1, 0, 0),
+                    "theta_y": (0, 0, 0, 0, 1, 0), "theta_z": (0, 0, 0, 0, 0, 1)}
+            equations += [tuple(c / scale if i >= 3 else c for i, c in enumerate(rows[n]))
+                          for n in model.supports.fixed(end)]
+        if equations and beam_rank(equations) == 6:
+            return []
+        return ["a rigid-body motion (support the chain's ends: e.g. clamp one)"]
     rows = []
     for end, (X, Y) in points.items():
         fixed = model.supports.fixed(end)

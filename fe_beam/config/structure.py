@@ -11,6 +11,7 @@ from __future__ import annotations
 from fe_beam.config.keys import NUMBER, REQUIRED, SCHEMA, Key, _checked, _wrap
 from fe_beam.errors import ConfigError
 from fe_beam.model.beam import point_rows
+from fe_beam.model.spatial import spatial_support_components
 from fe_beam.model.structure import Body, Joint, Rod, Structure
 from fe_beam.timefunctions import shown
 
@@ -20,23 +21,32 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
 STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
+#: the commands that run a spatial structure in this version
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
+PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {
     "name": Key((str,), REQUIRED, "the rod's name (joints name its ends as \"name:start\", "
                 "\"name:end\")"),
-    "start": Key((list,), [0.0, 0.0], "reference position of the rod's start [x, y] [m]"),
-    "direction": Key((list,), [1.0, 0.0], "unit tangent [x, y] of the reference axis"),
+    "start": Key((list,), None, "reference position of the rod's start [x, y] (spatial: "
+                 "[x, y, z]) [m] (default: the origin)"),
+    "direction": Key((list,), None, "unit tangent [x, y] (spatial: [x, y, z]) of the reference "
+                     "axis (default: along x)"),
     "length": Key(NUMBER, REQUIRED, "the rod's length [m]"),
     "mesh": Key((dict,), None, "{elements, degree} of this rod (default: [mesh])"),
     "supports": Key((dict,), {}, "{x0, xL = clamped | pinned | roller | free} at the rod's "
-                    "start and end (default free)"),
+                    "start and end (default free); spatial: clamped | pinned | free or a list "
+                    "of world components from u, v, w, theta_x, theta_y, theta_z"),
     "loads": Key((dict,), {}, "{point_forces = [[x, Px, Py], ...], point_moments = [[x, M], "
-                 "...]}, x the arc length from the rod's start"),
+                 "...]} (spatial: [[x, Px, Py, Pz]], [[x, Mx, My, Mz]]), x the arc length from "
+                 "the rod's start, world axes"),
     "section": Key((dict,), None, "the rod's section (default: [section])"),
     "material": Key((dict,), None, "the rod's material (default: [material])"),
     "model": Key((dict,), None, "the rod's law and constraint (default: [model])"),
     # the interface of issue 29 that this version refuses with a sentence
-    "normal": Key((list,), None, "spatial: the section's d2 at the start (not supported yet)"),
+    "normal": Key((list,), None, "spatial: the section's d2 (h direction), a unit vector "
+                  "orthogonal to direction (default: e_z x direction normalised; direction x "
+                  "e_x when direction is along z)"),
     "tendons": Key((list,), None, "per-rod tendons (not supported yet)"),
     "initial_curvature": Key((list,), None, "per-rod initial curvature (not supported yet)"),
 }
@@ -49,7 +59,7 @@ JOINT_KEYS = {
 }
 BODY_KEYS = {
     "name": Key((str,), REQUIRED, "the body's name (joints name it as \"body:NAME\")"),
-    "position": Key((list,), REQUIRED, "reference point [x, y] [m]"),
+    "position": Key((list,), REQUIRED, "reference point [x, y] (spatial: [x, y, z]) [m]"),
     "fixed": Key((bool, list), True, "true (free and partly fixed bodies: not supported yet)"),
     "offset": Key((list,), None, "a joined end's point in the body frame (not supported yet)"),
     "motion": Key((dict,), None, "prescribed motion (not supported yet)"),
@@ -123,9 +133,16 @@ def check_structure_tables(config: dict, command: str) -> None:
         raise ConfigError("[supports] with [[rods]]: give each rod's end supports in [[rods]] "
                           "supports = {x0 = ..., xL = ...}")
     model = config.get("model")
-    if isinstance(model, dict) and model.get("kinematics", "planar") != "planar":
-        raise ConfigError("[model] kinematics = \"spatial\" with [[rods]] is not supported yet; "
-                          "this version solves planar structures")
+    spatial = isinstance(model, dict) and model.get("kinematics", "planar") == "spatial"
+    if spatial and command not in SPATIAL_STRUCTURE_COMMANDS:
+        raise ConfigError(f"fe-beam {command} does not run a spatial structure of [[rods]] yet "
+                          "([model] kinematics = \"spatial\"); the commands that do: "
+                          f"{', '.join(SPATIAL_STRUCTURE_COMMANDS)} (planar chains also "
+                          f"{', '.join(PLANAR_ONLY)})")
+    if isinstance(model, dict) and model.get("kinematics", "planar") == "spatial" \
+            and model.get("law") == "hyperelastic":
+        raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
+                          "\"spatial\" (use \"nonstandard\" or \"reissner\")")
     for name in ("tendons", "obstacles"):
         if config.get(name):
             raise ConfigError(f"[[{name}]] with [[rods]] is not supported yet (a structure "
@@ -148,22 +165,37 @@ def check_structure_tables(config: dict, command: str) -> None:
         if single:
             raise ConfigError(f"[loads] {single[0]} with [[rods]]: give point loads per rod "
                               "([[rods]] loads = {point_forces = [[x, Px, Py]], point_moments "
-                              "= [[x, M]]}); [loads] takes gravity and distributed for every "
-                              "rod")
+                              "= [[x, M]]}, spatial [[x, Px, Py, Pz]], [[x, Mx, My, Mz]]); "
+                              "[loads] takes gravity and distributed for every rod")
 
 
-def parse_structure(config: dict) -> Structure:
+def parse_structure(config: dict, spatial: bool = False) -> Structure:
     """The validated `Structure` of [[rods]], [[joints]], [[bodies]] (ConfigError naming the
-    table and key otherwise). Per-rod section, material and model tables are checked by the
-    caller (`fe_beam.config.schema`)."""
+    table and key otherwise); ``spatial``: [model] kinematics = "spatial" (3-vectors, rows of
+    four numbers). Per-rod section, material and model tables are checked by the caller
+    (`fe_beam.config.schema`)."""
     mesh_default = config.get("mesh") if isinstance(config.get("mesh"), dict) else {}
+    size = 3 if spatial else 2
     rods = []
     for _index, entry in enumerate(_entries(config, "rods", ROD_KEYS)):
         where = f"[[rods]] '{entry['name']}'"
-        for key in ("normal", "tendons", "initial_curvature"):
+        for key in ("tendons", "initial_curvature"):
             if entry[key] is not None:
-                raise ConfigError(f"{where} {key} is not supported yet (planar rods without "
+                raise ConfigError(f"{where} {key} is not supported yet (rods without "
                                   "tendons, straight in the reference state)")
+        if entry["normal"] is not None and not spatial:
+            raise ConfigError(f"{where} normal is the spatial section's d2: it needs [model] "
+                              "kinematics = \"spatial\" (a planar rod's section turns with "
+                              "its direction)")
+        form = "[x, y]" if size == 2 else "[x, y, z]"
+        for key, default in (("start", [0.0] * size), ("direction", [1.0] + [0.0] * (size - 1))):
+            value = entry[key]
+            if value is None:
+                entry[key] = default
+            elif not (isinstance(value, list) and len(value) == size):
+                other = ("; three components need [model] kinematics = \"spatial\"" if size == 2
+                         else "; [model] kinematics = \"spatial\" takes three components")
+                raise ConfigError(f"{where} {key} must be {form}; got {shown(value)}{other}")
         mesh = dict(mesh_default) | (entry["mesh"] or {})
         unknown = [k for k in mesh if k not in ROD_MESH_KEYS]
         if unknown:
@@ -179,26 +211,40 @@ def parse_structure(config: dict) -> Structure:
         if unknown:
             raise ConfigError(f"{where} supports: unknown key {shown(unknown[0])}; allowed: "
                               "x0 (the rod's start), xL (its end)")
-        for key, value in supports.items():
+        for key, value in list(supports.items()):
+            if spatial and isinstance(value, list):
+                try:
+                    supports[key] = spatial_support_components(value, key) or "free"
+                except ValueError as error:
+                    raise ConfigError(f"{where} {error}") from None
+                continue
             if not isinstance(value, str):
+                lists = " or a list of components" if spatial else ""
                 raise ConfigError(f"{where} supports.{key} must be a support name (clamped | "
-                                  f"pinned | roller | free); got {shown(value)}")
+                                  f"pinned | roller | free{lists}); got {shown(value)}")
         loads = entry["loads"]
         unknown = [k for k in loads if k not in ROD_LOAD_KEYS]
         if unknown:
             raise ConfigError(f"{where} loads: unknown key {shown(unknown[0])}; allowed: "
                               f"{', '.join(ROD_LOAD_KEYS)}")
         try:
-            forces = point_rows("point_forces", loads.get("point_forces", []), 3,
-                                "[x, Px, Py] (three numbers)")
-            moments = point_rows("point_moments", loads.get("point_moments", []), 2,
-                                 "[x, M] (two numbers)")
+            if spatial:
+                forces = point_rows("point_forces", loads.get("point_forces", []), 4,
+                                    "[x, Px, Py, Pz] (four numbers, world axes)")
+                moments = point_rows("point_moments", loads.get("point_moments", []), 4,
+                                     "[x, Mx, My, Mz] (four numbers, world axes)")
+            else:
+                forces = point_rows("point_forces", loads.get("point_forces", []), 3,
+                                    "[x, Px, Py] (three numbers)")
+                moments = point_rows("point_moments", loads.get("point_moments", []), 2,
+                                     "[x, M] (two numbers)")
         except ValueError as error:
             raise ConfigError(f"{where} {error}") from None
         ends = {"x0": "start", "xL": "end"}
         rods.append(_wrap(Rod, entry["name"], entry["start"], entry["direction"],
                           entry["length"], mesh["elements"], mesh["degree"],
-                          {ends[k]: v for k, v in supports.items()}, forces, moments))
+                          {ends[k]: v for k, v in supports.items()}, forces, moments,
+                          normal=entry["normal"]))
     joints = []
     for entry in _entries(config, "joints", JOINT_KEYS):
         if entry["axis"] is not None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import ufl
 
 from fe_beam.exports.obstacles import bounding_box, obstacle_surface
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, figure, gather_line
@@ -37,7 +38,12 @@ class SpatialXDMFWriter(BeamXDMFWriter):
         d, theta, _ = problem.fields()
         plan = [(name, d[i] if i < 3 else theta[i - 3], scalar)
                 for i, name in enumerate(NODAL)]
-        plan += [("displacement", d, vector), ("rotation_vector", theta, vector)]
+        displacement = d
+        chain = getattr(problem, "chain", None)
+        if chain is not None:  # a chain of rods: from the mesh's (s, 0, 0) to the deformed chain
+            x = ufl.SpatialCoordinate(mesh)[0]
+            displacement = chain.reference + d - ufl.as_vector([x, 0, 0])
+        plan += [("displacement", displacement, vector), ("rotation_vector", theta, vector)]
         return plan + [(f"d{i + 1}", director, vector)
                        for i, director in enumerate(problem.directors())]
 
@@ -70,7 +76,7 @@ class SpatialXDMFWriter(BeamXDMFWriter):
 
 def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title: str,
                         length: float, offset: np.ndarray | None = None,
-                        obstacles=()) -> None:
+                        obstacles=(), undeformed=None) -> None:
     """Deformed centrelines in three views (x-y from above, x-z from the side, y-z along the
     axis) and a 3D view with the section frames' d2 (the h direction) drawn along the last
     shape. ``offset``: the straight reference's displacement to subtract (none here).
@@ -79,7 +85,8 @@ def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title:
     of its diameter), a box as its rectangle, a plane as its trace through its point with a
     strip on the solid side (left out in a view along which it lies); in the 3D view as
     translucent surfaces (`fe_beam.exports.obstacles.obstacle_surface`), cut to the rod's
-    bounding box widened by a quarter."""
+    bounding box widened by a quarter. ``undeformed``: the reference polyline's corners (a
+    chain of rods; default the straight axis (0, 0, 0)-(length, 0, 0))."""
     plt = _pyplot()
     low, high = bounding_box(shapes, length)
     drawn = plt.figure(figsize=(11, 8.5))
@@ -90,7 +97,8 @@ def plot_spatial_shapes(shapes: list[tuple[str, dict]], path: str | Path, title:
         extent = np.zeros((0, 3))
         for number, first, second, i, j in views:
             axes = drawn.add_subplot(2, 2, number)
-            reference = np.array([[0, 0, 0], [length, 0, 0]], dtype=float)
+            reference = (np.array([[0, 0, 0], [length, 0, 0]], dtype=float)
+                         if undeformed is None else np.asarray(undeformed, dtype=float))
             axes.plot(reference[:, i], reference[:, j], color="0.7", lw=1, ls="--",
                       label="undeformed")
             for (label, shape), colour in zip(shapes, colours, strict=False):

@@ -151,6 +151,8 @@ def _body_forms(problem):
     if problem.spatial:
         d = problem.fields()[0]
         position = ufl.as_vector([x + d[0], d[1], d[2]])
+        if getattr(problem, "chain", None) is not None:  # a chain: its reference position
+            position = problem.chain.reference + d
         forces = [body[i] for i in range(3)]
         moment = ufl.cross(position, body)
         moments = [moment[i] for i in range(3)]
@@ -224,7 +226,10 @@ def _point_forces(problem, factor: float) -> list[Wrench]:
     for x, force in _point_sums(problem, problem.model.loads.point_forces,
                                 getattr(problem, "point_force_fields", None), factor):
         values = problem.point_values(x)
-        if problem.spatial:
+        if problem.spatial and getattr(problem, "chain", None) is not None:
+            position = np.array(problem.reference_point(x)) + np.array(
+                [values["u"], values["v"], values["w"]])
+        elif problem.spatial:
             position = np.array([x + values["u"], values["v"], values["w"]])
         else:
             X, Y = problem.reference_point(x)

@@ -173,13 +173,17 @@ class SpatialRodProblem(BeamProblem):
         m, sec = self.model, self.model.section
         dims, dims_tip, x = self._material_constants()
         self.x = x
+        E, G = self.E, self.G
+        if self.chain is not None:  # rods with their own sections or materials: DG0 fields
+            dims = self.chain.section_dims() or dims
+            E, G = self.chain.moduli() or (E, G)
         p = sec.spatial_properties(x / m.length, dims, dims_tip, tanh=ufl.tanh)
         self.section_props = p
         if m.options.law == "reissner":
-            self.law = SpatialReissner(self.E * p.A, self.k_shear * self.G * p.A, self.G * p.J,
-                                       self.E * p.Iy, self.E * p.Iz)
+            self.law = SpatialReissner(E * p.A, self.k_shear * G * p.A, G * p.J,
+                                       E * p.Iy, E * p.Iz)
         else:
-            self.law = SpatialNonStandard(self.E, self.G, p.moments, p.J)
+            self.law = SpatialNonStandard(E, G, p.moments, p.J)
         self.intrinsic = ufl.as_vector([profile_expression(c, self.mesh)
                                         for c in m.initial_curvature])
         loads = m.loads
@@ -257,6 +261,10 @@ class SpatialRodProblem(BeamProblem):
 
     def strains(self, parts) -> SpatialStrains:
         d, theta = parts
+        if self.chain is not None:  # a chain of rods: R = R_inc R0 (fe_beam.fem.structure)
+            v, u = self.chain.spatial_rates(d, theta, rotation, curvature)
+            u = u - self.intrinsic
+            return SpatialStrains(tuple(v[i] for i in range(3)), tuple(u[i] for i in range(3)))
         tangent = ufl.as_vector([1 + d[0].dx(0), d[1].dx(0), d[2].dx(0)])
         R = rotation(theta)
         v = ufl.dot(R.T, tangent)
@@ -266,6 +274,8 @@ class SpatialRodProblem(BeamProblem):
     def frame_rates(self, parts):
         """(v, u) = (R^T r', the total curvature T(-theta) theta') as UFL 3-vectors."""
         d, theta = parts
+        if self.chain is not None:
+            return self.chain.spatial_rates(d, theta, rotation, curvature)
         tangent = ufl.as_vector([1 + d[0].dx(0), d[1].dx(0), d[2].dx(0)])
         return ufl.dot(rotation(theta).T, tangent), curvature(theta)
 
@@ -368,6 +378,15 @@ class SpatialRodProblem(BeamProblem):
         values = super().end_values(end)
         displacement = np.array([values[n] for n in ("u", "v", "w")])
         x = self.model.length if end == "xL" else 0.0
+        if self.chain is not None:  # world position and rotation R_inc R0 of the chain's end
+            vector = [values[n] for n in SPATIAL_COMPONENTS[3:]]
+            frame = np.array(rotation_matrix(vector)) @ self.chain.frame_at(
+                x, "before" if end == "xL" else "after")
+            position = np.array(self.reference_point(x)) + displacement
+            return {"u": float(displacement[0]), "v": float(displacement[1]),
+                    "w": float(displacement[2]), "R": frame.tolist(),
+                    "rotation_vector": [float(c) for c in vector],
+                    "position": [float(c) for c in position]}
         reference = self.reference_tip if end == "xL" else np.zeros(3)
         vector = [values[n] for n in SPATIAL_COMPONENTS[3:]]
         return {"u": float(displacement[0] - reference[0]),
@@ -384,10 +403,19 @@ class SpatialRodProblem(BeamProblem):
         return {"v1": s.v[0], "v2": s.v[1], "v3": s.v[2], "twist": s.u[0],
                 "curvature_y": s.u[1], "curvature_z": s.u[2]}
 
+    def reference_point(self, x: float) -> tuple[float, float, float]:
+        """The reference position (X, Y, Z) of the axis point x (the chain's, or (x, 0, 0))."""
+        if self.chain is None:
+            return float(x), 0.0, 0.0
+        return self.model.structure.reference_point(x)
+
     def directors(self):
-        """R's columns d1, d2, d3 (UFL 3-vectors) of the current state."""
+        """R's columns d1, d2, d3 (UFL 3-vectors) of the current state (R = R_inc R0 on a
+        chain of rods)."""
         _, theta, _ = self.fields()
         R = rotation(theta)
+        if self.chain is not None:
+            R = ufl.dot(R, self.chain.frame0)
         return [ufl.as_vector([R[i, j] for i in range(3)]) for j in range(3)]
 
     def strain_range(self) -> StrainRange:

@@ -16,6 +16,8 @@ on the first end named in the joint's ``at``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import ufl
 from dolfinx import fem
@@ -23,6 +25,7 @@ from petsc4py import PETSc
 
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
+from fe_beam.model.spatial import rotation_matrix
 
 __all__ = ["ChainGeometry", "chain_vertices"]
 
@@ -62,12 +65,25 @@ class ChainGeometry:
         self._segment_of_cell = np.array([self.structure.chain.index(seg) for seg in segments],
                                          dtype=int)
         nodal = compat.function_space(mesh, compat.element(mesh, "Lagrange", 1))
-        self.X, self.Y = fem.Function(nodal, name="X"), fem.Function(nodal, name="Y")
+        self.spatial = bool(getattr(problem, "spatial", False))
+        names = ("X", "Y", "Z") if self.spatial else ("X", "Y")
+        coordinates = [fem.Function(nodal, name=n) for n in names]
         points = nodal.tabulate_dof_coordinates()[:, 0]
         where = [self.structure.reference_point(s) for s in points]
-        self.X.x.array[:] = [p[0] for p in where]
-        self.Y.x.array[:] = [p[1] for p in where]
-        self.reference = ufl.as_vector([self.X, self.Y])
+        for i, function in enumerate(coordinates):
+            function.x.array[:] = [p[i] for p in where]
+        self.X, self.Y = coordinates[0], coordinates[1]
+        self.reference = ufl.as_vector(coordinates)
+        if self.spatial:
+            # R0: the reference directors (columns d1, d2, d3) of each cell's rod, DG0
+            self._frame = [[fem.Function(cellwise, name=f"R0_{i}{j}") for j in range(3)]
+                           for i in range(3)]
+            for i in range(3):
+                for j in range(3):
+                    self._frame[i][j].x.array[dofs] = [seg.frame[j][i] for seg in segments]
+                    self._frame[i][j].x.scatter_forward()
+            self.frame0 = ufl.as_matrix([[self._frame[i][j] for j in range(3)]
+                                         for i in range(3)])
         self._joint_form = None
         self._indicator = None
 
@@ -133,16 +149,55 @@ class ChainGeometry:
         c, s = ufl.cos(self.theta0), ufl.sin(self.theta0)
         return ufl.as_vector([1 + c * u.dx(0) + s * v.dx(0), -s * u.dx(0) + c * v.dx(0)])
 
+    # --- spatial kinematics (MODEL.md section 9: R = R_inc R0) ---------------------------------
+    def spatial_tangent(self, d):
+        """r' = R0 e1 + d' in world axes (d the world displacement)."""
+        return ufl.as_vector([self.frame0[i, 0] + d[i].dx(0) for i in range(3)])
+
+    def spatial_rates(self, d, theta, rotation, curvature):
+        """(v, u) = (R^T r', R^T R' as a vector) with R = R_inc R0, R_inc = ``rotation(theta)``:
+        R0 is constant on each rod, so u = R0^T u_inc, u_inc = ``curvature(theta)`` (the
+        body curvature of R_inc)."""
+        R = ufl.dot(rotation(theta), self.frame0)
+        return (ufl.dot(R.T, self.spatial_tangent(d)),
+                ufl.dot(self.frame0.T, curvature(theta)))
+
+    def frame_at(self, s: float, side: str = "after") -> np.ndarray:
+        """R0 (columns d1, d2, d3) of the chain's segment at s (the one before s with
+        ``side`` = "before": a chain's last end)."""
+        segments = self.structure.chain
+        segment = self.structure.segment_at(s)
+        if side == "before" and segment.s0 >= s - 1e-12 * self.structure.length \
+                and segments.index(segment) > 0:
+            segment = segments[segments.index(segment) - 1]
+        return np.array(segment.frame, dtype=float).T
+
     # --- outputs --------------------------------------------------------------------------------
-    def position(self, s: float) -> tuple[float, float, float]:
-        """(x, y, theta) world of the chain point s (a vertex; collective)."""
+    def position(self, s: float) -> tuple:
+        """(x, y, theta) world of the chain point s (a vertex; collective); spatial: (position
+        3-vector, rotation vector of R_inc)."""
         values = self.problem.point_values(s)
-        X, Y = self.structure.reference_point(s)
+        reference = self.structure.reference_point(s)
+        if self.spatial:
+            position = np.array(reference) + np.array([values[n] for n in ("u", "v", "w")])
+            return position, np.array([values[f"theta_{k}"] for k in "xyz"])
+        X, Y = reference
         return X + values["u"], Y + values["v"], values["theta"]
 
     def rods(self) -> dict:
         """{rod name: {tip: [x, y], tip_angle}}: each rod's own end ("rod:end") in world axes,
-        its section's world angle there (the rod's direction + theta). Collective."""
+        its section's world angle there (the rod's direction + theta). Spatial: {tip: [x, y,
+        z], tip_frame}: the rows of R = R_inc R0 of the rod (its columns the directors d1,
+        d2, d3 in world axes). Collective."""
+        if self.spatial:
+            result = {}
+            for index, rod in enumerate(self.structure.rods):
+                s, _ = self.structure.rod_tip(index)
+                position, vector = self.position(s)
+                frame = np.array(rotation_matrix(vector)) @ np.array(rod.frame, dtype=float).T
+                result[rod.name] = {"tip": [float(c) for c in position],
+                                    "tip_frame": frame.tolist()}
+            return result
         result = {}
         for index, rod in enumerate(self.structure.rods):
             s, _ = self.structure.rod_tip(index)
@@ -151,7 +206,29 @@ class ChainGeometry:
                                 "tip_angle": float(rod.angle + theta)}
         return result
 
+    def _compile_spatial_joint_form(self):
+        problem = self.problem
+        self._indicator = fem.Function(self.theta0.function_space)
+        chi = self._indicator
+        d, theta, multipliers = problem.fields()
+        s = problem.strains((d, theta))
+        energy = chi * problem.law_energy(s) * problem.dx_energy
+        if multipliers:
+            energy += chi * sum(value * s.constrained(n) for n, value in multipliers.items()) \
+                * problem.dx_energy
+        body = problem.distributed + problem.rho * problem.section_props.A * problem.gravity
+        energy -= chi * problem.load_factor * ufl.dot(body, d) * problem.dx_loads
+        test = ufl.TestFunction(problem.space)
+        self._joint_form = fem.form(ufl.derivative(energy, problem.w, test))
+        self._joint_dofs = {}
+        for joint in self.structure.joints_on_chain:
+            self._joint_dofs[joint.name] = [problem.point_dofs(n, joint.s, f"joint "
+                                                               f"'{joint.name}' at")
+                                            for n in problem.components]
+
     def _compile_joint_form(self):
+        if self.spatial:
+            return self._compile_spatial_joint_form()
         problem = self.problem
         cellwise = self.theta0.function_space
         self._indicator = fem.Function(cellwise)
@@ -181,6 +258,13 @@ class ChainGeometry:
         for name, end, rod_first in self.structure.body_joints:
             reaction = self.problem.end_reaction(end)
             sign = 1.0 if rod_first else -1.0
+            if self.spatial:
+                vector = self.problem.end_values(end)["rotation_vector"]
+                conjugate = np.array([reaction[f"M_theta_{k}"] for k in "xyz"])
+                moment = np.linalg.solve(_spin(vector).T, conjugate)
+                result[name] = {"force": [sign * reaction[k] for k in ("Fx", "Fy", "Fz")],
+                                "moment": [float(sign * m) for m in moment]}
+                continue
             result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
                             "moment": sign * reaction["M"]}
         if not self.structure.joints_on_chain:
@@ -195,10 +279,18 @@ class ChainGeometry:
             vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             values = vector.getArray(readonly=True)
             comm = self.problem.comm
-            fx, fy, m = (float(global_sum(comm, values[d].sum()))
-                         for d in self._joint_dofs[joint.name])
+            sums = [float(global_sum(comm, values[d].sum()))
+                    for d in self._joint_dofs[joint.name]]
             vector.destroy()
             sign = 1.0 if joint.first_before else -1.0
+            if self.spatial:
+                # the rotation rows are conjugate to the rotation vector: r_theta = T^T m
+                _, rotation_vector = self.position(joint.s)
+                moment = np.linalg.solve(_spin(rotation_vector).T, np.array(sums[3:]))
+                result[joint.name] = {"force": [sign * f for f in sums[:3]],
+                                      "moment": [float(sign * m) for m in moment]}
+                continue
+            fx, fy, m = sums
             result[joint.name] = {"force": [sign * fx, sign * fy], "moment": sign * m}
         return result
 
@@ -213,5 +305,22 @@ class ChainGeometry:
         shaped = dict(values)
         shaped["u"] = X + np.asarray(values["u"]) - x
         shaped["v"] = Y + np.asarray(values["v"])
+        if self.spatial:
+            shaped["w"] = (np.array([self.structure.reference_point(s)[2] for s in x])
+                           + np.asarray(values["w"]))
         return shaped
+
+
+def _skew(vector) -> np.ndarray:
+    t = np.asarray(vector, dtype=float)
+    return np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+
+
+def _spin(vector) -> np.ndarray:
+    """T(theta) = I + b Theta + c Theta^2 (the spatial spin of a varied rotation vector)."""
+    t = float(np.linalg.norm(vector))
+    b = (1 - math.cos(t)) / t**2 if t > 1e-4 else 0.5 - t * t / 24
+    c = (t - math.sin(t)) / t**3 if t > 1e-3 else 1 / 6 - t * t / 120
+    K = _skew(vector)
+    return np.eye(3) + b * K + c * K @ K
 

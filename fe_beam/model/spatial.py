@@ -353,6 +353,9 @@ class SpatialRodModel:
     supports: SpatialSupports = field(default_factory=SpatialSupports)
     loads: SpatialLoads = field(default_factory=SpatialLoads)
     initial_curvature: Any = None
+    #: a spatial serial chain of rods (`fe_beam.model.structure.Structure`) laid along
+    #: 0 <= x <= length (None: a single straight rod along x)
+    structure: Any = None
 
     kinematics = "spatial"
 

@@ -48,33 +48,51 @@ class Rod:
     #: the structure has its own (every rod then carries its values); () : the top level's
     section: tuple = ()
     material: tuple = ()
+    #: spatial: the section's d2 at the start (None: the default, `frame`)
+    normal: tuple | None = None
 
     def __post_init__(self):
         where = f"[[rods]] '{self.name}'"
         if not isinstance(self.name, str) or not self.name or ":" in self.name:
             raise ValueError(f"[[rods]] name must be a non-empty string without ':'; got "
                              f"{self.name!r}")
+        size = len(self.start) if isinstance(self.start, (list, tuple)) \
+            and len(self.start) in (2, 3) else 2
         for key in ("start", "direction"):
             value = getattr(self, key)
-            ok = (isinstance(value, (list, tuple)) and len(value) == 2
+            ok = (isinstance(value, (list, tuple)) and len(value) == size
                   and all(isinstance(c, (int, float)) and not isinstance(c, bool)
                           and math.isfinite(c) for c in value))
             if not ok:
-                hint = (" (3 components are spatial: [model] kinematics = \"spatial\" is not "
-                        "supported with [[rods]] yet)" if isinstance(value, (list, tuple))
-                        and len(value) == 3 else "")
-                raise ValueError(f"{where} {key} must be a pair of numbers [x, y]; got "
-                                 f"{value!r}{hint}")
-            object.__setattr__(self, key, (float(value[0]), float(value[1])))
-        norm = math.hypot(*self.direction)
+                form = "a pair of numbers [x, y]" if size == 2 else "three numbers [x, y, z]"
+                raise ValueError(f"{where} {key} must be {form} (as start); got {value!r}")
+            object.__setattr__(self, key, tuple(float(c) for c in value))
+        norm = math.sqrt(sum(c * c for c in self.direction))
         if not abs(norm - 1.0) <= 1e-9:
             raise ValueError(f"{where} direction must be a unit vector; got {list(self.direction)}"
                              f" of length {norm:.6g}")
+        if self.normal is not None:
+            value = self.normal
+            ok = (size == 3 and isinstance(value, (list, tuple)) and len(value) == 3
+                  and all(isinstance(c, (int, float)) and not isinstance(c, bool)
+                          and math.isfinite(c) for c in value))
+            if not ok:
+                raise ValueError(f"{where} normal must be three numbers [x, y, z] (a spatial "
+                                 f"rod's d2); got {value!r}")
+            object.__setattr__(self, "normal", tuple(float(c) for c in value))
+            length = math.sqrt(sum(c * c for c in self.normal))
+            dot = sum(a * b for a, b in zip(self.normal, self.direction, strict=True))
+            if not (abs(length - 1.0) <= 1e-9 and abs(dot) <= 1e-9):
+                raise ValueError(f"{where} normal must be a unit vector orthogonal to direction;"
+                                 f" got {list(self.normal)} of length {length:.6g}, "
+                                 f"normal . direction = {dot:.3g}")
         ok = (isinstance(self.length, (int, float)) and not isinstance(self.length, bool)
               and math.isfinite(self.length) and self.length > 0)
         if not ok:
             raise ValueError(f"{where} length must be a number > 0; got {self.length!r}")
         for end, kind in self.supports.items():
+            if self.dim == 3 and isinstance(kind, tuple):
+                continue  # spatial components, checked with the chain's end
             if kind not in SUPPORT_KINDS:
                 raise ValueError(f"{where} supports.{end} must be one of "
                                  f"{', '.join(SUPPORT_KINDS)}; got {kind!r}")
@@ -86,16 +104,41 @@ class Rod:
                                      f"the rod (0 <= x <= length = {self.length!r})")
 
     @property
+    def dim(self) -> int:
+        """2 (planar) or 3 (spatial)."""
+        return len(self.start)
+
+    @property
+    def frame(self) -> tuple:
+        """Spatial: the reference directors (d1, d2, d3) (world 3-vectors, the columns of R0):
+        d1 = direction, d2 = normal or by default e3 x d1 normalised (the planar convention:
+        d1 turned by +90 degrees about z; d1 x e1 normalised when d1 is along z), d3 = d1 x d2."""
+        d1 = self.direction
+        if self.normal is not None:
+            d2 = self.normal
+        else:
+            d2 = _cross((0.0, 0.0, 1.0), d1)
+            if math.sqrt(sum(c * c for c in d2)) < 1e-6:
+                d2 = _cross(d1, (1.0, 0.0, 0.0))
+            n = math.sqrt(sum(c * c for c in d2))
+            d2 = tuple(c / n for c in d2)
+        return (tuple(d1), tuple(d2), _cross(d1, d2))
+
+    @property
     def angle(self) -> float:
         """The direction's angle to the x axis [rad]."""
         return math.atan2(self.direction[1], self.direction[0])
 
-    def point(self, end: str) -> tuple[float, float]:
+    def point(self, end: str) -> tuple:
         """The reference position of the rod's "start" or "end"."""
         if end == "start":
             return self.start
-        return (self.start[0] + self.length * self.direction[0],
-                self.start[1] + self.length * self.direction[1])
+        return tuple(x + self.length * d for x, d in zip(self.start, self.direction,
+                                                         strict=True))
+
+
+def _cross(a, b) -> tuple:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 @dataclass(frozen=True)
@@ -144,11 +187,12 @@ class Body:
         if not isinstance(self.name, str) or not self.name:
             raise ValueError(f"[[bodies]] name must be a non-empty string; got {self.name!r}")
         value = self.position
-        ok = (isinstance(value, (list, tuple)) and len(value) == 2
+        ok = (isinstance(value, (list, tuple)) and len(value) in (2, 3)
               and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value))
         if not ok:
-            raise ValueError(f"{where} position must be a pair of numbers [x, y]; got {value!r}")
-        object.__setattr__(self, "position", (float(value[0]), float(value[1])))
+            raise ValueError(f"{where} position must be [x, y] (planar) or [x, y, z] (spatial); "
+                             f"got {value!r}")
+        object.__setattr__(self, "position", tuple(float(c) for c in value))
         if self.fixed is not True:
             raise ValueError(f"{where} fixed = {self.fixed!r}: free and partly fixed bodies are "
                              "not supported yet (give fixed = true)")
@@ -165,7 +209,17 @@ class ChainSegment:
     s0: float
     length: float
     theta0: float
-    origin: tuple[float, float]
+    origin: tuple
+    #: spatial: the reference directors (d1, d2, d3) of the chain on it (d1 the chain's
+    #: tangent; a reversed rod's frame turned by pi about its d3); None: planar
+    frame: tuple | None = None
+
+    @property
+    def tangent(self) -> tuple:
+        """The chain's reference tangent on the segment (world)."""
+        if self.frame is not None:
+            return self.frame[0]
+        return (math.cos(self.theta0), math.sin(self.theta0))
 
     def s_of(self, x: float) -> float:
         """The chain coordinate of the rod's own arc length x (from its start)."""
@@ -212,6 +266,10 @@ class Structure:
             if duplicate is not None:
                 raise ValueError(f"[[{table}]] name {duplicate!r} is given twice; names must be "
                                  "unique")
+        dims = {rod.dim for rod in self.rods} | {len(body.position) for body in self.bodies}
+        if len(dims) > 1:
+            raise ValueError("[[rods]] start, direction and [[bodies]] position must all be "
+                             "planar [x, y] or all spatial [x, y, z]")
         degrees = {rod.degree for rod in self.rods}
         if len(degrees) > 1:
             raise ValueError("[[rods]] mesh.degree differs between rods; this version needs "
@@ -222,6 +280,11 @@ class Structure:
     @property
     def length(self) -> float:
         return sum(rod.length for rod in self.rods)
+
+    @property
+    def dim(self) -> int:
+        """2 (planar) or 3 (spatial)."""
+        return self.rods[0].dim
 
     def rod_index(self, name: str) -> int:
         return next(i for i, rod in enumerate(self.rods) if rod.name == name)
@@ -345,8 +408,14 @@ class Structure:
             rod = self.rods[self.rod_index(name)]
             angle = rod.angle + (math.pi if flipped else 0.0)
             origin = rod.point("end" if flipped else "start")
+            frame = None
+            if rod.dim == 3:
+                d1, d2, d3 = rod.frame
+                frame = ((tuple(-c for c in d1), tuple(-c for c in d2), d3) if flipped
+                         else (d1, d2, d3))
+                angle = 0.0
             segments.append(ChainSegment(self.rod_index(name), flipped, s, rod.length, angle,
-                                         origin))
+                                         origin, frame))
             s += rod.length
         object.__setattr__(self, "chain", tuple(segments))
         joints = []
@@ -426,8 +495,8 @@ class Structure:
         forces, moments = [], []
         for segment in self.chain:
             rod = self.rods[segment.rod]
-            forces += [(segment.s_of(x), px, py) for x, px, py in rod.point_forces]
-            moments += [(segment.s_of(x), m) for x, m in rod.point_moments]
+            forces += [(segment.s_of(x), *rest) for x, *rest in rod.point_forces]
+            moments += [(segment.s_of(x), *rest) for x, *rest in rod.point_moments]
         return tuple(sorted(forces)), tuple(sorted(moments))
 
     def boundaries(self) -> tuple[float, ...]:
@@ -443,11 +512,10 @@ class Structure:
         return found
 
     def reference_point(self, s: float, segment: ChainSegment | None = None):
-        """The reference position (X, Y) of chain coordinate s."""
+        """The reference position (X, Y) (spatial: (X, Y, Z)) of chain coordinate s."""
         segment = segment or self.segment_at(s)
         t = s - segment.s0
-        return (segment.origin[0] + t * math.cos(segment.theta0),
-                segment.origin[1] + t * math.sin(segment.theta0))
+        return tuple(o + t * d for o, d in zip(segment.origin, segment.tangent, strict=True))
 
     def rod_tip(self, index: int) -> tuple[float, str]:
         """(chain coordinate, chain side) of rod ``index``'s own end ("end" of the rod)."""
