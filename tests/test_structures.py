@@ -288,7 +288,7 @@ def test_structure_mistakes_are_one_sentence(change, words):
     assert words in str(error.value), str(error.value)
 
 
-@pytest.mark.parametrize("command", ["modes", "dynamic", "buckling", "finger"])
+@pytest.mark.parametrize("command", ["finger", "solid", "calibrate"])
 def test_other_commands_refuse_a_structure(command):
     with pytest.raises(ConfigError, match=f"fe-beam {command} does not run a structure"):
         validate(command, _lee_config())
@@ -300,7 +300,7 @@ def test_cli_exit_code_2(tmp_path, capsys):
         'kind = "rigid"', 'kind = "hinge"'))
     assert main(["path", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     assert "not supported yet" in capsys.readouterr().err
-    assert main(["modes", "examples/lee_frame.toml", "--out", str(tmp_path / "m"),
+    assert main(["finger", "examples/lee_frame.toml", "--out", str(tmp_path / "m"),
                  "--quiet"]) == 2
 
 

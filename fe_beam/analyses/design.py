@@ -80,7 +80,7 @@ from fe_beam.config.design import (
     reproduce_command,
 )
 from fe_beam.config.finger import parse_finger, with_defaults
-from fe_beam.config.schema import parse_static
+from fe_beam.config.schema import parse_static, with_rod_sections
 from fe_beam.errors import ConfigError, UpdateFailed
 from fe_beam.exports.outputs import BeamXDMFWriter, _pyplot, atomic_write_json, draw_obstacles
 from fe_beam.model.settings import SolverSettings
@@ -484,15 +484,20 @@ def _constraint_summary(design: DesignProblem, values: dict) -> dict:
 
 def _shape(evaluator: Evaluator):
 
-    writer = BeamXDMFWriter(evaluator.solver.problem, None)
+    problem = evaluator.solver.problem
+    writer = BeamXDMFWriter(problem, None)
     try:
-        return writer.vertex_values()
+        values = writer.vertex_values()
     finally:
         writer.close()
+    chain = getattr(problem, "chain", None)
+    return values if chain is None else chain.shape(values)  # a chain: drawn in the plane
 
 
 def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float,
-          obstacles=()) -> None:
+          obstacles=(), tip=None) -> None:
+    """``tip``: the reference position of the tip ((length, 0) of a rod)."""
+    tip = (length, 0.0) if tip is None else tip
 
     plt = _pyplot()
     figure, axis = plt.subplots(figsize=(6, 5))
@@ -505,7 +510,7 @@ def _plot(out: Path, summary: dict, shapes, design: DesignProblem, length: float
         points = np.array(design.points)
         axis.plot(points[:, 1], points[:, 2], "kx", ms=8, label="target points")
     if design.objective == "tip_pose" and {"u", "v"} <= set(design.target):
-        axis.plot(length + design.target["u"], design.target["v"], "kx", ms=8,
+        axis.plot(tip[0] + design.target["u"], tip[1] + design.target["v"], "kx", ms=8,
                   label="target tip")
     if obstacles:
         draw_obstacles(axis, obstacles, [(None, s) for s in shapes if s is not None], length)
@@ -789,20 +794,27 @@ def run_design(config: dict, out: Path | None, comm, progress: bool = False,
         parsed, _ = parse_finger(rest)
     else:
         parsed = parse_static(rest)
+    structure = getattr(parsed.model, "structure", None) is not None
+    if structure and any(key.split(".")[0] == "rods" for key in design.variables):
+        # every rod's section a field the design writes in place
+        parsed = replace(parsed, model=with_rod_sections(parsed.model))
     if design.objective == "grasp_force":
         summary = grasp_design(design, parsed, comm)
         start, end, evaluator = summary.pop("_shapes")
         drawn = out is not None and parsed.output.plots
         shapes = (evaluator.shape(start), evaluator.shape(end)) if drawn else (None, None)
     else:
-        summary = optimise(design, parsed, comm, rest)
+        # a structure: finite-difference gradients (the adjoint sensitivities take one rod)
+        summary = optimise(design, parsed, comm, None if structure else rest)
         shapes = summary.pop("_shapes")
     summary["reproduce"] = reproduce_command(config, summary["variables"], options)
     if out is not None and comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         atomic_write_json(out / "summary.json", summary)
         if parsed.output.plots:
-            _plot(out, summary, shapes, design, parsed.model.length, parsed.obstacles)
+            tip = (None if not structure else parsed.model.structure.reference_point(
+                parsed.model.length, parsed.model.structure.chain[-1]))
+            _plot(out, summary, shapes, design, parsed.model.length, parsed.obstacles, tip)
     return summary
 
 

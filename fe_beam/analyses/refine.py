@@ -215,7 +215,10 @@ def _solve_rod(plan: RefinementPlan, level: int, comm) -> dict:
 
     parsed = plan.parsed
     mesh = replace(parsed.model.mesh, elements=plan.size(level))
-    config = replace(parsed, model=replace(parsed.model, mesh=mesh))
+    model = replace(parsed.model, mesh=mesh)
+    if getattr(model, "structure", None) is not None:  # a chain: every rod's elements
+        model = replace(model, structure=model.structure.refined(round(plan.ratio**level)))
+    config = replace(parsed, model=model)
     # nothing is written per level: no shapes, only the tip of each converged step
     result = analyses.static.solve_static(config, None, comm, progress=False, record_shapes=False)
     return {

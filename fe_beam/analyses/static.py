@@ -457,11 +457,11 @@ SPATIAL_CSV_COLUMNS = [
     exports.Column("newton_iterations", lambda s: s["newton_iterations"])]
 
 
-def structure_columns(model) -> list:
+def structure_columns(model, joints: bool = True) -> list:
     """A chain of rods' CSV columns: ``rod_<name>_x``, ``_y``, ``_angle`` (each rod's end,
-    world axes) and ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod); spatial:
-    ``rod_<name>_x``, ``_y``, ``_z`` and ``joint_<name>_Fx``, ``_Fy``, ``_Fz``, ``_Mx``,
-    ``_My``, ``_Mz``."""
+    world axes) and (``joints``) ``joint_<name>_Fx``, ``_Fy``, ``_M`` ([] for a single rod);
+    spatial: ``rod_<name>_x``, ``_y``, ``_z`` and ``joint_<name>_Fx``, ``_Fy``, ``_Fz``,
+    ``_Mx``, ``_My``, ``_Mz``."""
     structure = getattr(model, "structure", None)
     if structure is None:
         return []
@@ -485,7 +485,7 @@ def structure_columns(model) -> list:
             exports.Column(f"rod_{rod.name}_angle",
                            lambda r, n=rod.name: r["rods"][n]["tip_angle"])]
     names = [j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
-    for name in names:
+    for name in names if joints else ():
         columns += [
             exports.Column(f"joint_{name}_Fx", lambda r, n=name: r["joints"][n]["force"][0]),
             exports.Column(f"joint_{name}_Fy", lambda r, n=name: r["joints"][n]["force"][1]),

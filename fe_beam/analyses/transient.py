@@ -28,7 +28,12 @@ from mpi4py import MPI
 
 from fe_beam import certify, exports, runctl
 from fe_beam.analyses.certificates import equilibrium_entry
-from fe_beam.analyses.static import StaticContinuation, check_beam_work, contact_columns
+from fe_beam.analyses.static import (
+    StaticContinuation,
+    check_beam_work,
+    contact_columns,
+    structure_columns,
+)
 from fe_beam.baselines import fd_rk
 from fe_beam.config.transient import (  # noqa: F401  (their home; re-exported)
     DAMPING_KEYS,
@@ -300,6 +305,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         energies = integrator.energies()
         result.history.append({"t": t, "tip": problem.end_values("xL"), "energies": energies,
                                "momenta": integrator.momenta()})
+        if getattr(problem, "chain", None) is not None:  # each rod's end (world axes)
+            result.history[-1]["rods"] = problem.chain.rods()
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
@@ -314,6 +321,8 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         files.on_step(result.history[-1])
         if config.static.output.plots:
             shape = writer.vertex_values(update=False)
+            if getattr(problem, "chain", None) is not None:  # the plots draw the chain
+                shape = problem.chain.shape(shape)
             if root:
                 shapes.append((t, shape))
 
@@ -534,6 +543,8 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         obstacles = len(config.static.obstacles)
         if obstacles:  # each obstacle's force, moment, penetration and peak pressure
             columns = columns + contact_columns(obstacles, spatial)
+        # a chain of rods: each rod's end (its joints' forces would need the inertia: none)
+        columns = columns + structure_columns(config.static.model, joints=False)
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -570,9 +581,13 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
                   contact=None) -> None:
     t = np.array([h["t"] for h in result.history])
     length = config.static.model.length
+    structure = getattr(config.static.model, "structure", None)
+    # the tip's reference position: (L, 0) of a rod, the last end of a chain of rods
+    tip_x, tip_y = ((length, 0.0) if structure is None
+                    else structure.reference_point(length, structure.chain[-1]))
     with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
-        left.plot(length + np.array([h["tip"]["u"] for h in result.history]),
-                  [h["tip"]["v"] for h in result.history], lw=1.2)
+        left.plot(tip_x + np.array([h["tip"]["u"] for h in result.history]),
+                  tip_y + np.array([h["tip"]["v"] for h in result.history]), lw=1.2)
         left.set_xlabel("tip x [m]")
         left.set_ylabel("tip y [m]")
         left.set_title("tip trajectory")

@@ -123,6 +123,19 @@ def _initial_value(config: dict, key: str):
                               "tension, pull_in, offset_base, offset_tip or path.<point>)")
         raise ConfigError(f"{where} is not a design variable (a tendon has tension, "
                           "pull_in, offset_base, offset_tip and path.<point>)")
+    if head == "rods":
+        rods = config.get("rods") if isinstance(config.get("rods"), list) else []
+        index = rod_entry(rods, parts[1]) if len(parts) > 1 else None
+        if index is None or len(parts) != 4 or parts[2] != "section":
+            raise ConfigError(f"{where} is not a design variable of the structure; a rod's "
+                              "variables are rods.<name or index>.section.<dimension> (rods: "
+                              f"{', '.join(str(r.get('name')) for r in rods)})")
+        section = config.get("section", {}) | (rods[index].get("section") or {})
+        dims = SECTION_DIMS.get(section.get("shape", "rectangle"), ())
+        if parts[3] not in dims or parts[3] not in section:
+            raise ConfigError(f"{where}: {parts[3]!r} is not a dimension of the rod's section "
+                              f"(dimensions: {', '.join(d for d in dims if d in section)})")
+        return section[parts[3]]
     if head in ("model", "mesh", "beam", "supports", "solver", "output"):
         raise ConfigError(f"{where} is not a numeric design variable: the design varies "
                           "section.*, material.*, loads.* and tendons.<i>.* values")
@@ -180,7 +193,8 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
         if not low < high:
             raise ConfigError(f"[design] bounds of {key!r}: low {low:g} must be < high "
                               f"{high:g}")
-        if POSITIVE.match(key) and not (low > 0 or key == "section.I3"):
+        positive = POSITIVE.match(key) or key.startswith("rods.")
+        if positive and not (low > 0 or key == "section.I3"):
             raise ConfigError(f"[design] bounds of {key!r} must be > 0 (got low {low:g})")
         if not low <= value <= high:
             raise ConfigError(f"[design] the configuration's {key} = {value:g} lies outside "
@@ -189,6 +203,8 @@ def parse_design(config: dict) -> tuple[DesignProblem, dict]:
     if objective not in OBJECTIVES:
         raise ConfigError(f"[design] objective must be one of {', '.join(OBJECTIVES)}; got "
                           f"{objective!r}")
+    if "rods" in rest:
+        _check_structure_design(rest, variables, objective, given)
     problem = DesignProblem(list(variables), bounds, objective, np.array(initial))
     if rest.get("obstacles") is not None and objective != "grasp_force":
         raise ConfigError(f"[design] objective = {objective!r} is not available with "
@@ -302,6 +318,39 @@ def _parse_grasp(problem: DesignProblem, given: dict, rest: dict) -> None:
                               f"{error}") from None
 
 
+def _check_structure_design(rest: dict, variables, objective, given: dict) -> None:
+    """What a design of a structure of [[rods]] supports: objective = "tip_pose" of the
+    chain's last end, variables rods.<name>.section.<dim> or (when no rod has its own
+    section or material table) the top-level section.<dim> and material.*."""
+    if objective != "tip_pose":
+        raise ConfigError(f"[design] objective = {objective!r} with [[rods]] is not supported "
+                          "yet; a structure's design takes objective = \"tip_pose\" (the "
+                          "chain's last end)")
+    if given.get("max_fibre_strain") is not None:
+        raise ConfigError("[design] max_fibre_strain with [[rods]] is not supported yet")
+    own = any(isinstance(rod, dict) and (rod.get("section") or rod.get("material"))
+              for rod in rest["rods"])
+    by_rod = any(v.split(".")[0] == "rods" for v in variables)
+    for key in variables:
+        head = key.split(".")[0]
+        if head == "loads" or head == "tendons":
+            raise ConfigError(f"[design] variables: {key!r} with [[rods]] is not supported "
+                              "yet (a structure's variables are rods.<name>.section.<dim>, "
+                              "section.<dim> and material.*)")
+        if head in ("section", "material") and (own or by_rod):
+            raise ConfigError(f"[design] variables: {key!r} is a top-level value, which the "
+                              "rods with their own section or material (or a rods.<name> "
+                              "variable) do not take; use rods.<name>.section.<dim>")
+
+
+def rod_entry(rods: list, ident: str) -> int | None:
+    """The index in [[rods]] of the rod named ``ident`` (or of index ``ident``), else None."""
+    if ident.isdigit():
+        return int(ident) if int(ident) < len(rods) else None
+    return next((i for i, rod in enumerate(rods) if isinstance(rod, dict)
+                 and rod.get("name") == ident), None)
+
+
 def with_value(config: dict, key: str, value: float) -> dict:
     """A copy of the configuration's tables (without [design]) with the design variable
     ``key`` (a key `_initial_value` accepts) set to ``value``."""
@@ -319,6 +368,11 @@ def with_value(config: dict, key: str, value: float) -> dict:
             pair = list(loads.get(parts[1], [0.0, 0.0]))
             pair[int(parts[2])] = value
             loads[parts[1]] = pair
+    elif head == "rods":
+        rods = copy.deepcopy(changed["rods"])
+        rod = rods[rod_entry(rods, parts[1])]
+        rod["section"] = dict(rod.get("section") or {}) | {parts[3]: value}
+        changed["rods"] = rods
     elif head == "tendons":
         if not changed.get("tendons"):  # the chapter's default tendon
             changed["tendons"] = with_defaults(changed)["tendons"]

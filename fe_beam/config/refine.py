@@ -168,6 +168,11 @@ def plan_refinement(config: dict, levels=None, ratio=None, quantities=None,
         parsed, kind = parse_static(config), "rod"
     elements = parsed.model.mesh.elements
     counts = [elements * ratio**k for k in range(levels)]
+    structure = getattr(parsed.model, "structure", None)
+    if structure is not None and any(abs(ratio**k - round(ratio**k)) > 1e-9 * ratio**k
+                                     for k in range(levels)):
+        raise ConfigError(f"--ratio {ratio:g} with [[rods]]: every rod's elements are multiplied"
+                          " by ratio**k, which must be an integer; use an integer ratio")
     if any(abs(n - round(n)) > 1e-9 * n for n in counts):
         raise ConfigError(
             f"--ratio {ratio:g} with [mesh] elements = {elements} gives a fractional number of "

@@ -126,7 +126,8 @@ def _parse_value(text: str):
 
 def apply_overrides(config: dict, assignments: list[str], defaults: dict | None = None) -> dict:
     """Apply ``table.key=value`` overrides (values in TOML syntax; bare words are strings).
-    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``. ``defaults``: the tables a
+    Arrays of tables are indexed from 0: ``tendons.0.tension=1.5``, or by a table's ``name``
+    (``rods.beam.section.h=0.04``). ``defaults``: the tables a
     command uses for those the file leaves out (the finger's, `fe_beam.config.finger`): an
     override of such a table applies to a copy of its default (``section.h_tip=0.009`` with no
     [section] changes the default section's h_tip, not a new section of h_tip alone)."""
@@ -149,6 +150,9 @@ def apply_overrides(config: dict, assignments: list[str], defaults: dict | None 
             position += 1
             if isinstance(target, list) and all(isinstance(item, dict) for item in target):
                 index = names[position]
+                named = [i for i, item in enumerate(target) if item.get("name") == index]
+                if not index.isdigit() and len(named) == 1:  # a table by its name
+                    index = str(named[0])
                 if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
                     raise ConfigError(
                         f"--set {shown(assignment)}: {shown(name)[1:-1]} is an array of "
@@ -344,6 +348,19 @@ def _own_sections(config: dict, structure, section, material, law: str):
                                      material=moduli[i] if own_material else ())
                  for i, rod in enumerate(structure.rods))
     return _wrap(Structure, rods, structure.joints, structure.bodies)
+
+
+def with_rod_sections(model: BeamModel) -> BeamModel:
+    """The structure's model with every rod carrying its own section dimensions (those of
+    [section] where it has none): piecewise-constant fields a design varies per rod."""
+    structure = model.structure
+    if model.options.law == "hyperelastic":
+        raise ConfigError("[design] rods.<name>.section variables with [model] law = "
+                          "\"hyperelastic\" are not supported yet")
+    dims = tuple(sorted(model.section.dims.items()))
+    rods = tuple(dataclasses.replace(rod, section=rod.section or dims) for rod in structure.rods)
+    return dataclasses.replace(model, structure=_wrap(Structure, rods, structure.joints,
+                                                      structure.bodies))
 
 
 def structure_rigid_motions(model: BeamModel) -> list[str]:

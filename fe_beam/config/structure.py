@@ -20,7 +20,10 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
-STRUCTURE_COMMANDS = ("static", "path")
+STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
+#: the commands that run a spatial structure in this version
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
+PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {
     "name": Key((str,), REQUIRED, "the rod's name (joints name its ends as \"name:start\", "
@@ -130,6 +133,12 @@ def check_structure_tables(config: dict, command: str) -> None:
         raise ConfigError("[supports] with [[rods]]: give each rod's end supports in [[rods]] "
                           "supports = {x0 = ..., xL = ...}")
     model = config.get("model")
+    spatial = isinstance(model, dict) and model.get("kinematics", "planar") == "spatial"
+    if spatial and command not in SPATIAL_STRUCTURE_COMMANDS:
+        raise ConfigError(f"fe-beam {command} does not run a spatial structure of [[rods]] yet "
+                          "([model] kinematics = \"spatial\"); the commands that do: "
+                          f"{', '.join(SPATIAL_STRUCTURE_COMMANDS)} (planar chains also "
+                          f"{', '.join(PLANAR_ONLY)})")
     if isinstance(model, dict) and model.get("kinematics", "planar") == "spatial" \
             and model.get("law") == "hyperelastic":
         raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
@@ -138,6 +147,18 @@ def check_structure_tables(config: dict, command: str) -> None:
         if config.get(name):
             raise ConfigError(f"[[{name}]] with [[rods]] is not supported yet (a structure "
                               "without tendons and obstacles, or a single rod with [beam])")
+    if command == "dynamic":
+        scheme = (config.get("time") or {}).get("scheme", "generalized-alpha") \
+            if isinstance(config.get("time"), dict) else "generalized-alpha"
+        if isinstance(scheme, str) and scheme.startswith("fd-"):
+            raise ConfigError(f"[time] scheme = \"{scheme}\" with [[rods]] is not supported "
+                              "(its baseline integrates a single rod); use \"generalized-alpha\""
+                              " or \"energy-conserving\"")
+        initial = config.get("initial")
+        if isinstance(initial, dict) and initial.get("angular_velocity") is not None:
+            raise ConfigError("[initial] angular_velocity with [[rods]] is not supported yet "
+                              "(a spin about x = 0 of a rod along x); give [initial] velocity "
+                              "= [u_t, v_t, theta_t], formulas in the chain's arc length x")
     loads = config.get("loads")
     if isinstance(loads, dict):
         single = [key for key in SINGLE_ROD_LOADS if key in loads]

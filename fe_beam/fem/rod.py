@@ -798,10 +798,13 @@ class BeamProblem:
     def momentum_densities(self, parts, rates) -> dict:
         """Linear momentum (x, y) and the angular momentum about the origin (z), per length."""
         rho_area, rho_inertia = self.rho * self.section_props.A, self.rho * self.section_props.I
-        x = ufl.SpatialCoordinate(self.mesh)[0]
+        if self.chain is None:
+            X, Y = ufl.SpatialCoordinate(self.mesh)[0], 0.0
+        else:  # a chain of rods: its reference position
+            X, Y = self.chain.reference[0], self.chain.reference[1]
         u, v, _ = parts
         return {"momentum_x": rho_area * rates[0], "momentum_y": rho_area * rates[1],
-                "angular_momentum": rho_area * ((x + u) * rates[1] - v * rates[0])
+                "angular_momentum": rho_area * ((X + u) * rates[1] - (Y + v) * rates[0])
                 + rho_inertia * rates[2]}
 
     def mass_form(self):
@@ -823,13 +826,18 @@ class BeamProblem:
 
     def rigid_motion_candidates(self) -> list:
         """Infinitesimal rigid motions of the current state (Functions): translations
-        (1, 0, 0), (0, 1, 0) and the rotation about the origin (-v, x + u, 1)."""
+        (1, 0, 0), (0, 1, 0) and the rotation about the origin (-(Y + v), X + u, 1), (X, Y)
+        the reference position (x, 0) of a rod, a chain's `reference_point`)."""
         u_space, u_dofs = compat.sub_space_collapsed(self.space, 0)
         v_space, v_dofs = compat.sub_space_collapsed(self.space, 1)
         _, theta_dofs = compat.sub_space_collapsed(self.space, 2)
         u_dofs, v_dofs, theta_dofs = (np.asarray(d) for d in (u_dofs, v_dofs, theta_dofs))
         x = v_space.tabulate_dof_coordinates()[:, 0]
         same_points = np.allclose(u_space.tabulate_dof_coordinates()[:, 0], x)
+        y = np.zeros_like(x)
+        if self.chain is not None:  # a chain of rods: the reference position (X, Y) of s
+            where = np.array([self.reference_point(s) for s in x]).reshape(-1, 2)
+            x, y = where[:, 0], where[:, 1]
         state = compat.local_array(self.w)
         candidates = []
         for k in range(3):
@@ -840,7 +848,7 @@ class BeamProblem:
             elif k == 1:
                 array[v_dofs] = 1.0
             elif same_points:  # u and v share one element: their dofs sit at the same points
-                array[u_dofs] = -state[v_dofs]
+                array[u_dofs] = -(y + state[v_dofs])
                 array[v_dofs] = x + state[u_dofs]
                 array[theta_dofs] = 1.0
             candidates.append(function)
@@ -851,7 +859,23 @@ class BeamProblem:
         normal to the current state's section, A (du sin(theta) - dv cos(theta))^2, against
         along it, A (du cos(theta) + dv sin(theta))^2 (the reference axes' u, v when
         straight: a bent pre-state's bending mode moves normal to the bent axis, which in
-        reference axes is along x where the rod is turned by more than 45 degrees)."""
+        reference axes is along x where the rod is turned by more than 45 degrees).
+
+        Along a chain of rods a member's rigid motion along its axis (the beam of a swaying
+        portal frame) is no axial deformation: the share is that of the shape's linearised
+        strain energy not in stretching, each rod's strains in its own frame (e = c u' + s v',
+        g = -s u' + c v' - theta, kappa = theta'; c, s of theta0)."""
+        if self.chain is not None:
+            u, v, theta = ufl.split(shape)[0], ufl.split(shape)[1], ufl.split(shape)[2]
+            c, s = ufl.cos(self.chain.theta0), ufl.sin(self.chain.theta0)
+            stiff = self.stiffness
+            stretch = stiff.EA * (c * u.dx(0) + s * v.dx(0)) ** 2
+            rest = (stiff.shear_correction * stiff.GA * (-s * u.dx(0) + c * v.dx(0) - theta) ** 2
+                    + stiff.EI * theta.dx(0) ** 2)
+            axial = assemble_scalar(fem.form(stretch * self.dx_energy))
+            transverse = assemble_scalar(fem.form(rest * self.dx_energy))
+            total = axial + transverse
+            return {"transverse": transverse / total if total > 0 else 0.0}
         du, dv = ufl.split(shape)[0], ufl.split(shape)[1]
         _, _, theta, _ = self.fields()
         along = du * ufl.cos(theta) + dv * ufl.sin(theta)

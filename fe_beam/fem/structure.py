@@ -102,16 +102,37 @@ class ChainGeometry:
         if not rods[0].section:
             return None
         names = [name for name, _ in rods[0].section]
-        return {name: self.cellwise([dict(rod.section)[name] for rod in rods])
-                for name in names}
+        self._section_fields = {name: self.cellwise([dict(rod.section)[name] for rod in rods])
+                                for name in names}
+        return self._section_fields
 
     def moduli(self) -> tuple | None:
         """(E, G) DG0 fields of the rods' own materials (None: the top-level material)."""
         rods = self.structure.rods
         if not rods[0].material:
             return None
-        return (self.cellwise([rod.material[0] for rod in rods]),
-                self.cellwise([rod.material[1] for rod in rods]))
+        self._moduli_fields = (self.cellwise([rod.material[0] for rod in rods]),
+                               self.cellwise([rod.material[1] for rod in rods]))
+        return self._moduli_fields
+
+    def set_rod_values(self, old, new, fraction: float = 1.0) -> None:
+        """Rewrite the rods' own section and moduli fields with the values of structure
+        ``old`` + ``fraction`` (``new`` - ``old``) (same `Structure.compiled_key`)."""
+        def mixed(a, b):
+            a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+            return b if fraction == 1.0 else a + fraction * (b - a)
+
+        fields = getattr(self, "_section_fields", None)
+        for name, field in (fields or {}).items():
+            values = mixed([dict(rod.section)[name] for rod in old.rods],
+                           [dict(rod.section)[name] for rod in new.rods])
+            field.x.array[:] = self.cellwise(values).x.array
+        moduli = getattr(self, "_moduli_fields", None)
+        for k, field in enumerate(moduli or ()):
+            values = mixed([rod.material[k] for rod in old.rods],
+                           [rod.material[k] for rod in new.rods])
+            field.x.array[:] = self.cellwise(values).x.array
+        self.structure = new
 
     # --- kinematics -----------------------------------------------------------------------------
     def world_tangent(self, u, v):

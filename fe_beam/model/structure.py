@@ -14,7 +14,7 @@ the table and key (the config layer turns them into `fe_beam.errors.ConfigError`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from fe_beam.model.beam import SUPPORT_KINDS
 
@@ -454,6 +454,40 @@ class Structure:
                 body_joints.append((joint_name, chain_end, rod_first))
         object.__setattr__(self, "end_supports", supports)
         object.__setattr__(self, "body_joints", tuple(body_joints))
+
+    def compiled_key(self) -> tuple:
+        """What of the structure is compiled into a problem's mesh and forms: everything but
+        the numbers of the rods' own sections and materials (held by piecewise-constant
+        fields, rewritten in place: `fe_beam.fem.structure.ChainGeometry.set_rod_values`);
+        which rods have them is part of it."""
+        rods = tuple(replace(rod, section=tuple(name for name, _ in rod.section),
+                             material=bool(rod.material)) for rod in self.rods)
+        return (repr(rods), repr(self.joints), repr(self.bodies))
+
+    def with_rod_values(self, index: int, section: dict | None = None,
+                        material: tuple | None = None) -> Structure:
+        """The structure with rod ``index``'s own section dimensions ({name: value}, merged
+        into its own) or (E, G) replaced; the rods must carry their own values (`section`,
+        `material` not empty)."""
+        rod = self.rods[index]
+        if section:
+            if not rod.section:
+                raise ValueError(f"[[rods]] '{rod.name}' has no own section fields")
+            dims = dict(rod.section) | section
+            rod = replace(rod, section=tuple(sorted(dims.items())))
+        if material is not None:
+            if not rod.material:
+                raise ValueError(f"[[rods]] '{rod.name}' has no own material fields")
+            rod = replace(rod, material=tuple(material))
+        rods = self.rods[:index] + (rod,) + self.rods[index + 1:]
+        return Structure(rods, self.joints, self.bodies)
+
+    def refined(self, factor: int) -> Structure:
+        """The same structure with every rod's elements multiplied by ``factor`` (a mesh
+        refinement study of the chain)."""
+        rods = tuple(replace(rod, elements=rod.elements * int(factor))
+                     for rod in self.rods)
+        return Structure(rods, self.joints, self.bodies)
 
     # --- what the finite elements need --------------------------------------------------------
     def chain_point_loads(self) -> tuple[tuple, tuple]:

@@ -175,7 +175,13 @@ class EnergyMomentum(StepDriver):
         dt = self.dt
         new, old, vel = (ufl.split(f) for f in (self.unknown, self.q_old, self.v_old))
         psi = new[2]
-        tangent = lambda parts: ufl.as_vector([1 + parts[0].dx(0), parts[1].dx(0)])  # noqa: E731
+        chain = getattr(p, "chain", None)
+        if chain is None:
+            theta0 = 0
+            tangent = lambda parts: ufl.as_vector([1 + parts[0].dx(0), parts[1].dx(0)])  # noqa: E731
+        else:  # a chain of rods: r' = X' + (u', v'), theta_q the world angle theta0 + theta
+            theta0 = chain.theta0
+            tangent = lambda parts: chain.world_tangent(parts[0], parts[1])  # noqa: E731
         t0, t1 = tangent(old), tangent(new)
         tm = (t0 + t1) / 2
         increment = ufl.as_vector([new[0] - old[0], new[1] - old[1]])
@@ -251,9 +257,12 @@ class EnergyMomentum(StepDriver):
         points = self._gauss_points
         self._update = (compat.expression(self.theta_q + 2 * ufl.atan(psi / 2), points),
                         compat.expression(self.kappa_q + c2 * psi.dx(0), points))
-        self._initial_gauss = (compat.expression(old[2], points),
+        self._initial_gauss = (compat.expression(old[2] + theta0, points),
                                compat.expression(old[2].dx(0), points))
-        x = ufl.SpatialCoordinate(p.mesh)[0]
+        if chain is None:
+            X, Y = ufl.SpatialCoordinate(p.mesh)[0], 0
+        else:  # the reference position of the chain
+            X, Y = chain.reference[0], chain.reference[1]
         q, v = old, vel
         damping_work = self.c * ufl.dot(increment, increment) / dt * dx_m
         if self.damping.kelvin_voigt > 0:
@@ -268,7 +277,7 @@ class EnergyMomentum(StepDriver):
             "damping_work": fem.form(damping_work),
             "momentum_x": fem.form(rho_area * v[0] * dx_m),
             "momentum_y": fem.form(rho_area * v[1] * dx_m),
-            "angular_momentum": fem.form((rho_area * ((x + q[0]) * v[1] - q[1] * v[0])
+            "angular_momentum": fem.form((rho_area * ((X + q[0]) * v[1] - (Y + q[1]) * v[0])
                                           + rho_inertia * v[2]) * dx_m),
         }
 

@@ -134,8 +134,9 @@ def structure_key(config: StaticConfig, comm) -> tuple:
         # obstacles are compiled into the contact forms (and the section's extents with them)
         (repr(config.obstacles), repr(config.contact), repr(section)) if config.obstacles
         else (),
-        # a chain of rods: its mesh, reference angles and positions are compiled in
-        repr(getattr(model, "structure", None)),
+        # a chain of rods: its mesh, reference angles and positions are compiled in (its
+        # rods' own section and material numbers are fields, rewritten in place)
+        None if getattr(model, "structure", None) is None else model.structure.compiled_key(),
     )
 
 
@@ -156,6 +157,8 @@ def apply_config(run, config: StaticConfig) -> None:
     for name, kind in LOADS.items():  # the loads the rod problem holds as constants
         if kind.realtime:
             getattr(problem, name).value = np.asarray(getattr(model.loads, name), dtype=float)
+    if getattr(problem, "chain", None) is not None:  # the rods' own sections and materials
+        problem.chain.set_rod_values(model.structure, model.structure)
     problem.model = model
     compat.local_array(problem.w)[:] = 0.0
     if run.tendons is not None:
@@ -295,11 +298,20 @@ PARAMETER_KEYS = (
 )
 
 
+def _rod_index(structure, ident: str) -> int | None:
+    """The index of the rod named ``ident`` (or of index ``ident``) in [[rods]], else None."""
+    if ident.isdigit():
+        return int(ident) if int(ident) < len(structure.rods) else None
+    return next((i for i, rod in enumerate(structure.rods) if rod.name == ident), None)
+
+
 def set_parameters(config: StaticConfig, values: Mapping[str, float]) -> StaticConfig:
     """``config`` with parameters changed, keys as in PARAMETER_KEYS (``section.h``,
     ``section.h_tip`` (a tip value of a dimension without one starts a taper),
     ``tendons.0.offset_tip``, ``tendons.0.path.2`` = the offset of path point 2 of the first
-    branch, ...). Raises KeyError (unknown key) or ValueError (a value the model refuses)."""
+    branch, ...; a structure's ``rods.<name or index>.section.<dim>`` of rods that carry their
+    own section fields). Raises KeyError (unknown key) or ValueError (a value the model
+    refuses)."""
     model = config.model
     material, section, loads = model.material, model.section, model.loads
     tendons = list(config.tendons)
@@ -324,6 +336,24 @@ def set_parameters(config: StaticConfig, values: Mapping[str, float]) -> StaticC
                 raise KeyError(f"{key}: section {section.shape!r} has dimensions "
                                f"{', '.join(dims)} (and their _tip values)")
             section = replace(section, dims=dims, dims_tip=tip)
+        elif head == "rods" and len(parts) == 4 and parts[2] in ("section", "material") \
+                and getattr(model, "structure", None) is not None \
+                and _rod_index(model.structure, parts[1]) is not None:
+            structure = model.structure
+            index = _rod_index(structure, parts[1])
+            rod = structure.rods[index]
+            if parts[2] == "section":
+                if parts[3] not in dict(rod.section):
+                    raise KeyError(f"{key}: rod {rod.name!r} has no own section dimension "
+                                   f"{parts[3]!r}")
+                structure = structure.with_rod_values(index, section={parts[3]: value})
+            else:
+                if parts[3] not in ("E", "G") or not rod.material:
+                    raise KeyError(f"{key}: a rod's material variables are E and G")
+                E, G = rod.material
+                structure = structure.with_rod_values(
+                    index, material=(value, G) if parts[3] == "E" else (E, value))
+            model = replace(model, structure=structure)
         elif head == "loads" and key == "loads.tip_moment":
             loads = replace(loads, tip_moment=value)
         elif head == "loads" and len(parts) == 3 and parts[1] in ("tip_force", "distributed") \
@@ -862,6 +892,8 @@ class RealtimeSolver:
             if kind.realtime:
                 getattr(problem, name).value = np.asarray(
                     mix(getattr(a.loads, name), getattr(b.loads, name)), dtype=float)
+        if getattr(problem, "chain", None) is not None:  # the rods' own sections, materials
+            problem.chain.set_rod_values(a.structure, b.structure, fraction)
         tendons = self.tendons
         if not tendons:
             return
