@@ -124,3 +124,22 @@ def test_an_impact_keeps_the_velocity_2s_minus_1_and_books_the_loss(fraction):
     assert abs(energies["balance_residual"]) < 1e-9 * first["kinetic"]
     check = next(c for c in summary["checks"] if c["name"] == "energy_balance")
     assert check["passed"]
+
+
+def test_an_impacts_energy_gain_is_still_judged(monkeypatch):
+    """rho_inf = 0.9: right after a bounce the generalised-alpha scheme gains energy (the
+    impulse in its acceleration history; measured 2.6 % of the kinetic energy at the worst
+    step, 0.7 % at the end, here): an impact is exempt from halving, not from the check. The
+    run fails with the default tolerance 2e-2 and passes with 5e-2."""
+    from fe_beam.solvers.dynamics import StepDriver
+
+    config = bar_falling_flat(0.5, 3.3e-3, 1e-3, rho_inf=0.9)
+    failed = fe_beam.run("dynamic", config)
+    assert failed["status"] == "failed"
+    assert "energy_balance" in failed["message"]
+    assert failed["history"][-1]["energies"]["balance_residual"] > 0  # a gain, booked nowhere
+    monkeypatch.setattr(StepDriver, "energy_tolerance", 5e-2)
+    passed = fe_beam.run("dynamic", config)
+    check = next(c for c in passed["checks"] if c["name"] == "energy_balance")
+    assert passed["status"] == "completed" and check["passed"]
+    assert 0.02 < check["value"] < 0.05
