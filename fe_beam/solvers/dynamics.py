@@ -474,8 +474,11 @@ class StepDriver:
                             f"step {trial:.3g} s ({verdict}{where}; steps down to "
                             f"{smallest_energy_step:.3g} s tried); the integration is not "
                             f"trustworthy beyond t = {self.time:.6g} s, the last good state "
-                            "(use a smaller [time] dt, or scheme = \"energy-conserving\" for a "
-                            "planar rod)", self.time)
+                            + ("(with [[obstacles]]: rho_inf = 1, whose impacts gain no "
+                               "energy; the energy-conserving scheme takes no obstacles)"
+                               if getattr(self, "contact", None) is not None else
+                               "(use a smaller [time] dt, or scheme = \"energy-conserving\" "
+                               "for a planar rod)"), self.time)
                     dt = trial / 2
                     bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({verdict})")
                     continue
