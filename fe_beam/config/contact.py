@@ -60,7 +60,8 @@ CONTACT_KEYS = {
                                  "keep [m] (default 1e-3 x the smallest section height; the 3D "
                                  "solid: x min(h, h_tip, b))"),
     "penalty": Key(NUMBER, 1.0, "augmented-Lagrangian stiffness k relative to the element "
-                   "bending stiffness: k = penalty EI / h_e^4 per unit length (the 3D solid: "
+                   "bending stiffness: k = penalty EI / h_e^4 per unit length (fe-beam dynamic: "
+                   "at least penalty 100 rho A / (beta dt^2), the step's inertia; the 3D solid: "
                    "k = penalty mu / mesh_size per unit area)"),
     "max_updates": Key((int,), 50, "augmented-Lagrangian (Uzawa) updates per load step before "
                        "the step is cut back (active-set and multiplier updates)"),

@@ -926,6 +926,33 @@ class ContactSet:
                 and self._problem is not None else o.translation(self.parameter)
                 for i, o in enumerate(self.obstacles)]
 
+    def new_contact(self) -> bool:
+        """Whether the current state presses a contact point or end that the last accepted
+        state (`commit`) did not press: an impact (collective)."""
+        state = self.evaluate(friction=False)
+        local = False
+        for i in range(len(self.obstacles)):
+            now = np.asarray(state["pressure"][i]) > 0
+            ends = np.asarray(state["end_pressure"][i]) > 0
+            if self._pressed is None:
+                before, before_ends = np.zeros_like(now), np.zeros_like(ends)
+            else:
+                before, before_ends = self._pressed[i]
+            local = local or bool(np.any(now & ~before)) or bool(np.any(ends & ~before_ends))
+        return bool(self._problem.comm.allreduce(local, op=MPI.LOR))
+
+    def resultant(self, index: int) -> np.ndarray:
+        """The force of obstacle ``index`` on the rod in the current forms' state (global
+        axes, normal and friction parts) [N]; collective."""
+        comm = self._problem.comm
+        forms = self._resultant_forms[index]
+        force = np.array([global_sum(comm, fem.assemble_scalar(form))
+                          for form in forms["normal"][:self.dim]])
+        if "friction" in forms:
+            force = force + np.array([global_sum(comm, fem.assemble_scalar(form))
+                                      for form in forms["friction"][:self.dim]])
+        return force
+
     def placed(self) -> list:
         """The obstacles at their current place (`fe_beam.model.obstacles.translated`): for
         the outputs of moving obstacles."""

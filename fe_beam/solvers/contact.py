@@ -129,8 +129,11 @@ class ContactSolver:
                               f"still inconsistent at {sliding} contact points after {limit} "
                               "updates")
         if inaccurate:
-            hint = ("raise [contact] penalty" if contact.settings.penalty < MAX_PENALTY
-                    else "raise [contact] max_updates or force_tolerance")
+            settings = contact.settings
+            hint = (f"raise [contact] max_updates (now {settings.max_updates}), or accept a "
+                    f"coarser force: force_tolerance (now {settings.force_tolerance:.3g}, e.g. "
+                    "0.05)" + (", or raise penalty (faster updates)"
+                               if settings.penalty < MAX_PENALTY else ""))
             raise SolveFailed(f"contact: the contact force was still changing by more than "
                               f"{contact.settings.force_tolerance:.3g} of itself after {limit} "
                               f"augmented-Lagrangian updates ({hint})")
