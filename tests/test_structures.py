@@ -256,6 +256,9 @@ MISTAKES = [
     (lambda c: c["rods"][1].update(supports={}), "free to move as a rigid body"),
     (lambda c: c["rods"][0].update(loads={"point_forces": [[0.0, 1.0, 0.0]]}),
      "would be taken by the support"),
+    # the key as written (x0 / xL), not the model's "start" / "end"
+    (lambda c: c["rods"][1].update(supports={"xL": "welded"}), "'beam' supports.xL must be one"),
+    (lambda c: c["rods"][0].update(supports={"x0": "hinged"}), "'column' supports.x0 must be"),
 ]
 UNSUPPORTED = [
     (lambda c: c["joints"][0].update(kind="pin"), "kind = 'pin' is not supported yet"),

@@ -94,7 +94,8 @@ class Rod:
             if self.dim == 3 and isinstance(kind, tuple):
                 continue  # spatial components, checked with the chain's end
             if kind not in SUPPORT_KINDS:
-                raise ValueError(f"{where} supports.{end} must be one of "
+                key = {"start": "x0", "end": "xL"}.get(end, end)  # as the user wrote it
+                raise ValueError(f"{where} supports.{key} must be one of "
                                  f"{', '.join(SUPPORT_KINDS)}; got {kind!r}")
         for name, rows in (("point_forces", self.point_forces),
                            ("point_moments", self.point_moments)):
