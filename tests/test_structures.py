@@ -318,6 +318,19 @@ def test_set_overrides_reach_the_rods():
     assert np.isclose(structure.reference_point(3.0)[0], 2.0)
 
 
+@pytest.mark.parametrize("assignment, words", [
+    # a misspelt rod name: the message offers the names as well as the indices
+    ("rods.colum.length=2.0", "by its name (column, beam)"),
+    ("joints.knee.kind=rigid", "by its name (corner)"),
+    # an array of tables the file does not have: not "write [[bodies]], not [bodies]"
+    ("bodies.0.position=[0.0, 0.0]", "the config has no [[bodies]] to index"),
+])
+def test_set_mistakes_on_the_structure_tables(assignment, words):
+    with pytest.raises(ConfigError) as error:
+        fe_beam.config.apply_overrides(_lee_config(), [assignment])
+    assert words in str(error.value), str(error.value)
+
+
 @pytest.mark.mpi
 @pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
                     reason="needs mpirun (and a serial pytest)")

@@ -146,6 +146,10 @@ def apply_overrides(config: dict, assignments: list[str], defaults: dict | None 
             if position == 0 and name not in target and isinstance(defaults.get(name),
                                                                     (dict, list)):
                 target[name] = copy.deepcopy(defaults[name])
+            if (name not in target and position + 1 < len(names) - 1
+                    and names[position + 1].isdigit()):
+                raise ConfigError(f"--set {shown(assignment)}: the config has no [[{name}]] to "
+                                  f"index; add the [[{name}]] tables to the file")
             target = target.setdefault(name, {})
             position += 1
             if isinstance(target, list) and all(isinstance(item, dict) for item in target):
@@ -154,10 +158,14 @@ def apply_overrides(config: dict, assignments: list[str], defaults: dict | None 
                 if not index.isdigit() and len(named) == 1:  # a table by its name
                     index = str(named[0])
                 if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
+                    names_given = [item["name"] for item in target
+                                   if isinstance(item.get("name"), str)]
+                    by_name = (f" or by its name ({', '.join(names_given)})" if names_given
+                               else "")
                     raise ConfigError(
                         f"--set {shown(assignment)}: {shown(name)[1:-1]} is an array of "
                         f"{len(target)} tables; "
-                        f"address one as {name}.<index 0..{len(target) - 1}>.key"
+                        f"address one as {name}.<index 0..{len(target) - 1}>.key{by_name}"
                     )
                 target = target[int(index)]
                 position += 1
