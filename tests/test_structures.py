@@ -259,6 +259,11 @@ MISTAKES = [
     # the key as written (x0 / xL), not the model's "start" / "end"
     (lambda c: c["rods"][1].update(supports={"xL": "welded"}), "'beam' supports.xL must be one"),
     (lambda c: c["rods"][0].update(supports={"x0": "hinged"}), "'column' supports.x0 must be"),
+    # the range of lengths a single rod's [beam] length has, per rod and for the whole chain
+    (lambda c: c["rods"][1].update(length=2e-7), "'beam' length = 2e-07 m is outside the range"),
+    (lambda c: (c["rods"][0].update(length=7e5), c["rods"][1].update(start=[0.0, 7e5],
+                                                                    length=6e5)),
+     "the rods' lengths sum to 1.3e+06 m"),
 ]
 UNSUPPORTED = [
     (lambda c: c["joints"][0].update(kind="pin"), "kind = 'pin' is not supported yet"),

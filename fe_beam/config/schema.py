@@ -644,6 +644,22 @@ def _check_ranges(config: dict) -> None:
     if length is not None and length > 0 and not low <= length <= high:
         raise ConfigError(f"[beam] length = {length:g} m is outside the range fe-beam computes "
                           f"with ({low:g} m to {high:g} m)")
+    rods = config.get("rods")
+    if not isinstance(rods, list):
+        return
+    # the chain is one mesh of the rods' total length: each rod and the sum in the range
+    lengths = [(rod.get("name"), rod.get("length")) for rod in rods if isinstance(rod, dict)]
+    lengths = [(name, value) for name, value in lengths
+               if isinstance(value, (int, float)) and not isinstance(value, bool)
+               and 0 < value < float("inf")]
+    for name, value in lengths:
+        if not low <= value <= high:
+            raise ConfigError(f"[[rods]] {shown(name)} length = {value:g} m is outside the range "
+                              f"fe-beam computes with ({low:g} m to {high:g} m)")
+    total = sum(value for _, value in lengths)
+    if total > high:
+        raise ConfigError(f"[[rods]] length: the rods' lengths sum to {total:g} m, beyond the "
+                          f"range fe-beam computes with ({low:g} m to {high:g} m for the chain)")
 
 
 def _check_pairs(config: dict) -> None:
