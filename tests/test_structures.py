@@ -188,6 +188,11 @@ def test_fixed_body_clamps_the_chain_end():
     base = two["joints"]["base"]
     assert base["force"] == pytest.approx([-force[0], -force[1]], rel=1e-9)
     assert base["moment"] == pytest.approx(-(tip[0] * force[1] - tip[1] * force[0]), rel=1e-9)
+    # the body named first: the force and moment on the body (the reaction's opposite)
+    held["joints"][-1]["at"] = ["body:ground", "column:start"]
+    flipped = fe_beam.run("static", held)["steps"][-1]["joints"]["base"]
+    assert flipped["force"] == pytest.approx(force, rel=1e-9)
+    assert flipped["moment"] == pytest.approx(-base["moment"], rel=1e-9)
 
 
 # --- Lee's frame ------------------------------------------------------------------------------
