@@ -527,6 +527,14 @@ def _spec(support) -> str:
     return "[" + ", ".join(f'"{c}"' for c in support) + "]"
 
 
+def _chain_end(support) -> str:
+    """A chain end's support in a sentence: its name, "free" for a spatial end holding no
+    component (an empty tuple), else its components as the user writes them."""
+    if isinstance(support, str):
+        return support
+    return _spec(support) if support else "free"
+
+
 def parse_static(config: dict, rigid_motion_allowed: bool = False,
                  motion_variable: str = "load_factor") -> StaticConfig:
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
@@ -545,9 +553,10 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
             else model.supports.rigid_motions())
     if free and not rigid_motion_allowed and getattr(model, "structure", None) is not None:
         raise ConfigError(
-            f"[[rods]] supports: the chain's ends ({model.supports.x0} at its start, "
-            f"{model.supports.xL} at its end) leave it free to move as a rigid body; a static "
-            "equilibrium needs supports that prevent it (clamp one end, or pin both)")
+            f"[[rods]] supports: the chain's ends ({_chain_end(model.supports.x0)} at its "
+            f"start, {_chain_end(model.supports.xL)} at its end) leave it free to move as a "
+            "rigid body; a static equilibrium needs supports that prevent it (clamp one end, "
+            "or pin both)")
     if free and not rigid_motion_allowed:
         raise ConfigError(
             f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "
