@@ -252,6 +252,7 @@ MISTAKES = [
     (lambda c: c["rods"][1].update(start=[0.0, 1.1]), "0.1 m apart"),
     (lambda c: c["rods"][0].update(direction=[0.0, 2.0]), "must be a unit vector"),
     (lambda c: c["rods"][0].update(direction=[0.0, 0.0]), "must be a unit vector"),
+    (lambda c: c["rods"][0].update(direction=[0.0, 1.0000002]), "of length 1.0000002"),
     (lambda c: c["rods"][1].update(name="column"), "name 'column' is given twice"),
     (lambda c: c["joints"][0].update(at=["column:end"]), "two or more ends"),
     (lambda c: c.update(beam={"length": 1.0}), "[beam] with [[rods]]"),
@@ -470,11 +471,29 @@ def test_rods_with_their_own_section_and_material_against_shooting():
     (lambda c: c["rods"][0].update(material={"rho": 1000.0}), "density different"),
     (lambda c: c["rods"][0].update(model={"law": "nonstandard"}), "own law or constraint"),
     (lambda c: c["rods"][0].update(section={"h": -0.01}), "[[rods]] 'column' section:"),
+    # nu and G both in the rod's own table (named once, not "material: material:")
+    (lambda c: c["rods"][1].update(material={"G": 2e6, "nu": 0.25}),
+     "[[rods]] 'beam' material: give exactly one of nu"),
 ])
 def test_rods_own_tables_mistakes(change, words):
     with pytest.raises(ConfigError) as error:
         validate("static", _edit(change))
     assert words in str(error.value), str(error.value)
+
+
+@pytest.mark.parametrize("own, other", [({"G": 2e6}, "nu"), ({"nu": 0.1}, "G")])
+def test_rods_own_nu_or_g_replaces_the_top_levels_other(own, other):
+    """A rod's own G over a top-level nu (or its own nu over a top-level G) is the rod's
+    shear modulus: the two are alternatives (it was refused: "give exactly one of nu or G")."""
+    config = _lee_config()
+    E = config["material"]["E"]
+    config["material"].pop("nu")
+    config["material"].update({"nu": 0.3} if other == "nu" else {"G": E / 2.6})
+    config["rods"][1]["material"] = own
+    rods = validate("static", config).parsed.model.structure.rods
+    expected = own["G"] if "G" in own else E / (2 * (1 + own["nu"]))
+    assert rods[1].material == pytest.approx((E, expected), rel=1e-14)
+    assert rods[0].material == pytest.approx((E, E / 2.6), rel=1e-14)
 
 
 def test_three_rods_in_any_order_and_orientation_are_the_rod():

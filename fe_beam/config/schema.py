@@ -336,11 +336,16 @@ def _own_sections(config: dict, structure, section, material, law: str):
         if own and law == "hyperelastic":
             raise ConfigError(f"{where} material: a rod's own material with [model] law = "
                               "\"hyperelastic\" is not supported yet")
+        # a rod's own nu or G replaces the top level's other one (they are alternatives)
+        merged = {k: v for k, v in top.items()
+                  if not (k in ("nu", "G") and ("nu" in own or "G" in own))} | own
         try:
-            rod_material = _wrap(Material, **table({"material": top | own}, "material")) \
+            rod_material = _wrap(Material, **table({"material": merged}, "material")) \
                 if own else material
         except ConfigError as error:
-            raise ConfigError(f"{where} material: {error}") from None
+            text = str(error)
+            raise ConfigError(f"{where} {text}" if text.startswith(("material", "[material]"))
+                              else f"{where} material: {text}") from None
         if rod_material.rho != material.rho:
             raise ConfigError(f"{where} material.rho: a density different from [material] rho "
                               "is not supported yet")

@@ -70,7 +70,7 @@ class Rod:
         norm = math.sqrt(sum(c * c for c in self.direction))
         if not abs(norm - 1.0) <= 1e-9:
             raise ValueError(f"{where} direction must be a unit vector; got {list(self.direction)}"
-                             f" of length {norm:.6g}")
+                             f" of length {norm:.12g}")
         if self.normal is not None:
             value = self.normal
             ok = (size == 3 and isinstance(value, (list, tuple)) and len(value) == 3
