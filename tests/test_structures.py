@@ -253,6 +253,14 @@ MISTAKES = [
     (lambda c: c["rods"][0].update(direction=[0.0, 2.0]), "must be a unit vector"),
     (lambda c: c["rods"][0].update(direction=[0.0, 0.0]), "must be a unit vector"),
     (lambda c: c["rods"][0].update(direction=[0.0, 1.0000002]), "of length 1.0000002"),
+    # a moment at a clamped chain end is the support's (as a force at a held end): refused
+    (lambda c: c["rods"][0].update(supports={"x0": "clamped"},
+                                   loads={"point_moments": [[0.0, 0.3]]}),
+     "'column' loads.point_moments: a moment at the rod's x0 end, clamped there"),
+    (lambda c: (c["rods"][0].update(supports={}),
+                c["rods"][1].update(supports={"xL": "clamped"},
+                                    loads={"point_moments": [[1.0, -0.2]]})),
+     "'beam' loads.point_moments: a moment at the rod's xL end"),
     (lambda c: c["rods"][1].update(name="column"), "name 'column' is given twice"),
     (lambda c: c["joints"][0].update(at=["column:end"]), "two or more ends"),
     (lambda c: c.update(beam={"length": 1.0}), "[beam] with [[rods]]"),
@@ -462,6 +470,13 @@ def test_rods_with_their_own_section_and_material_against_shooting():
     # the same frame with the top level's section and material everywhere is another one
     uniform = frame_shooting.solve_frame(dataclasses.replace(frame, EI=EI, EA=EA, GA=GA)).end()
     assert math.hypot(tip[0] - uniform[0], tip[1] - uniform[1]) > 1e-2 * b
+
+
+def test_a_moment_at_a_pinned_chain_end_is_a_load():
+    """A moment at a pinned end (Lee's column start) turns the end: it is accepted."""
+    config = _lee_config()
+    config["rods"][0]["loads"] = {"point_moments": [[0.0, 0.3]]}
+    assert validate("static", config).parsed.model.loads.point_moments == ((0.0, 0.3),)
 
 
 @pytest.mark.parametrize("change, words", [

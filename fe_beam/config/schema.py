@@ -248,6 +248,21 @@ def parse_structure_model(config: dict) -> BeamModel:
                               f"{end} end, held by supports.{end} = "
                               f"{structure.end_supports['x0']!r}, would be taken by the support; "
                               "load a free end or a point of a rod")
+    rotations = {"theta_x", "theta_y", "theta_z"}
+    for s, *values in moments:
+        # a moment at a chain end whose support holds the rotation is taken by the support
+        for chain_end, at, index in (("x0", 0.0, 0), ("xL", structure.length, -1)):
+            kind = structure.end_supports[chain_end]
+            held = kind == "clamped" or (isinstance(kind, tuple) and rotations <= set(kind))
+            if held and abs(s - at) <= 1e-12 * structure.length and any(values):
+                segment = structure.chain[index]
+                rod = structure.rods[segment.rod]
+                end = ("xL" if segment.reversed else "x0") if index == 0 else \
+                    ("x0" if segment.reversed else "xL")
+                raise ConfigError(f"[[rods]] '{rod.name}' loads.point_moments: a moment at the "
+                                  f"rod's {end} end, clamped there (supports or a fixed body),"
+                                  " would be taken by the support; load a free or pinned end "
+                                  "or a point of a rod")
     elements = sum(rod.elements for rod in structure.rods)
     supports = structure.end_supports
     if spatial:
