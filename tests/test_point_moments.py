@@ -326,3 +326,21 @@ def test_a_point_moment_alone_is_a_load_to_follow(command):
     assert kind == "rod" and static.model.loads.point_moments == ((0.5, 1.0),)
     with pytest.raises(ConfigError, match="point_moments"):
         parse(config(point_moments=[[0.5, 0.0]]))
+
+
+@pytest.mark.parametrize("spatial", [False, True])
+def test_interior_point_force_and_point_moment_together(spatial):
+    """A point force and a point moment at different interior points of one rod (UFL refused
+    the two interior-vertex measures of different subdomain data: an internal error, exit 1).
+    Linear range, inextensible-unshearable, superposition of the closed forms: a force P at a
+    and a moment M at c give v(L) = P a^2 (3 L - a) / (6 EI) + M c (2 L - c) / (2 EI)."""
+    a, c = 0.37, 0.61
+    ei = EI_ROUND if spatial else EI
+    P, M = 1e-6 * ei / L**2, -2e-6 * ei / L
+    loads = ({"point_forces": [[a, 0.0, P, 0.0]], "point_moments": [[c, 0.0, 0.0, M]]}
+             if spatial else {"point_forces": [[a, 0.0, P]], "point_moments": [[c, M]]})
+    run = solved(config("reissner", "inextensible-unshearable", spatial=spatial, **loads))
+    tip = run.problem.end_values("xL")
+    assert tip["v"] == pytest.approx(P * a**2 * (3 * L - a) / (6 * ei)
+                                     + M * c * (2 * L - c) / (2 * ei), rel=1e-7)
+    run.destroy()

@@ -188,6 +188,11 @@ def test_fixed_body_clamps_the_chain_end():
     base = two["joints"]["base"]
     assert base["force"] == pytest.approx([-force[0], -force[1]], rel=1e-9)
     assert base["moment"] == pytest.approx(-(tip[0] * force[1] - tip[1] * force[0]), rel=1e-9)
+    # the body named first: the force and moment on the body (the reaction's opposite)
+    held["joints"][-1]["at"] = ["body:ground", "column:start"]
+    flipped = fe_beam.run("static", held)["steps"][-1]["joints"]["base"]
+    assert flipped["force"] == pytest.approx(force, rel=1e-9)
+    assert flipped["moment"] == pytest.approx(-base["moment"], rel=1e-9)
 
 
 # --- Lee's frame ------------------------------------------------------------------------------
@@ -247,6 +252,15 @@ MISTAKES = [
     (lambda c: c["rods"][1].update(start=[0.0, 1.1]), "0.1 m apart"),
     (lambda c: c["rods"][0].update(direction=[0.0, 2.0]), "must be a unit vector"),
     (lambda c: c["rods"][0].update(direction=[0.0, 0.0]), "must be a unit vector"),
+    (lambda c: c["rods"][0].update(direction=[0.0, 1.0000002]), "of length 1.0000002"),
+    # a moment at a clamped chain end is the support's (as a force at a held end): refused
+    (lambda c: c["rods"][0].update(supports={"x0": "clamped"},
+                                   loads={"point_moments": [[0.0, 0.3]]}),
+     "'column' loads.point_moments: a moment at the rod's x0 end, clamped there"),
+    (lambda c: (c["rods"][0].update(supports={}),
+                c["rods"][1].update(supports={"xL": "clamped"},
+                                    loads={"point_moments": [[1.0, -0.2]]})),
+     "'beam' loads.point_moments: a moment at the rod's xL end"),
     (lambda c: c["rods"][1].update(name="column"), "name 'column' is given twice"),
     (lambda c: c["joints"][0].update(at=["column:end"]), "two or more ends"),
     (lambda c: c.update(beam={"length": 1.0}), "[beam] with [[rods]]"),
@@ -256,6 +270,14 @@ MISTAKES = [
     (lambda c: c["rods"][1].update(supports={}), "free to move as a rigid body"),
     (lambda c: c["rods"][0].update(loads={"point_forces": [[0.0, 1.0, 0.0]]}),
      "would be taken by the support"),
+    # the key as written (x0 / xL), not the model's "start" / "end"
+    (lambda c: c["rods"][1].update(supports={"xL": "welded"}), "'beam' supports.xL must be one"),
+    (lambda c: c["rods"][0].update(supports={"x0": "hinged"}), "'column' supports.x0 must be"),
+    # the range of lengths a single rod's [beam] length has, per rod and for the whole chain
+    (lambda c: c["rods"][1].update(length=2e-7), "'beam' length = 2e-07 m is outside the range"),
+    (lambda c: (c["rods"][0].update(length=7e5), c["rods"][1].update(start=[0.0, 7e5],
+                                                                    length=6e5)),
+     "the rods' lengths sum to 1.3e+06 m"),
 ]
 UNSUPPORTED = [
     (lambda c: c["joints"][0].update(kind="pin"), "kind = 'pin' is not supported yet"),
@@ -313,6 +335,19 @@ def test_set_overrides_reach_the_rods():
     assert parsed.model.length == 3.0
     assert parsed.model.loads.point_forces == ((2.5, 0.0, -1.0),)
     assert np.isclose(structure.reference_point(3.0)[0], 2.0)
+
+
+@pytest.mark.parametrize("assignment, words", [
+    # a misspelt rod name: the message offers the names as well as the indices
+    ("rods.colum.length=2.0", "by its name (column, beam)"),
+    ("joints.knee.kind=rigid", "by its name (corner)"),
+    # an array of tables the file does not have: not "write [[bodies]], not [bodies]"
+    ("bodies.0.position=[0.0, 0.0]", "the config has no [[bodies]] to index"),
+])
+def test_set_mistakes_on_the_structure_tables(assignment, words):
+    with pytest.raises(ConfigError) as error:
+        fe_beam.config.apply_overrides(_lee_config(), [assignment])
+    assert words in str(error.value), str(error.value)
 
 
 @pytest.mark.mpi
@@ -437,6 +472,13 @@ def test_rods_with_their_own_section_and_material_against_shooting():
     assert math.hypot(tip[0] - uniform[0], tip[1] - uniform[1]) > 1e-2 * b
 
 
+def test_a_moment_at_a_pinned_chain_end_is_a_load():
+    """A moment at a pinned end (Lee's column start) turns the end: it is accepted."""
+    config = _lee_config()
+    config["rods"][0]["loads"] = {"point_moments": [[0.0, 0.3]]}
+    assert validate("static", config).parsed.model.loads.point_moments == ((0.0, 0.3),)
+
+
 @pytest.mark.parametrize("change, words", [
     (lambda c: c["rods"][0].update(section={"shape": "circle", "d": 0.02}),
      "a shape different from [section] shape is not supported yet"),
@@ -444,11 +486,29 @@ def test_rods_with_their_own_section_and_material_against_shooting():
     (lambda c: c["rods"][0].update(material={"rho": 1000.0}), "density different"),
     (lambda c: c["rods"][0].update(model={"law": "nonstandard"}), "own law or constraint"),
     (lambda c: c["rods"][0].update(section={"h": -0.01}), "[[rods]] 'column' section:"),
+    # nu and G both in the rod's own table (named once, not "material: material:")
+    (lambda c: c["rods"][1].update(material={"G": 2e6, "nu": 0.25}),
+     "[[rods]] 'beam' material: give exactly one of nu"),
 ])
 def test_rods_own_tables_mistakes(change, words):
     with pytest.raises(ConfigError) as error:
         validate("static", _edit(change))
     assert words in str(error.value), str(error.value)
+
+
+@pytest.mark.parametrize("own, other", [({"G": 2e6}, "nu"), ({"nu": 0.1}, "G")])
+def test_rods_own_nu_or_g_replaces_the_top_levels_other(own, other):
+    """A rod's own G over a top-level nu (or its own nu over a top-level G) is the rod's
+    shear modulus: the two are alternatives (it was refused: "give exactly one of nu or G")."""
+    config = _lee_config()
+    E = config["material"]["E"]
+    config["material"].pop("nu")
+    config["material"].update({"nu": 0.3} if other == "nu" else {"G": E / 2.6})
+    config["rods"][1]["material"] = own
+    rods = validate("static", config).parsed.model.structure.rods
+    expected = own["G"] if "G" in own else E / (2 * (1 + own["nu"]))
+    assert rods[1].material == pytest.approx((E, expected), rel=1e-14)
+    assert rods[0].material == pytest.approx((E, E / 2.6), rel=1e-14)
 
 
 def test_three_rods_in_any_order_and_orientation_are_the_rod():

@@ -279,6 +279,24 @@ def test_dynamic_l_frame_released_from_a_static_load_conserves_energy():
 
 
 @pytest.mark.parametrize("scheme", ["generalized-alpha", "energy-conserving"])
+def test_dynamic_free_chain_without_loads_certifies_its_momenta(scheme):
+    """A free chain with no [loads] at all (the time function left at its default 1) is in
+    free flight: the run certifies its momenta (they were left unchecked unless
+    time_function = "0"). A reversed rod joined start to start, set turning."""
+    config = _dynamic(4, scheme, t_end=0.01, dt=0.002)
+    config["rods"] = [
+        {"name": "b", "start": [1.0, 0.2], "direction": [-1.0, 0.0], "length": 0.6},
+        {"name": "a", "start": [1.0, 0.2], "direction": [0.0, 1.0], "length": 0.4}]
+    config["joints"] = [{"name": "j", "at": ["b:start", "a:start"]}]
+    config["initial"] = {"velocity": ["0", "0.5 * x", "0"]}
+    config.pop("loads", None)
+    summary = fe_beam.run("dynamic", config)
+    assert summary["status"] == "completed"
+    names = {c["name"]: c for c in summary["checks"]}
+    assert names["linear_momentum"]["passed"] and names["angular_momentum"]["passed"], names
+
+
+@pytest.mark.parametrize("scheme", ["generalized-alpha", "energy-conserving"])
 def test_dynamic_free_l_frame_momenta(scheme):
     """A free L-frame away from the origin, its sections set spinning (theta_t = w x, x the
     chain's arc length): no load, so its momenta are constants: linear 0, angular about the

@@ -253,6 +253,10 @@ MISTAKES = [
      "not a coordinate axis"),
     (lambda c: c["rods"][0].update(supports={"x0": "pinned"}), "free to move as a rigid body"),
     (lambda c: c["model"].update(law="hyperelastic"), "hyperelastic"),
+    # an end holding no component reads "free" (not "()"), a partial one as its list
+    (lambda c: c["rods"][0].update(supports={"x0": []}), "(free at its start, free at its end)"),
+    (lambda c: c["rods"][0].update(supports={"x0": ["u", "v", "w"]}),
+     "([\"u\", \"v\", \"w\"] at its start, free at its end)"),
 ]
 
 

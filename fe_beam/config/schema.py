@@ -146,6 +146,10 @@ def apply_overrides(config: dict, assignments: list[str], defaults: dict | None 
             if position == 0 and name not in target and isinstance(defaults.get(name),
                                                                     (dict, list)):
                 target[name] = copy.deepcopy(defaults[name])
+            if (name not in target and position + 1 < len(names) - 1
+                    and names[position + 1].isdigit()):
+                raise ConfigError(f"--set {shown(assignment)}: the config has no [[{name}]] to "
+                                  f"index; add the [[{name}]] tables to the file")
             target = target.setdefault(name, {})
             position += 1
             if isinstance(target, list) and all(isinstance(item, dict) for item in target):
@@ -154,10 +158,14 @@ def apply_overrides(config: dict, assignments: list[str], defaults: dict | None 
                 if not index.isdigit() and len(named) == 1:  # a table by its name
                     index = str(named[0])
                 if position >= len(names) - 1 or not index.isdigit() or int(index) >= len(target):
+                    names_given = [item["name"] for item in target
+                                   if isinstance(item.get("name"), str)]
+                    by_name = (f" or by its name ({', '.join(names_given)})" if names_given
+                               else "")
                     raise ConfigError(
                         f"--set {shown(assignment)}: {shown(name)[1:-1]} is an array of "
                         f"{len(target)} tables; "
-                        f"address one as {name}.<index 0..{len(target) - 1}>.key"
+                        f"address one as {name}.<index 0..{len(target) - 1}>.key{by_name}"
                     )
                 target = target[int(index)]
                 position += 1
@@ -240,6 +248,21 @@ def parse_structure_model(config: dict) -> BeamModel:
                               f"{end} end, held by supports.{end} = "
                               f"{structure.end_supports['x0']!r}, would be taken by the support; "
                               "load a free end or a point of a rod")
+    rotations = {"theta_x", "theta_y", "theta_z"}
+    for s, *values in moments:
+        # a moment at a chain end whose support holds the rotation is taken by the support
+        for chain_end, at, index in (("x0", 0.0, 0), ("xL", structure.length, -1)):
+            kind = structure.end_supports[chain_end]
+            held = kind == "clamped" or (isinstance(kind, tuple) and rotations <= set(kind))
+            if held and abs(s - at) <= 1e-12 * structure.length and any(values):
+                segment = structure.chain[index]
+                rod = structure.rods[segment.rod]
+                end = ("xL" if segment.reversed else "x0") if index == 0 else \
+                    ("x0" if segment.reversed else "xL")
+                raise ConfigError(f"[[rods]] '{rod.name}' loads.point_moments: a moment at the "
+                                  f"rod's {end} end, clamped there (supports or a fixed body),"
+                                  " would be taken by the support; load a free or pinned end "
+                                  "or a point of a rod")
     elements = sum(rod.elements for rod in structure.rods)
     supports = structure.end_supports
     if spatial:
@@ -328,11 +351,16 @@ def _own_sections(config: dict, structure, section, material, law: str):
         if own and law == "hyperelastic":
             raise ConfigError(f"{where} material: a rod's own material with [model] law = "
                               "\"hyperelastic\" is not supported yet")
+        # a rod's own nu or G replaces the top level's other one (they are alternatives)
+        merged = {k: v for k, v in top.items()
+                  if not (k in ("nu", "G") and ("nu" in own or "G" in own))} | own
         try:
-            rod_material = _wrap(Material, **table({"material": top | own}, "material")) \
+            rod_material = _wrap(Material, **table({"material": merged}, "material")) \
                 if own else material
         except ConfigError as error:
-            raise ConfigError(f"{where} material: {error}") from None
+            text = str(error)
+            raise ConfigError(f"{where} {text}" if text.startswith(("material", "[material]"))
+                              else f"{where} material: {text}") from None
         if rod_material.rho != material.rho:
             raise ConfigError(f"{where} material.rho: a density different from [material] rho "
                               "is not supported yet")
@@ -519,6 +547,14 @@ def _spec(support) -> str:
     return "[" + ", ".join(f'"{c}"' for c in support) + "]"
 
 
+def _chain_end(support) -> str:
+    """A chain end's support in a sentence: its name, "free" for a spatial end holding no
+    component (an empty tuple), else its components as the user writes them."""
+    if isinstance(support, str):
+        return support
+    return _spec(support) if support else "free"
+
+
 def parse_static(config: dict, rigid_motion_allowed: bool = False,
                  motion_variable: str = "load_factor") -> StaticConfig:
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
@@ -537,9 +573,10 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
             else model.supports.rigid_motions())
     if free and not rigid_motion_allowed and getattr(model, "structure", None) is not None:
         raise ConfigError(
-            f"[[rods]] supports: the chain's ends ({model.supports.x0} at its start, "
-            f"{model.supports.xL} at its end) leave it free to move as a rigid body; a static "
-            "equilibrium needs supports that prevent it (clamp one end, or pin both)")
+            f"[[rods]] supports: the chain's ends ({_chain_end(model.supports.x0)} at its "
+            f"start, {_chain_end(model.supports.xL)} at its end) leave it free to move as a "
+            "rigid body; a static equilibrium needs supports that prevent it (clamp one end, "
+            "or pin both)")
     if free and not rigid_motion_allowed:
         raise ConfigError(
             f"[supports] x0 = {_spec(model.supports.x0)}, xL = {_spec(model.supports.xL)} leave "
@@ -636,6 +673,22 @@ def _check_ranges(config: dict) -> None:
     if length is not None and length > 0 and not low <= length <= high:
         raise ConfigError(f"[beam] length = {length:g} m is outside the range fe-beam computes "
                           f"with ({low:g} m to {high:g} m)")
+    rods = config.get("rods")
+    if not isinstance(rods, list):
+        return
+    # the chain is one mesh of the rods' total length: each rod and the sum in the range
+    lengths = [(rod.get("name"), rod.get("length")) for rod in rods if isinstance(rod, dict)]
+    lengths = [(name, value) for name, value in lengths
+               if isinstance(value, (int, float)) and not isinstance(value, bool)
+               and 0 < value < float("inf")]
+    for name, value in lengths:
+        if not low <= value <= high:
+            raise ConfigError(f"[[rods]] {shown(name)} length = {value:g} m is outside the range "
+                              f"fe-beam computes with ({low:g} m to {high:g} m)")
+    total = sum(value for _, value in lengths)
+    if total > high:
+        raise ConfigError(f"[[rods]] length: the rods' lengths sum to {total:g} m, beyond the "
+                          f"range fe-beam computes with ({low:g} m to {high:g} m for the chain)")
 
 
 def _check_pairs(config: dict) -> None:

@@ -397,8 +397,25 @@ class BeamProblem:
         """The point forces' and point moments' (measure, nodal field, at an end) lists
         (`_point_measures`)."""
         loads = self.model.loads
+        # one interior-vertex measure for the forces and the moments: UFL refuses a form whose
+        # integrals of one type have different subdomain data (a point force and a point moment
+        # inside the rod); the nodal fields vanish at the other kind's vertices
+        interior = [compat.locate_entities(self.mesh, 0, self.point_marker(row[0]))
+                    for row in loads.point_forces + loads.point_moments
+                    if not self._at_end(row[0])]
+        self._interior_measure = None
+        if interior:
+            self.mesh.topology.create_connectivity(0, 1)
+            vertices = np.unique(np.concatenate(interior)).astype(np.int32)
+            tags = compat.meshtags(self.mesh, 0, vertices, np.ones(len(vertices), np.int32))
+            self._interior_measure = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)(1)
         self.point_forces, self.point_force_fields = self._point_measures(loads.point_forces)
         self.point_moments, self.point_moment_fields = self._point_measures(loads.point_moments)
+
+    def _at_end(self, x: float) -> bool:
+        """x is within round-off of x = 0 or x = L (a boundary vertex)."""
+        return (abs(x - self.model.length) <= self.point_tolerance
+                or abs(x) <= self.point_tolerance)
 
     def _point_measures(self, rows) -> tuple[list, list]:
         """(measure, nodal value field, at an end) per kind of vertex carrying the point loads
@@ -413,7 +430,7 @@ class BeamProblem:
             return [], []
         space = compat.function_space(self.mesh, compat.element(self.mesh, "Lagrange", 1))
         nodal = [fem.Function(space) for _ in rows[0][1:]]  # a field per component
-        interior, at = [], set()
+        interior, at = False, set()
         for x, *values in rows:
             dofs = compat.locate_dofs_geometrical(space, self.point_marker(x))
             for function, value in zip(nodal, values, strict=True):
@@ -425,15 +442,11 @@ class BeamProblem:
                 # element), a boundary facet, which an interior-facet measure never visits
                 at.add("start")
             else:
-                interior.append(compat.locate_entities(self.mesh, 0, self.point_marker(x)))
+                interior = True
         field = ufl.as_vector(nodal)
         measures = []
-        if interior:
-            self.mesh.topology.create_connectivity(0, 1)
-            vertices = np.unique(np.concatenate(interior)).astype(np.int32)
-            tags = compat.meshtags(self.mesh, 0, vertices, np.ones(len(vertices), np.int32))
-            measure = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)(1)
-            measures.append((measure, field, False))
+        if interior:  # the vertices of every interior point load (`_point_force_measures`)
+            measures.append((self._interior_measure, field, False))
         for name, measure in (("tip", self.ds_tip), ("start", self.ds_start)):
             if name in at:
                 measures.append((measure, field, True))

@@ -70,7 +70,7 @@ class Rod:
         norm = math.sqrt(sum(c * c for c in self.direction))
         if not abs(norm - 1.0) <= 1e-9:
             raise ValueError(f"{where} direction must be a unit vector; got {list(self.direction)}"
-                             f" of length {norm:.6g}")
+                             f" of length {norm:.12g}")
         if self.normal is not None:
             value = self.normal
             ok = (size == 3 and isinstance(value, (list, tuple)) and len(value) == 3
@@ -94,7 +94,8 @@ class Rod:
             if self.dim == 3 and isinstance(kind, tuple):
                 continue  # spatial components, checked with the chain's end
             if kind not in SUPPORT_KINDS:
-                raise ValueError(f"{where} supports.{end} must be one of "
+                key = {"start": "x0", "end": "xL"}.get(end, end)  # as the user wrote it
+                raise ValueError(f"{where} supports.{key} must be one of "
                                  f"{', '.join(SUPPORT_KINDS)}; got {kind!r}")
         for name, rows in (("point_forces", self.point_forces),
                            ("point_moments", self.point_moments)):

@@ -32,6 +32,7 @@ contact points of the last accepted step (docs/theory.md, Contact in dynamics).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -315,9 +316,10 @@ class StepDriver:
         """A step with no supports, no load at either end, no viscous damping, tendons or
         contact: the momenta are constants of the motion."""
         p = self.problem
+        unloaded = ((self.load_function(t_old) == 0 and self.load_function(t_new) == 0)
+                    or _no_loads(getattr(p.model, "loads", None)))
         return (not p.bcs and self.damping.c == 0 and getattr(self, "tendons", None) is None
-                and getattr(self, "contact", None) is None
-                and self.load_function(t_old) == 0 and self.load_function(t_new) == 0)
+                and getattr(self, "contact", None) is None and unloaded)
 
     def _mass_and_reach(self) -> tuple[float, float]:
         """The rod's mass (rho A_max L) and its reach from the origin (L + |tip position|)."""
@@ -509,6 +511,24 @@ class StepDriver:
         momentum = self.momentum_watch.report()
         return {"energy_balance": guard.report()} | (
             {"momentum": momentum} if momentum is not None else {})
+
+
+def _no_loads(loads) -> bool:
+    """Every load of ``loads`` (a model's loads dataclass) is zero or absent: a run without
+    [loads] is in free flight whatever its time function (flags such as follower aside)."""
+    if loads is None or not dataclasses.is_dataclass(loads):
+        return False
+
+    def zero(value) -> bool:
+        if value is None or isinstance(value, bool):
+            return True
+        if isinstance(value, (int, float)):
+            return value == 0
+        if isinstance(value, (list, tuple)):
+            return all(zero(item) for item in value)
+        return False
+
+    return all(zero(getattr(loads, f.name)) for f in dataclasses.fields(loads))
 
 
 class GeneralizedAlpha(StepDriver):
