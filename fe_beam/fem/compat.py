@@ -287,7 +287,13 @@ def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.
     import basix.ufl
 
     domain = ufl.Mesh(basix.ufl.element("Lagrange", "interval", 1, shape=(1,)))
-    return mesh.create_mesh(comm, cells.astype(np.int64), domain, points)
+    # shared-facet ghosts, as create_interval and dolfinx 0.5's create_mesh: 0.10+'s
+    # create_mesh ghosts nothing, so the vertex where two ranks' parts meet is an exterior
+    # facet on both, and an interior-facet integral there (a point load) was lost on 2 ranks
+    partitioner = (mesh.create_cell_partitioner(mesh.GhostMode.shared_facet, 2)
+                   if comm.size > 1 else None)
+    return mesh.create_mesh(comm, cells.astype(np.int64), domain, points,
+                            partitioner=partitioner)
 
 
 def cell_vertex_x(msh: mesh.Mesh) -> np.ndarray:
