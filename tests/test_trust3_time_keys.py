@@ -31,6 +31,7 @@ def run(tmp_path, config, capsys):
     capsys.readouterr()
     code = main(["dynamic", str(path), "--out", str(out), "--quiet"])
     err = capsys.readouterr().err
+    assert (out / "summary.json").exists(), (code, err)
     summary = json.loads((out / "summary.json").read_text())
     return code, err, summary
 
