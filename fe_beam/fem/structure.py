@@ -218,13 +218,7 @@ class ChainGeometry:
                 * problem.dx_energy
         body = problem.distributed + problem.rho * problem.section_props.A * problem.gravity
         energy -= chi * problem.load_factor * ufl.dot(body, d) * problem.dx_loads
-        test = ufl.TestFunction(problem.space)
-        self._joint_form = fem.form(ufl.derivative(energy, problem.w, test))
-        self._joint_dofs = {}
-        for joint in self.structure.joints_on_chain:
-            self._joint_dofs[joint.name] = [problem.point_dofs(n, joint.s, f"joint "
-                                                               f"'{joint.name}' at")
-                                            for n in problem.components]
+        self._finish_joint_form(energy, problem.components)
 
     def _compile_joint_form(self):
         if self.spatial:
@@ -242,13 +236,18 @@ class ChainGeometry:
         body = problem.distributed + problem.rho * problem.section_props.A * problem.gravity
         energy -= chi * problem.load_factor * ufl.dot(body, ufl.as_vector([u, v])) \
             * problem.dx_loads
+        self._finish_joint_form(energy, ("u", "v", "theta"))
+
+    def _finish_joint_form(self, energy, components) -> None:
+        """The joint residual form (the variation of ``energy``, the elements before a joint
+        weighted by the indicator) and, per joint, its dofs of ``components``."""
+        problem = self.problem
         test = ufl.TestFunction(problem.space)
         self._joint_form = fem.form(ufl.derivative(energy, problem.w, test))
-        self._joint_dofs = {}
-        for joint in self.structure.joints_on_chain:
-            self._joint_dofs[joint.name] = [problem.point_dofs(n, joint.s, f"joint "
-                                                               f"'{joint.name}' at")
-                                            for n in ("u", "v", "theta")]
+        self._joint_dofs = {
+            joint.name: [problem.point_dofs(n, joint.s, f"joint '{joint.name}' at")
+                         for n in components]
+            for joint in self.structure.joints_on_chain}
 
     def joints(self) -> dict:
         """{joint name: {force: [Fx, Fy], moment}}: the force and moment (world axes) on the
