@@ -265,31 +265,27 @@ def parse_structure_model(config: dict) -> BeamModel:
                                   "or a point of a rod")
     elements = sum(rod.elements for rod in structure.rods)
     supports = structure.end_supports
-    if spatial:
-        return _wrap(
-            SpatialRodModel,
-            length=structure.length,
-            section=section,
-            material=material,
-            options=_wrap(ModelOptions, **model, **law_options),
-            mesh=_wrap(Discretisation, elements=elements, degree=structure.rods[0].degree),
-            supports=_wrap(SpatialSupports, x0=_spatial_chain_support(structure, "x0"),
-                           xL=_spatial_chain_support(structure, "xL")),
-            loads=_wrap(SpatialLoads, distributed=loads["distributed"], gravity=loads["gravity"],
-                        point_forces=forces, point_moments=moments),
-            structure=structure,
-        )
-    return _wrap(
-        BeamModel,
+    common = dict(
         length=structure.length,
         section=section,
         material=material,
         options=_wrap(ModelOptions, **model, **law_options),
         mesh=_wrap(Discretisation, elements=elements, degree=structure.rods[0].degree),
+        structure=structure,
+    )
+    if spatial:
+        return _wrap(
+            SpatialRodModel, **common,
+            supports=_wrap(SpatialSupports, x0=_spatial_chain_support(structure, "x0"),
+                           xL=_spatial_chain_support(structure, "xL")),
+            loads=_wrap(SpatialLoads, distributed=loads["distributed"], gravity=loads["gravity"],
+                        point_forces=forces, point_moments=moments),
+        )
+    return _wrap(
+        BeamModel, **common,
         supports=_wrap(Supports, x0=supports["x0"], xL=supports["xL"]),
         loads=_wrap(Loads, distributed=loads["distributed"], gravity=loads["gravity"],
                     point_forces=forces, point_moments=moments),
-        structure=structure,
     )
 
 
