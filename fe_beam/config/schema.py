@@ -551,6 +551,30 @@ def _chain_end(support) -> str:
     return _spec(support) if support else "free"
 
 
+def _check_held_length(model) -> None:
+    """Refuse a straight rod with an inextensibility constraint whose supports hold u at both
+    ends at their reference distance L: its length is then fixed twice (by the constraint and
+    by the supports), so it must stay straight, a transverse load has no equilibrium (the axial
+    force would be infinite) and the constant axial force is indeterminate (a singular
+    saddle-point system: the solves failed with DIVERGED_LINEAR_SOLVE or, with MUMPS's null
+    pivots, returned an arbitrary axial force of 1e9 N with exit 0)."""
+    if getattr(model, "structure", None) is not None or getattr(model, "curved", False):
+        return
+    if "inextensible" not in model.options.constraint:
+        return
+    supports = model.supports
+    if not all("u" in supports.fixed(end) for end in ("x0", "xL")):
+        return
+    if any(getattr(supports, f"prescribed_{end}").get("u", 0.0) for end in ("x0", "xL")):
+        return  # a prescribed end shortening (or stretch): the length is not held
+    raise ConfigError(
+        "a straight inextensible rod held along its axis at both ends keeps its length L "
+        "between them and cannot bend (a transverse load has no equilibrium, the axial force "
+        "is indeterminate): free u at one end (e.g. xL = roller) or choose another constraint "
+        f"([model] constraint = \"{model.options.constraint}\", [supports] x0 = "
+        f"{_spec(supports.x0)}, xL = {_spec(supports.xL)})")
+
+
 def parse_static(config: dict, rigid_motion_allowed: bool = False,
                  motion_variable: str = "load_factor") -> StaticConfig:
     """The statics configuration; ``rigid_motion_allowed`` for dynamics and modes, where a
@@ -565,6 +589,7 @@ def parse_static(config: dict, rigid_motion_allowed: bool = False,
             f"systems of constraint = \"{model.options.constraint}\" (its multiplier rows have a "
             "zero diagonal); use linear_solver = \"auto\" or \"mumps\", or constraint = \"none\""
         )
+    _check_held_length(model)
     free = (structure_rigid_motions(model) if getattr(model, "structure", None) is not None
             else model.supports.rigid_motions())
     if free and not rigid_motion_allowed and getattr(model, "structure", None) is not None:
