@@ -40,8 +40,8 @@ HELD = [
 
 @pytest.mark.parametrize("case", HELD, ids=lambda c: f"{c[0]}-{c[1]}-{c[3]}")
 def test_held_length_is_refused(case):
-    with pytest.raises(ConfigError, match=r"straight inextensible rod held along its axis at both ends.*"
-                       r"free u at one end"):
+    with pytest.raises(ConfigError, match=r"straight inextensible rod held along its axis at "
+                       r"both ends.*free u at one end"):
         parse_static(_config(*case))
 
 
