@@ -139,6 +139,20 @@ def residual_floor(problem) -> tuple[float, float]:
     return force / math.sqrt(max(int(problem.global_dofs), 1)), stiffness
 
 
+def zero_pivot(problem) -> float:
+    """The pivot below which PETSc's LU (no pivoting) calls a rod's tangent singular: 100
+    machine epsilons (PETSc's default, an absolute number in the matrix's units) times the
+    smallest stiffness scale of its rows, EI / h_e (rotation rows) or EI / h_e^3 (displacement
+    rows), h_e the element length: a geometrically similar rod in other units factors
+    identically (with the absolute default a 1 um cantilever's rotation pivots, EI / h_e ~
+    1e-14 N m, were "zero": DIVERGED_LINEAR_SOLVE at the first increment). Collective."""
+    length = float(problem.model.length)
+    EI = abs(assemble_scalar(fem.form(problem.bending_stiffness() * ufl.dx(
+        domain=problem.mesh)))) / length
+    h_e = length / max(int(problem.model.mesh.elements), 1)
+    return float(100 * np.finfo(float).eps * min(EI / h_e, EI / h_e**3))
+
+
 def _reactions(problem) -> list[Wrench]:
     result = []
     for end in ("x0", "xL"):

@@ -240,13 +240,24 @@ class SNESSolver:
         near_nullspace: PETSc.NullSpace | None = None,
         state_scale: float = 0.0,
         residual_floor: tuple[float, float] = (0.0, 0.0),
+        zero_pivot: float | None = None,
+        dof_weights: np.ndarray | None = None,
     ):
         """``residual_floor``: the residual's round-off floor, (absolute [N], stiffness [N/m]):
         a Newton iteration that has stopped converging (the residual no longer halves) at or
         below max(absolute, machine epsilon x stiffness x the state's norm) is converged
-        (`fe_beam.fem.equilibrium.residual_floor`); (0, 0): none."""
+        (`fe_beam.fem.equilibrium.residual_floor`); (0, 0): none. ``zero_pivot``: PETSc's LU
+        zero-pivot threshold in the matrix's units (`fe_beam.fem.equilibrium.zero_pivot`; the
+        user's ``pc_factor_zeropivot`` wins; None: PETSc's absolute default, 100 eps).
+        ``dof_weights``: a weight per owned dof that turns the state into lengths (1 for a
+        displacement, the length for a rotation, 1 / stiffness for a multiplier force): the
+        step test and the round-off floor then measure the state in one unit, so that a
+        geometrically similar problem in other units converges identically (`rod_dof_weights`;
+        None: PETSc's norms of the mixed-unit state)."""
         self.problem = problem
         self.state_scale = float(state_scale)
+        self.dof_weights = None if dof_weights is None else np.asarray(dof_weights, dtype=float)
+        self._weighted_previous = None
         self.residual_floor = tuple(float(v) for v in residual_floor)
         self.settings = settings or SolverSettings()
         check_petsc_options(self.settings.petsc_options)  # ConfigError before any solve
@@ -260,8 +271,11 @@ class SNESSolver:
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
         options = PETSc.Options()
-        self._option_keys = [prefix + key for key in self.settings.options()]
-        for key, value in self.settings.options().items():
+        settings_options = self.settings.options()
+        if zero_pivot is not None and zero_pivot > 0:
+            settings_options.setdefault("pc_factor_zeropivot", float(zero_pivot))
+        self._option_keys = [prefix + key for key in settings_options]
+        for key, value in settings_options.items():
             options[prefix + key] = value
         self.snes.setFunction(problem.residual, problem.b)
         self.snes.setJacobian(problem.jacobian, problem.A)
@@ -295,6 +309,8 @@ class SNESSolver:
         if not math.isfinite(fnorm):
             return reason.DIVERGED_FNORM_NAN
         previous, self._last_fnorm = getattr(self, "_last_fnorm", fnorm), fnorm
+        if self.dof_weights is not None:
+            xnorm, step_norm = self._weighted_norms(snes, iteration, xnorm, step_norm)
         if iteration == 0:
             reference = self._reference_fnorm
             self._initial_fnorm = fnorm if reference is None else min(fnorm, reference)
@@ -326,6 +342,21 @@ class SNESSolver:
         if iteration >= max_it:
             return reason.DIVERGED_MAX_IT
         return reason.ITERATING
+
+    def _weighted_norms(self, snes, iteration: int, xnorm: float, step_norm: float):
+        """(||w x||, ||w (x - x_previous)||) of the current iterate, w = ``dof_weights``
+        (collective; PETSc's norms when the weights do not fit this rank's dofs)."""
+        x = snes.getSolution().getArray(readonly=True)
+        if x.shape != self.dof_weights.shape:
+            return xnorm, step_norm
+        weighted = self.dof_weights * x
+        comm = snes.getComm().tompi4py()
+        previous = self._weighted_previous
+        step = (weighted - previous if iteration > 0 and previous is not None
+                and previous.shape == weighted.shape else np.zeros_like(weighted))
+        self._weighted_previous = weighted.copy()
+        sums = comm.allreduce(np.array([float(weighted @ weighted), float(step @ step)]))
+        return math.sqrt(sums[0]), (math.sqrt(sums[1]) if iteration > 0 else step_norm)
 
     def commit_scale(self) -> None:
         """A converged solve's first residual joins the largest load-step residual seen (the

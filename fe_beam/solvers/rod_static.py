@@ -11,7 +11,7 @@ from mpi4py import MPI
 from fe_beam import runctl
 from fe_beam.fem import compat
 from fe_beam.fem.contact import ContactSet
-from fe_beam.fem.equilibrium import residual_floor
+from fe_beam.fem.equilibrium import residual_floor, zero_pivot
 from fe_beam.fem.rod import BeamProblem, StrainWatch
 from fe_beam.fem.spatial_rod import SpatialRodProblem
 from fe_beam.fem.tendons import TendonSet
@@ -31,6 +31,23 @@ from fe_beam.solvers.pull_in import PullInSolver
 
 __all__ = ["STABILITY_MAX_DOFS", "STABILITY_ZERO", "StaticContinuation", "beam_dofs_estimate",
            "check_beam_work"]
+
+
+def rod_dof_weights(problem) -> np.ndarray | None:
+    """Owned dofs' weights that turn a rod's state into lengths (`SNESSolver`'s
+    ``dof_weights``): 1 for the centreline displacements, the rod's length for the rotations,
+    1 / (the tangent's scale, `residual_floor`) for the multipliers (forces); None for a
+    problem without named components (a chain). Collective."""
+    if getattr(problem, "structure", None) is not None or not hasattr(problem, "components"):
+        return None
+    owned = problem.space.dofmap.index_map.size_local * problem.space.dofmap.index_map_bs
+    weights = np.zeros(owned)
+    length = float(problem.model.length)
+    for name in problem.components:
+        weights[problem.component_dofs(name)] = length if name.startswith("theta") else 1.0
+    multipliers = np.asarray(problem.multiplier_dofs())
+    weights[multipliers[multipliers < owned]] = 1.0 / residual_floor(problem)[1]
+    return weights
 
 
 class StaticContinuation:
@@ -68,6 +85,8 @@ class StaticContinuation:
             prefix=prefix,
             state_scale=config.model.length,
             residual_floor=residual_floor(self.problem),
+            zero_pivot=zero_pivot(self.problem),
+            dof_weights=rod_dof_weights(self.problem),
         )
         self.solver = PullInSolver(self.snes, self.tendons) if self.tendons else self.snes
         if self.contact is not None:
