@@ -105,6 +105,7 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
                                                progress)
         else:
             result = linear
+            extra = _unconfirmed(run, linear, settings)
         critical = [load_scale_record(static.model, f) for f in result.load_factors]
         if static.model.loads.follower:  # Beck's column: no load factor found, yet unstable
             result.notes.append(
@@ -138,6 +139,32 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         return summary
     finally:
         run.destroy()
+
+
+def _unconfirmed(run, linear: Buckling, settings) -> dict:
+    """The summary's keys of factors the path cannot confirm (`_confirmable` false): they stay
+    in load_factors (the public key), labelled linearised and unconfirmed, with a note naming
+    why (the follower force has its own note on flutter)."""
+    loads = run.config.model.loads
+    if run.tendons is not None and any(t.controlled_by_pull_in for t in run.tendons.tendons):
+        reason = "a tendon controlled by pull-in"
+    elif loads.follower:
+        reason = "a follower force"
+    elif getattr(run.problem, "moment_loads", False):
+        reason = "a dead moment on a spatial rod"
+    else:
+        reason = "a load without a potential"
+    if linear.load_factors and not loads.follower:
+        linear.notes.append(
+            f"the load_factors (and reversed_load_factors) are linearised estimates about "
+            f"the state at load factor "
+            f"{linear.prestress:g}, not buckling loads confirmed by the nonlinear path: with "
+            f"{reason} the tangent is not symmetric and the path's stability (its energy-"
+            "decreasing directions) cannot confirm a critical point; follow the path with "
+            "fe-beam path (or fe-beam dynamic) to find where the rod loses stability")
+    return {"load_factors_confirmed": False, "unconfirmed_reason": reason,
+            "linearised_load_factors": list(linear.load_factors),
+            "linearised_reversed_load_factors": list(linear.negative[: settings.count])}
 
 
 def _confirmable(run) -> bool:
@@ -310,6 +337,12 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
                      f"{below} energy-decreasing direction(s)")
             report.out(f"{index:>4}  {factor:>14.8g}  {state} at {point['bracket'][0]:.8g}, "
                        f"{point['unstable_above']} at {point['bracket'][1]:.8g}")
+    elif summary.get("load_factors_confirmed") is False:
+        report.out(f"{'mode':>4}  {'load factor':>14}  linearised estimates about the state at "
+                   f"load factor {summary['prestress']:g}, NOT confirmed by the path "
+                   f"({summary['unconfirmed_reason']}): not buckling loads")
+        for index, factor in enumerate(summary["load_factors"], start=1):
+            report.out(f"{index:>4}  {factor:>14.8g}")
     else:
         report.out(f"{'mode':>4}  {'load factor':>14}  about the state at load factor "
                    f"{summary['prestress']:g}")
