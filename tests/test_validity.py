@@ -525,3 +525,47 @@ def test_a_too_high_assumed_order_exits_3(tmp_path):
     assert summary["status"] == "failed"
     assert "solid_discretisation_error" in summary["message"]
     assert float(summary["checks"][0]["value"]) > 1  # "inf" (JSON) when no bound exists
+
+
+@pytest.mark.parametrize("ratio, p_true, configured_finest", [(1.5, 6.0, False), (2.0, 4.5, True),
+                                                              (1.25, 7.7, False)])
+def test_mesh_check_caps_the_observed_order_at_the_elements(ratio, p_true, configured_finest):
+    """An observed order above the element's (degree + 1 = 3 for P2) must not shrink the
+    bound: q = q* + C h^p exactly with p > 3, the bound is the one of order 3 (closed form
+    below), larger than the true error (conservative). Was: the observed order, a bound
+    R^p_obs - 1 smaller (e.g. 7.7 over 3 at R = 1.25: 3.9x)."""
+    from fe_beam.analyses.validity import mesh_check
+
+    levels, star = power_law_levels(ratio, p_true, scale=0.01**(3 - p_true))  # C h^3 at h
+    reported = {"rotation": 1e-3, "tip": 1e-3, "backbone": 1e-3}
+    check = mesh_check(levels, ratio, 1.0, reported, 1.0, configured_finest,
+                       theoretical_order=3.0)
+    rotation = check["quantities"]["rotation"]
+    assert rotation["observed_order"] == pytest.approx(p_true, rel=1e-9)
+    assert rotation["order_used"] == 3.0
+    n2 = abs(levels[2]["tip"]["theta"] - levels[1]["tip"]["theta"])
+    bound = n2 / (ratio**3 - 1) if configured_finest else n2 * ratio**3 / (ratio**3 - 1)
+    assert rotation["value"] * reported["rotation"] == pytest.approx(bound, rel=1e-9)
+    configured = levels[2] if configured_finest else levels[1]
+    assert bound > abs(configured["tip"]["theta"] - star["theta"])
+    # below the element's order nothing changes: the observed one
+    levels, _ = power_law_levels(ratio, 2.0)
+    assert mesh_check(levels, ratio, 1.0, reported, 1.0, configured_finest,
+                      theoretical_order=3.0)["quantities"]["rotation"]["order_used"] == \
+        pytest.approx(2.0, rel=1e-9)
+
+
+def test_mesh_check_refuses_an_observed_order_below_one_half():
+    """Changes that shrink too slowly (p_obs = 0.3: noise, or no asymptotic range) certify
+    nothing: value inf (was a finite bound from R^0.3 - 1)."""
+    from fe_beam.analyses.validity import mesh_check
+
+    reported = {"rotation": 1.0, "tip": 1.0, "backbone": 1.0}
+    for p_true in (0.3, 0.45):
+        levels, _ = power_law_levels(1.5, p_true)
+        check = mesh_check(levels, 1.5, 1.0, reported, 1.0, False, theoretical_order=3.0)
+        assert check["quantities"]["rotation"]["observed_order"] == pytest.approx(p_true)
+        assert check["quantities"]["rotation"]["value"] == math.inf
+    levels, _ = power_law_levels(1.5, 0.6)
+    assert math.isfinite(mesh_check(levels, 1.5, 1.0, reported, 1.0, False,
+                                    theoretical_order=3.0)["quantities"]["rotation"]["value"])

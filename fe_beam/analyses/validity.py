@@ -148,7 +148,8 @@ def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig,
     configured = {"tip": tip, "backbone": solid["backbone"]}
     levels = ([third, configured, last] if ratio > 1 else [third, last, configured])
     check = mesh_check(levels, max(ratio, 1.0 / ratio), order, estimate, length,
-                       configured_finest=ratio < 1, spatial=point.parsed.spatial)
+                       configured_finest=ratio < 1, spatial=point.parsed.spatial,
+                       theoretical_order=solid_theoretical_order(point.parsed.solid))
     return estimate | {
         "second_mesh_size": parsed.sizes.size,
         "second_dofs": dofs,
@@ -161,12 +162,24 @@ def _discretisation_error(point: GridPoint, solid: dict, config: ValidityConfig,
     }
 
 
+def solid_theoretical_order(solid) -> float:
+    """The highest convergence order a mesh check may use for the 3D solid: degree + 1 (the
+    displacements' L2 order of Lagrange elements of that degree)."""
+    return float(solid.discretization.degree) + 1.0
+
+
 #: changes below this (relative: of L for positions, of 1 rad for angles) are round-off
 MESH_CHECK_NOISE = 1e-10
 
 
+#: an observed order below this certifies nothing (the changes barely shrink: noise, or the
+#: meshes are not in the asymptotic range)
+MIN_OBSERVED_ORDER = 0.5
+
+
 def mesh_check(levels: list[dict], ratio: float, order: float, estimate: dict, length: float,
-               configured_finest: bool, spatial: bool = False) -> dict:
+               configured_finest: bool, spatial: bool = False,
+               theoretical_order: float | None = None) -> dict:
     """Is the reported error (`_discretisation_error`, Richardson with the assumed ``order``)
     an honest bound? ``levels`` are three solid records ({"tip", "backbone"}) on meshes
     h R, h, h / R (coarse to fine, ``ratio`` = R > 1), the configured one the middle level
@@ -178,9 +191,13 @@ def mesh_check(levels: list[dict], ratio: float, order: float, estimate: dict, l
         e_obs = |d2| R^p_obs / (R^p_obs - 1)       (middle level) or |d2| / (R^p_obs - 1)
         value = e_obs / (the reported estimate)     (<= 1: the reported error is a bound)
 
-    A change that does not shrink (p_obs <= 0) or reverses (d1 . d2 < 0) has no error bound:
-    value inf. Changes at round-off (`MESH_CHECK_NOISE`) give 0. Returns {"value" (the
-    largest), "quantities": {name: {"value", "observed_order", "changes"}}}."""
+    The bound uses p = min(p_obs, ``theoretical_order``) (the element's order, degree + 1 for
+    the solid's displacements: an observed 7.7 of a P2 solid is a lucky cancellation of
+    unstructured meshes, and would shrink the bound 10-fold). A change that does not shrink
+    (p_obs <= 0), shrinks too slowly (p_obs < `MIN_OBSERVED_ORDER`) or reverses
+    (d1 . d2 < 0) has no error bound: value inf. Changes at round-off (`MESH_CHECK_NOISE`)
+    give 0. Returns {"value" (the largest), "quantities": {name: {"value", "observed_order",
+    "order_used", "changes"}}}."""
     keys = ("u", "v", "w") if spatial else ("u", "v")
 
     def tip_vector(record):
@@ -201,17 +218,22 @@ def mesh_check(levels: list[dict], ratio: float, order: float, estimate: dict, l
         n1 = float(np.max(np.linalg.norm(np.atleast_2d(d1), axis=-1)))
         n2 = float(np.max(np.linalg.norm(np.atleast_2d(d2), axis=-1)))
         reported = estimate[name]
-        observed = None
+        observed = used = None
         if n2 <= MESH_CHECK_NOISE:
             value = 0.0
         elif n1 <= MESH_CHECK_NOISE or float(np.sum(d1 * d2)) <= 0 or n2 >= n1:
             value = math.inf
         else:
             observed = math.log(n1 / n2) / math.log(ratio)
-            factor = ratio**observed - 1.0
-            bound = n2 / factor if configured_finest else n2 * ratio**observed / factor
-            value = bound / reported if reported > 0 else math.inf
-        quantities[name] = {"value": value, "observed_order": observed, "changes": [n1, n2]}
+            used = observed if theoretical_order is None else min(observed, theoretical_order)
+            if observed < MIN_OBSERVED_ORDER:
+                value = math.inf
+            else:
+                factor = ratio**used - 1.0
+                bound = n2 / factor if configured_finest else n2 * ratio**used / factor
+                value = bound / reported if reported > 0 else math.inf
+        quantities[name] = {"value": value, "observed_order": observed, "order_used": used,
+                            "changes": [n1, n2]}
     return {"value": max(q["value"] for q in quantities.values()), "quantities": quantities,
             "order": order}
 
@@ -549,7 +571,12 @@ def mesh_estimate_check(points: list[dict]) -> dict | None:
                 f"x = {point['x']:g}" + (f", y = {point['y']:g}" if point.get("y") is not None
                                          else "")
                 + (f", observed order {order:.3g}" if order is not None
-                   else ", the change does not shrink")),
+                   else ", the change does not shrink")
+                + (f" (capped at the element's {quantity['order_used']:.3g})"
+                   if order is not None and quantity.get("order_used") is not None
+                   and quantity["order_used"] < order else "")
+                + (f" (below {MIN_OBSERVED_ORDER:g}: no bound)"
+                   if order is not None and order < MIN_OBSERVED_ORDER else "")),
         remedy="set [validity] order to the observed order (or lower), or refine [solid] "
                "mesh_size until the three meshes are in the asymptotic range")
 
