@@ -43,6 +43,8 @@ def test_dead_moment_factors_are_labelled_unconfirmed(tmp_path, capsys, loads):
     assert summary["load_factors_confirmed"] is False
     assert summary["unconfirmed_reason"] == "a dead moment on a spatial rod"
     assert summary["linearised_load_factors"] == summary["load_factors"]
+    assert summary["linearised_reversed_load_factors"] == summary["reversed_load_factors"]
+    assert any("(and reversed_load_factors) are linearised" in n for n in summary["notes"])
     assert summary["load_factors"], summary
     assert "NOT confirmed by the path" in out and "not buckling loads" in out
     assert any("not buckling loads confirmed by the nonlinear path" in n and "fe-beam path" in n
