@@ -363,3 +363,16 @@ def test_spatial_rod_in_parallel_equals_serial():
     for key in ("u", "v", "w"):
         assert together[key] == pytest.approx(alone[key], rel=1e-9, abs=1e-12)
     assert np.array(together["R"]) == pytest.approx(np.array(alone["R"]), abs=1e-10)
+
+
+@pytest.mark.parametrize("b, h", [(0.02, 0.03), (0.05, 0.05), (0.03, 0.012), (0.004, 0.05)])
+def test_torsion_constant_is_the_converged_series(b, h):
+    """Saint-Venant's series of J summed to convergence (issue 28, small items): against the
+    series summed here term by term with its tanh over 100 000 odd n (remainder < 1e-22).
+    Was: 12 terms, J 2.7e-7 (b/h = 2/3), 5.6e-7 (square), 1.3e-7 (0.4) too large."""
+    t, w = min(b, h), max(b, h)
+    series = math.fsum(math.tanh(n * math.pi * w / (2 * t)) / n**5
+                       for n in range(199_999, 0, -2))
+    reference = t**3 * w / 3 * (1 - 192 * t / (math.pi**5 * w) * series)
+    J = Section("rectangle", {"b": b, "h": h}).spatial_properties().J
+    assert J == pytest.approx(reference, rel=2e-15)
