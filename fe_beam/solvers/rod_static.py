@@ -37,11 +37,14 @@ def rod_dof_weights(problem) -> np.ndarray | None:
     """Owned dofs' weights that turn a rod's state into lengths (`SNESSolver`'s
     ``dof_weights``): 1 for the centreline displacements, the rod's length for the rotations,
     1 / (the tangent's scale, `residual_floor`) for the multipliers (forces); None for a
-    problem without named components (a chain). Collective."""
-    if getattr(problem, "structure", None) is not None or not hasattr(problem, "components"):
+    problem without named components or a chain (its joints' unknowns are neither). Dofs of
+    no component keep weight 1. Collective."""
+    if (getattr(problem, "structure", None) is not None
+            or getattr(problem.model, "structure", None) is not None
+            or not hasattr(problem, "components")):
         return None
     owned = problem.space.dofmap.index_map.size_local * problem.space.dofmap.index_map_bs
-    weights = np.zeros(owned)
+    weights = np.ones(owned)
     length = float(problem.model.length)
     for name in problem.components:
         weights[problem.component_dofs(name)] = length if name.startswith("theta") else 1.0
