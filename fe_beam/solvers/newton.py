@@ -257,7 +257,8 @@ class SNESSolver:
         self.problem = problem
         self.state_scale = float(state_scale)
         self.dof_weights = None if dof_weights is None else np.asarray(dof_weights, dtype=float)
-        self._weighted_previous = None
+        self._weight_vectors = None
+        self._solving = False
         self.residual_floor = tuple(float(v) for v in residual_floor)
         self.settings = settings or SolverSettings()
         check_petsc_options(self.settings.petsc_options)  # ConfigError before any solve
@@ -309,7 +310,8 @@ class SNESSolver:
         if not math.isfinite(fnorm):
             return reason.DIVERGED_FNORM_NAN
         previous, self._last_fnorm = getattr(self, "_last_fnorm", fnorm), fnorm
-        if self.dof_weights is not None:
+        if self.dof_weights is not None and self._solving:
+            # (only inside `solve`: a caller running its own Newton loop passes its norms)
             xnorm, step_norm = self._weighted_norms(snes, iteration, xnorm, step_norm)
         if iteration == 0:
             reference = self._reference_fnorm
@@ -344,19 +346,25 @@ class SNESSolver:
         return reason.ITERATING
 
     def _weighted_norms(self, snes, iteration: int, xnorm: float, step_norm: float):
-        """(||w x||, ||w (x - x_previous)||) of the current iterate, w = ``dof_weights``
-        (collective; PETSc's norms when the weights do not fit this rank's dofs)."""
-        x = snes.getSolution().getArray(readonly=True)
-        if x.shape != self.dof_weights.shape:
+        """(||w x||, ||w (x - x_previous)||) of the current iterate, w = ``dof_weights``, in
+        PETSc vectors (collective; PETSc's norms when the weights do not fit this rank's
+        dofs)."""
+        x = snes.getSolution()
+        if x.getLocalSize() != self.dof_weights.shape[0]:
             return xnorm, step_norm
-        weighted = self.dof_weights * x
-        comm = snes.getComm().tompi4py()
-        previous = self._weighted_previous
-        step = (weighted - previous if iteration > 0 and previous is not None
-                and previous.shape == weighted.shape else np.zeros_like(weighted))
-        self._weighted_previous = weighted.copy()
-        sums = comm.allreduce(np.array([float(weighted @ weighted), float(step @ step)]))
-        return math.sqrt(sums[0]), (math.sqrt(sums[1]) if iteration > 0 else step_norm)
+        if getattr(self, "_weight_vectors", None) is None:
+            weights = x.duplicate()
+            weights.setArray(self.dof_weights)
+            self._weight_vectors = (weights, x.duplicate(), x.duplicate())
+        weights, weighted, previous = self._weight_vectors
+        weighted.pointwiseMult(weights, x)
+        norm = weighted.norm()
+        step = step_norm
+        if iteration > 0:
+            previous.axpy(-1.0, weighted)
+            step = previous.norm()
+        weighted.copy(previous)
+        return norm, step
 
     def commit_scale(self) -> None:
         """A converged solve's first residual joins the largest load-step residual seen (the
@@ -385,6 +393,7 @@ class SNESSolver:
         """Solve from the current state of ``w``: Newton iterations, or raises SolveFailed."""
         w_vec = compat.vector_of(self.problem.w)
         w_vec.copy(self._x)
+        self._solving = True
         try:
             self.snes.solve(None, self._x)
         except PETSc.Error as error:  # e.g. a factorisation that breaks down: a failed step
@@ -392,6 +401,7 @@ class SNESSolver:
             raise SolveFailed(f"PETSc error {error.ierr} in the Newton solve") from None
         finally:
             self._reference_fnorm = None
+            self._solving = False
         reason = self.snes.getConvergedReason()
         self.linear_iterations = self.snes.getLinearSolveIterations()
         if reason <= 0:
@@ -407,6 +417,9 @@ class SNESSolver:
         sessions do not run into PETSc's limit on the number of options."""
         self.snes.destroy()
         self._x.destroy()
+        for vector in self._weight_vectors or ():
+            vector.destroy()
+        self._weight_vectors = None
         options = PETSc.Options()
         for key in self._option_keys:
             options.delValue(key)
