@@ -143,10 +143,10 @@ def check_structure_tables(config: dict, command: str) -> None:
             and model.get("law") == "hyperelastic":
         raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
                           "\"spatial\" (use \"nonstandard\" or \"reissner\")")
-    for name in ("tendons", "obstacles"):
+    for name in ("tendons",):
         if config.get(name):
             raise ConfigError(f"[[{name}]] with [[rods]] is not supported yet (a structure "
-                              "without tendons and obstacles, or a single rod with [beam])")
+                              "without tendons, or a single rod with [beam])")
     if command == "dynamic":
         scheme = (config.get("time") or {}).get("scheme", "generalized-alpha") \
             if isinstance(config.get("time"), dict) else "generalized-alpha"

@@ -27,7 +27,7 @@ from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
 from fe_beam.model.spatial import rotation_matrix
 
-__all__ = ["ChainGeometry", "chain_vertices"]
+__all__ = ["ChainGeometry", "chain_centreline", "chain_section_dims", "chain_vertices"]
 
 
 def chain_vertices(structure) -> tuple[np.ndarray, tuple[float, ...]]:
@@ -323,3 +323,21 @@ def _spin(vector) -> np.ndarray:
     K = _skew(vector)
     return np.eye(3) + b * K + c * K @ K
 
+
+
+# --- contact and tendons along a chain (each rod's own frame and section) -----------------------
+def chain_centreline(chain: ChainGeometry, displacement):
+    """The deformed centreline r = X(s) + displacement (UFL, world axes) of a chain of rods:
+    the reference position of the chain's arc length s plus the world displacement (u, v) or
+    (u, v, w)."""
+    return ufl.as_vector([chain.reference[i] + displacement[i]
+                          for i in range(len(displacement))])
+
+
+def chain_section_dims(chain: ChainGeometry) -> dict | None:
+    """{dimension: DG0 field} of the rods' own sections (those the problem's forms use), None
+    when every rod has the top-level [section]."""
+    fields = getattr(chain, "_section_fields", None)
+    if fields is None:
+        fields = chain.section_dims()
+    return fields
