@@ -222,6 +222,8 @@ def run_finger(
                 "anchor": t.anchor,
                 "tension": t.tension,
                 "pull_in": t.pull_in,
+                # a structure of rods: the tendon's rod (paths, entry, anchor: the chain's s)
+                **({"rod": t.rod} if t.rod is not None else {}),
                 # a routed tendon (offset_y/offset_z): its profiles as given (paths: sampled)
                 **({"routing": {"offset_y": _profile_value(t.routing[0]),
                                 "offset_z": _profile_value(t.routing[1])}}
@@ -321,8 +323,9 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         for index, ((_, shape), step) in enumerate(shapes):
             line, = axis.plot(shape["x"] + shape["u"], shape["v"],
                               label=f"tension {step['tensions'][0]:.3g} N")
-            draw_section_faces(axis, shape, config.model.section, config.model.length,
-                               line.get_color(), fill=index == len(shapes) - 1)
+            if getattr(config.model, "structure", None) is None:  # a chain: the axes only
+                draw_section_faces(axis, shape, config.model.section, config.model.length,
+                                   line.get_color(), fill=index == len(shapes) - 1)
         if config.obstacles:
             draw_obstacles(axis, result.obstacles or config.obstacles, [s for s, _ in shapes],
                            config.model.length)
@@ -448,7 +451,9 @@ def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None
     plotter = pyvista.Plotter(off_screen=True, window_size=(900, 600))
     body = pyvista.Spline(backbone, len(x) * 3).tube(radius=float(np.mean(height)) / 2)
     plotter.add_mesh(body, color="lightsteelblue", opacity=0.45)
-    for tendon in config.tendons:
+    # a chain of rods: the tube only (its tendons' offsets turn with each rod's angle)
+    chain = getattr(config.model, "structure", None) is not None
+    for tendon in () if chain else config.tendons:
         for branch in tendon.paths:
             xs, ds = np.array([p[0] for p in branch]), np.array([p[1] for p in branch])
             delta = np.interp(shape["x"], xs, ds)

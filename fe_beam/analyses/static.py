@@ -542,7 +542,8 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
         undeformed = [structure.reference_point(s, structure.segment_at(min(s, m.length)))
                       for s in corners]
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                             undeformed=undeformed)
+                             undeformed=undeformed,
+                             obstacles=result.obstacles or config.obstacles)
     else:
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                              obstacles=result.obstacles or config.obstacles, section=m.section)

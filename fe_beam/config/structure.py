@@ -20,7 +20,10 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
-STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
+STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design",
+                      "finger")
+#: the commands that run the tendons of a structure ([[tendons]] with rod = "NAME")
+TENDON_COMMANDS = ("finger", "path")
 #: the commands that run a spatial structure in this version
 SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
@@ -143,10 +146,10 @@ def check_structure_tables(config: dict, command: str) -> None:
             and model.get("law") == "hyperelastic":
         raise ConfigError("[model] law = \"hyperelastic\" is not available for kinematics = "
                           "\"spatial\" (use \"nonstandard\" or \"reissner\")")
-    for name in ("tendons",):
-        if config.get(name):
-            raise ConfigError(f"[[{name}]] with [[rods]] is not supported yet (a structure "
-                              "without tendons, or a single rod with [beam])")
+    if config.get("tendons") and command not in TENDON_COMMANDS:
+        raise ConfigError(f"[[tendons]] with [[rods]] in fe-beam {command} is not supported "
+                          f"yet; the commands that run a structure's tendons: "
+                          f"{', '.join(TENDON_COMMANDS)}")
     if command == "dynamic":
         scheme = (config.get("time") or {}).get("scheme", "generalized-alpha") \
             if isinstance(config.get("time"), dict) else "generalized-alpha"

@@ -18,7 +18,7 @@ import numpy as np
 from fe_beam.errors import ConfigError
 
 __all__ = ["ROUTING_SAMPLES", "Path", "Tendon", "check_tendon_inside", "looped_tendon",
-           "section_margin"]
+           "on_chain", "section_margin"]
 
 Path = tuple[tuple[float, float], ...]
 #: intervals between entry and anchor on which a routing is sampled: for its checks (finite,
@@ -74,6 +74,9 @@ class Tendon:
     pull_in: float | None = None
     name: str = "tendon"
     routing: tuple | None = None
+    #: a structure of rods: the name of the rod the tendon runs along (its paths, entry and
+    #: anchor then in the chain's arc length s: `on_chain`); None: the single rod
+    rod: str | None = None
 
     def __post_init__(self):
         if self.routing is not None:
@@ -171,6 +174,20 @@ class Tendon:
                 f"tendon {self.name!r}: anchor {self.anchor:g} lies beyond the beam "
                 f"(L = {length:g})"
             )
+
+
+def on_chain(tendon: Tendon, segment, rod: str) -> Tendon:
+    """The tendon of one rod of a chain (`fe_beam.model.structure.ChainSegment` ``segment``),
+    its paths, entry and anchor given in the rod's own arc length x and its offsets in the
+    rod's own section frame, as a tendon of the chain: x -> s = `ChainSegment.s_of` (x), and
+    on a rod traversed from its end the offsets turned with the chain's director (which is the
+    rod's turned by pi: -delta). A planar routing is read through its sampled paths."""
+    sign = -1.0 if segment.reversed else 1.0
+    paths = tuple(tuple(sorted((segment.s_of(x), sign * delta) for x, delta in path))
+                  for path in tendon.paths)
+    ends = sorted((segment.s_of(tendon.entry), segment.s_of(tendon.anchor)))
+    return Tendon(paths=paths, entry=ends[0], anchor=ends[1], tension=tendon.tension,
+                  pull_in=tendon.pull_in, name=tendon.name, rod=rod)
 
 
 def looped_tendon(
