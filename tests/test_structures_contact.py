@@ -212,3 +212,29 @@ def test_path_follows_the_l_frame_onto_the_block():
         assert point["contact"][0]["active"] == [[a + b, a + b]]
         reaction = (q * b**4 / 8 + q * a * b**3 / 2 - EI * GAP) / (b**3 / 3 + a * b**2)
         assert point["contact"][0]["force"][1] == pytest.approx(reaction, rel=1e-4)
+
+
+def test_l_frame_with_rods_own_sections_on_a_block():
+    """The L-frame with a stiffer column (its own d) and a thinner beam (its own d): the gap
+    is measured from the beam's own surface (its d / 2 below the axis: the top-level d would
+    leave it 2.5 mm clear of the block) and the closed form takes each member's EI:
+    R = (q b^4 / (8 EI_b) + q a b^3 / (2 EI_c) - g) / (b^3 / (3 EI_b) + a b^2 / EI_c)."""
+    a, b, q = 0.4, 1.0, 4 * Q1
+    d_column, d_beam = 1.5 * D, 0.5 * D
+    inertia = lambda d: math.pi * d**4 / 64  # noqa: E731
+    EI_c, EI_b = E * inertia(d_column), E * inertia(d_beam)
+    config = _l_frame(q, a, b)
+    config["rods"][0]["section"] = {"d": d_column}
+    config["rods"][1]["section"] = {"d": d_beam}
+    top = a - d_beam / 2 - GAP
+    config["obstacles"][0]["min"][1], config["obstacles"][0]["max"][1] = top - 0.1, top
+    # the load of the beam's first touch is EI_b g / (b^4 / 8 + a b^3 EI_b / (2 EI_c)): 16 q1
+    q = 3 * EI_b * GAP / (b**4 / 8 + a * b**3 * EI_b / (2 * EI_c))
+    config["loads"]["distributed"] = [0.0, -q]
+    entry = _contact(fe_beam.run("static", config))
+    reaction = (q * b**4 / (8 * EI_b) + q * a * b**3 / (2 * EI_c) - GAP) \
+        / (b**3 / (3 * EI_b) + a * b**2 / EI_c)
+    print(f"own sections: reaction {entry['force'][1]:.10g} vs {reaction:.10g} "
+          f"({entry['force'][1] / reaction - 1:.2e})")
+    assert entry["force"][1] == pytest.approx(reaction, rel=1e-4)
+    assert entry["active"] == [[a + b, a + b]]
