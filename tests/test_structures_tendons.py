@@ -35,8 +35,9 @@ def _base(elements: int = 10, constraint: str = "inextensible-unshearable") -> d
             "output": {"xdmf": False, "plots": False}}
 
 
-@pytest.mark.parametrize("constraint", ["inextensible-unshearable", "none"])
-def test_split_rod_with_a_tendon_on_its_second_rod_is_the_rod(constraint):
+@pytest.mark.parametrize("constraint, control", [("inextensible-unshearable", "tension"),
+                                                 ("none", "tension"), ("none", "pull_in")])
+def test_split_rod_with_a_tendon_on_its_second_rod_is_the_rod(constraint, control):
     """A tapered tendon path from x = 0.04 to the tip of a 0.1 m cantilever: the single rod,
     and the rod split at x = 0.04 with the tendon on the second rod (its x from that rod's
     start), give the same tip to round-off (the same mesh: 8 + 12 elements)."""
@@ -55,6 +56,10 @@ def test_split_rod_with_a_tendon_on_its_second_rod_is_the_rod(constraint):
     split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
     split["tendons"] = [{"name": "t", "rod": "b", "path": [[0.0, 0.003], [LB, -0.001]],
                          "tension": tau}]
+    if control == "pull_in":  # the pull-in of the tendon (its tension the multiplier)
+        for config in (single, split):
+            config["tendons"][0].pop("tension")
+            config["tendons"][0]["pull_in"] = 2e-4
     one, two = fe_beam.run("finger", single), fe_beam.run("finger", split)
     assert one["status"] == two["status"] == "converged", two.get("message")
     tip1, tip2 = one["steps"][-1]["tip"], two["steps"][-1]["tip"]
@@ -62,7 +67,10 @@ def test_split_rod_with_a_tendon_on_its_second_rod_is_the_rod(constraint):
     assert abs(tip1["theta"]) > 1e-2
     for key in ("u", "v", "theta"):
         assert abs(tip1[key] - tip2[key]) <= 1e-12 * scale, (key, tip1[key], tip2[key])
-    assert two["steps"][-1]["tensions"] == pytest.approx([tau], rel=1e-15)
+    assert two["steps"][-1]["tensions"] == pytest.approx(one["steps"][-1]["tensions"],
+                                                         rel=1e-12)
+    assert two["steps"][-1]["pull_ins"] == pytest.approx(one["steps"][-1]["pull_ins"],
+                                                         rel=1e-12)
     assert all(c["passed"] for c in two["checks"]), two["checks"]
 
 
@@ -192,3 +200,98 @@ def test_every_rods_tendons_are_swept():
                           math.cos(ANGLE) - math.cos(ANGLE + kappa_a * LA)]) / kappa_a
         assert step["rods"]["a"]["tip"] == pytest.approx(joint, abs=1e-12)
     assert result["steps"][-1]["tensions"] == pytest.approx([0.5, 0.3], rel=1e-15)
+
+
+# --- spatial chains ---------------------------------------------------------------------------
+def _rotation(vector) -> np.ndarray:
+    vector = np.asarray(vector, dtype=float)
+    angle = float(np.linalg.norm(vector))
+    k = vector / angle
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+@pytest.mark.parametrize("axis, reversed_rod", [("z", False), ("z", True), ("y", True)])
+def test_spatial_chain_tendon_bends_its_rod_into_a_circle(axis, reversed_rod):
+    """A spatial chain: rod a clamped with a skew frame, rod b joined rigidly with another
+    (``reversed_rod``: b given from its far end, its direction and normal turned, the offset
+    y then of the other sign); a tendon at constant offset along b's d3 (offset_z) or d2
+    (offset_y) bends b into the circle of curvature tau |offset| / EI about its d2 or d3, in
+    the plane of the offset: the chain's end on that circle, its rotation kappa LB; rod a
+    unloaded."""
+    tau, offset = 0.5, 0.004 if axis == "z" else 0.003
+    frame_a = _rotation([0.2, -0.4, 0.6])
+    frame_b = _rotation([0.5, 0.3, -0.2]) @ frame_a
+    config = _base()
+    config["model"]["kinematics"] = "spatial"
+    joint = frame_a[:, 0] * LA
+    rod_b = ({"name": "b", "start": list(joint + LB * frame_b[:, 0]),
+              "direction": list(-frame_b[:, 0]), "normal": list(-frame_b[:, 1]), "length": LB}
+             if reversed_rod else
+             {"name": "b", "start": list(joint), "direction": list(frame_b[:, 0]),
+              "normal": list(frame_b[:, 1]), "length": LB})
+    config["rods"] = [{"name": "a", "start": [0.0, 0.0, 0.0], "direction": list(frame_a[:, 0]),
+                       "normal": list(frame_a[:, 1]), "length": LA,
+                       "supports": {"x0": "clamped"}}, rod_b]
+    config["joints"] = [{"name": "j", "at": ["a:end", "b:end" if reversed_rod else "b:start"]}]
+    y = (-offset if reversed_rod else offset) if axis == "y" else 0.0
+    z = offset if axis == "z" else 0.0
+    config["tendons"] = [{"name": "t", "rod": "b", "offset_y": y, "offset_z": z,
+                          "tension": tau}]
+    result = fe_beam.run("finger", config)
+    assert result["status"] == "converged", result.get("message")
+    step = result["steps"][-1]
+    stiffness = E * (H * B**3 if axis == "z" else B * H**3) / 12
+    kappa = tau * offset / stiffness
+    toward = frame_b[:, 2] if axis == "z" else frame_b[:, 1]
+    end = (joint + math.sin(kappa * LB) / kappa * frame_b[:, 0]
+           + (1 - math.cos(kappa * LB)) / kappa * toward)
+    tip = step["tip"]
+    error = np.abs(np.array(tip["position"]) - end).max() / LB
+    print(f"spatial {axis}, reversed {reversed_rod}: end {error:.2e} of LB, rotation "
+          f"{np.linalg.norm(tip['rotation_vector']) / (kappa * LB) - 1:.2e}")
+    assert error <= 1e-8
+    assert np.linalg.norm(tip["rotation_vector"]) == pytest.approx(kappa * LB, rel=1e-8)
+    assert step["rods"]["a"]["tip"] == pytest.approx(joint, abs=1e-12)
+
+
+def test_spatial_chain_tendon_formulas_are_refused():
+    config = _base()
+    config["model"]["kinematics"] = "spatial"
+    config["rods"] = [{"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0],
+                       "length": LA, "supports": {"x0": "clamped"}},
+                      {"name": "b", "start": [LA, 0.0, 0.0], "direction": [0.0, 1.0, 0.0],
+                       "length": LB}]
+    config["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    config["tendons"] = [{"name": "t", "rod": "b", "offset_y": "0.003*s/L", "tension": 0.1}]
+    with pytest.raises(ConfigError, match="'t' \\(on rod 'b'\\): tendon 't': offset_y / "
+                                          "offset_z formulas of s on a spatial chain"):
+        validate("finger", config)
+
+
+def test_spatial_split_rod_with_a_tendon_on_its_second_rod_is_the_rod():
+    """The spatial rod (Reissner law, extensible and shearable) with a tendon at a constant
+    offset (y, z) from x = LA to the tip, and the rod split at LA with the tendon on the
+    second rod: the same tip position and rotation to round-off."""
+    single = _base(20, "none")
+    single["model"]["kinematics"] = "spatial"
+    single["beam"] = {"length": LA + LB}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    tendon = {"name": "t", "offset_y": 0.002, "offset_z": -0.003, "tension": 0.4}
+    single["tendons"] = [tendon | {"entry": LA}]
+    split = _base(10, "none")
+    split["model"]["kinematics"] = "spatial"
+    split["rods"] = [
+        {"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0], "length": LA,
+         "supports": {"x0": "clamped"}, "mesh": {"elements": 8}},
+        {"name": "b", "start": [LA, 0.0, 0.0], "direction": [1.0, 0.0, 0.0], "length": LB,
+         "mesh": {"elements": 12}}]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    split["tendons"] = [tendon | {"rod": "b"}]
+    one, two = fe_beam.run("finger", single), fe_beam.run("finger", split)
+    assert one["status"] == two["status"] == "converged", two.get("message")
+    tip1, tip2 = one["steps"][-1]["tip"], two["steps"][-1]["tip"]
+    scale = float(np.linalg.norm(tip1["rotation_vector"]))
+    assert scale > 1e-2
+    assert tip2["position"] == pytest.approx(tip1["position"], abs=1e-12 * (LA + LB))
+    assert tip2["rotation_vector"] == pytest.approx(tip1["rotation_vector"], abs=1e-12 * scale)

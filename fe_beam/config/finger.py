@@ -183,8 +183,8 @@ def _rod_tendon(index: int, given, static: StaticConfig) -> tuple[Tendon, int | 
     structure = static.model.structure
     names = [rod.name for rod in structure.rods]
     rod_name = given.get("rod") if isinstance(given, dict) else None
-    label = given.get("name") if isinstance(given, dict) and isinstance(given.get("name"), str) \
-        else f"#{index + 1}"
+    label = repr(given["name"]) if isinstance(given, dict) \
+        and isinstance(given.get("name"), str) else f"#{index + 1}"
     if rod_name is None:
         raise ConfigError(f"[[tendons]] {label} needs rod = \"NAME\" with [[rods]] (the rod it "
                           f"runs along: {', '.join(names)})")
@@ -203,13 +203,14 @@ def _rod_tendon(index: int, given, static: StaticConfig) -> tuple[Tendon, int | 
     if rod.section:
         section = replace(section, dims=dict(rod.section))
     check_tendon_inside(tendon, section, rod.length, index)
-    if tendon.out_of_plane and getattr(static.model, "kinematics", "planar") != "spatial":
+    spatial = getattr(static.model, "kinematics", "planar") == "spatial"
+    if tendon.out_of_plane and not spatial:
         check_tendons_planar({"model": {}}, [tendon], index)
-    if getattr(static.model, "kinematics", "planar") == "spatial":
-        raise ConfigError(f"[[tendons]] {label} with a spatial structure of [[rods]] is not "
-                          "supported yet (planar chains take tendons)")
     segment = next(seg for seg in structure.chain if seg.rod == rod_index)
-    return on_chain(tendon, segment, rod_name), steps
+    try:
+        return on_chain(tendon, segment, rod_name, spatial), steps
+    except ValueError as error:
+        raise ConfigError(f"[[tendons]] {label} (on rod '{rod_name}'): {error}") from None
 
 
 def check_tendons_planar(config: dict, tendons, start: int = 0) -> None:

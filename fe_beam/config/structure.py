@@ -25,7 +25,7 @@ STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine"
 #: the commands that run the tendons of a structure ([[tendons]] with rod = "NAME")
 TENDON_COMMANDS = ("finger", "path")
 #: the commands that run a spatial structure in this version
-SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "finger")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {

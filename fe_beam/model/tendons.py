@@ -176,18 +176,30 @@ class Tendon:
             )
 
 
-def on_chain(tendon: Tendon, segment, rod: str) -> Tendon:
+def on_chain(tendon: Tendon, segment, rod: str, spatial: bool = False) -> Tendon:
     """The tendon of one rod of a chain (`fe_beam.model.structure.ChainSegment` ``segment``),
     its paths, entry and anchor given in the rod's own arc length x and its offsets in the
     rod's own section frame, as a tendon of the chain: x -> s = `ChainSegment.s_of` (x), and
-    on a rod traversed from its end the offsets turned with the chain's director (which is the
-    rod's turned by pi: -delta). A planar routing is read through its sampled paths."""
+    on a rod traversed from its end the offsets turned with the chain's frame (the rod's
+    turned by pi about its d3: y -> -y, z unchanged). A planar routing is read through its
+    sampled paths; ``spatial``: a routing of constant offsets (y, z) stays a routing (other
+    formulas of s: ValueError)."""
     sign = -1.0 if segment.reversed else 1.0
+    ends = sorted((segment.s_of(tendon.entry), segment.s_of(tendon.anchor)))
+    common = dict(entry=ends[0], anchor=ends[1], tension=tendon.tension,
+                  pull_in=tendon.pull_in, name=tendon.name, rod=rod)
+    if spatial and tendon.routing is not None:
+        if not all(getattr(p, "is_constant", False) for p in tendon.routing):
+            raise ValueError(f"tendon {tendon.name!r}: offset_y / offset_z formulas of s on a "
+                             "spatial chain of rods are not supported yet (give numbers, or "
+                             "a path in y)")
+        y, z = tendon.routing
+        routing = (type(y)(sign * y.constant, {"L": segment.length}),
+                   type(z)(z.constant, {"L": segment.length}))
+        return Tendon(routing=routing, **common)
     paths = tuple(tuple(sorted((segment.s_of(x), sign * delta) for x, delta in path))
                   for path in tendon.paths)
-    ends = sorted((segment.s_of(tendon.entry), segment.s_of(tendon.anchor)))
-    return Tendon(paths=paths, entry=ends[0], anchor=ends[1], tension=tendon.tension,
-                  pull_in=tendon.pull_in, name=tendon.name, rod=rod)
+    return Tendon(paths=paths, **common)
 
 
 def looped_tendon(
