@@ -123,6 +123,16 @@ def test_constant_offset_tendon_on_a_turned_rod_bends_it_into_a_circle(delta, re
     assert step["joints"]["j"]["moment"] == pytest.approx(0.0, abs=1e-12 * tau * abs(delta))
 
 
+def test_tendon_on_a_rod_with_its_own_section_bends_it_with_its_own_stiffness():
+    config, _, _ = _turned_chain(0.002, 0.5, False)
+    config["rods"][1]["section"] = {"h": 0.006}
+    result = fe_beam.run("finger", config)
+    assert result["status"] == "converged", result.get("message")
+    stiffness = E * B * 0.006**3 / 12
+    assert result["steps"][-1]["tip"]["theta"] == pytest.approx(0.5 * 0.002 / stiffness * LB,
+                                                                rel=1e-10)
+
+
 def test_path_sweeps_a_chain_tendon_along_the_circle():
     """`fe-beam path` (parameter = "tension") on the turned chain: every point is the circle
     of its tension (theta at the chain's end = tau delta LB / EI)."""
@@ -151,7 +161,11 @@ MISTAKES = [
                 c["tendons"][0].update(path=[[0.0, 0.002], [0.08, 0.002]])),
      "(on rod 'b', length 0.06 m): tendon 'flexor': anchor 0.08 lies beyond the beam"),
     (lambda c: c["tendons"][0].update(offset_base=0.006),
-     "outside the section"),
+     "outside the section (y from -0.005 to 0.005 m about its centroid) (on rod 'b'"),
+    # the rod's own section
+    (lambda c: c["rods"][1].update(section={"h": 0.005}),
+     "offset 0.003 m at x = 0 m lies outside the section (y from -0.0025 to 0.0025 m about "
+     "its centroid) (on rod 'b', x from its start)"),
 ]
 
 
@@ -295,3 +309,38 @@ def test_spatial_split_rod_with_a_tendon_on_its_second_rod_is_the_rod():
     assert scale > 1e-2
     assert tip2["position"] == pytest.approx(tip1["position"], abs=1e-12 * (LA + LB))
     assert tip2["rotation_vector"] == pytest.approx(tip1["rotation_vector"], abs=1e-12 * scale)
+
+
+def test_split_finger_pressing_a_disc_is_the_rod():
+    """A tendon and an obstacle together (a finger closing on a disc): the rod split at LA
+    with the tendon on its second rod presses the disc with the single rod's force, to
+    round-off; the tendon's forces are internal and the contact force in the equilibrium
+    certificate."""
+    tendon = {"name": "t", "offset_base": 0.003, "offset_tip": 0.003, "tension": 3.0}
+    disc = [{"shape": "cylinder", "name": "disc", "point": [0.07, 0.026], "radius": 0.02}]
+    contact = {"penetration_tolerance": 1e-7}
+    single = _base(20, "none")
+    single["beam"] = {"length": LA + LB}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    single["tendons"] = [{"name": "t", "path": [[LA, 0.003], [LA + LB, 0.003]], "entry": LA,
+                          "tension": 3.0}]
+    split = _base(10, "none")
+    split["rods"] = [
+        {"name": "a", "start": [0.0, 0.0], "direction": [1.0, 0.0], "length": LA,
+         "supports": {"x0": "clamped"}, "mesh": {"elements": 8}},
+        {"name": "b", "start": [LA, 0.0], "direction": [1.0, 0.0], "length": LB,
+         "mesh": {"elements": 12}}]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    split["tendons"] = [tendon | {"rod": "b"}]
+    for config in (single, split):
+        config["obstacles"], config["contact"] = disc, contact
+    one, two = fe_beam.run("finger", single), fe_beam.run("finger", split)
+    assert one["status"] == two["status"] == "converged", two.get("message")
+    assert all(c["passed"] for c in two["checks"]), two["checks"]
+    force1 = np.array(one["steps"][-1]["contact"][0]["force"])
+    force2 = np.array(two["steps"][-1]["contact"][0]["force"])
+    assert np.linalg.norm(force1) > 1e-2  # pressed
+    assert force2 == pytest.approx(force1, abs=1e-10 * np.linalg.norm(force1))
+    tip1, tip2 = one["steps"][-1]["tip"], two["steps"][-1]["tip"]
+    for key in ("u", "v", "theta"):
+        assert tip2[key] == pytest.approx(tip1[key], abs=1e-10 * abs(tip1["theta"]))

@@ -385,9 +385,13 @@ def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -
     every = max(1, len(result.shapes) // 8)
     shapes = [(f"tension {step['tensions'][0]:.3g} N", shape) for (_, shape), step in list(
         zip(result.shapes, result.steps, strict=True))[every - 1:: every]]
+    structure = getattr(config.model, "structure", None)
+    undeformed = None if structure is None else [  # a chain: its reference polyline
+        structure.reference_point(s, structure.segment_at(min(s, config.model.length)))
+        for s in (0.0, *structure.boundaries(), config.model.length)]
     plot_spatial_shapes(shapes, out / "fig3_9_backbone.png",
                         "Backbone (cf. chapter Fig. 3.9)", config.model.length,
-                        obstacles=result.obstacles or config.obstacles)
+                        obstacles=result.obstacles or config.obstacles, undeformed=undeformed)
     tensions = [s["tensions"][0] for s in result.steps]
     tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w", "rotation_vector")}
     plot_spatial_load_displacement(tensions, tips, out / "tension_tip.png",

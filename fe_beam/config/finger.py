@@ -202,7 +202,10 @@ def _rod_tendon(index: int, given, static: StaticConfig) -> tuple[Tendon, int | 
     section = static.model.section
     if rod.section:
         section = replace(section, dims=dict(rod.section))
-    check_tendon_inside(tendon, section, rod.length, index)
+    try:
+        check_tendon_inside(tendon, section, rod.length, index)
+    except ConfigError as error:
+        raise ConfigError(f"{error} (on rod '{rod_name}', x from its start)") from None
     spatial = getattr(static.model, "kinematics", "planar") == "spatial"
     if tendon.out_of_plane and not spatial:
         check_tendons_planar({"model": {}}, [tendon], index)
