@@ -16,6 +16,8 @@ import math
 
 import numpy as np
 import pytest
+from mpi4py import MPI
+from mpilaunch import mpirun_command
 
 import fe_beam
 from fe_beam.config import validate
@@ -289,3 +291,40 @@ def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle):
         tip = frame.T @ np.array([b["tip"]["u"], b["tip"]["v"]])
         assert tip == pytest.approx([a["tip"]["u"], a["tip"]["v"]],
                                     abs=(1e-8 if angle == 0 else 1e-6) * tip_scale)
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+                    reason="needs mpirun (and a serial pytest)")
+def test_two_ranks_give_the_serial_contact_and_tendon(tmp_path):
+    """``mpirun -n 2``: the L-frame on the block (fe-beam static) and a chain finger with a
+    tendon on its second rod (fe-beam finger) give one rank's contact force and tip."""
+    import json
+
+    from test_mpi_errors import fe_beam as fe_beam_job
+
+    config = _l_frame(4 * Q1, 0.4, 1.0)
+    alone = fe_beam.run("static", config)["steps"][-1]
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"))
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "two" / "summary.json").read_text())["steps"][-1]
+    assert together["contact"][0]["force"] == pytest.approx(alone["contact"][0]["force"],
+                                                            rel=1e-8)
+    assert together["contact"][0]["active"] == alone["contact"][0]["active"]
+    for key in ("u", "v", "theta"):
+        assert together["tip"][key] == pytest.approx(alone["tip"][key],
+                                                     abs=1e-9 * abs(alone["tip"]["v"]))
+    finger = _l_frame(0.0, 0.4, 1.0)
+    finger.pop("obstacles"), finger.pop("contact")
+    finger["loads"] = {"steps": 2}
+    finger["tendons"] = [{"name": "t", "rod": "beam", "offset_base": 0.002,
+                          "offset_tip": 0.002, "tension": 5.0}]
+    alone = fe_beam.run("finger", finger)["steps"][-1]
+    process, _ = fe_beam_job(tmp_path, finger, "--out", str(tmp_path / "finger"),
+                             command="finger")
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "finger" / "summary.json").read_text())["steps"][-1]
+    assert abs(alone["tip"]["theta"]) > 1e-3
+    for key in ("u", "v", "theta"):
+        assert together["tip"][key] == pytest.approx(alone["tip"][key],
+                                                     abs=1e-10 * abs(alone["tip"]["theta"]))
