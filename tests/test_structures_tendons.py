@@ -269,18 +269,45 @@ def test_spatial_chain_tendon_bends_its_rod_into_a_circle(axis, reversed_rod):
     assert step["rods"]["a"]["tip"] == pytest.approx(joint, abs=1e-12)
 
 
-def test_spatial_chain_tendon_formulas_are_refused():
-    config = _base()
-    config["model"]["kinematics"] = "spatial"
-    config["rods"] = [{"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0],
-                       "length": LA, "supports": {"x0": "clamped"}},
-                      {"name": "b", "start": [LA, 0.0, 0.0], "direction": [0.0, 1.0, 0.0],
-                       "length": LB}]
-    config["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
-    config["tendons"] = [{"name": "t", "rod": "b", "offset_y": "0.003*s/L", "tension": 0.1}]
-    with pytest.raises(ConfigError, match="'t' \\(on rod 'b'\\): tendon 't': offset_y / "
-                                          "offset_z formulas of s on a spatial chain"):
-        validate("finger", config)
+@pytest.mark.parametrize("reversed_rod", [False, True])
+def test_spatial_chain_tendon_routed_by_formulas_is_the_rod(reversed_rod):
+    """A tendon routed by formulas of the rod's own s (offset_y, offset_z) on the second rod
+    of a spatial rod split in two (forward, or given from its far end with the formulas of
+    its own s and y of the other sign) equals the single rod with the formulas shifted to
+    its s: the same tip to round-off; the summary keeps the rod's own formulas."""
+    y = "0.002*cos(pi*s/(2*L))"
+    z = "-0.003 + 0.002*s/L"
+    single = _base(20, "none")
+    single["model"]["kinematics"] = "spatial"
+    single["beam"] = {"length": LA + LB}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    shifted = {"offset_y": f"0.002*cos(pi*(s - {LA})/(2*{LB}))",
+               "offset_z": f"-0.003 + 0.002*(s - {LA})/{LB}"}
+    single["tendons"] = [{"name": "t", "entry": LA, "anchor": LA + LB, "tension": 0.4}
+                         | shifted]
+    split = _base(10, "none")
+    split["model"]["kinematics"] = "spatial"
+    rod_b = ({"name": "b", "start": [LA + LB, 0.0, 0.0], "direction": [-1.0, 0.0, 0.0],
+              "normal": [0.0, -1.0, 0.0], "length": LB, "mesh": {"elements": 12}}
+             if reversed_rod else
+             {"name": "b", "start": [LA, 0.0, 0.0], "direction": [1.0, 0.0, 0.0],
+              "length": LB, "mesh": {"elements": 12}})
+    split["rods"] = [
+        {"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0], "length": LA,
+         "supports": {"x0": "clamped"}, "mesh": {"elements": 8}}, rod_b]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:end" if reversed_rod else "b:start"]}]
+    own = ({"offset_y": "-0.002*cos(pi*(L - s)/(2*L))", "offset_z": "-0.003 + 0.002*(L - s)/L"}
+           if reversed_rod else {"offset_y": y, "offset_z": z})
+    split["tendons"] = [{"name": "t", "rod": "b", "tension": 0.4} | own]
+    one, two = fe_beam.run("finger", single), fe_beam.run("finger", split)
+    assert one["status"] == two["status"] == "converged", two.get("message")
+    tip1, tip2 = one["steps"][-1]["tip"], two["steps"][-1]["tip"]
+    scale = float(np.linalg.norm(tip1["rotation_vector"]))
+    assert scale > 1e-2
+    assert tip2["position"] == pytest.approx(tip1["position"], abs=1e-11 * (LA + LB))
+    assert tip2["rotation_vector"] == pytest.approx(tip1["rotation_vector"], abs=1e-11 * scale)
+    assert two["tendons"][0]["routing"] == own
+    assert two["tendons"][0]["rod"] == "b"
 
 
 def test_spatial_split_rod_with_a_tendon_on_its_second_rod_is_the_rod():

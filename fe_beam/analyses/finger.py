@@ -50,7 +50,9 @@ __all__ = ["DEFAULT_FINGER", "InverseUnreachable", "parse_finger", "run", "run_f
 
 
 def _profile_value(profile):
-    """A routing profile as the configuration gave it: the number, or the formula's text."""
+    """A routing profile as the configuration gave it: the number, or the formula's text (a
+    chain's tendon: its rod's own, `fe_beam.model.tendons.RodProfile`)."""
+    profile = getattr(profile, "profile", profile)
     return profile.constant if profile.is_constant else profile.text
 
 class InverseUnreachable(ConfigError):
