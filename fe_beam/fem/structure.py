@@ -324,7 +324,6 @@ def _spin(vector) -> np.ndarray:
     return np.eye(3) + b * K + c * K @ K
 
 
-
 # --- contact and tendons along a chain (each rod's own frame and section) -----------------------
 def chain_centreline(chain: ChainGeometry, displacement):
     """The deformed centreline r = X(s) + displacement (UFL, world axes) of a chain of rods:
