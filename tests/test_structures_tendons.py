@@ -371,3 +371,14 @@ def test_split_finger_pressing_a_disc_is_the_rod():
     tip1, tip2 = one["steps"][-1]["tip"], two["steps"][-1]["tip"]
     for key in ("u", "v", "theta"):
         assert tip2[key] == pytest.approx(tip1[key], abs=1e-10 * abs(tip1["theta"]))
+
+
+def test_inverse_tip_angle_of_a_chain_finger_is_the_circles_tension():
+    """`[inverse] tip_angle` on the turned chain: the tension that turns the chain's end by
+    the target is EI theta / (delta LB) (the circle), to the inverse solve's tolerance."""
+    delta, target = 0.003, 0.05
+    config, _, _ = _turned_chain(delta, 0.5, False)
+    config["inverse"] = {"tip_angle": target}
+    result = fe_beam.run("finger", config)
+    assert result["status"] == "converged", result.get("message")
+    assert result["inverse"]["tension"] == pytest.approx(EI * target / (delta * LB), rel=1e-9)
