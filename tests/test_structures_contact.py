@@ -353,3 +353,45 @@ def test_split_rod_slipping_on_a_rough_plane_is_the_rod(angle):
     assert frame.T @ np.array(two["force"]) == pytest.approx(one["force"], abs=tolerance)
     assert frame.T @ np.array(two["friction_force"]) == pytest.approx(one["friction_force"],
                                                                      abs=tolerance)
+
+
+@pytest.mark.parametrize("spatial", [False, True])
+def test_reversed_rod_with_a_t_section_touches_with_its_own_side(spatial):
+    """A t-section (its flange on the rod's own +d2 side) is asymmetric, and a rod the chain
+    traverses from its end keeps its own sides. Spatial: the cantilever split in two rods,
+    the second given from its far end (direction -x) with normal +y (the flange up, as the
+    single rod's), pressed on the plane below with the web's foot: the single rod's force.
+    Planar: a rod's director is its direction turned by +90 degrees, so a rod given from its
+    far end (direction -x, clamped at its end: the chain traverses it reversed) has its
+    flange down: the mirror image about the axis of the single rod (flange up) pushed up
+    against a ceiling. Reissner law (no I3 term)."""
+    section = {"shape": "t-section", "b": 0.02, "h": 0.02, "tf": 0.004, "tw": 0.004}
+    # the centroid's height above the web's foot, and below the flange's top
+    foot = (0.004 * 0.016 * 0.008 + 0.02 * 0.004 * 0.018) / (0.004 * 0.016 + 0.02 * 0.004)
+    top = 0.02 - foot
+    q = 4 * Q1
+    single = _single(q, spatial)
+    split = _split(q, np.eye(3 if spatial else 2))
+    if spatial:
+        split["rods"][1] = {"name": "b", "start": [L, 0.0, 0.0], "direction": [-1.0, 0.0, 0.0],
+                            "length": L / 2, "normal": [0.0, 1.0, 0.0]}
+        split["joints"] = [{"name": "j", "at": ["a:end", "b:end"]}]
+        single["obstacles"][0]["point"][1] = split["obstacles"][0]["point"][1] = -GAP - foot
+    else:
+        split["rods"] = [{"name": "b", "start": [L, 0.0], "direction": [-1.0, 0.0],
+                          "length": L, "supports": {"xL": "clamped"}, "mesh": {"elements": 20}}]
+        split.pop("joints")
+        split["obstacles"][0]["point"][1] = -GAP - top  # the flange's top on the floor
+        single["loads"]["distributed"] = [0.0, q]
+        single["obstacles"][0] |= {"point": [0.0, GAP + top], "normal": [0.0, -1.0]}
+    for config in (single, split):
+        config["section"] = section
+        config["material"]["E"] = 1e8
+    one = _contact(fe_beam.run("static", single))
+    two = _contact(fe_beam.run("static", split))
+    mirror = np.array([1.0, 1.0, 1.0] if spatial else [1.0, -1.0])
+    scale = abs(one["force"][1])
+    print(f"spatial {spatial}: {one['active']} {two['active']}, forces {one['force']} "
+          f"{two['force']}")
+    assert scale > 0 and one["active"] == two["active"] == [[L, L]]
+    assert np.abs(mirror * np.array(two["force"]) - one["force"]).max() <= 1e-9 * scale

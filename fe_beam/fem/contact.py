@@ -71,7 +71,7 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
 from fe_beam.fem.rotations import rotation
-from fe_beam.fem.structure import chain_centreline, chain_section_dims
+from fe_beam.fem.structure import chain_centreline, chain_reversed, chain_section_dims
 from fe_beam.model.obstacles import (
     Box,
     ContactSettings,
@@ -895,6 +895,11 @@ class ContactSet:
                                                 problem.section_dims_tip)
             self._parts = section_parts(model.section, self._s, self._dims(problem),
                                         problem.section_dims_tip)
+            flip = self._flip(problem)
+            if flip is not None:  # a reversed rod: its frame's d2 is the rod's -d2
+                self._parts = {"rectangles": [((1 - 2 * flip) * offset, half2, half3)
+                                              for offset, half2, half3
+                                              in self._parts["rectangles"]]}
             self._axes = {id(o): fem.Constant(mesh, np.asarray(o.axis, dtype=float))
                           for o in self.obstacles if isinstance(o, Cylinder)}
         self._build_measures(problem, x)
@@ -978,8 +983,21 @@ class ContactSet:
 
     def _extents(self):
         problem = self._problem
-        return section_extents(self.model.section, self._s, self._dims(problem),
-                               problem.section_dims_tip)
+        below, above = section_extents(self.model.section, self._s, self._dims(problem),
+                                       problem.section_dims_tip)
+        flip = self._flip(problem)
+        if flip is not None:  # a reversed rod: its own sides swapped in the chain's frame
+            below, above = flip * above + (1 - flip) * below, flip * below + (1 - flip) * above
+        return below, above
+
+    def _flip(self, problem):
+        """Along a chain of rods with an asymmetric section (a t-section), the DG0 indicator
+        of the rods traversed from their end (`fe_beam.fem.structure.chain_reversed`), else
+        None."""
+        chain = getattr(problem, "chain", None)
+        if chain is None or self.model.section.shape != "t-section":
+            return None
+        return chain_reversed(chain)
 
     @staticmethod
     def _dims(problem):

@@ -27,7 +27,8 @@ from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
 from fe_beam.model.spatial import rotation_matrix
 
-__all__ = ["ChainGeometry", "chain_centreline", "chain_section_dims", "chain_vertices"]
+__all__ = ["ChainGeometry", "chain_centreline", "chain_reversed", "chain_section_dims",
+           "chain_vertices"]
 
 
 def chain_vertices(structure) -> tuple[np.ndarray, tuple[float, ...]]:
@@ -340,3 +341,18 @@ def chain_section_dims(chain: ChainGeometry) -> dict | None:
     if fields is None:
         fields = chain.section_dims()
     return fields
+
+
+def chain_reversed(chain: ChainGeometry):
+    """A DG0 field: 1 on the cells of a rod the chain traverses from its end (its frame the
+    rod's turned by pi: an asymmetric section's sides swap in the chain's frame), else 0;
+    None when no rod is reversed."""
+    if not any(segment.reversed for segment in chain.structure.chain):
+        return None
+    field = getattr(chain, "_reversed_field", None)
+    if field is None:
+        flags = [0.0] * len(chain.structure.rods)
+        for segment in chain.structure.chain:
+            flags[segment.rod] = 1.0 if segment.reversed else 0.0
+        field = chain._reversed_field = chain.cellwise(flags)
+    return field
