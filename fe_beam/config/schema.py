@@ -237,6 +237,14 @@ def parse_structure_model(config: dict) -> BeamModel:
         raise ConfigError("[section] *_tip (a tapered section) with [[rods]] is not supported "
                           "yet: each rod has the section of [section]")
     structure = _own_sections(config, structure, section, material, model["law"])
+    reversed_rods = [structure.rods[seg.rod].name for seg in structure.chain if seg.reversed]
+    if section.shape == "t-section" and model["law"] != "reissner" and reversed_rods:
+        # the chain's laws take the section in the chain's frame: a reversed rod's own
+        # (flange on its own +d2 side) would need its I3 (and fibre rule) turned
+        raise ConfigError(f"[[rods]] '{reversed_rods[0]}' is traversed from its end by the "
+                          f"chain and its t-section is asymmetric: with [model] law = "
+                          f"\"{model['law']}\" this is not supported yet (give the rod from its "
+                          "other end, start and direction reversed, or law = \"reissner\")")
     loads = table(config, "loads")
     forces, moments = structure.chain_point_loads()
     for s, *_ in forces:
