@@ -472,7 +472,7 @@ def structure_columns(model, joints: bool = True) -> list:
                                        r["rods"][n]["tip"][i]) for i, k in enumerate("xyz")]
         names = [j.name for j in structure.joints_on_chain] + [j[0] for j in
                                                                 structure.body_joints]
-        for name in names:
+        for name in names if joints else ():
             columns += [exports.Column(f"joint_{name}_F{k}", lambda r, n=name, i=i:
                                        r["joints"][n]["force"][i]) for i, k in enumerate("xyz")]
             columns += [exports.Column(f"joint_{name}_M{k}", lambda r, n=name, i=i:

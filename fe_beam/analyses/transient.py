@@ -308,6 +308,12 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                "momenta": integrator.momenta()})
         if getattr(problem, "chain", None) is not None:  # each rod's end (world axes)
             result.history[-1]["rods"] = problem.chain.rods()
+            if hasattr(integrator, "end_inertia_work"):  # the joints' forces at t, inertia in
+                blended = float(problem.load_factor.value)
+                problem.load_factor.value = config.load_function(t)
+                result.history[-1]["joints"] = problem.chain.joints_in_motion(
+                    integrator.end_inertia_work)
+                problem.load_factor.value = blended
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
@@ -544,8 +550,9 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         obstacles = len(config.static.obstacles)
         if obstacles:  # each obstacle's force, moment, penetration and peak pressure
             columns = columns + contact_columns(obstacles, spatial)
-        # a chain of rods: each rod's end (its joints' forces would need the inertia: none)
-        columns = columns + structure_columns(config.static.model, joints=False)
+        # a chain of rods: each rod's end and (generalised-alpha) each joint's force, moment
+        columns = columns + structure_columns(
+            config.static.model, joints=config.time.scheme == "generalized-alpha")
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -585,7 +592,7 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
     structure = getattr(config.static.model, "structure", None)
     # the tip's reference position: (L, 0) of a rod, the last end of a chain of rods
     tip_x, tip_y = ((length, 0.0) if structure is None
-                    else structure.reference_point(length, structure.chain[-1]))
+                    else structure.reference_point(length, structure.chain[-1])[:2])
     with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
         left.plot(tip_x + np.array([h["tip"]["u"] for h in result.history]),
                   tip_y + np.array([h["tip"]["v"] for h in result.history]), lw=1.2)

@@ -22,7 +22,7 @@ STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
 STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
 #: the commands that run a spatial structure in this version
-SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {

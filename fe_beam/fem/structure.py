@@ -243,7 +243,8 @@ class ChainGeometry:
         weighted by the indicator) and, per joint, its dofs of ``components``."""
         problem = self.problem
         test = ufl.TestFunction(problem.space)
-        self._joint_form = fem.form(ufl.derivative(energy, problem.w, test))
+        self._joint_form_ufl = ufl.derivative(energy, problem.w, test)
+        self._joint_form = fem.form(self._joint_form_ufl)
         self._joint_dofs = {
             joint.name: [problem.point_dofs(n, joint.s, f"joint '{joint.name}' at")
                          for n in components]
@@ -293,6 +294,69 @@ class ChainGeometry:
             result[joint.name] = {"force": [sign * fx, sign * fy], "moment": sign * m}
         return result
 
+    # --- joint forces in motion (fe-beam dynamic) ---------------------------------------------
+    def joints_in_motion(self, inertia) -> dict:
+        """`joints` of a moving chain: the residual of the elements before each joint now with
+        their inertia, ``inertia(test)`` (a UFL form linear in the test function: the inertia
+        and damping forces' virtual work of the current state, velocity and acceleration), so
+        that the force on the part before is the rest's: applied loads + support reaction -
+        its momentum rate. A joint to a fixed body reports the support's reaction with the
+        inertia of the whole chain (the consistent mass couples the held end to its
+        neighbours). Compiled once (``inertia`` must keep returning the same form);
+        collective."""
+        if getattr(self, "_motion_form", None) is None:
+            self._compile_motion_form(inertia)
+        result = {}
+        dofs = compat.cell_dofs(self._motion_indicator.function_space)[
+            : len(self._segment_of_cell), 0]
+        for name, end, rod_first in self.structure.body_joints:
+            self._motion_indicator.x.array[:] = 1.0
+            sums = self._motion_sums(self._motion_end_dofs[name])
+            result[name] = self._joint_entry(sums, 1.0 if rod_first else -1.0,
+                                             self.problem.end_values(end))
+        for joint in self.structure.joints_on_chain:
+            self._motion_indicator.x.array[:] = 0.0
+            self._motion_indicator.x.array[dofs] = (self._segment_of_cell <= joint.segment)
+            sums = self._motion_sums(self._joint_dofs[joint.name])
+            values = self.problem.point_values(joint.s) if self.spatial else None
+            result[joint.name] = self._joint_entry(sums, 1.0 if joint.first_before else -1.0,
+                                                   values)
+        return result
+
+    def _compile_motion_form(self, inertia) -> None:
+        if self._joint_form is None:
+            self._compile_joint_form()
+        problem = self.problem
+        self._motion_indicator = fem.Function(self.theta0.function_space)
+        test = ufl.TestFunction(problem.space)
+        static = self._joint_form_ufl
+        weighted = ufl.replace(static, {self._indicator: self._motion_indicator})
+        moving = _weighted(inertia(test), self._motion_indicator)
+        self._motion_form = fem.form(weighted + moving)
+        components = problem.components[:6] if self.spatial else ("u", "v", "theta")
+        self._motion_end_dofs = {
+            name: [problem.component_dofs(n, end) for n in components]
+            for name, end, _ in self.structure.body_joints}
+
+    def _motion_sums(self, dof_lists) -> list:
+        vector = compat.assemble_vector(self._motion_form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vector.getArray(readonly=True)
+        sums = [float(global_sum(self.problem.comm, values[d].sum())) for d in dof_lists]
+        vector.destroy()
+        return sums
+
+    def _joint_entry(self, sums, sign: float, values) -> dict:
+        """{force, moment} of a joint's residual sums (world axes; spatial: the rotation rows
+        turned into the moment, m = T(theta)^-T r_theta, ``values`` holding theta)."""
+        if self.spatial:
+            vector = (values["rotation_vector"] if "rotation_vector" in values
+                      else [values[f"theta_{k}"] for k in "xyz"])
+            moment = np.linalg.solve(_spin(vector).T, np.array(sums[3:6]))
+            return {"force": [sign * f for f in sums[:3]],
+                    "moment": [float(sign * m) for m in moment]}
+        return {"force": [sign * sums[0], sign * sums[1]], "moment": sign * sums[2]}
+
     def shape(self, values: dict | None) -> dict | None:
         """A gathered line shape (``x``, ``u``, ``v`` at the vertices; `vertex_values`) with
         ``u``, ``v`` replaced by X + u - x, Y + v: plots that draw (x + u, v) draw the chain."""
@@ -308,6 +372,12 @@ class ChainGeometry:
             shaped["w"] = (np.array([self.structure.reference_point(s)[2] for s in x])
                            + np.asarray(values["w"]))
         return shaped
+
+
+def _weighted(form, weight):
+    """The form with each integrand multiplied by ``weight``."""
+    return ufl.Form([integral.reconstruct(integrand=weight * integral.integrand())
+                     for integral in form.integrals()])
 
 
 def _skew(vector) -> np.ndarray:

@@ -611,6 +611,18 @@ class GeneralizedAlpha(StepDriver):
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
+    def end_inertia_work(self, test):
+        """The inertia and damping forces' virtual work at the accepted state: q_{n+1}
+        (``problem.w``), v_{n+1}, a_{n+1} (UFL; the joint forces of a moving chain of rods,
+        `fe_beam.fem.structure.ChainGeometry.joints_in_motion`)."""
+        p = self.problem
+        n = p.motion_count
+        state = p.motion_parts(ufl.split(p.w)[:n])
+        velocity = tuple(ufl.split(self.v_old)[:n])
+        acceleration = tuple(ufl.split(self.a_old)[:n])
+        return (self.inertia(acceleration, test, state, velocity)
+                + self.dissipation(state, velocity, test))
+
     def _contact_residual(self, direction):
         """The contact terms at the state q_{n+1} (``problem.w``) along ``direction`` (the test
         function, or a displacement for the work): -(the contact forces' virtual work)."""

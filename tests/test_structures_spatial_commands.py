@@ -1,0 +1,237 @@
+"""Spatial chains of rods ([[rods]] with [model] kinematics = "spatial", issue 29) in fe-beam
+modes, buckling and dynamic.
+
+References: the same rod without joints (a straight rod split into two rods joined rigidly,
+laid along a skew direction with a skew `normal`, is the rod turned by its frame R0) and the
+exact transfer-matrix frequencies of `fe_beam.baselines.frame_modes` for the motions of a planar
+frame in and out of its plane (Timoshenko bending with rotary inertia, Saint-Venant torsion
+with the polar inertia: the spatial Reissner law's linear vibrations)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import fe_beam
+from fe_beam.baselines import frame_modes
+
+E, NU, RHO = 2.0e7, 0.3, 1000.0
+B, H = 0.02, 0.03
+
+
+def _base(elements: int, b: float = B, h: float = H) -> dict:
+    return {
+        "section": {"shape": "rectangle", "b": b, "h": h},
+        "material": {"E": E, "nu": NU, "rho": RHO},
+        "model": {"law": "reissner", "kinematics": "spatial"},
+        "mesh": {"elements": elements, "degree": 2},
+        "output": {"xdmf": False, "plots": False},
+    }
+
+
+def _frame(direction, normal) -> np.ndarray:
+    d1, d2 = np.array(direction, float), np.array(normal, float)
+    d1, d2 = d1 / np.linalg.norm(d1), d2 / np.linalg.norm(d2)
+    return np.column_stack([d1, d2, np.cross(d1, d2)])
+
+
+#: a skew frame: d1 along (1, 2, 2)/3, d2 = (2, 1, -2)/3 (not the default normal)
+SKEW = _frame([1.0, 2.0, 2.0], [2.0, 1.0, -2.0])
+START = np.array([0.3, -0.2, 0.5])
+
+
+def _single_and_split(table: str | None = None, count: int = 0):
+    """A clamped rod of length 1 along x (10 elements) and the same rod along SKEW split into
+    rods of 0.4 (4 elements) and 0.6 (6 elements) joined rigidly."""
+    single = _base(10)
+    single["beam"] = {"length": 1.0}
+    single["supports"] = {"x0": "clamped", "xL": "free"}
+    split = _base(4)
+    split["rods"] = [
+        {"name": "a", "start": START.tolist(), "direction": SKEW[:, 0].tolist(),
+         "normal": SKEW[:, 1].tolist(), "length": 0.4, "mesh": {"elements": 4},
+         "supports": {"x0": "clamped"}},
+        {"name": "b", "start": (START + 0.4 * SKEW[:, 0]).tolist(),
+         "direction": SKEW[:, 0].tolist(), "normal": SKEW[:, 1].tolist(), "length": 0.6,
+         "mesh": {"elements": 6}}]
+    split["joints"] = [{"name": "j", "at": ["a:end", "b:start"]}]
+    if table:
+        single[table] = {"count": count}
+        split[table] = {"count": count}
+    return single, split
+
+
+# --- modes -------------------------------------------------------------------------------------
+def test_modes_split_skew_rod_is_the_rod():
+    """The split rod along SKEW has the single rod's eight frequencies (bending about both
+    axes, torsion) and mode kinds: the rotary and polar inertia turn with R0."""
+    single, split = _single_and_split("modes", 8)
+    one, two = fe_beam.run("modes", single), fe_beam.run("modes", split)
+    assert one["status"] == two["status"] == "completed"
+    assert one["mode_kinds"] == two["mode_kinds"]
+    assert {"bending about y", "bending about z", "torsion"} <= set(one["mode_kinds"])
+    f1, f2 = np.array(one["frequencies_hz"]), np.array(two["frequencies_hz"])
+    # measured: 3e-11 (the eigensolver's tolerance); without R0 in the inertia: 2e-1
+    assert np.max(np.abs(f1 - f2) / f1) <= 1e-9, (f1, f2)
+
+
+def _torsion_constant(b: float, h: float, terms: int = 12) -> float:
+    t, w = min(b, h), max(b, h)
+    series = sum(math.tanh(n * math.pi * w / (2 * t)) / n**5 for n in range(1, 2 * terms, 2))
+    return t**3 * w / 3 * (1 - 192 * t / (math.pi**5 * w) * series)
+
+
+def _l_frame_members(a, b, sections, moduli):
+    """The in-plane and out-of-plane members of the L-frame (column (0, 0) -> (0, a), beam
+    (0, a) -> (b, a)), each with its section (b, h) and moduli (E, G): h in the plane."""
+    inplane, outplane = [], []
+    for (start, angle, length), (bb, hh), (EE, GG) in zip(
+            (((0.0, 0.0), math.pi / 2, a), ((0.0, a), 0.0, b)), sections, moduli, strict=True):
+        area, Iz, Iy = bb * hh, bb * hh**3 / 12, hh * bb**3 / 12
+        inplane.append(frame_modes.Member(start, angle, length, EE * Iz, EE * area, GG * area,
+                                          RHO * area, RHO * Iz))
+        outplane.append(frame_modes.OutOfPlaneMember(
+            start, angle, length, EE * Iy, GG * _torsion_constant(bb, hh), GG * area,
+            RHO * area, RHO * Iy, RHO * (Iy + Iz)))
+    return inplane, outplane
+
+
+def _l_frame(elements: int, a: float, b: float, beam_h: float, beam_E: float) -> dict:
+    """The clamped L-frame turned in space by SKEW (each member's normal the turned in-plane
+    normal e_z x d1), the beam of its own section height and modulus."""
+    config = _base(elements, b=0.02, h=0.05) | {"modes": {"count": 8}}
+    rods = []
+    for name, start, direction, length in (("column", [0, 0, 0], [0, 1, 0], a),
+                                           ("beam", [0, a, 0], [1, 0, 0], b)):
+        d1 = np.array(direction, float)
+        rods.append({"name": name, "start": (SKEW @ np.array(start, float) + START).tolist(),
+                     "direction": (SKEW @ d1).tolist(),
+                     "normal": (SKEW @ np.cross([0, 0, 1.0], d1)).tolist(), "length": length})
+    rods[0]["supports"] = {"x0": "clamped"}
+    rods[1]["section"] = {"h": beam_h}
+    rods[1]["material"] = {"E": beam_E, "nu": NU}
+    config["rods"] = rods
+    config["joints"] = [{"name": "corner", "at": ["column:end", "beam:start"]}]
+    return config
+
+
+def test_modes_spatial_l_frame_against_transfer_matrices():
+    """A clamped L-frame turned in space (the beam of another section and modulus): the eight
+    lowest frequencies, motions in and out of the frame's plane (bending coupled with torsion
+    through the corner), against the exact transfer-matrix roots of its members, converging at
+    order 4 in the element count."""
+    a, b, beam_h, beam_E = 0.8, 0.6, 0.04, 3.0e7
+    G = E / (2 * (1 + NU))
+    inplane, outplane = _l_frame_members(a, b, [(0.02, 0.05), (0.02, beam_h)],
+                                         [(E, G), (beam_E, beam_E / (2 * (1 + NU)))])
+    omega_max = 2 * math.pi * 40
+    inside = frame_modes.frame_frequencies(inplane, {(0.0, 0.0): "clamped"}, 8, omega_max, 800)
+    outside = frame_modes.frame_frequencies(outplane, {(0.0, 0.0): "clamped"}, 8, omega_max,
+                                            800)
+    reference = np.array(sorted(inside + outside)[:8])
+    assert len(reference) == 8 and len(outside) >= 4 and len(inside) >= 3
+    errors = []
+    for elements in (4, 8):
+        summary = fe_beam.run("modes", _l_frame(elements, a, b, beam_h, beam_E))
+        assert summary["status"] == "completed"
+        assert "torsion" in summary["mode_kinds"]
+        errors.append(np.abs(np.array(summary["frequencies_hz"]) - reference) / reference)
+    # measured (8 elements per rod): 8e-7 ... 1.4e-3; order 3.9-4.0
+    assert np.all(errors[1] < 2e-3), errors[1]
+    orders = np.log2(errors[0] / errors[1])
+    assert np.all((orders > 3.5) & (orders < 4.5)), orders
+
+
+def test_out_of_plane_baseline_is_bending_and_torsion_of_a_cantilever():
+    """One out-of-plane member, clamped, turned in the plane: the Euler-Bernoulli cantilever's
+    bending roots and the shaft's torsion (k + 1/2) pi sqrt(GJ / rho I_p) / L, to 1e-12; and a
+    member split in two is the member (shear and rotary inertia included)."""
+    EI, GJ, rho_area, rho_polar, length, angle = 2.0, 1.5, 0.7, 0.01, 1.3, 0.4
+    member = frame_modes.OutOfPlaneMember((0.0, 0.0), angle, length, EI, GJ, math.inf,
+                                          rho_area, 0.0, rho_polar)
+    found = frame_modes.frame_frequencies([member], {(0.0, 0.0): "clamped"}, 4,
+                                          2 * math.pi * 10)
+    roots = [1.8751040687119611, 4.694091132974175]
+    bending = [r**2 * math.sqrt(EI / rho_area) / length**2 / (2 * math.pi) for r in roots]
+    torsion = [(k + 0.5) * math.pi * math.sqrt(GJ / rho_polar) / length / (2 * math.pi)
+               for k in range(2)]
+    assert found == pytest.approx(sorted(bending + torsion), rel=1e-12)
+    c, s = math.cos(angle), math.sin(angle)
+    parts = [frame_modes.OutOfPlaneMember((0.0, 0.0), angle, 0.5, EI, GJ, 3.0, rho_area, 0.002,
+                                          rho_polar),
+             frame_modes.OutOfPlaneMember((0.5 * c, 0.5 * s), angle, length - 0.5, EI, GJ, 3.0,
+                                          rho_area, 0.002, rho_polar)]
+    whole = [frame_modes.OutOfPlaneMember((0.0, 0.0), angle, length, EI, GJ, 3.0, rho_area,
+                                          0.002, rho_polar)]
+    assert frame_modes.frame_frequencies(parts, {(0.0, 0.0): "clamped"}, 4, 2 * math.pi * 10) \
+        == pytest.approx(frame_modes.frame_frequencies(whole, {(0.0, 0.0): "clamped"}, 4,
+                                                       2 * math.pi * 10), rel=1e-12)
+
+
+# --- buckling ----------------------------------------------------------------------------------
+def test_buckling_split_skew_column_is_the_column():
+    """The clamped column under an axial end force, split along SKEW: the single column's
+    buckling factors (about both section axes), linearised and confirmed on the path."""
+    single, split = _single_and_split("buckling", 3)
+    single["loads"] = {"tip_force": [-1.0, 0.0, 0.0]}
+    split["rods"][1]["loads"] = {"point_forces": [[0.6, *(-SKEW[:, 0])]]}
+    one, two = fe_beam.run("buckling", single), fe_beam.run("buckling", split)
+    assert one["status"] == two["status"] == "completed"
+    f1, f2 = np.array(one["load_factors"]), np.array(two["load_factors"])
+    assert len(f1) == len(f2) == 3
+    # measured: 1.3e-10
+    assert np.max(np.abs(f1 - f2) / f1) <= 1e-9, (f1, f2)
+    l1, l2 = np.array(one["linearised_load_factors"]), np.array(two["linearised_load_factors"])
+    assert np.max(np.abs(l1 - l2) / l1) <= 1e-9, (l1, l2)
+
+
+# --- dynamic -----------------------------------------------------------------------------------
+def test_dynamic_split_skew_rod_is_the_rod():
+    """A suddenly applied end force and moment (three components each): the split rod along
+    SKEW moves as the single rod turned by SKEW, at every step (generalised-alpha)."""
+    single, split = _single_and_split()
+    force, moment = np.array([0.2, -6.0, 3.0]), np.array([0.1, 0.05, -0.08])
+    single["loads"] = {"tip_force": force.tolist(), "tip_moment": moment.tolist()}
+    split["rods"][1]["loads"] = {"point_forces": [[0.6, *(SKEW @ force)]],
+                                 "point_moments": [[0.6, *(SKEW @ moment)]]}
+    for config in (single, split):
+        config["time"] = {"t_end": 0.02, "dt": 0.01, "scheme": "generalized-alpha"}
+    one, two = fe_beam.run("dynamic", single), fe_beam.run("dynamic", split)
+    assert one["status"] == two["status"] == "completed"
+    assert [h["t"] for h in one["history"]] == [h["t"] for h in two["history"]]
+    scale = np.linalg.norm([one["history"][-1]["tip"][k] for k in "uvw"])
+    assert scale > 0.02  # a large motion
+    for a, b in zip(one["history"], two["history"], strict=True):
+        d1 = np.array([a["tip"][k] for k in "uvw"])
+        d2 = np.array([b["tip"][k] for k in "uvw"])
+        # measured: 4e-16 of the length
+        assert np.linalg.norm(SKEW @ d1 - d2) <= 1e-11, (a["t"], d1, d2)
+        assert np.abs(SKEW @ np.array(a["tip"]["R"]) - np.array(b["tip"]["R"])).max() <= 1e-11
+        for key in ("kinetic", "strain"):
+            assert b["energies"][key] == pytest.approx(a["energies"][key], rel=1e-10, abs=1e-14)
+        assert b["rods"]["b"]["tip"] == pytest.approx(b["tip"]["position"], abs=1e-12)
+
+
+def test_dynamic_spatial_chain_writes_its_outputs(tmp_path):
+    """fe-beam dynamic of a spatial chain with XDMF and pictures: each step's rods and joints
+    (force, moment: 3-vectors), history.csv's rod_<name>_x.._z and joint_<name>_Fx.._Mz, the
+    XDMF field rod, and the trajectory picture (it drew the chain's 3D end as a 2D point and
+    stopped)."""
+    _, split = _single_and_split()
+    split["rods"][1]["loads"] = {"point_forces": [[0.6, 0.0, 0.0, -1.0]]}
+    split["time"] = {"t_end": 0.02, "dt": 0.01}
+    split["output"] = {"xdmf": True, "plots": True}
+    summary = fe_beam.run("dynamic", split, tmp_path)
+    assert summary["status"] == "completed"
+    last = summary["history"][-1]
+    assert len(last["joints"]["j"]["force"]) == len(last["joints"]["j"]["moment"]) == 3
+    assert abs(last["joints"]["j"]["force"][2]) > 0.1
+    lines = (tmp_path / "history.csv").read_text().splitlines()
+    header, row = lines[0].split(","), [float(x) for x in lines[-1].split(",")]
+    assert row[header.index("joint_j_Mx")] == pytest.approx(last["joints"]["j"]["moment"][0],
+                                                            rel=1e-12)
+    assert row[header.index("rod_a_z")] == pytest.approx(last["rods"]["a"]["tip"][2], rel=1e-12)
+    assert 'Attribute Name="rod"' in (tmp_path / "beam.xdmf").read_text()
+    assert (tmp_path / "dynamics.png").exists()
