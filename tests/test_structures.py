@@ -310,7 +310,7 @@ def test_structure_mistakes_are_one_sentence(change, words):
     assert words in str(error.value), str(error.value)
 
 
-@pytest.mark.parametrize("command", ["finger", "solid", "calibrate"])
+@pytest.mark.parametrize("command", ["finger", "solid", "compare", "validity"])
 def test_other_commands_refuse_a_structure(command):
     with pytest.raises(ConfigError, match=f"fe-beam {command} does not run a structure"):
         validate(command, _lee_config())

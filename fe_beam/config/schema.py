@@ -387,6 +387,20 @@ def with_rod_sections(model: BeamModel) -> BeamModel:
                                                       structure.bodies))
 
 
+def with_rod_materials(model: BeamModel) -> BeamModel:
+    """The structure's model with every rod carrying its own (E, G) (those of [material] where
+    it has none): piecewise-constant fields a calibration varies per rod."""
+    structure = model.structure
+    if model.options.law == "hyperelastic":
+        raise ConfigError("rods.<name>.material parameters with [model] law = \"hyperelastic\" "
+                          "are not supported yet")
+    moduli = (model.material.E, model.material.shear_modulus)
+    rods = tuple(dataclasses.replace(rod, material=rod.material or moduli)
+                 for rod in structure.rods)
+    return dataclasses.replace(model, structure=_wrap(Structure, rods, structure.joints,
+                                                      structure.bodies))
+
+
 def structure_rigid_motions(model: BeamModel) -> list[str]:
     """The rigid motions a chain's end supports leave free (empty: none), with the ends at
     their reference positions: a small rigid motion (a, b, w) moves the point (X, Y) by

@@ -20,7 +20,8 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
-STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
+STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design",
+                      "calibrate")
 #: the commands that run a spatial structure in this version
 SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)

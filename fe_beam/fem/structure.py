@@ -134,6 +134,22 @@ class ChainGeometry:
             field.x.array[:] = self.cellwise(values).x.array
         self.structure = new
 
+    def rod_field(self, index: int, table: str, name: str):
+        """(the DG0 field of rod ``index``'s own ``table`` ("section": a dimension name;
+        "material": "E" or "G") value, the DG0 indicator of the rod's cells), or None when the
+        rods do not carry their own fields of it (parameters of one rod: calibrate)."""
+        if table == "section":
+            field = (getattr(self, "_section_fields", None) or {}).get(name)
+        else:
+            moduli = getattr(self, "_moduli_fields", None)
+            field = None if moduli is None or name not in ("E", "G") \
+                else moduli[0 if name == "E" else 1]
+        if field is None:
+            return None
+        indicator = self.cellwise([1.0 if i == index else 0.0
+                                   for i in range(len(self.structure.rods))])
+        return field, indicator
+
     # --- kinematics -----------------------------------------------------------------------------
     def world_tangent(self, u, v):
         """r' = X' + (u', v') in world axes."""
