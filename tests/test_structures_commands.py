@@ -506,9 +506,11 @@ def test_spatial_chains_are_refused_beyond_static_path_modes_buckling_dynamic(co
 # --- joint forces in motion --------------------------------------------------------------------
 def _joint_balance_recorder(monkeypatch, records):
     """Wrap `ChainGeometry.joints_in_motion` to record, beside each reported joint force, the
-    independent balance of the part after the joint (a free body: its applied end force P at
-    t minus its momentum rate int rho A a, the moment about the joint's point likewise with
-    the sections' rotary inertia rho I theta_tt), from the scheme's state at t."""
+    balance of the part after the joint as a free body from the state's acceleration a (the
+    scheme's `end_acceleration`): its applied end force P at t minus its momentum rate
+    int rho A a, and the moment about the joint's point likewise with the sections' rotary
+    inertia rho I theta_tt. The reported force is the residual of the elements before the
+    joint: an independent sum over the other elements."""
     import ufl
     from dolfinx import fem
 
@@ -525,7 +527,7 @@ def _joint_balance_recorder(monkeypatch, records):
         after = fem.Function(self.theta0.function_space)
         dofs = compat.cell_dofs(after.function_space)[: len(self._segment_of_cell), 0]
         after.x.array[dofs] = self._segment_of_cell > joint.segment
-        a = ufl.split(integrator.a_old)
+        a = ufl.split(integrator._end_a)
         u, v = problem.fields()[0], problem.fields()[1]
         X, Y = self.reference[0], self.reference[1]
         x_c, y_c, _ = self.position(joint.s)
@@ -542,11 +544,10 @@ def _joint_balance_recorder(monkeypatch, records):
     monkeypatch.setattr(ChainGeometry, "joints_in_motion", recording)
 
 
-def _swinging_frame(dt: float, force) -> dict:
+def _swinging_frame(scheme: str, force) -> dict:
     """A clamped L-frame (column 0.8 along y, beam 0.6 along x; 6 elements per rod) under a
-    suddenly applied force at the beam's end, 6 steps of dt (generalised-alpha)."""
-    config = _dynamic(6, "generalized-alpha", t_end=6 * dt, dt=dt)
-    config["time"] |= {"adaptive": False}
+    suddenly applied force at the beam's end, 5 steps of 2 ms."""
+    config = _dynamic(6, scheme, t_end=0.01, dt=0.002)
     config["rods"] = [
         {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 0.8,
          "supports": {"x0": "clamped"}},
@@ -556,40 +557,36 @@ def _swinging_frame(dt: float, force) -> dict:
     return config
 
 
-def test_dynamic_joint_force_is_the_balance_of_the_part_beyond(monkeypatch, tmp_path):
+@pytest.mark.parametrize("scheme", ["generalized-alpha", "energy-conserving"])
+def test_dynamic_joint_force_is_the_balance_of_the_part_beyond(monkeypatch, tmp_path, scheme):
     """Each step's joint force and moment in fe-beam dynamic (a clamped L-frame swinging under
-    a suddenly applied end force) against the part beyond the joint as a free body: the end
-    force minus its momentum rate, and the moment about the joint. The reported force is the
-    discrete balance at t_{n+1} of the elements before the joint, the independent one of the
-    elements after it: they differ by the scheme's defect at t_{n+1} (its balance holds at
-    t_{n+1-alpha_f}), which falls at order 2 as dt halves. history.csv has the columns."""
+    a suddenly applied end force) equal the balance of the part beyond the joint as a free
+    body: the end force minus its momentum rate, and the moment about the joint, to
+    round-off; the inertia is a large part of it. history.csv has the columns."""
     force = np.array([3.0, -8.0])
-    defects = []
-    for dt in (0.002, 0.001):
-        records = []
-        _joint_balance_recorder(monkeypatch, records)
-        summary = fe_beam.run("dynamic", _swinging_frame(dt, force), tmp_path / f"{dt}")
-        monkeypatch.undo()
-        assert summary["status"] == "completed"
-        history = summary["history"]
-        assert len(records) == len(history) == 7
-        worst = 0.0
-        for entry, (reported, rate, spin, corner) in zip(history, records, strict=True):
-            assert entry["joints"]["corner"] == reported
-            expected = force - np.array(rate)
-            tip = np.array(entry["rods"]["beam"]["tip"])
-            moment = float(np.cross(tip - np.array(corner), force)) - spin
-            assert np.linalg.norm(expected - force) > 0.2 * np.linalg.norm(force) \
-                or entry["t"] == 0.0  # the inertia matters
-            worst = max(worst, np.linalg.norm(np.array(reported["force"]) - expected)
-                        / np.linalg.norm(force),
-                        abs(reported["moment"] - moment) / (0.6 * np.linalg.norm(force)))
-        defects.append(worst)
-        lines = (tmp_path / f"{dt}" / "history.csv").read_text().splitlines()
-        header, last = lines[0].split(","), [float(x) for x in lines[-1].split(",")]
-        assert last[header.index("joint_corner_Fy")] == pytest.approx(
-            history[-1]["joints"]["corner"]["force"][1], rel=1e-12)
-    assert defects[1] < defects[0] / 3, defects
+    records = []
+    _joint_balance_recorder(monkeypatch, records)
+    summary = fe_beam.run("dynamic", _swinging_frame(scheme, force), tmp_path)
+    assert summary["status"] == "completed"
+    history = summary["history"]
+    assert len(records) == len(history) >= 6
+    worst, inertia = 0.0, 0.0
+    for entry, (reported, rate, spin, corner) in zip(history, records, strict=True):
+        assert entry["joints"]["corner"] == reported
+        expected = force - np.array(rate)
+        tip = np.array(entry["rods"]["beam"]["tip"])
+        moment = float(np.cross(tip - np.array(corner), force)) - spin
+        inertia = max(inertia, np.linalg.norm(rate) / np.linalg.norm(force))
+        worst = max(worst, np.linalg.norm(np.array(reported["force"]) - expected)
+                    / np.linalg.norm(force),
+                    abs(reported["moment"] - moment) / (0.6 * np.linalg.norm(force)))
+    assert inertia > 0.3, inertia  # the momentum rate is a large part of the force
+    # measured: 1.1e-15 (generalised-alpha), 7.9e-16 (energy-conserving)
+    assert worst < 1e-12, worst
+    lines = (tmp_path / "history.csv").read_text().splitlines()
+    header, last = lines[0].split(","), [float(x) for x in lines[-1].split(",")]
+    assert last[header.index("joint_corner_Fy")] == pytest.approx(
+        history[-1]["joints"]["corner"]["force"][1], rel=1e-12)
 
 
 # --- calibrate ---------------------------------------------------------------------------------

@@ -308,12 +308,13 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                "momenta": integrator.momenta()})
         if getattr(problem, "chain", None) is not None:  # each rod's end (world axes)
             result.history[-1]["rods"] = problem.chain.rods()
-            if hasattr(integrator, "end_inertia_work"):  # the joints' forces at t, inertia in
-                blended = float(problem.load_factor.value)
-                problem.load_factor.value = config.load_function(t)
-                result.history[-1]["joints"] = problem.chain.joints_in_motion(
-                    integrator.end_inertia_work)
-                problem.load_factor.value = blended
+            # the joints' forces at t: the parts' inertia with the state's acceleration
+            blended = float(problem.load_factor.value)
+            problem.load_factor.value = config.load_function(t)
+            integrator.end_acceleration()
+            result.history[-1]["joints"] = problem.chain.joints_in_motion(
+                integrator.end_inertia_work)
+            problem.load_factor.value = blended
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
@@ -550,9 +551,8 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         obstacles = len(config.static.obstacles)
         if obstacles:  # each obstacle's force, moment, penetration and peak pressure
             columns = columns + contact_columns(obstacles, spatial)
-        # a chain of rods: each rod's end and (generalised-alpha) each joint's force, moment
-        columns = columns + structure_columns(
-            config.static.model, joints=config.time.scheme == "generalized-alpha")
+        # a chain of rods: each rod's end and each joint's force and moment
+        columns = columns + structure_columns(config.static.model)
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]

@@ -390,7 +390,11 @@ def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
     Configured programmatically rather than through dolfinx's LinearProblem, whose options
     stay in PETSc's global database (512 entries at most) long after the solve.
     """
-    bilinear, linear = fem.form(a), fem.form(L)
+    return solve_compiled(fem.form(a), fem.form(L), bcs, target)
+
+
+def solve_compiled(bilinear, linear, bcs, target: fem.Function) -> fem.Function:
+    """`solve_linear` of compiled forms (``fem.form``: a solve repeated without compiling)."""
     matrix = assemble_matrix(bilinear, bcs=bcs)
     matrix.assemble()
     rhs = assemble_vector(linear)

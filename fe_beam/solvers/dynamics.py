@@ -270,6 +270,70 @@ class StepDriver:
         names = getattr(self, "momentum_names", ("momentum_x", "momentum_y", "angular_momentum"))
         return {name: assemble_scalar(self.forms[name]) for name in names}
 
+    # --- joint forces of a moving chain (fe_beam.fem.structure.ChainGeometry) -----------------
+    def end_acceleration(self) -> None:
+        """Solve the consistent acceleration of the current state (``problem.w``, v_old at
+        the problem's load factor): M a = f_ext - f_int - C v - g(q, v) (the equations of
+        motion at the state's time; the fixed dofs at zero). Its inertia is what the joint
+        forces of a moving chain take (`end_inertia_work`): the elements before a joint then
+        balance exactly with the rest of the structure."""
+        p = self.problem
+        if getattr(self, "_end_forms", None) is None:
+            n = p.motion_count
+            self._end_a = fem.Function(p.space)
+            trial, test = ufl.TrialFunction(p.space), ufl.TestFunction(p.space)
+            a_parts, t = ufl.split(trial), ufl.split(test)
+            *parts, multipliers = p.fields()
+            state = tuple(parts)
+            mass = p.mass_work(state, a_parts[:n], test)
+            for index in range(n, len(a_parts)):  # multipliers: identity
+                mass += a_parts[index] * t[index] * ufl.dx
+            velocity = tuple(ufl.split(self.v_old)[:n])
+            force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
+            if multipliers:
+                force += ufl.derivative(p.constraint_term(state, multipliers), p.w, test)
+            force += self.dissipation(state, velocity, test)
+            quadratic = p.velocity_inertia_work(state, velocity, test)
+            if quadratic is not None:
+                force += quadratic
+            if p.nonpotential_loads:
+                force -= p.nonconservative_work(state, test)
+            self._end_forms = (fem.form(mass), fem.form(-force))
+        p.set_prescribed_factor(0.0)
+        compat.solve_compiled(*self._end_forms, p.bcs, self._end_a)
+        p.set_prescribed_factor(self.motion_function(self.time))
+        compat.local_array(self._end_a)[p.multiplier_dofs()] = 0.0
+
+    def end_inertia_work(self, test):
+        """The inertia and damping forces' virtual work of the current state, v_old and the
+        acceleration of `end_acceleration` (UFL)."""
+        p = self.problem
+        n = p.motion_count
+        *parts, _ = p.fields()
+        state = tuple(parts)
+        velocity = tuple(ufl.split(self.v_old)[:n])
+        acceleration = tuple(ufl.split(self._end_a)[:n])
+        work = p.mass_work(state, acceleration, test)
+        quadratic = p.velocity_inertia_work(state, velocity, test)
+        if quadratic is not None:
+            work += quadratic
+        return work + self.dissipation(state, velocity, test)
+
+    def dissipation(self, state, velocity, test):
+        """Virtual work of viscous (c, on the translations) and Kelvin-Voigt (eta, planar)
+        damping."""
+        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
+        work = self.c * sum(velocity[i] * t[i] for i in range(self.problem.translations)) \
+            * self.dx_mass
+        if self.damping.kelvin_voigt > 0:
+            k = self.problem.stiffness
+            rates = strain_rates(state, velocity)
+            variations = strain_rates(state, t[:3])
+            moduli = (k.EA, k.GA, k.EI)
+            terms = zip(moduli, rates, variations, strict=True)
+            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
+        return work
+
     def _unit_load_energy(self) -> float:
         """Dead-load work at load factor 1 on the last accepted state (the
         schemes' ``forms["load_potential"]``)."""
@@ -611,18 +675,6 @@ class GeneralizedAlpha(StepDriver):
         self._energy_forms()
 
     # --- forms -----------------------------------------------------------------------------------
-    def end_inertia_work(self, test):
-        """The inertia and damping forces' virtual work at the accepted state: q_{n+1}
-        (``problem.w``), v_{n+1}, a_{n+1} (UFL; the joint forces of a moving chain of rods,
-        `fe_beam.fem.structure.ChainGeometry.joints_in_motion`)."""
-        p = self.problem
-        n = p.motion_count
-        state = p.motion_parts(ufl.split(p.w)[:n])
-        velocity = tuple(ufl.split(self.v_old)[:n])
-        acceleration = tuple(ufl.split(self.a_old)[:n])
-        return (self.inertia(acceleration, test, state, velocity)
-                + self.dissipation(state, velocity, test))
-
     def _contact_residual(self, direction):
         """The contact terms at the state q_{n+1} (``problem.w``) along ``direction`` (the test
         function, or a displacement for the work): -(the contact forces' virtual work)."""
@@ -645,21 +697,6 @@ class GeneralizedAlpha(StepDriver):
             quadratic = p.velocity_inertia_work(state, velocity, test)
             if quadratic is not None:
                 work += quadratic
-        return work
-
-    def dissipation(self, state, velocity, test):
-        """Virtual work of viscous (c, on the translations) and Kelvin-Voigt (eta, planar)
-        damping."""
-        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
-        work = self.c * sum(velocity[i] * t[i] for i in range(self.problem.translations)) \
-            * self.dx_mass
-        if self.damping.kelvin_voigt > 0:
-            k = self.problem.stiffness
-            rates = strain_rates(state, velocity)
-            variations = strain_rates(state, t[:3])
-            moduli = (k.EA, k.GA, k.EI)
-            terms = zip(moduli, rates, variations, strict=True)
-            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
         return work
 
     def _constraints(self, test):
