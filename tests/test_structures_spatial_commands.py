@@ -11,8 +11,12 @@ from __future__ import annotations
 
 import math
 
+import json
+
 import numpy as np
 import pytest
+from mpi4py import MPI
+from mpilaunch import mpirun_command
 
 import fe_beam
 from fe_beam.baselines import frame_modes
@@ -302,3 +306,32 @@ def test_dynamic_spatial_joint_force_is_the_balance_of_the_part_beyond(monkeypat
         assert np.linalg.norm(np.array(reported) - (force - np.array(rate))) \
             <= 1e-12 * np.linalg.norm(force)
     assert max(np.linalg.norm(rate) for _, rate in records) > 0.3 * np.linalg.norm(force)
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(mpirun_command(2) is None or MPI.COMM_WORLD.size > 1,
+                    reason="needs mpirun (and a serial pytest)")
+@pytest.mark.parametrize("command", ["modes", "dynamic"])
+def test_two_ranks_give_the_serial_spatial_chain(tmp_path, command):
+    """``mpirun -n 2 fe-beam modes | dynamic`` of the split skew rod: one rank's frequencies
+    and kinds, or history (end, joints' force and moment)."""
+    from test_mpi_errors import fe_beam as fe_beam_job
+
+    _, config = _single_and_split("modes" if command == "modes" else None, 6)
+    if command == "dynamic":
+        config["rods"][1]["loads"] = {"point_forces": [[0.6, 0.0, 0.0, -1.0]]}
+        config["time"] = {"t_end": 0.01, "dt": 0.005}
+    alone = fe_beam.run(command, config)
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"), command=command)
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "two" / "summary.json").read_text())
+    if command == "modes":
+        assert np.allclose(together["frequencies_hz"], alone["frequencies_hz"], rtol=1e-9)
+        assert together["mode_kinds"] == alone["mode_kinds"]
+        return
+    assert len(together["history"]) == len(alone["history"])
+    for a, b in zip(alone["history"], together["history"], strict=True):
+        assert b["rods"]["b"]["tip"] == pytest.approx(a["rods"]["b"]["tip"], abs=1e-12)
+        for key in ("force", "moment"):
+            assert b["joints"]["j"][key] == pytest.approx(a["joints"]["j"][key], rel=1e-9,
+                                                          abs=1e-12)
