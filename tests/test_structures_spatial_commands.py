@@ -9,9 +9,8 @@ with the polar inertia: the spatial Reissner law's linear vibrations)."""
 
 from __future__ import annotations
 
-import math
-
 import json
+import math
 
 import numpy as np
 import pytest
