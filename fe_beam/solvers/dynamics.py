@@ -94,14 +94,22 @@ def alpha_parameters(rho_inf: float) -> dict:
     return {"alpha_m": alpha_m, "alpha_f": alpha_f, "gamma": gamma, "beta": beta}
 
 
-def strain_rates(parts, rates):
-    """Directional derivatives (eps, g, kappa) of the strains at ``parts`` along ``rates``."""
+def strain_rates(parts, rates, chain=None):
+    """Directional derivatives (eps, g, kappa) of the strains at ``parts`` along ``rates``
+    (``chain``: a chain of rods' `fe_beam.fem.structure.ChainGeometry`, each rod's tangent in
+    its own frame, R(-theta0) r')."""
     u, v, theta = parts
-    stretch_x, stretch_y = (ufl.variable(c) for c in axis_tangent(u, v))
+    du, dv, dtheta = rates
+    if chain is None:
+        tangent, moved = axis_tangent(u, v), (du.dx(0), dv.dx(0))
+    else:
+        tangent = chain.local_displacement_tangent(u, v)
+        c, s_ = ufl.cos(chain.theta0), ufl.sin(chain.theta0)
+        moved = (c * du.dx(0) + s_ * dv.dx(0), -s_ * du.dx(0) + c * dv.dx(0))
+    stretch_x, stretch_y = (ufl.variable(c) for c in tangent)
     angle, curvature = ufl.variable(theta), ufl.variable(theta.dx(0))
     s = strains_from_gradient(ufl.as_vector([stretch_x, stretch_y]), angle, curvature)
-    du, dv, dtheta = rates
-    directions = ((stretch_x, du.dx(0)), (stretch_y, dv.dx(0)), (angle, dtheta),
+    directions = ((stretch_x, moved[0]), (stretch_y, moved[1]), (angle, dtheta),
                   (curvature, dtheta.dx(0)))
 
     def rate(quantity):
@@ -327,8 +335,9 @@ class StepDriver:
             * self.dx_mass
         if self.damping.kelvin_voigt > 0:
             k = self.problem.stiffness
-            rates = strain_rates(state, velocity)
-            variations = strain_rates(state, t[:3])
+            chain = getattr(self.problem, "chain", None)
+            rates = strain_rates(state, velocity, chain)
+            variations = strain_rates(state, t[:3], chain)
             moduli = (k.EA, k.GA, k.EI)
             terms = zip(moduli, rates, variations, strict=True)
             work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
