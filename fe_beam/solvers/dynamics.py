@@ -787,6 +787,7 @@ class GeneralizedAlpha(StepDriver):
             mass += a_parts[index] * t[index] * ufl.dx
         velocity = tuple(ufl.split(self.v_old)[:n])
         force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
+        force += self._constraints(test)  # a constrained rod's multipliers (a static start)
         force += self.dissipation(state, velocity, test)
         quadratic = p.velocity_inertia_work(state, velocity, test)
         if quadratic is not None:
