@@ -520,8 +520,8 @@ def test_dynamic_history_has_each_rods_end(tmp_path):
     assert abs(rods["column"]["tip"][0]) > 1e-4  # it moved
 
 
-@pytest.mark.parametrize("command", ["refine", "design"])
-def test_spatial_chains_are_refused_beyond_static_path_modes_buckling_dynamic(command):
+@pytest.mark.parametrize("command", ["design", "calibrate"])
+def test_spatial_chains_are_refused_in_design_and_calibrate(command):
     from fe_beam.config import validate
     from fe_beam.errors import ConfigError
 

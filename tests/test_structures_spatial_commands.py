@@ -376,3 +376,41 @@ def test_dynamic_free_spatial_l_frame_angular_momentum():
     # measured: 1e-16 relative
     assert [first[f"angular_momentum_{k}"] for k in "xyz"] == pytest.approx(angular, rel=1e-12)
     assert [first[f"momentum_{k}"] for k in "xyz"] == pytest.approx(linear, rel=1e-12)
+
+
+# --- refine ------------------------------------------------------------------------------------
+def test_refine_spatial_l_frame_at_order_four():
+    """fe-beam refine of the clamped L-frame pushed out of its plane (large force with in-plane
+    parts, Reissner law): every rod's elements doubled (6, 12, 24 in all), the end's observed
+    order 4 in u, v, w, and the finest level within its estimated error of the independent
+    shooting solution across the corner (`fe_beam.baselines.spatial_frame_shooting`), the
+    Richardson extrapolation closer still."""
+    from fe_beam.baselines.spatial_frame_shooting import SpatialFrame, solve_spatial_frame
+
+    length = 0.5
+    G = E / (2 * (1 + NU))
+    EA, GA, GJ = E * B * H, G * B * H, G * _torsion_constant(B, H)
+    EIy, EIz = E * H * B**3 / 12, E * B * H**3 / 12
+    force = np.array([0.3, -0.5, 2.0]) * EIy / length**2
+    reference = solve_spatial_frame(SpatialFrame(
+        (_frame([1.0, 0, 0], [0, 1.0, 0]), _frame([0, 1.0, 0], [-1.0, 0, 0])),
+        (length, length), (EA, GA, GJ, EIy, EIz), force=tuple(force)))
+    expected = np.array(reference[-1][0]) - [length, length, 0.0]
+    config = _base(3) | {"loads": {"steps": 6}, "refine": {"levels": 3}}
+    config["rods"] = [
+        {"name": "a", "start": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0], "length": length,
+         "supports": {"x0": "clamped"}},
+        {"name": "b", "start": [length, 0.0, 0.0], "direction": [0.0, 1.0, 0.0],
+         "length": length, "loads": {"point_forces": [[length, *force]]}}]
+    config["joints"] = [{"name": "corner", "at": ["a:end", "b:start"]}]
+    summary = fe_beam.run("refine", config)
+    assert summary["status"] == "completed"
+    assert [level["elements"] for level in summary["levels"]] == [6, 12, 24]
+    assert abs(expected[2]) > 0.5 * length  # large
+    for name, value in zip(("tip.u", "tip.v", "tip.w"), expected, strict=True):
+        analysis = summary["analysis"][name]
+        # measured: orders 3.98, 3.90, 3.89
+        assert 3.7 < analysis["order"] < 4.3, (name, analysis["order"])
+        finest = analysis["levels"][-1]["value"]
+        assert abs(finest - value) <= 2 * analysis["error_estimate"], (name, finest, value)
+        assert abs(analysis["extrapolated"] - value) < 0.2 * abs(finest - value), name

@@ -23,7 +23,7 @@ STRUCTURE_TABLES = ("rods", "joints", "bodies")
 STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design",
                       "calibrate")
 #: the commands that run a spatial structure in this version
-SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic")
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {
