@@ -71,6 +71,7 @@ from fe_beam.model.loads import unsupported
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
 from fe_beam.solvers.energy_momentum import EnergyMomentum
+from fe_beam.solvers.spatial_energy_momentum import SpatialEnergyMomentum
 from fe_beam.solvers.modes import natural_frequencies
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
@@ -271,7 +272,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
-    if config.time.scheme == "energy-conserving":
+    if config.time.scheme == "energy-conserving" and getattr(problem, "spatial", False):
+        integrator = SpatialEnergyMomentum(problem, config.time, config.damping,
+                                           config.load_function, config.motion_function,
+                                           config.static.solver)
+    elif config.time.scheme == "energy-conserving":
         if tendons is not None:
             _detach_tendon_energy(problem)
         integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,
