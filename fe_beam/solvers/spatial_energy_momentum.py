@@ -55,7 +55,7 @@ from dolfinx import fem
 from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_max
-from fe_beam.fem.rod import StrainWatch
+from fe_beam.fem.rod import StrainRange, StrainWatch
 from fe_beam.fem.rotations import curvature, rotation, skew
 from fe_beam.fem.spatial_rod import SpatialRodProblem, rotation_vector_of
 from fe_beam.model.spatial import SPATIAL_COMPONENTS, SpatialStrains, rotation_matrix
@@ -271,6 +271,7 @@ class SpatialEnergyMomentum(StepDriver):
                                                       + [psi.dx(0)[i] for i in range(3)]),
                                         self.at_energy.points)
         self._psi_m = compat.expression(psi, self.at_mass.points)
+        self._tangent_e = compat.expression(t1, self.at_energy.points)
         state = ufl.split(p.w)
         theta_state = ufl.as_vector(state[3:6])
         R = rotation(theta_state)
@@ -406,7 +407,7 @@ class SpatialEnergyMomentum(StepDriver):
         for i, c in enumerate(columns):
             state[c] = theta[:, i]
         compat.local_array(p.w)[:] = state
-        self._trial_range = p.strain_range()  # collective
+        self._trial_range = self._strain_range()  # collective
         reason = self._trial_range.inadmissible()
         if reason is not None:
             raise SolveFailed(reason)
@@ -416,6 +417,23 @@ class SpatialEnergyMomentum(StepDriver):
         velocity[p.multiplier_dofs()] = 0.0
         self._candidate = (state, velocity, rotations, t_old, t_new)
         return iterations
+
+    def _strain_range(self) -> StrainRange:
+        """Extremes of the scheme's strains v = Lambda_{n+1}^T r'_{n+1} over the energy rule's
+        points (collective): min v1, max |eps|, the largest shear angle (the nodal rotation
+        vector of the output is not what the scheme integrates)."""
+        values = self.at_energy.evaluate(self._psi_e, 6)
+        lam = self.at_energy.get()[..., :9].reshape(values.shape[:-1] + (3, 3))
+        lam_new = cayley(values[..., :3]) @ lam
+        tangent = self.at_energy.evaluate(self._tangent_e, 3)
+        v = np.einsum("...ji,...j->...i", lam_new, tangent).reshape(-1, 3)
+        local = np.full(3, -np.inf)
+        if len(v):
+            local[0] = -float(np.min(v[:, 0]))
+            local[1] = float(np.max(np.abs((np.sum(v**2, axis=1) - 1) / 2)))
+            local[2] = float(np.max(np.abs(np.arctan2(np.hypot(v[:, 1], v[:, 2]), v[:, 0]))))
+        reduced = np.array([global_max(self.problem.comm, float(x)) for x in local])
+        return StrainRange(float(-reduced[0]), float(reduced[1]), float(reduced[2]), None)
 
     def local_error(self) -> float:
         """dt^2/2 |a_{n+1/2} - a_p| over the displacements (a_p the previous step's mean
