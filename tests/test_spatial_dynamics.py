@@ -285,7 +285,7 @@ def test_dynamic_command_writes_tip_frame_energies_and_momenta(tmp_path, capsys)
 
 
 @pytest.mark.parametrize("change, words", [
-    ({"time.scheme": "energy-conserving"}, "energy-conserving"),
+    ({"time.scheme": "fd-dop853"}, "fd-dop853"),
     ({"time.scheme": "fd-rk45"}, "fd-rk45"),
     ({"damping.kelvin_voigt": 0.01}, "kelvin_voigt"),
     ({"initial.velocity": [0.0, 1.0, 0.0]}, "omega_x"),
