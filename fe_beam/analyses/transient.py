@@ -71,12 +71,12 @@ from fe_beam.model.loads import unsupported
 from fe_beam.model.studies import StaticConfig
 from fe_beam.solvers.dynamics import DynamicsFailed, GeneralizedAlpha
 from fe_beam.solvers.energy_momentum import EnergyMomentum
-from fe_beam.solvers.spatial_energy_momentum import SpatialEnergyMomentum
 from fe_beam.solvers.modes import natural_frequencies
 from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
 from fe_beam.solvers.rod_static import build_problem
+from fe_beam.solvers.spatial_energy_momentum import SpatialEnergyMomentum
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
 
