@@ -35,8 +35,9 @@ pi_n) = dt (T_{n+1} - T_n) since cay(Psi) Psi = Psi); testing with translations 
 (e x r_m, e) gives the linear and angular momentum balances exactly. Second order in dt.
 
 The nodal rotation vector of the problem's state (what the outputs read) follows the nodes'
-rotations Lambda = cay(psi) Lambda_n (the member of theta + 2 pi k n nearest the previous one):
-it is output only, the scheme never evaluates T(theta), and passes |theta| = 2 pi.
+rotations Lambda = cay(psi) Lambda_n, continuous along the rod and re-parametrised at x = 0
+beyond 1.5 pi (`_nodal_vectors`): it is output only, the scheme never evaluates T(theta), and
+passes |theta| = 2 pi.
 
 Not taken (ConfigError): follower loads, tendons, chains of rods, prescribed end motions,
 Kelvin-Voigt damping, contact.
@@ -70,6 +71,8 @@ MAX_ROTATION_INCREMENT = 2.0
 # |Delta pi|_D^2 below which the discrete gradient is the midpoint gradient
 SMALL_INCREMENT = 1e-16
 SERIES = 1e-3  # |psi| below which 2 atan(|psi|/2)/|psi| is its series
+#: the length of the output's rotation vector at x = 0 beyond which it is re-parametrised
+REPARAMETRISE = 1.5 * math.pi
 
 
 def cayley(psi: np.ndarray) -> np.ndarray:
@@ -344,6 +347,38 @@ class SpatialEnergyMomentum(StepDriver):
                 for i in range(3)]
         return self._rotation_dof_columns
 
+    def _nodal_vectors(self, rotations: np.ndarray, previous: np.ndarray) -> np.ndarray:
+        """The nodal rotation vectors of the rotations (local nodes, ghosts included) that the
+        outputs read: continuous along the rod (each node's the member of theta + 2 pi k n
+        nearest its neighbour's towards x = 0), the node at x = 0 continuous in time and
+        re-parametrised, theta -> theta (1 - 2 pi / |theta|) (the same rotation), when its
+        length passes `REPARAMETRISE`: the interpolated vectors stay away from |theta| = 2 pi,
+        where the chart's interpolation would not be the rotations'."""
+        p = self.problem
+        if not hasattr(self, "_node_x"):
+            sub, _ = compat.sub_space_collapsed(p.space, 3)
+            self._node_x = sub.tabulate_dof_coordinates()[:, 0].copy()
+            self._node_owned = sub.dofmap.index_map.size_local
+        owned = self._node_owned
+        gathered = p.comm.allgather((self._node_x[:owned], rotations[:owned],
+                                     previous[:owned]))
+        xs = np.concatenate([g[0] for g in gathered])
+        matrices = np.concatenate([g[1] for g in gathered]).reshape(-1, 3, 3)
+        before = np.concatenate([g[2] for g in gathered]).reshape(-1, 3)
+        order = np.argsort(xs, kind="stable")
+        vectors = np.empty((len(xs), 3))
+        first = order[0]
+        base = rotation_vector_of(matrices[first], near=before[first])
+        size = float(np.linalg.norm(base))
+        if size > REPARAMETRISE:
+            base = base * (1 - 2 * math.pi / size)
+        vectors[first] = base
+        for previous_index, index in zip(order[:-1], order[1:], strict=True):
+            vectors[index] = rotation_vector_of(matrices[index], near=vectors[previous_index])
+        sorted_x = xs[order]
+        local = order[np.clip(np.searchsorted(sorted_x, self._node_x), 0, len(xs) - 1)]
+        return vectors[local]
+
     def initialise(self, velocity: Callable | None = None) -> None:
         """Start from ``problem.w`` at t = 0 with initial velocities ``velocity(x) -> (u_t,
         v_t, w_t, omega_x, omega_y, omega_z)`` (omega the sections' angular velocity in world
@@ -400,9 +435,7 @@ class SpatialEnergyMomentum(StepDriver):
             raise SolveFailed(f"rotation increment {2 * math.atan(largest / 2):.3g} rad >= "
                               f"{MAX_ROTATION_INCREMENT:g} rad in one step")
         rotations = _orthonormal(cayley(psi) @ self._nodal_rotations)
-        theta_old = np.stack([old[c] for c in columns], axis=1)
-        theta = np.array([rotation_vector_of(r, near=t)
-                          for r, t in zip(rotations, theta_old, strict=True)]).reshape(-1, 3)
+        theta = self._nodal_vectors(rotations, np.stack([old[c] for c in columns], axis=1))
         state = unknown.copy()
         for i, c in enumerate(columns):
             state[c] = theta[:, i]
