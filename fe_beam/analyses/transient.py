@@ -196,7 +196,7 @@ def dynamic_checks(certificates: dict) -> tuple[list, list]:
                     f"{energy['t']:.4g} s); a step failing it was halved"
                     + (f"; it failed first at t = {failed['t']:.6g} s at the smallest step: "
                        f"{failed['reason']}" if failed else "")),
-            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar); "
+            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\"; "
                    "with [[obstacles]] rho_inf = 1 (impacts then gain no energy)"))
     elif energy:
         notes.append("the energy balance is not checked: prescribed end motions do work that "

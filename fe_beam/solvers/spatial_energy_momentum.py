@@ -527,6 +527,10 @@ class SpatialEnergyMomentum(StepDriver):
     _state_attributes = ("time", "_a_prev", "_work", "_dissipated", "_load_energy",
                          "_nodal_rotations")
 
+    def _rotation_note(self) -> str:
+        """No rotation-vector chart here: nothing to say about |theta| = 2 pi."""
+        return ""
+
     def reject(self) -> None:
         p = self.problem
         compat.local_array(p.w)[:] = compat.local_array(self.q_old)
