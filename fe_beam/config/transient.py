@@ -225,9 +225,6 @@ def _check_spatial_dynamics(settings: TimeSettings, damping: Damping,
         if getattr(model, "structure", None) is not None:
             raise ConfigError(f"{scheme} does not take chains of rods yet; use scheme = "
                               "\"generalized-alpha\"")
-        if model.loads.follower:
-            raise ConfigError(f"{scheme} takes dead loads only, not [loads] follower = true; "
-                              "use scheme = \"generalized-alpha\"")
         if config is not None and config.get("tendons"):
             raise ConfigError(f"{scheme} takes no [[tendons]]; use scheme = "
                               "\"generalized-alpha\"")

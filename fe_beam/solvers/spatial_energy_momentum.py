@@ -39,8 +39,10 @@ rotations Lambda = cay(psi) Lambda_n, continuous along the rod and re-parametris
 beyond 1.5 pi (`_nodal_vectors`): it is output only, the scheme never evaluates T(theta), and
 passes |theta| = 2 pi.
 
-Not taken (ConfigError): follower loads, tendons, chains of rods, prescribed end motions,
-Kelvin-Voigt damping, contact.
+A follower tip force and moment (tip frame) act as R_m F and R_m M, R_m = (Lambda_n +
+Lambda_{n+1})/2 at the tip, their work over the step (R_m F . Delta d + R_m M . phi n) booked as
+applied: the balance stays exact. Not taken (ConfigError): tendons, chains of rods, prescribed
+end motions, Kelvin-Voigt damping, contact.
 """
 
 from __future__ import annotations
@@ -170,6 +172,8 @@ class SpatialEnergyMomentum(StepDriver):
         const = lambda value: fem.Constant(mesh, float(value))  # noqa: E731
         self.dt = const(settings.dt)
         self.c = const(damping.c)
+        self.follower = bool(model.loads.follower)
+        self.tip_rotation = fem.Constant(mesh, np.eye(3))  # Lambda_n at x = L (follower loads)
         self.bcs, self._bc_values = self._dirichlet_conditions()
         self._build_forms()
         self.solver = SNESSolver(NonlinearProblem(self.residual, self.unknown, self.bcs),
@@ -255,19 +259,27 @@ class SpatialEnergyMomentum(StepDriver):
         # dead forces at the step's mean load factor on dd (linear: exact discrete gradient);
         # dead moments on (phi/|psi|) dphi, phi = 2 atan(|psi|/2)
         residual -= p.dead_load_work((dd, None))
+        # follower tip force and moment (tip frame): R_m F, R_m M with R_m = (Lambda_n +
+        # Lambda_{n+1}) / 2 at the tip, their work over the step booked as applied (`accept`)
+        turned = ufl.dot((eye + cay) / 2, self.tip_rotation)
         size = ufl.sqrt(ufl.dot(psi, psi))
         small = ufl.lt(size, SERIES)
         safe = ufl.conditional(small, 1.0, size)
         size2 = ufl.dot(psi, psi)
         ratio = ufl.conditional(small, 1 - size2 / 12 + size2**2 / 80,
                                 2 * ufl.atan(safe / 2) / safe)
-        moment_work = self._moment_work(ratio * dphi)
+        moment_work = self._moment_work(ratio * dphi, turned)
+        if self.follower:
+            moment_work += p.load_factor * ufl.dot(ufl.dot(turned, p.tip_force), dd) * p.ds_tip
         if moment_work is not None:
             residual -= moment_work
         self.residual = residual
-        # the work of the dead moments over the step: tested with psi itself
-        self._moment_step_work = (fem.form(self._moment_work(ratio * psi))
-                                  if moment_work is not None else None)
+        # the work of the moments and follower loads over the step: tested with the increment
+        step_work = self._moment_work(ratio * psi, turned)
+        if self.follower:
+            step_work += p.load_factor * ufl.dot(ufl.dot(turned, p.tip_force),
+                                                 increment) * p.ds_tip
+        self._moment_step_work = fem.form(step_work) if step_work is not None else None
         # point updates (evaluated on the candidate before it is accepted), as expressions of
         # the nodal fields only (the stored point values are combined in numpy)
         self._psi_e = compat.expression(ufl.as_vector([psi[i] for i in range(3)]
@@ -307,13 +319,15 @@ class SpatialEnergyMomentum(StepDriver):
             self.forms[f"momentum_{k}"] = fem.form(linear[i] * dx_m)
             self.forms[f"angular_momentum_{k}"] = fem.form(angular[i] * dx_m)
 
-    def _moment_work(self, rotation_increment):
-        """Virtual work of the dead tip and point moments (world axes) at the step's load
-        factor on a rotation vector (None without moments)."""
+    def _moment_work(self, rotation_increment, turned):
+        """Virtual work of the tip moment (dead: world axes; follower: ``turned`` times it,
+        the tip frame) and the dead point moments at the step's load factor on a rotation
+        vector (None without moments and follower loads)."""
         p = self.problem
-        if not p.moment_loads:
+        if not (p.moment_loads or self.follower):
             return None
-        work = ufl.dot(p.tip_moment, rotation_increment) * p.ds_tip
+        moment = ufl.dot(turned, p.tip_moment) if self.follower else p.tip_moment
+        work = ufl.dot(moment, rotation_increment) * p.ds_tip
         if p.point_moments:
             work += p.point_work(p.point_moments,
                                  lambda moment: ufl.dot(moment, rotation_increment))
@@ -347,6 +361,28 @@ class SpatialEnergyMomentum(StepDriver):
                 for i in range(3)]
         return self._rotation_dof_columns
 
+    def _nodes(self) -> None:
+        """The x of the rotation's local nodes (ghosts included) and the number owned."""
+        if not hasattr(self, "_node_x"):
+            sub, _ = compat.sub_space_collapsed(self.problem.space, 3)
+            self._node_x = sub.tabulate_dof_coordinates()[:, 0].copy()
+            self._node_owned = sub.dofmap.index_map.size_local
+
+    def _set_tip_rotation(self) -> None:
+        """Lambda_n of the node at x = L (follower loads), from the rank that owns it."""
+        if not self.follower:
+            return
+        self._nodes()
+        owned = self._node_owned
+        length = self.problem.model.length
+        found = np.flatnonzero(np.abs(self._node_x[:owned] - length) <= 1e-10 * length)
+        local = np.zeros(10)
+        if len(found):
+            local[:9] = self._nodal_rotations[found[0]].ravel()
+            local[9] = 1.0
+        total = self.problem.comm.allreduce(local)
+        self.tip_rotation.value[:] = (total[:9] / max(total[9], 1.0)).reshape(3, 3)
+
     def _nodal_vectors(self, rotations: np.ndarray, previous: np.ndarray) -> np.ndarray:
         """The nodal rotation vectors of the rotations (local nodes, ghosts included) that the
         outputs read: continuous along the rod (each node's the member of theta + 2 pi k n
@@ -355,10 +391,7 @@ class SpatialEnergyMomentum(StepDriver):
         length passes `REPARAMETRISE`: the interpolated vectors stay away from |theta| = 2 pi,
         where the chart's interpolation would not be the rotations'."""
         p = self.problem
-        if not hasattr(self, "_node_x"):
-            sub, _ = compat.sub_space_collapsed(p.space, 3)
-            self._node_x = sub.tabulate_dof_coordinates()[:, 0].copy()
-            self._node_owned = sub.dofmap.index_map.size_local
+        self._nodes()
         owned = self._node_owned
         gathered = p.comm.allgather((self._node_x[:owned], rotations[:owned],
                                      previous[:owned]))
@@ -406,6 +439,7 @@ class SpatialEnergyMomentum(StepDriver):
         theta = np.stack([state[c] for c in self._rotation_columns()], axis=1)
         self._nodal_rotations = np.array([rotation_matrix(t) for t in theta],
                                          dtype=float).reshape(-1, 3, 3)
+        self._set_tip_rotation()
         self._work = 0.0
         self._dissipated = 0.0
         self._load_energy = self._unit_load_energy()
@@ -512,6 +546,7 @@ class SpatialEnergyMomentum(StepDriver):
         self.q_old.x.scatter_forward()
         self.v_old.x.scatter_forward()
         self._nodal_rotations = rotations
+        self._set_tip_rotation()
         load_energy = self._unit_load_energy()
         self._work += load_mid * (load_energy - self._load_energy)
         self._load_energy = load_energy
@@ -533,6 +568,7 @@ class SpatialEnergyMomentum(StepDriver):
 
     def reject(self) -> None:
         p = self.problem
+        self._set_tip_rotation()  # of the accepted state (also after a restored snapshot)
         compat.local_array(p.w)[:] = compat.local_array(self.q_old)
         p.load_factor.value = self.load_function(self.time)
 
@@ -554,9 +590,6 @@ def refusal(problem, damping) -> str | None:
     scheme = "[time] scheme = \"energy-conserving\" for spatial rods"
     if getattr(problem, "chain", None) is not None:
         return f"{scheme} does not take chains of rods yet; use scheme = \"generalized-alpha\""
-    if model.loads.follower:
-        return (f"{scheme} takes dead loads only, not [loads] follower = true; use "
-                "scheme = \"generalized-alpha\"")
     if problem.extra_energy is not None or problem.extra_work is not None:
         return f"{scheme} takes no [[tendons]]; use scheme = \"generalized-alpha\""
     if damping.kelvin_voigt:
