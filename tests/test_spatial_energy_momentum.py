@@ -228,12 +228,14 @@ def test_what_the_spatial_scheme_refuses(tmp_path, capsys, change, words):
 
 
 @pytest.mark.mpi
-def test_two_ranks_match_serial():
-    """Under mpirun -n 2: the Gauss-point state, the gathered output rotation vectors and the
-    energies are the serial run's (measured 4e-13 on the tumbling beam to t = 8 s)."""
+@pytest.mark.parametrize("follower", [False, True])
+def test_two_ranks_match_serial(follower):
+    """Under mpirun -n 2: the Gauss-point state, the gathered output rotation vectors (and the
+    tip frame of the follower loads) and the energies are the serial run's (measured 4e-13 on
+    the tumbling beam to t = 8 s)."""
     if MPI.COMM_WORLD.size == 1:
         pytest.skip("run under mpirun -n 2 to compare a serial and a parallel run")
-    config = tumbling(0.1, 2.0, elements=4)
+    config = tumbling(0.1, 2.0, elements=4, follower=follower)
     parallel = run_dynamic(parse_dynamic(copy.deepcopy(config)), None, MPI.COMM_WORLD,
                            progress=False)
     serial = run(config)
