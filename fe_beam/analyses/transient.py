@@ -76,6 +76,7 @@ from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
 from fe_beam.solvers.rod_static import build_problem
+from fe_beam.solvers.spatial_energy_momentum import SpatialEnergyMomentum
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
 
@@ -195,7 +196,7 @@ def dynamic_checks(certificates: dict) -> tuple[list, list]:
                     f"{energy['t']:.4g} s); a step failing it was halved"
                     + (f"; it failed first at t = {failed['t']:.6g} s at the smallest step: "
                        f"{failed['reason']}" if failed else "")),
-            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar); "
+            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\"; "
                    "with [[obstacles]] rho_inf = 1 (impacts then gain no energy)"))
     elif energy:
         notes.append("the energy balance is not checked: prescribed end motions do work that "
@@ -271,7 +272,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
-    if config.time.scheme == "energy-conserving":
+    if config.time.scheme == "energy-conserving" and getattr(problem, "spatial", False):
+        integrator = SpatialEnergyMomentum(problem, config.time, config.damping,
+                                           config.load_function, config.motion_function,
+                                           config.static.solver)
+    elif config.time.scheme == "energy-conserving":
         if tendons is not None:
             _detach_tendon_energy(problem)
         integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,

@@ -552,8 +552,8 @@ class StepDriver:
                             + ("(with [[obstacles]]: rho_inf = 1, whose impacts gain no "
                                "energy; the energy-conserving scheme takes no obstacles)"
                                if getattr(self, "contact", None) is not None else
-                               "(use a smaller [time] dt, or scheme = \"energy-conserving\" "
-                               "for a planar rod)"), self.time)
+                               "(use a smaller [time] dt, or scheme = \"energy-conserving\", "
+                               "which has no rotation-vector singularity)"), self.time)
                     dt = trial / 2
                     bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({verdict})")
                     continue
