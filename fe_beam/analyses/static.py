@@ -470,8 +470,7 @@ def structure_columns(model, joints: bool = True) -> list:
         for rod in structure.rods:
             columns += [exports.Column(f"rod_{rod.name}_{k}", lambda r, n=rod.name, i=i:
                                        r["rods"][n]["tip"][i]) for i, k in enumerate("xyz")]
-        names = [j.name for j in structure.joints_on_chain] + [j[0] for j in
-                                                                structure.body_joints]
+        names = _joint_names(structure)
         for name in names:
             columns += [exports.Column(f"joint_{name}_F{k}", lambda r, n=name, i=i:
                                        r["joints"][n]["force"][i]) for i, k in enumerate("xyz")]
@@ -484,13 +483,21 @@ def structure_columns(model, joints: bool = True) -> list:
             exports.Column(f"rod_{rod.name}_y", lambda r, n=rod.name: r["rods"][n]["tip"][1]),
             exports.Column(f"rod_{rod.name}_angle",
                            lambda r, n=rod.name: r["rods"][n]["tip_angle"])]
-    names = [j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+    names = _joint_names(structure)
     for name in names if joints else ():
         columns += [
             exports.Column(f"joint_{name}_Fx", lambda r, n=name: r["joints"][n]["force"][0]),
             exports.Column(f"joint_{name}_Fy", lambda r, n=name: r["joints"][n]["force"][1]),
             exports.Column(f"joint_{name}_M", lambda r, n=name: r["joints"][n]["moment"])]
     return columns
+
+
+def _joint_names(structure) -> list[str]:
+    """The joints with outputs: shared vertices, fixed bodies at the mesh's ends, ties and
+    fixed bodies inside the mesh."""
+    return ([j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+            + [t.name for t in structure.ties]
+            + [j[0] for j in structure.inner_body_joints])
 
 
 def contact_columns(count: int, spatial: bool = False) -> list:

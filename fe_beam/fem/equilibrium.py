@@ -141,6 +141,24 @@ def residual_floor(problem) -> tuple[float, float]:
 
 def _reactions(problem) -> list[Wrench]:
     result = []
+    chain = getattr(problem, "chain", None)
+    for s, held in (problem.inner_reactions() if chain is not None else ()):
+        # a structure's supported rod ends inside the mesh
+        values = problem.point_values(s)
+        reference = np.array(problem.reference_point(s))
+        get = lambda name: held.get(name, 0.0)  # noqa: E731
+        if problem.spatial:
+            force = np.array([get("u"), get("v"), get("w")])
+            conjugate = np.array([get(f"theta_{k}") for k in "xyz"])
+            moment = np.linalg.solve(spin_matrix(np.array(
+                [values[f"theta_{k}"] for k in "xyz"])).T, conjugate)
+            position = reference + np.array([values["u"], values["v"], values["w"]])
+        else:
+            force = np.array([get("u"), get("v")])
+            moment = np.array([0.0, 0.0, get("theta")])
+            position = reference + np.array([values["u"], values["v"]])
+        result.append(Wrench(f"reaction s = {s:.6g}", _vector3(force),
+                             moment_of(position, force) + _vector3(moment), reaction=True))
     for end in ("x0", "xL"):
         if not problem.model.supports.fixed(end):
             continue

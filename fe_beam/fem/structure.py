@@ -33,10 +33,12 @@ __all__ = ["ChainGeometry", "chain_vertices"]
 def chain_vertices(structure) -> tuple[np.ndarray, tuple[float, ...]]:
     """(increasing vertex coordinates of the chain: each rod's uniform elements in chain order,
     the joints' coordinates)."""
-    parts = [np.zeros(1)]
+    parts, end = [], None
     for segment in structure.chain:
         rod = structure.rods[segment.rod]
-        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[1:])
+        first = 0 if end is None or segment.s0 > end else 1  # a piece's first vertex
+        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[first:])
+        end = segment.s0 + segment.length
     vertices = np.concatenate(parts)
     joints = structure.boundaries()
     for s in joints:  # the joint vertex exactly at its coordinate
@@ -54,13 +56,24 @@ class ChainGeometry:
         self.structure = problem.model.structure
         mesh = problem.mesh
         cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
-        self.theta0 = fem.Function(cellwise, name="theta0")
+        self._cellwise = cellwise
+        curved = any(seg.curvature for seg in self.structure.chain)
+        # the reference angle: constant on each straight rod (DG0), linear on an arc (DG1)
+        angles = compat.function_space(mesh, compat.element(mesh, "DG", 1)) if curved \
+            else cellwise
+        self.theta0 = fem.Function(angles, name="theta0")
         self.rod = fem.Function(cellwise, name="rod")
         x = compat.cell_vertex_x(mesh)
         middle = x.mean(axis=1)
         dofs = compat.cell_dofs(cellwise)[: len(middle), 0]
         segments = [self.structure.segment_at(m) for m in middle]
-        self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
+        if curved:
+            where = angles.tabulate_dof_coordinates()[:, 0]
+            for cell, seg in enumerate(segments):
+                for dof in compat.cell_dofs(angles)[cell]:
+                    self.theta0.x.array[dof] = seg.angle_at(where[dof])
+        else:
+            self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
         self.rod.x.array[dofs] = [seg.rod for seg in segments]
         self._segment_of_cell = np.array([self.structure.chain.index(seg) for seg in segments],
                                          dtype=int)
@@ -89,7 +102,7 @@ class ChainGeometry:
 
     def cellwise(self, values) -> fem.Function:
         """A DG0 field whose value on each cell is ``values[i]`` of the cell's rod i."""
-        field = fem.Function(self.theta0.function_space)
+        field = fem.Function(self._cellwise)
         dofs = compat.cell_dofs(field.function_space)[: len(self._segment_of_cell), 0]
         rods = np.array([self.structure.chain[k].rod for k in self._segment_of_cell], dtype=int)
         field.x.array[dofs] = np.asarray(values, dtype=float)[rods]
@@ -208,7 +221,7 @@ class ChainGeometry:
 
     def _compile_spatial_joint_form(self):
         problem = self.problem
-        self._indicator = fem.Function(self.theta0.function_space)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         d, theta, multipliers = problem.fields()
         s = problem.strains((d, theta))
@@ -224,8 +237,7 @@ class ChainGeometry:
         if self.spatial:
             return self._compile_spatial_joint_form()
         problem = self.problem
-        cellwise = self.theta0.function_space
-        self._indicator = fem.Function(cellwise)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         u, v, theta, multipliers = problem.fields()
         s = problem.strains(u, v, theta)
@@ -266,6 +278,19 @@ class ChainGeometry:
                 continue
             result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
                             "moment": sign * reaction["M"]}
+        ties, inner = self.structure.ties, self.structure.inner_body_joints
+        if ties or inner:
+            # the force and moment the rest of the structure exerts on a tied end: the
+            # residual of its own rod's cells there (no Dirichlet rows at tied dofs)
+            values = self.problem.raw_residual()
+            for tie in ties:
+                result[tie.name] = self._end_wrench(values, tie.ends[0][0])
+            for name, s, rod_first in inner:
+                wrench = self._end_wrench(values, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * f for f in wrench["force"]],
+                                "moment": ([sign * m for m in wrench["moment"]] if self.spatial
+                                           else sign * wrench["moment"])}
         if not self.structure.joints_on_chain:
             return result
         if self._joint_form is None:
@@ -292,6 +317,38 @@ class ChainGeometry:
             fx, fy, m = sums
             result[joint.name] = {"force": [sign * fx, sign * fy], "moment": sign * m}
         return result
+
+    # --- ties (joints that are not shared vertices) --------------------------------------------
+    def _global_dof(self, name: str, s: float, what: str) -> int:
+        """The global index (in the state vector) of component ``name`` at the vertex s."""
+        problem = self.problem
+        local = problem.point_dofs(name, s, what)
+        start = compat.vector_of(problem.w).getOwnershipRange()[0]
+        mine = int(local[0]) + start + 1 if len(local) else 0
+        return int(problem.comm.allreduce(mine)) - 1
+
+    def tie_pairs(self) -> np.ndarray:
+        """(slave, master) global dof pairs of the structure's ties: each tied component of
+        every end after the first equals the first end's (collective)."""
+        pairs = []
+        for tie in self.structure.ties:
+            (s_first, _), *others = tie.ends
+            for name in tie.components:
+                master = self._global_dof(name, s_first, f"joint '{tie.name}' at")
+                for s, _ in others:
+                    pairs.append((self._global_dof(name, s, f"joint '{tie.name}' at"), master))
+        return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+    def _end_wrench(self, values, s: float) -> dict:
+        """{force, moment} from the residual ``values`` at the vertex s (world axes)."""
+        comm = self.problem.comm
+        sums = [float(global_sum(comm, values[self.problem.point_dofs(n, s)].sum()))
+                for n in self.problem.components]
+        if self.spatial:
+            _, rotation_vector = self.position(s)
+            moment = np.linalg.solve(_spin(rotation_vector).T, np.array(sums[3:]))
+            return {"force": sums[:3], "moment": [float(m) for m in moment]}
+        return {"force": sums[:2], "moment": sums[2]}
 
     def shape(self, values: dict | None) -> dict | None:
         """A gathered line shape (``x``, ``u``, ``v`` at the vertices; `vertex_values`) with

@@ -63,7 +63,9 @@ class StaticContinuation:
             self.contact.frictional else None,
         )
         self.snes = SNESSolver(
-            NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
+            NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs,
+                             ties=self.problem.chain.tie_pairs()
+                             if getattr(self.problem, "chain", None) is not None else None),
             config.solver.for_problem(self.problem.saddle_point, self.problem.comm),
             prefix=prefix,
             state_scale=config.model.length,
