@@ -146,16 +146,16 @@ def _reactions(problem) -> list[Wrench]:
         # a structure's supported rod ends inside the mesh
         values = problem.point_values(s)
         reference = np.array(problem.reference_point(s))
-        get = lambda name: held.get(name, 0.0)  # noqa: E731
+        get = held.get
         if problem.spatial:
-            force = np.array([get("u"), get("v"), get("w")])
-            conjugate = np.array([get(f"theta_{k}") for k in "xyz"])
+            force = np.array([get("u", 0.0), get("v", 0.0), get("w", 0.0)])
+            conjugate = np.array([get(f"theta_{k}", 0.0) for k in "xyz"])
             moment = np.linalg.solve(spin_matrix(np.array(
                 [values[f"theta_{k}"] for k in "xyz"])).T, conjugate)
             position = reference + np.array([values["u"], values["v"], values["w"]])
         else:
-            force = np.array([get("u"), get("v")])
-            moment = np.array([0.0, 0.0, get("theta")])
+            force = np.array([get("u", 0.0), get("v", 0.0)])
+            moment = np.array([0.0, 0.0, get("theta", 0.0)])
             position = reference + np.array([values["u"], values["v"]])
         result.append(Wrench(f"reaction s = {s:.6g}", _vector3(force),
                              moment_of(position, force) + _vector3(moment), reaction=True))

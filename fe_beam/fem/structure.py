@@ -21,6 +21,7 @@ import math
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam.fem import compat
@@ -338,6 +339,45 @@ class ChainGeometry:
                 for s, _ in others:
                     pairs.append((self._global_dof(name, s, f"joint '{tie.name}' at"), master))
         return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+    def describe_mechanism(self, values) -> str:
+        """One sentence naming the mechanism whose zero-stiffness mode is ``values`` (the local
+        array of the state vector's owned dofs): the pin or ball joint about which the rods
+        turn relative to each other, or else the piece of the structure that moves as a rigid
+        body (collective)."""
+        comm, problem = self.problem.comm, self.problem
+        rotations = [n for n in problem.components if n.startswith("theta")]
+
+        def at(name, s):
+            return float(global_sum(comm, values[problem.point_dofs(name, s)].sum()))
+
+        owned = np.concatenate([problem.component_dofs(n) for n in rotations])
+        largest = comm.allreduce(float(np.max(np.abs(values[owned]), initial=0.0)), op=MPI.MAX)
+        best, relative = None, 0.0
+        for tie in self.structure.ties:
+            free = [n for n in rotations if n not in tie.components]
+            if not free:
+                continue
+            first = np.array([at(n, tie.ends[0][0]) for n in free])
+            for s, _ in tie.ends[1:]:
+                jump = float(np.linalg.norm(np.array([at(n, s) for n in free]) - first))
+                if jump > relative:
+                    best, relative = (tie, free), jump
+        if best is not None and relative > 1e-3 * largest:
+            tie, free = best
+            return (f"the structure is a mechanism: joint '{tie.name}' ({tie.kind}, at "
+                    f"{', '.join(end for _, end in tie.ends)}) lets the rods turn about it "
+                    f"with no stiffness (free dof: the relative rotation {', '.join(free)}); "
+                    "hold the rods (supports, a rigid joint) so that no part can turn freely")
+        motion = [n for n in problem.components]
+        magnitude = {}
+        for index, rod in enumerate(self.structure.rods):
+            s, _ = self.structure.rod_tip(index)
+            magnitude[rod.name] = max(abs(at(n, s)) for n in motion)
+        rod = max(magnitude, key=magnitude.get)
+        return (f"the structure is a mechanism: rod '{rod}' (and what is joined to it) moves "
+                "as a rigid body with no stiffness (free dofs: its rigid motion); support it or "
+                "join it rigidly")
 
     def _end_wrench(self, values, s: float) -> dict:
         """{force, moment} from the residual ``values`` at the vertex s (world axes)."""

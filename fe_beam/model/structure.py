@@ -472,8 +472,8 @@ class Structure:
                                  "list (e.g. [\"u\", \"v\", \"w\", \"theta_x\"])")
             return ("u", "v", "w", ("theta_x", "theta_y", "theta_z")[axis[0]])
         raise ValueError(f"[[rods]] '{name}' supports.{'x0' if end == 'start' else 'xL'} = "
-                         f"{kind!r} is planar; a spatial structure takes clamped, pinned, free "
-                         "or a list of components")
+                         f"\"{kind}\" is planar; a spatial chain takes clamped, pinned, free "
+                         "or a list of components from u, v, w, theta_x, theta_y, theta_z")
 
     def _order(self, links, clamped, ties) -> None:
         names = [rod.name for rod in self.rods]
@@ -525,7 +525,7 @@ class Structure:
                 current = nxt
         # piece numbers: a new piece where the walk restarted
         piece_of, count, previous = [], -1, None
-        for name, flipped in order_all:
+        for name, _flipped in order_all:
             linked = previous is not None and any(o[0] == previous for _, _, o in
                                                   neighbours[name])
             count += 0 if linked else 1

@@ -223,7 +223,7 @@ class Ties:
         start, end = b.getOwnershipRange()
         n, N = end - start, b.getSize()
         slaves, masters = pairs[:, 0], pairs[:, 1]
-        self.slaves = slaves
+        self.slaves, self.masters = slaves, masters
         is_slave = np.zeros(n, dtype=bool)
         mine = (slaves >= start) & (slaves < end)
         is_slave[slaves[mine] - start] = True

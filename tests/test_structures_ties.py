@@ -1,0 +1,285 @@
+"""Joints that are not shared mesh vertices: ties (issue 29): pins, T junctions, closed loops
+(rings of curved rods), mechanisms refused.
+
+References: the pinched ring's closed form (pi/4 - 2/pi) P R^3 / EI at small loads and the
+independent shooting solver `fe_beam.baselines.ring_shooting` at large ones; the direct
+stiffness solver `fe_beam.baselines.linear_frame` (exact Timoshenko members, rigid and pinned
+joints) for a three-hinged frame and a T junction at small loads."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+
+import numpy as np
+import pytest
+from test_config import dump_toml
+
+import fe_beam
+from fe_beam.baselines.linear_frame import LinearFrame
+from fe_beam.baselines.ring_shooting import pinched_ring
+from fe_beam.cli import main
+from fe_beam.config import validate
+from fe_beam.errors import ConfigError
+
+E, NU = 1.2e7, 0.3
+SIDE = 0.01  # square section
+EI = E * SIDE**4 / 12
+
+
+def _base(constraint: str = "inextensible-unshearable") -> dict:
+    return {"section": {"shape": "rectangle", "b": SIDE, "h": SIDE},
+            "material": {"E": E, "nu": NU},
+            "model": {"law": "reissner", "constraint": constraint},
+            "loads": {"steps": 1},
+            "output": {"xdmf": False, "plots": False}}
+
+
+def _ring(elements: int, P: float, R: float = 1.0, steps: int = 1) -> dict:
+    """A ring of four quarter rods (curvature 1/R) joined rigidly (the fourth joint closes the
+    loop: a tie), pinched by P at the top and bottom; a roller at the right joint and a pin at
+    the left one hold the rigid motions without reactions."""
+    quarter = math.pi * R / 2
+    starts = [(R, 0.0), (0.0, R), (-R, 0.0), (0.0, -R)]
+    directions = [(0.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (1.0, 0.0)]
+    config = _base()
+    config["loads"]["steps"] = steps
+    config["rods"] = [{"name": f"q{k + 1}", "start": list(starts[k]),
+                       "direction": list(directions[k]), "curvature": 1 / R, "length": quarter,
+                       "mesh": {"elements": elements, "degree": 2}} for k in range(4)]
+    config["rods"][0]["supports"] = {"x0": "roller"}
+    config["rods"][1]["supports"] = {"xL": "pinned"}
+    config["rods"][0]["loads"] = {"point_forces": [[quarter, 0.0, -P]]}
+    config["rods"][2]["loads"] = {"point_forces": [[quarter, 0.0, P]]}
+    config["joints"] = [{"name": f"j{k + 1}", "at": [f"q{k + 1}:end", f"q{(k + 1) % 4 + 1}:start"]}
+                        for k in range(4)]
+    return config
+
+
+def _diameters(step: dict, R: float = 1.0) -> tuple[float, float]:
+    """(shortening of the loaded diameter, lengthening of the other) from the rods' ends."""
+    rods = step["rods"]
+    return (2 * R - (rods["q1"]["tip"][1] - rods["q3"]["tip"][1]),
+            (rods["q4"]["tip"][0] - rods["q2"]["tip"][0]) - 2 * R)
+
+
+def test_pinched_ring_small_load_closed_form_and_order():
+    """delta = (pi/4 - 2/pi) P R^3 / EI (MODEL.md section 9) at P = 1e-6 EI / R^2 (the
+    nonlinear terms 1e-7 relative): errors 7.8e-3, 4.9e-4, 3.1e-5 with 2, 4, 8 quadratic
+    elements per quarter (measured), order 4; the joints' forces are P / 2 and the moments
+    the linear theory's P R / pi (loaded points) and P R (1/2 - 1/pi) (the others)."""
+    P = 1e-6 * EI
+    exact = (math.pi / 4 - 2 / math.pi) * P / EI
+    errors = []
+    for elements in (2, 4, 8):
+        summary = fe_beam.run("static", _ring(elements, P))
+        assert summary["status"] == "converged", summary.get("message")
+        delta, _ = _diameters(summary["steps"][-1])
+        errors.append(abs(delta - exact) / exact)
+    orders = [math.log2(a / b) for a, b in zip(errors, errors[1:])]
+    assert all(3.7 < order < 4.3 for order in orders), (errors, orders)
+    assert errors[-1] < 5e-5
+    joints = summary["steps"][-1]["joints"]
+    for name, moment in (("j1", P / math.pi), ("j2", P * (0.5 - 1 / math.pi))):
+        assert abs(abs(joints[name]["moment"]) - moment) < 1e-3 * moment, (name, joints[name])
+        assert abs(np.linalg.norm(joints[name]["force"]) - P / 2) < 1e-3 * P
+    # the tie (j4, closing the loop) reports as a shared vertex would: the side's moment
+    assert abs(abs(joints["j4"]["moment"]) - P * (0.5 - 1 / math.pi)) < 1e-3 * P
+
+
+def test_pinched_ring_large_load_against_shooting():
+    """P = EI / R^2 (the diameter shortens by 0.17 R) against the elastica by shooting: the
+    diameters' changes to 2e-5 R with 8 elements per quarter and 1.5e-6 R with 16."""
+    P = EI
+    reference = pinched_ring(P, 1.0, EI)
+    errors = []
+    for elements in (8, 16):
+        summary = fe_beam.run("static", _ring(elements, P, steps=3))
+        assert summary["status"] == "converged", summary.get("message")
+        delta, widening = _diameters(summary["steps"][-1])
+        errors.append(max(abs(delta - reference["delta"]),
+                          abs(widening - reference["widening"])))
+    assert reference["delta"] > 0.15
+    assert errors[1] < 1e-5 and errors[1] < errors[0] / 8, errors
+
+
+def test_one_rod_ring_pinned_at_one_point_is_refused():
+    """A closed loop of one rod (its end joined rigidly to its start) pinned at that point
+    turns about the pin: refused before solving (exit 2: the supports' rigid motions);
+    clamped there, it is held (converged)."""
+    config = _base()
+    circumference = 2 * math.pi
+    config["rods"] = [{"name": "ring", "start": [1.0, 0.0], "direction": [0.0, 1.0],
+                       "curvature": 1.0, "length": circumference, "mesh": {"elements": 48},
+                       "supports": {"x0": "pinned"},
+                       "loads": {"point_forces": [[circumference / 4, 0.0, -0.1 * EI]]}}]
+    config["joints"] = [{"name": "closure", "at": ["ring:end", "ring:start"]}]
+    with pytest.raises(ConfigError, match="free to move as a rigid body"):
+        validate("static", config)
+    config["rods"][0]["supports"] = {"x0": "clamped"}
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "converged", summary.get("message")
+    assert summary["steps"][-1]["rods"]["ring"]["tip"] == pytest.approx([1.0, 0.0], abs=1e-14)
+
+
+def _three_hinged(P: float, elements: int = 4) -> dict:
+    """A portal: columns 1.0 and 0.8 high (pinned bases), a beam 1.2 long joined rigidly to
+    the left column and by a pin to the right one; a horizontal force at mid-height of the
+    left column and a vertical one on the beam."""
+    config = _base("none")
+    mesh = {"elements": elements, "degree": 2}
+    config["rods"] = [
+        {"name": "left", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 1.0,
+         "supports": {"x0": "pinned"}, "mesh": mesh,
+         "loads": {"point_forces": [[0.5, P, 0.0]]}},
+        {"name": "beam", "start": [0.0, 1.0], "direction": [1.0, 0.0], "length": 1.2,
+         "mesh": mesh, "loads": {"point_forces": [[0.3, 0.0, -2 * P]]}},
+        {"name": "right", "start": [1.2, 0.2], "direction": [0.0, 1.0], "length": 0.8,
+         "supports": {"x0": "pinned"}, "mesh": mesh}]
+    config["joints"] = [{"name": "corner", "at": ["left:end", "beam:start"]},
+                        {"name": "hinge", "kind": "pin", "at": ["beam:end", "right:end"]}]
+    return config
+
+
+def _stiffnesses():
+    area = SIDE * SIDE
+    return EI, E * area, E / (2 * (1 + NU)) * area
+
+
+def test_three_hinged_frame_against_direct_stiffness():
+    """The pinned corner's two sides turn apart; the displacements and both rotations at the
+    pin, and the pin's force, against the linear direct stiffness solution (Timoshenko
+    members, exact at the nodes) at P = 1e-6 EI / L^2: measured 1.7e-6 of the largest
+    displacement, 5.8e-6 of the rotation (the nonlinear terms: 100 times smaller at 1e-8)."""
+    P = 1e-6 * EI
+    summary = fe_beam.run("static", _three_hinged(P))
+    assert summary["status"] == "converged", summary.get("message")
+    step = summary["steps"][-1]
+    EI_, EA, GA = _stiffnesses()
+    # nodes: 0 base L, 1 load on L, 2 corner, 3 load on beam, 4 pin, 5 base R
+    points = [(0, 0), (0, 0.5), (0, 1), (0.3, 1), (1.2, 1), (1.2, 0.2)]
+    frame = LinearFrame(points, [(0, 1), (1, 2), (2, 3), (3, 4), (5, 4)], EI_, EA, GA)
+    frame.pin(4, 4)
+    frame.fix(0, "u", "v")
+    frame.fix(5, "u", "v")
+    frame.load(1, P, 0.0)
+    frame.load(3, 0.0, -2 * P)
+    d = frame.solve()
+    scale = max(np.abs(d["u"]).max(), np.abs(d["v"]).max())
+    rods = step["rods"]
+    assert rods["beam"]["tip"] == pytest.approx([1.2 + d["u"][4], 1.0 + d["v"][4]],
+                                                abs=1e-5 * scale)
+    assert rods["right"]["tip"] == pytest.approx(rods["beam"]["tip"], abs=1e-14)
+    assert rods["left"]["tip"] == pytest.approx([d["u"][2], 1.0 + d["v"][2]], abs=1e-5 * scale)
+    turn_beam, turn_right = d["theta"][(4, 3)], d["theta"][(4, 4)]
+    assert abs(turn_beam - turn_right) > 0.1 * abs(turn_beam)  # the pin opens
+    assert rods["beam"]["tip_angle"] == pytest.approx(turn_beam, abs=2e-5 * abs(turn_beam))
+    assert rods["right"]["tip_angle"] - math.pi / 2 == pytest.approx(
+        turn_right, abs=2e-5 * abs(turn_beam))
+    # the pin's force on the beam's end: the reaction the right column (a two-force member)
+    # takes, along it; no moment
+    hinge = step["joints"]["hinge"]
+    right_base = frame.reactions[frame._index[(5, "v")]]
+    assert hinge["force"][1] == pytest.approx(right_base, rel=1e-5)
+    assert abs(hinge["force"][0]) < 1e-5 * abs(right_base)
+    assert abs(hinge["moment"]) < 1e-9 * P
+
+
+def _t_junction(P: float, elements: int = 4) -> dict:
+    """A clamped column and two arms (0.5 and 0.7 long) joined rigidly at its top: three rod
+    ends at one point; forces at the arms' ends and a moment on the left arm."""
+    config = _base("none")
+    mesh = {"elements": elements, "degree": 2}
+    config["rods"] = [
+        {"name": "column", "start": [0.0, 0.0], "direction": [0.0, 1.0], "length": 1.0,
+         "supports": {"x0": "clamped"}, "mesh": mesh},
+        {"name": "left", "start": [0.0, 1.0], "direction": [-1.0, 0.0], "length": 0.5,
+         "mesh": mesh, "loads": {"point_forces": [[0.5, 0.3 * P, -P]],
+                                 "point_moments": [[0.25, 0.2 * P]]}},
+        {"name": "right", "start": [0.0, 1.0], "direction": [1.0, 0.0], "length": 0.7,
+         "mesh": mesh, "loads": {"point_forces": [[0.7, 0.0, -0.5 * P]]}}]
+    config["joints"] = [{"name": "top", "at": ["column:end", "left:start", "right:start"]}]
+    return config
+
+
+def test_t_junction_against_direct_stiffness():
+    P = 1e-6 * EI
+    summary = fe_beam.run("static", _t_junction(P))
+    assert summary["status"] == "converged", summary.get("message")
+    step = summary["steps"][-1]
+    EI_, EA, GA = _stiffnesses()
+    points = [(0, 0), (0, 1), (-0.25, 1), (-0.5, 1), (0.7, 1)]
+    frame = LinearFrame(points, [(0, 1), (1, 2), (2, 3), (1, 4)], EI_, EA, GA)
+    frame.fix(0, "u", "v", "theta")
+    frame.load(3, 0.3 * P, -P)
+    frame.load(2, moment=0.2 * P)
+    frame.load(4, 0.0, -0.5 * P)
+    d = frame.solve()
+    scale = max(np.abs(d["u"]).max(), np.abs(d["v"]).max())
+    rods = step["rods"]
+    for name, node, reference in (("column", 1, (0, 1)), ("left", 3, (-0.5, 1)),
+                                  ("right", 4, (0.7, 1))):
+        assert rods[name]["tip"] == pytest.approx(
+            [reference[0] + d["u"][node], reference[1] + d["v"][node]], abs=1e-5 * scale)
+    # the joint's force and moment on the column's end: the loads beyond it
+    top = step["joints"]["top"]
+    assert top["force"] == pytest.approx([0.3 * P, -1.5 * P], rel=1e-5)
+
+
+def test_two_ranks_give_one_rank(tmp_path):
+    """``mpirun -n 2``: the three-hinged frame's rods and joints as on one rank (the tied dofs
+    on different ranks)."""
+    from test_mpi_errors import fe_beam as fe_beam_job
+
+    config = _three_hinged(0.1 * EI)
+    config["loads"]["steps"] = 2
+    alone = fe_beam.run("static", config)["steps"][-1]
+    process, _ = fe_beam_job(tmp_path, config, "--out", str(tmp_path / "two"))
+    assert process.returncode == 0, process.stderr
+    together = json.loads((tmp_path / "two" / "summary.json").read_text())["steps"][-1]
+    for name in ("left", "beam", "right"):
+        assert together["rods"][name]["tip"] == pytest.approx(alone["rods"][name]["tip"],
+                                                              abs=1e-11)
+    for name in ("corner", "hinge"):
+        assert together["joints"][name]["force"] == pytest.approx(
+            alone["joints"][name]["force"], rel=1e-8, abs=1e-12)
+
+
+def test_mechanism_is_refused(tmp_path, capsys):
+    """Two rods pinned together, only one clamped: exit 3, status failed, the pin named."""
+    config = _base("none")
+    config["rods"] = [
+        {"name": "a", "start": [0.0, 0.0], "direction": [1.0, 0.0], "length": 1.0,
+         "supports": {"x0": "clamped"}, "mesh": {"elements": 3}},
+        {"name": "b", "start": [1.0, 0.0], "direction": [1.0, 0.0], "length": 0.6,
+         "mesh": {"elements": 3}, "loads": {"point_forces": [[0.6, 0.0, -1e-4]]}}]
+    config["joints"] = [{"name": "knee", "kind": "pin", "at": ["a:end", "b:start"]}]
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "failed"
+    assert "joint 'knee' (pin" in summary["message"] and "theta" in summary["message"]
+    held = copy.deepcopy(config)
+    held["joints"][0]["kind"] = "rigid"
+    assert fe_beam.run("static", held)["status"] == "converged"
+    path = tmp_path / "m.toml"
+    path.write_text(dump_toml(config))
+    assert main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda c: c["joints"][0].update(kind="ball"), "kind = \"ball\" is spatial"),
+    (lambda c: c["joints"].append({"name": "again", "at": ["beam:end", "right:start"]}),
+     "beam:end is already joined (by 'hinge')"),
+    (lambda c: c["rods"][0].update(curvature="1"), "curvature"),
+])
+def test_tie_mistakes_are_one_sentence(change, words):
+    config = _three_hinged(1.0)
+    change(config)
+    with pytest.raises(ConfigError) as error:
+        validate("static", config)
+    assert words in str(error.value), str(error.value)
+
+
+def test_commands_without_ties_refuse_them():
+    with pytest.raises(ConfigError, match="does not run a structure with pin or ball"):
+        validate("modes", _three_hinged(1.0))
