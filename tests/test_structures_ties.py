@@ -261,6 +261,12 @@ def test_mechanism_is_refused(tmp_path, capsys):
     held = copy.deepcopy(config)
     held["joints"][0]["kind"] = "rigid"
     assert fe_beam.run("static", held)["status"] == "converged"
+    floating = copy.deepcopy(held)  # a rod joined to nothing: it moves as a rigid body
+    floating["rods"].append({"name": "loose", "start": [0.0, 1.0], "direction": [0.0, 1.0],
+                             "length": 0.5, "mesh": {"elements": 2}})
+    summary = fe_beam.run("static", floating)
+    assert summary["status"] == "failed"
+    assert "rod 'loose'" in summary["message"] and "rigid body" in summary["message"]
     path = tmp_path / "m.toml"
     path.write_text(dump_toml(config))
     assert main(["static", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 3
@@ -283,3 +289,51 @@ def test_tie_mistakes_are_one_sentence(change, words):
 def test_commands_without_ties_refuse_them():
     with pytest.raises(ConfigError, match="does not run a structure with pin or ball"):
         validate("modes", _three_hinged(1.0))
+
+
+def test_spatial_ball_portal_is_the_planar_pin_portal():
+    """The three-hinged portal with spatial kinematics, its pin a ball joint, the bases holding
+    every component but the in-plane rotation theta_z: the planar pin portal's rods' ends and
+    joint forces (out-of-plane components 0)."""
+    P = 0.05 * EI
+    planar = fe_beam.run("static", _three_hinged(P))["steps"][-1]
+    config = _three_hinged(P)
+    config["model"]["kinematics"] = "spatial"
+    held = ["u", "v", "w", "theta_x", "theta_y"]
+    for rod in config["rods"]:
+        rod["start"] = [*rod["start"], 0.0]
+        rod["direction"] = [*rod["direction"], 0.0]
+        rod["loads"] = {key: [[x, *force, 0.0] for x, *force in rows]
+                        for key, rows in rod.get("loads", {}).items()}
+        if "supports" in rod:
+            rod["supports"] = {"x0": held}
+    config["joints"][1]["kind"] = "ball"
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "converged", summary.get("message")
+    spatial = summary["steps"][-1]
+    for name in ("left", "beam", "right"):
+        tip = spatial["rods"][name]["tip"]
+        assert tip[:2] == pytest.approx(planar["rods"][name]["tip"], abs=1e-10)
+        assert abs(tip[2]) < 1e-12
+        frame = np.array(spatial["rods"][name]["tip_frame"])
+        angle = math.atan2(frame[1, 0], frame[0, 0])
+        assert angle == pytest.approx(planar["rods"][name]["tip_angle"], abs=1e-9)
+    hinge = spatial["joints"]["hinge"]
+    assert hinge["force"][:2] == pytest.approx(planar["joints"]["hinge"]["force"], rel=1e-7)
+    assert np.abs(hinge["moment"]).max() < 1e-9 * P
+
+
+def test_ring_path_against_shooting():
+    """`fe-beam path` (arc length) around the pinched ring to P = 2 EI / R^2: the last point's
+    diameters against shooting."""
+    config = _ring(8, EI)
+    config["path"] = {"parameter": "load_factor", "max_load_factor": 2.0, "arc_length": 0.5,
+                      "max_arc_length": 1.0, "max_steps": 20}
+    summary = fe_beam.run("path", config)
+    assert summary["status"] == "converged", summary.get("message")
+    last = summary["path"][-1]
+    assert last["load_factor"] == pytest.approx(2.0, rel=1e-9)
+    reference = pinched_ring(2.0 * EI, 1.0, EI)
+    delta, widening = _diameters(last)
+    assert abs(delta - reference["delta"]) < 5e-5
+    assert abs(widening - reference["widening"]) < 5e-5

@@ -85,7 +85,7 @@ class StaticContinuation:
             self._relax()
 
     def mechanism(self) -> str | None:
-        """A structure with ties (pins, loops, T junctions): one sentence naming its
+        """A structure with ties (pins, loops, T junctions, pieces): one sentence naming its
         mechanism when the reduced tangent at the reference state is singular (a zero
         eigenvalue of the Jacobi-scaled P^T K P, dense; the joint or the rod and the free
         dof), else None. Computed once (collective)."""
@@ -94,7 +94,8 @@ class StaticContinuation:
         self._mechanism = None
         nonlinear = self.snes.problem
         chain = getattr(self.problem, "chain", None)
-        if chain is None or nonlinear.ties is None or self.problem.global_dofs > MECHANISM_MAX_DOFS:
+        if chain is None or not chain.structure.tied \
+                or self.problem.global_dofs > MECHANISM_MAX_DOFS:
             return None
         state = compat.vector_of(self.problem.w).copy()
         factor = self.load_factor
@@ -116,9 +117,8 @@ class StaticContinuation:
         full = np.zeros(size)
         kernel = vectors[:, k] / scale
         full[:] = kernel
-        slaves = nonlinear.ties.slaves
-        masters = nonlinear.ties.masters
-        full[slaves] = kernel[masters]  # the prolonged mode: P z
+        if nonlinear.ties is not None:  # the prolonged mode: P z
+            full[nonlinear.ties.slaves] = kernel[nonlinear.ties.masters]
         owned = compat.vector_of(self.problem.w).getLocalSize()
         local = np.zeros(len(compat.local_array(self.problem.w)))
         local[:owned] = full[start:start + owned]
