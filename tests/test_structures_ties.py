@@ -90,7 +90,8 @@ def test_pinched_ring_small_load_closed_form_and_order():
 
 def test_pinched_ring_large_load_against_shooting():
     """P = EI / R^2 (the diameter shortens by 0.17 R) against the elastica by shooting: the
-    diameters' changes to 2e-5 R with 8 elements per quarter and 1.5e-6 R with 16."""
+    diameters' changes to 4.7e-6 R with 8 elements per quarter and 3.0e-7 R with 16
+    (measured; order 4)."""
     P = EI
     reference = pinched_ring(P, 1.0, EI)
     errors = []
@@ -101,7 +102,7 @@ def test_pinched_ring_large_load_against_shooting():
         errors.append(max(abs(delta - reference["delta"]),
                           abs(widening - reference["widening"])))
     assert reference["delta"] > 0.15
-    assert errors[1] < 1e-5 and errors[1] < errors[0] / 8, errors
+    assert errors[1] < 1e-6 and errors[1] < errors[0] / 12, errors
 
 
 def test_one_rod_ring_pinned_at_one_point_is_refused():
