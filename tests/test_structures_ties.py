@@ -290,7 +290,7 @@ def test_tie_mistakes_are_one_sentence(change, words):
 
 def test_commands_without_ties_refuse_them():
     with pytest.raises(ConfigError, match="does not run a structure with pin or ball"):
-        validate("modes", _three_hinged(1.0))
+        validate("buckling", _three_hinged(1.0))
 
 
 def test_spatial_ball_portal_is_the_planar_pin_portal():
@@ -394,3 +394,65 @@ def test_free_ring_modes_against_thin_ring_theory():
         exact = w0 * n * (n * n - 1) / math.sqrt(n * n + 1) / (2 * math.pi)
         for f in frequencies[k:k + 2]:
             assert abs(f - exact) < 4e-4 * exact, (n, f, exact)
+
+
+def _palm(P: float, free_body: bool = True) -> dict:
+    """A clamped arm holding a free body (its reference point at the arm's end) from which a
+    finger hangs; the body carries a force and a moment, the finger a force at its tip.
+    Without the body: the arm and the finger joined rigidly, the body's loads on the joint."""
+    config = _base("none")
+    config["rods"] = [
+        {"name": "arm", "start": [0.0, 0.0], "direction": [1.0, 0.0], "length": 1.0,
+         "supports": {"x0": "clamped"}, "mesh": {"elements": 4, "degree": 2}},
+        {"name": "finger", "start": [1.0, 0.0], "direction": [0.6, -0.8], "length": 0.5,
+         "mesh": {"elements": 3, "degree": 2},
+         "loads": {"point_forces": [[0.5, 0.4 * P, -P]]}}]
+    body_force, body_moment = [0.3 * P, -0.5 * P], 0.2 * P
+    if free_body:
+        config["bodies"] = [{"name": "palm", "position": [1.0, 0.0], "fixed": False,
+                             "force": body_force, "moment": body_moment}]
+        config["joints"] = [{"name": "wrist", "at": ["arm:end", "body:palm"]},
+                            {"name": "knuckle", "at": ["body:palm", "finger:start"]}]
+    else:
+        config["rods"][0]["loads"] = {"point_forces": [[1.0, *body_force]],
+                                      "point_moments": [[1.0, body_moment]]}
+        config["joints"] = [{"name": "wrist", "at": ["arm:end", "finger:start"]}]
+    return config
+
+
+def test_free_body_is_a_rigid_joint_carrying_its_loads():
+    """A free body whose rod ends sit at its reference point is a rigid joint of those ends
+    carrying the body's loads: the same rods' ends to round-off; the body's pose is the arm's
+    end and its resultant vanishes; the rods' forces on it balance its loads."""
+    P = 0.4 * EI
+    body = fe_beam.run("static", _palm(P))
+    joint = fe_beam.run("static", _palm(P, free_body=False))
+    assert body["status"] == joint["status"] == "converged", body.get("message")
+    a, b = body["steps"][-1], joint["steps"][-1]
+    scale = max(abs(c) for c in a["rods"]["finger"]["tip"])
+    for name in ("arm", "finger"):
+        assert a["rods"][name]["tip"] == pytest.approx(b["rods"][name]["tip"], abs=1e-12 * scale)
+        assert a["rods"][name]["tip_angle"] == pytest.approx(b["rods"][name]["tip_angle"],
+                                                             abs=1e-12)
+    palm = a["bodies"]["palm"]
+    assert palm["position"] == pytest.approx(a["rods"]["arm"]["tip"], abs=1e-14)
+    assert palm["rotation"] == pytest.approx(a["rods"]["arm"]["tip_angle"], abs=1e-14)
+    assert max(abs(f) for f in palm["force"]) < 1e-9 * P
+    assert abs(palm["moment"]) < 1e-9 * P
+    # the rods' ends' forces on the body (their opposites) and the body's loads balance
+    wrist, knuckle = a["joints"]["wrist"], a["joints"]["knuckle"]  # on arm:end, on the body
+    total = np.array(knuckle["force"]) - np.array(wrist["force"]) + np.array([0.3 * P, -0.5 * P])
+    assert np.abs(total).max() < 1e-9 * P
+    # on the arm's end: the finger's load and the body's (the arm holds them)
+    assert wrist["force"] == pytest.approx([0.7 * P, -1.5 * P], rel=1e-9)
+
+
+def test_free_body_held_by_nothing_is_refused():
+    config = _palm(0.1 * EI)
+    config["rods"].append({"name": "post", "start": [0.0, -1.0], "direction": [1.0, 0.0],
+                           "length": 0.5, "supports": {"x0": "clamped"},
+                           "mesh": {"elements": 2}})
+    config["rods"][0]["supports"] = {}
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "failed"
+    assert "free body 'palm'" in summary["message"]

@@ -113,7 +113,10 @@ def structure_record(problem) -> dict:
     chain = getattr(problem, "chain", None)
     if chain is None:
         return {}
-    return {"rods": chain.rods(), "joints": chain.joints()}
+    record = {"rods": chain.rods(), "joints": chain.joints()}
+    if chain.structure.body_ties:  # free bodies
+        record["bodies"] = chain.bodies()
+    return record
 
 
 #: the written moment field against the support's reaction moment (relative): an identity of
@@ -497,7 +500,8 @@ def _joint_names(structure) -> list[str]:
     fixed bodies inside the mesh."""
     return ([j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
             + [t.name for t in structure.ties]
-            + [j[0] for j in structure.inner_body_joints])
+            + [j[0] for j in structure.inner_body_joints]
+            + [j[0] for j in structure.free_body_joints])
 
 
 def contact_columns(count: int, spatial: bool = False) -> list:

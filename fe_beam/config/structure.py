@@ -65,14 +65,16 @@ JOINT_KEYS = {
 BODY_KEYS = {
     "name": Key((str,), REQUIRED, "the body's name (joints name it as \"body:NAME\")"),
     "position": Key((list,), REQUIRED, "reference point [x, y] (spatial: [x, y, z]) [m]"),
-    "fixed": Key((bool, list), True, "true (free and partly fixed bodies: not supported yet)"),
+    "fixed": Key((bool, list), True, "true (it clamps the rod end joined to it) or false "
+                 "(planar: a free body whose pose is solved for; partly fixed: not supported "
+                 "yet)"),
     "offset": Key((list,), None, "a joined end's point in the body frame (not supported yet)"),
     "motion": Key((dict,), None, "prescribed motion (not supported yet)"),
     "shape": Key((str,), None, "obstacle shape (not supported yet)"),
     "radius": Key(NUMBER, None, "obstacle radius (not supported yet)"),
     "mass": Key(NUMBER, None, "mass (not supported yet)"),
-    "force": Key((list,), None, "applied force (not supported yet)"),
-    "moment": Key(NUMBER + (list,), None, "applied moment (not supported yet)"),
+    "force": Key((list,), None, "a free body's dead force [Fx, Fy] (world axes) [N]"),
+    "moment": Key(NUMBER + (list,), None, "a free body's dead moment M [N m]"),
 }
 ROD_MESH_KEYS = {"elements": SCHEMA["mesh"]["elements"], "degree": SCHEMA["mesh"]["degree"]}
 ROD_SUPPORT_KEYS = ("x0", "xL")
@@ -287,10 +289,12 @@ def parse_structure(config: dict, spatial: bool = False) -> Structure:
         joints.append(_wrap(Joint, entry["name"], entry["kind"], entry["at"]))
     bodies = []
     for entry in _entries(config, "bodies", BODY_KEYS):
-        extra = [k for k in ("offset", "motion", "shape", "radius", "mass", "force", "moment")
+        extra = [k for k in ("offset", "motion", "shape", "radius", "mass")
                  if entry[k] is not None]
         if extra:
             raise ConfigError(f"[[bodies]] '{entry['name']}' {extra[0]} is not supported yet "
-                              "(fixed bodies that clamp a rod end)")
-        bodies.append(_wrap(Body, entry["name"], entry["position"], entry["fixed"]))
+                              "(fixed bodies that clamp a rod end, free planar bodies at the "
+                              "rod ends joined to them, loaded by force and moment)")
+        bodies.append(_wrap(Body, entry["name"], entry["position"], entry["fixed"],
+                            entry["force"] or (), entry["moment"] or 0.0))
     return _wrap(Structure, tuple(rods), tuple(joints), tuple(bodies))

@@ -280,6 +280,18 @@ class ChainGeometry:
             result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
                             "moment": sign * reaction["M"]}
         ties, inner = self.structure.ties, self.structure.inner_body_joints
+        carried = self.structure.free_body_joints
+        if carried:
+            values = self.problem.raw_residual()
+            for name, s, rod_first, body in carried:
+                # the body's force and moment on the rod end: the rod's own cells' residual
+                # there (the body's loads, applied at its first end, added back)
+                wrench = self._end_wrench(values, s)
+                load = self._body_load(body, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * (f + p) for f, p in
+                                          zip(wrench["force"], load[0], strict=True)],
+                                "moment": sign * (wrench["moment"] + load[1])}
         if ties or inner:
             # the force and moment the rest of the structure exerts on a tied end: the
             # residual of its own rod's cells there (no Dirichlet rows at tied dofs)
@@ -332,7 +344,7 @@ class ChainGeometry:
         """(slave, master) global dof pairs of the structure's ties: each tied component of
         every end after the first equals the first end's (collective)."""
         pairs = []
-        for tie in self.structure.ties:
+        for tie in self.structure.ties + self.structure.body_ties:
             (s_first, _), *others = tie.ends
             for name in tie.components:
                 master = self._global_dof(name, s_first, f"joint '{tie.name}' at")
@@ -375,9 +387,43 @@ class ChainGeometry:
             s, _ = self.structure.rod_tip(index)
             magnitude[rod.name] = max(abs(at(n, s)) for n in motion)
         rod = max(magnitude, key=magnitude.get)
+        for tie in self.structure.body_ties:
+            if any(end.partition(":")[0] == rod for _, end in tie.ends):
+                return (f"the structure is a mechanism: the free body '{tie.name}' (and the "
+                        f"rods joined to it, {', '.join(end for _, end in tie.ends)}) moves "
+                        "as a rigid body with no stiffness (free dofs: its x, y, theta); hold "
+                        "it (fixed = true) or support a rod joined to it")
         return (f"the structure is a mechanism: rod '{rod}' (and what is joined to it) moves "
                 "as a rigid body with no stiffness (free dofs: its rigid motion); support it or "
                 "join it rigidly")
+
+    def _body_load(self, name: str, s: float) -> tuple:
+        """(force, moment) of free body ``name`` applied at the rod end s (its first end)."""
+        tie = next(t for t in self.structure.body_ties if t.name == name)
+        body = self.structure.body(name)
+        if abs(s - tie.ends[0][0]) > 1e-12 * self.structure.length:
+            return [0.0, 0.0], 0.0
+        return list(body.force or (0.0, 0.0)), body.moment
+
+    def bodies(self) -> dict:
+        """{body name: {position, rotation, force, moment}} of the free bodies: the pose of
+        its reference point (world axes; rotation: the incremental angle) and the resultant
+        force and moment on it (its loads and the rod ends' forces on it: zero at
+        equilibrium; collective)."""
+        result = {}
+        ties = self.structure.body_ties
+        values = self.problem.raw_residual() if ties else None
+        for tie in ties:
+            body = self.structure.body(tie.name)
+            x, y, theta = self.position(tie.ends[0][0])
+            force, moment = np.zeros(2), 0.0
+            for s, _ in tie.ends:  # -sum of the ends' residuals: the loads less the rods'
+                wrench = self._end_wrench(values, s)
+                force -= np.array(wrench["force"])
+                moment -= wrench["moment"]
+            result[body.name] = {"position": [float(x), float(y)], "rotation": float(theta),
+                                 "force": [float(f) for f in force], "moment": float(moment)}
+        return result
 
     def _end_wrench(self, values, s: float) -> dict:
         """{force, moment} from the residual ``values`` at the vertex s (world axes)."""

@@ -204,11 +204,16 @@ class Joint:
 
 @dataclass(frozen=True)
 class Body:
-    """A rigid body at ``position``; ``fixed`` = true (the only kind this slice supports)."""
+    """A rigid body at ``position``: ``fixed`` = true (it clamps the rod end joined to it) or
+    false (planar: a free body, its pose (x, y, theta) unknowns of the solve, the rod ends
+    joined rigidly to it at its reference point; dead ``force`` [Fx, Fy] and ``moment`` M on
+    it)."""
 
     name: str
     position: tuple[float, float]
     fixed: object = True
+    force: tuple = ()
+    moment: float = 0.0
 
     def __post_init__(self):
         where = f"[[bodies]] '{self.name}'"
@@ -221,9 +226,28 @@ class Body:
             raise ValueError(f"{where} position must be [x, y] (planar) or [x, y, z] (spatial); "
                              f"got {value!r}")
         object.__setattr__(self, "position", tuple(float(c) for c in value))
-        if self.fixed is not True:
-            raise ValueError(f"{where} fixed = {self.fixed!r}: free and partly fixed bodies are "
-                             "not supported yet (give fixed = true)")
+        if self.fixed is not True and self.fixed is not False:
+            raise ValueError(f"{where} fixed = {self.fixed!r}: partly fixed bodies are not "
+                             "supported yet (give fixed = true or false)")
+        force = tuple(self.force or ())
+        ok = (len(force) in (0, len(self.position))
+              and all(isinstance(c, (int, float)) and not isinstance(c, bool)
+                      and math.isfinite(c) for c in force))
+        if not ok:
+            raise ValueError(f"{where} force must be [Fx, Fy] (numbers, world axes); got "
+                             f"{self.force!r}")
+        object.__setattr__(self, "force", tuple(float(c) for c in force))
+        ok = (isinstance(self.moment, (int, float)) and not isinstance(self.moment, bool)
+              and math.isfinite(self.moment))
+        if not ok:
+            raise ValueError(f"{where} moment must be a number M (planar); got {self.moment!r}")
+        object.__setattr__(self, "moment", float(self.moment))
+        if self.fixed and (any(self.force) or self.moment):
+            raise ValueError(f"{where} force, moment: a fixed body takes no loads (they would "
+                             "be the support's); give fixed = false or load a rod")
+        if not self.fixed and len(self.position) == 3:
+            raise ValueError(f"{where} fixed = false: free bodies are planar in this version "
+                             "(a spatial body must be fixed = true)")
 
 
 @dataclass(frozen=True)
@@ -310,6 +334,11 @@ class Structure:
     pieces: tuple = field(init=False, default=())
     #: ((joint name, s, the rod end is named first), ...): fixed bodies at ends inside the mesh
     inner_body_joints: tuple = field(init=False, default=())
+    #: free bodies: (Tie(name = the body's, kind "body", its rod ends), ...)
+    body_ties: tuple = field(init=False, default=())
+    #: ((joint name, s of its rod end, the rod end is named first, body name), ...): joints of
+    #: rod ends to free bodies
+    free_body_joints: tuple = field(init=False, default=())
 
     def __post_init__(self):
         object.__setattr__(self, "rods", tuple(self.rods))
@@ -353,8 +382,11 @@ class Structure:
 
     @property
     def tied(self) -> bool:
-        """Some joint is a tie (the mesh has several pieces or a loop)."""
-        return bool(self.ties) or len(self.pieces) > 1
+        """Some joint is a tie (the mesh has several pieces, a loop or a free body)."""
+        return bool(self.ties) or bool(self.body_ties) or len(self.pieces) > 1
+
+    def body(self, name: str) -> Body:
+        return next(b for b in self.bodies if b.name == name)
 
     def rod_index(self, name: str) -> int:
         return next(i for i, rod in enumerate(self.rods) if rod.name == name)
@@ -383,6 +415,7 @@ class Structure:
         links = []  # candidate shared vertices: (joint, (rod, end), (rod, end))
         ties = []  # (joint, [(rod, end), ...])
         clamped: dict[tuple[str, str], tuple] = {}  # rod end -> (body, joint, rod first)
+        carried: dict[str, list] = {}  # free body -> [(rod end, joint, rod first), ...]
         for joint in self.joints:
             where = f"[[joints]] '{joint.name}'"
             if joint.kind == "pin" and not planar:
@@ -414,14 +447,17 @@ class Structure:
                 raise ValueError(f"[[joints]] '{joint.name}' at: the ends do not coincide in "
                                  f"the reference geometry: {', '.join(joint.at)} are "
                                  f"{distance:.6g} m apart")
-            if bodies:
+            if bodies and not self.body(bodies[0]).fixed:  # a free body: a tie of its ends
+                carried.setdefault(bodies[0], []).append(
+                    (rods[0], joint.name, joint.at[0].partition(":")[0] != "body"))
+            elif bodies:
                 clamped[rods[0]] = (bodies[0], joint.name,
                                     joint.at[0].partition(":")[0] != "body")
             elif joint.kind == "rigid" and len(rods) == 2 and rods[0][0] != rods[1][0]:
                 links.append((joint, rods[0], rods[1]))
             else:
                 ties.append((joint, rods))
-        joined_bodies = {body for body, _, _ in clamped.values()}
+        joined_bodies = {body for body, _, _ in clamped.values()} | set(carried)
         for body in self.bodies:
             if body.name not in joined_bodies:
                 raise ValueError(f"[[bodies]] '{body.name}' is joined to no rod end; name it in "
@@ -448,7 +484,7 @@ class Structure:
                 continue
             root[ra] = rb
             accepted.append((joint, a, b))
-        self._order(accepted, clamped, ties)
+        self._order(accepted, clamped, ties, carried)
 
     def _held(self, key, clamped) -> tuple:
         """The components a rod end's own support (or fixed body) holds."""
@@ -475,7 +511,7 @@ class Structure:
                          f"\"{kind}\" is planar; a spatial chain takes clamped, pinned, free "
                          "or a list of components from u, v, w, theta_x, theta_y, theta_z")
 
-    def _order(self, links, clamped, ties) -> None:
+    def _order(self, links, clamped, ties, carried) -> None:
         names = [rod.name for rod in self.rods]
         neighbours: dict[str, list] = {n: [] for n in names}
         for joint, a, b in links:
@@ -565,7 +601,7 @@ class Structure:
             first_before = joint.at[0].partition(":")[0] == a
             joints.append(ChainJoint(joint.name, segments[k + 1].s0, first_before, k))
         object.__setattr__(self, "joints_on_chain", tuple(joints))
-        self._supports_and_ties(clamped, ties)
+        self._supports_and_ties(clamped, ties, carried)
 
     def end_s(self, name: str, end: str) -> float:
         """The mesh coordinate of a rod's "start" or "end"."""
@@ -574,7 +610,7 @@ class Structure:
         at_s0 = (end == "start") != segment.reversed
         return segment.s0 if at_s0 else segment.s0 + segment.length
 
-    def _supports_and_ties(self, clamped, ties) -> None:
+    def _supports_and_ties(self, clamped, ties, carried) -> None:
         ends = [(rod.name, e) for rod in self.rods for e in ENDS]
         held = {key: set(self._held(key, clamped)) for key in ends}
         dim_index = 0 if self.dim == 2 else 1
@@ -589,6 +625,19 @@ class Structure:
                                 tuple((self.end_s(*key), f"{key[0]}:{key[1]}") for key in rods),
                                 components))
         object.__setattr__(self, "ties", tuple(resolved))
+        body_ties, free_joints = [], []
+        for body, entries in carried.items():
+            for key, _, _ in entries:
+                if held[key]:
+                    raise ValueError(f"[[rods]] '{key[0]}' supports."
+                                     f"{'x0' if key[1] == 'start' else 'xL'}: the end is joined "
+                                     f"to the free body '{body}'; hold the body or free the end")
+            body_ties.append(Tie(body, "body", tuple((self.end_s(*key), f"{key[0]}:{key[1]}")
+                                                     for key, _, _ in entries),
+                                 TIED["rigid"][0]))
+            free_joints += [(name, self.end_s(*key), first, body) for key, name, first in entries]
+        object.__setattr__(self, "body_ties", tuple(body_ties))
+        object.__setattr__(self, "free_body_joints", tuple(free_joints))
         span = self.pieces[-1][1]
         order_names = self.rods[0].dim == 2 and ("u", "v", "theta") or TIED["rigid"][1]
         supports, extra, body_joints, inner = {}, [], [], []
@@ -656,12 +705,19 @@ class Structure:
 
     # --- what the finite elements need --------------------------------------------------------
     def chain_point_loads(self) -> tuple[tuple, tuple]:
-        """(point_forces, point_moments) of every rod at chain coordinates."""
+        """(point_forces, point_moments) of every rod at chain coordinates (and a free body's
+        force and moment at its first rod end: the body's pose is that end's)."""
         forces, moments = [], []
         for segment in self.chain:
             rod = self.rods[segment.rod]
             forces += [(segment.s_of(x), *rest) for x, *rest in rod.point_forces]
             moments += [(segment.s_of(x), *rest) for x, *rest in rod.point_moments]
+        for tie in self.body_ties:
+            body = self.body(tie.name)
+            if any(body.force):
+                forces.append((tie.ends[0][0], *body.force))
+            if body.moment:
+                moments.append((tie.ends[0][0], body.moment))
         return tuple(sorted(forces)), tuple(sorted(moments))
 
     def boundaries(self) -> tuple[float, ...]:
