@@ -287,8 +287,8 @@ UNSUPPORTED = [
                 c["joints"].append({"name": "t", "at": ["arm:start", "column:end"]})),
      "column:end is already joined (by 'corner'); name every end meeting at a point in one "
      "joint"),
-    (lambda c: c.update(bodies=[{"name": "palm", "position": [0.0, 0.0], "fixed": False}]),
-     "free and partly fixed bodies are not supported yet"),
+    (lambda c: c.update(bodies=[{"name": "palm", "position": [0.0, 0.0], "fixed": ["x"]}]),
+     "partly fixed bodies are not supported yet"),
     (lambda c: c.update(tendons=[{"name": "t", "tension": 1.0}]),
      "[[tendons]] with [[rods]] is not supported yet"),
     (lambda c: c["loads"].update(tip_force=[0.0, 1.0]) if "loads" in c
