@@ -536,9 +536,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
         structure = getattr(m, "structure", None)
-        undeformed = None if structure is None else [
-            structure.reference_point(s, structure.segment_at(min(s, m.length)))
-            for s in (0.0, *structure.boundaries(), m.length)]
+        undeformed = None if structure is None else structure.reference_polyline()
         plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                             obstacles=result.obstacles or config.obstacles,
                             undeformed=undeformed)
@@ -549,9 +547,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
         return
     structure = getattr(m, "structure", None)
     if structure is not None:  # a chain: its reference polygon, the axes only
-        corners = (0.0, *structure.boundaries(), m.length)
-        undeformed = [structure.reference_point(s, structure.segment_at(min(s, m.length)))
-                      for s in corners]
+        undeformed = structure.reference_polyline()
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                              undeformed=undeformed)
     else:

@@ -450,6 +450,14 @@ class ChainGeometry:
         if self.spatial:
             shaped["w"] = (np.array([self.structure.reference_point(s)[2] for s in x])
                            + np.asarray(values["w"]))
+        elif len(self.structure.pieces) > 1:  # a break in the drawn line between pieces
+            order = np.argsort(x)
+            breaks = [int(np.searchsorted(x[order], b)) for (_, b) in
+                      [(a[1], b[0]) for a, b in zip(self.structure.pieces,
+                                                    self.structure.pieces[1:])]]
+            for key in ("x", "u", "v"):
+                shaped[key] = np.insert(np.asarray(shaped[key], dtype=float)[order], breaks,
+                                        np.nan)
         return shaped
 
 

@@ -741,6 +741,21 @@ class Structure:
             return arc_point(segment.origin, segment.theta0, segment.curvature, t)
         return tuple(o + t * d for o, d in zip(segment.origin, segment.tangent, strict=True))
 
+    def reference_polyline(self, samples: int = 24) -> list[tuple]:
+        """Points along the reference axes for drawing: each rod's ends (``samples`` points
+        along an arc), a row of NaN between pieces (a break in the line)."""
+        points, end = [], None
+        for segment in self.chain:
+            if end is not None and segment.s0 > end:
+                points.append(tuple(math.nan for _ in range(self.dim)))
+            count = samples if segment.curvature else 1
+            start = 0 if end is None or segment.s0 > end else 1
+            for k in range(start, count + 1):
+                s = segment.s0 + segment.length * k / count
+                points.append(self.reference_point(s, segment))
+            end = segment.s0 + segment.length
+        return points
+
     def rod_tip(self, index: int) -> tuple[float, str]:
         """(chain coordinate, chain side) of rod ``index``'s own end ("end" of the rod)."""
         segment = next(seg for seg in self.chain if seg.rod == index)
