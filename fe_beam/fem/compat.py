@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import functools
 import sys
+import time
+from pathlib import Path
 
 import dolfinx
 import dolfinx.fem.petsc as fem_petsc
@@ -38,6 +40,7 @@ __all__ = [
     "create_matrix",
     "vector_for_form",
     "cell_vertex_x",
+    "clear_stale_jit_lock",
     "element",
     "element_degree",
     "function_space",
@@ -535,6 +538,31 @@ def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndar
 
 
 # --- JIT look-ups ------------------------------------------------------------------------------
+# a C file older than this without its ".c.cached" marker is a lock left by a killed compile
+STALE_JIT_LOCK_SECONDS = 600.0
+
+
+def clear_stale_jit_lock(cache_dir, module_name, age: float = STALE_JIT_LOCK_SECONDS) -> bool:
+    """Remove FFCx's lock of ``module_name`` in ``cache_dir`` if a killed process left it.
+
+    FFCx claims a module by creating ``<module>.c`` exclusively, compiles it, and then writes
+    ``<module>.c.cached``; a process that finds the ``.c`` file waits (10 s by default) for the
+    marker and then fails with "JIT compilation timed out". A run killed mid-compile (Ctrl-C,
+    a batch system's time limit) leaves the ``.c`` file without its marker, and every later run
+    that needs the form fails. A compile writes its C file seconds before the marker, so a file
+    older than ``age`` seconds without a marker is such a lock: it is removed (True). Errors
+    (another process removed it first, a read-only cache) leave it to FFCx."""
+    c_file = Path(str(cache_dir)).expanduser() / f"{module_name}.c"
+    try:
+        if (c_file.with_suffix(".c.cached").exists()
+                or time.time() - c_file.stat().st_mtime < age):
+            return False
+        c_file.unlink()
+    except OSError:
+        return False
+    return True
+
+
 def _memoize_jit_lookups() -> None:
     """Remember the compiled modules FFCx has found in its disk cache in this process.
 
@@ -544,11 +572,11 @@ def _memoize_jit_lookups() -> None:
     problem whose forms are all compiled already (issue 22, item 8: 0.13-0.32 s instead of
     ~0.1 s for a spatial cantilever). A module's name is the hash of its form and options, so
     the same name in the same directory is the same module: found once, it is reused.
-    FE_BEAM_JIT_MEMO=0 switches this off."""
+    FE_BEAM_JIT_MEMO=0 switches this off. Before a look-up, a lock left by a killed compile is
+    removed (`clear_stale_jit_lock`)."""
     import os
 
-    if os.environ.get("FE_BEAM_JIT_MEMO", "1") == "0":
-        return
+    memo = os.environ.get("FE_BEAM_JIT_MEMO", "1") != "0"
     try:
         from ffcx.codegeneration import jit as ffcx_jit
     except ImportError:  # pragma: no cover - another FFCx layout: nothing to speed up
@@ -562,8 +590,9 @@ def _memoize_jit_lookups() -> None:
         key = (str(module_name), tuple(object_names), str(cache_dir))
         if key in found:
             return found[key]
+        clear_stale_jit_lock(cache_dir, module_name)
         result = lookup(module_name, object_names, cache_dir, *args, **kwargs)
-        if result[0] is not None:  # found (None: the caller compiles it now)
+        if memo and result[0] is not None:  # found (None: the caller compiles it now)
             found[key] = result
         return result
 
