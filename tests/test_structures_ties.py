@@ -479,3 +479,30 @@ def test_free_body_held_by_nothing_is_refused():
     summary = fe_beam.run("static", config)
     assert summary["status"] == "failed"
     assert "free body 'palm'" in summary["message"]
+
+
+def test_support_at_a_shared_vertex_continuous_beam():
+    """A beam over three supports (a roller at the shared vertex between its two spans, no
+    tie): each span is a propped cantilever, the mid-span deflection q L^4 / (192 EI) (Euler-
+    Bernoulli: inextensible, unshearable; the small load's nonlinear terms ~1e-6); the global
+    equilibrium check counts the inner support's reaction."""
+    span, q = 1.0, 1e-6 * EI
+    config = _base()
+    config["loads"] = {"steps": 1, "distributed": [0.0, -q]}
+    config["rods"] = [{"name": name, "start": [0.5 * k, 0.0], "direction": [1.0, 0.0],
+                       "length": 0.5, "mesh": {"elements": 2, "degree": 2}}
+                      for k, name in enumerate(("a1", "a2", "b1", "b2"))]
+    config["rods"][0]["supports"] = {"x0": "pinned"}
+    config["rods"][1]["supports"] = {"xL": "roller"}
+    config["rods"][3]["supports"] = {"xL": "roller"}
+    config["joints"] = [{"name": f"j{k}", "at": [f"{a}:end", f"{b}:start"]}
+                        for k, (a, b) in enumerate((("a1", "a2"), ("a2", "b1"), ("b1", "b2")))]
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "converged", summary.get("message")
+    step = summary["steps"][-1]
+    exact = -q * span**4 / (192 * EI)
+    for name in ("a1", "b1"):
+        assert step["rods"][name]["tip"][1] == pytest.approx(exact, rel=1e-5)
+    assert abs(step["rods"]["a2"]["tip"][1]) < 1e-12 * abs(exact)
+    check = next(c for c in summary["checks"] if c["name"] == "global_equilibrium")
+    assert check["passed"]
