@@ -506,3 +506,31 @@ def test_support_at_a_shared_vertex_continuous_beam():
     assert abs(step["rods"]["a2"]["tip"][1]) < 1e-12 * abs(exact)
     check = next(c for c in summary["checks"] if c["name"] == "global_equilibrium")
     assert check["passed"]
+
+
+def test_spatial_t_junction_is_the_planar_one():
+    """A rigid T junction (a tie of all six components) with spatial kinematics, loaded in its
+    plane: the planar T junction's rod ends, angles and joint force."""
+    P = 0.05 * EI
+    planar = fe_beam.run("static", _t_junction(P))["steps"][-1]
+    config = _t_junction(P)
+    config["model"]["kinematics"] = "spatial"
+    for rod in config["rods"]:
+        rod["start"] = [*rod["start"], 0.0]
+        rod["direction"] = [*rod["direction"], 0.0]
+        loads = rod.get("loads", {})
+        rod["loads"] = {"point_forces": [[x, *f, 0.0] for x, *f in loads.get("point_forces", [])],
+                        "point_moments": [[x, 0.0, 0.0, m] for x, m in
+                                          loads.get("point_moments", [])]}
+    summary = fe_beam.run("static", config)
+    assert summary["status"] == "converged", summary.get("message")
+    spatial = summary["steps"][-1]
+    for name in ("column", "left", "right"):
+        assert spatial["rods"][name]["tip"][:2] == pytest.approx(planar["rods"][name]["tip"],
+                                                                 abs=1e-10)
+        frame = np.array(spatial["rods"][name]["tip_frame"])
+        turn = math.atan2(frame[1, 0], frame[0, 0]) - planar["rods"][name]["tip_angle"]
+        assert abs(math.remainder(turn, 2 * math.pi)) < 1e-9
+    top = spatial["joints"]["top"]
+    assert top["force"][:2] == pytest.approx(planar["joints"]["top"]["force"], rel=1e-8)
+    assert top["moment"][2] == pytest.approx(planar["joints"]["top"]["moment"], rel=1e-7)
