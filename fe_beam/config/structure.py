@@ -24,7 +24,7 @@ STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine"
 #: the commands that run a spatial structure in this version
 SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
 #: the commands that run a structure with ties (pin, ball, T junctions, loops, pieces)
-TIED_COMMANDS = ("static", "path", "modes")
+TIED_COMMANDS = ("static", "path", "modes", "buckling")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {
