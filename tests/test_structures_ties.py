@@ -313,7 +313,7 @@ def test_tie_mistakes_are_one_sentence(change, words):
 
 def test_commands_without_ties_refuse_them():
     with pytest.raises(ConfigError, match="does not run a structure with pin or ball"):
-        validate("buckling", _three_hinged(1.0))
+        validate("dynamic", _three_hinged(1.0))
 
 
 def test_spatial_ball_portal_is_the_planar_pin_portal():
