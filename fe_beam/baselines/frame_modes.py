@@ -136,7 +136,9 @@ def _transfer(member: Member, omega: float, scale_length: float, scale_EI: float
     return scipy.linalg.expm(A * (member.length / L0))
 
 
-def _matrix(members, supports: dict, omega: float) -> np.ndarray:
+def _matrix(members, supports: dict, omega: float, pins=frozenset()) -> np.ndarray:
+    """``pins``: {(member index, "start" | "end")}: member ends joined to their node by a pin
+    (the end's rotation free, its moment zero)."""
     scale_length = max(m.length for m in members)
     scale_EI = max(m.EI for m in members)
     points, ends = _nodes(members, 1e-9 * scale_length)
@@ -158,14 +160,19 @@ def _matrix(members, supports: dict, omega: float) -> np.ndarray:
         start = np.zeros((6, size))
         start[:, 6 * k: 6 * k + 6] = np.eye(6)
         finish = T @ start
-        for state, node, sign in ((start, ends[k][0], 1.0), (finish, ends[k][1], -1.0)):
+        for state, node, sign, which in ((start, ends[k][0], 1.0, "start"),
+                                          (finish, ends[k][1], -1.0, "end")):
             displacement = state[:3]
             node_columns = slice(6 * n_members + 3 * node, 6 * n_members + 3 * node + 3)
             block = displacement.copy()
             block[:, node_columns] -= to_local
+            force = sign * (to_local.T @ state[3:])
+            if (k, which) in pins:  # a pin: no rotation equality, no moment
+                block[2] = state[5]
+                force[2] = 0.0
             matrix[row: row + 3] = block
             row += 3
-            forces[node].append(sign * (to_local.T @ state[3:]))
+            forces[node].append(force)
     for node in range(n_nodes):
         held = SUPPORTS[supports.get(node, "free")]
         for dof in range(3):
@@ -196,9 +203,10 @@ def _support_nodes(members, supports_at: dict) -> dict:
 
 
 def frame_frequencies(members, supports_at: dict, count: int, omega_max: float,
-                      samples: int = 4000) -> list[float]:
+                      samples: int = 4000, pins=frozenset()) -> list[float]:
     """The ``count`` lowest natural frequencies [Hz] below ``omega_max`` [rad/s] of the frame
-    with supports {(x, y): "clamped" | "pinned" | "free"} at nodes (every other node free).
+    with supports {(x, y): "clamped" | "pinned" | "free"} at nodes (every other node free) and
+    ``pins`` {(member index, "start" | "end")} (those member ends pinned to their node).
     The scan's step omega_max / samples must separate the roots (a pair of roots closer than
     a step would be missed: compare the count with the expected one). Members of the kind
     `OutOfPlaneMember` give the frame's motions out of its plane (the held dofs of a node are
@@ -207,7 +215,7 @@ def frame_frequencies(members, supports_at: dict, count: int, omega_max: float,
     grid = np.linspace(omega_max / samples, omega_max, samples)
 
     def sign_log(omega):
-        return np.linalg.slogdet(_matrix(members, supports, omega))
+        return np.linalg.slogdet(_matrix(members, supports, omega, pins))
 
     values = [sign_log(w) for w in grid]
     roots = []

@@ -21,6 +21,7 @@ import math
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam.fem import compat
@@ -33,10 +34,12 @@ __all__ = ["ChainGeometry", "chain_vertices"]
 def chain_vertices(structure) -> tuple[np.ndarray, tuple[float, ...]]:
     """(increasing vertex coordinates of the chain: each rod's uniform elements in chain order,
     the joints' coordinates)."""
-    parts = [np.zeros(1)]
+    parts, end = [], None
     for segment in structure.chain:
         rod = structure.rods[segment.rod]
-        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[1:])
+        first = 0 if end is None or segment.s0 > end else 1  # a piece's first vertex
+        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[first:])
+        end = segment.s0 + segment.length
     vertices = np.concatenate(parts)
     joints = structure.boundaries()
     for s in joints:  # the joint vertex exactly at its coordinate
@@ -54,13 +57,24 @@ class ChainGeometry:
         self.structure = problem.model.structure
         mesh = problem.mesh
         cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
-        self.theta0 = fem.Function(cellwise, name="theta0")
+        self._cellwise = cellwise
+        curved = any(seg.curvature for seg in self.structure.chain)
+        # the reference angle: constant on each straight rod (DG0), linear on an arc (DG1)
+        angles = compat.function_space(mesh, compat.element(mesh, "DG", 1)) if curved \
+            else cellwise
+        self.theta0 = fem.Function(angles, name="theta0")
         self.rod = fem.Function(cellwise, name="rod")
         x = compat.cell_vertex_x(mesh)
         middle = x.mean(axis=1)
         dofs = compat.cell_dofs(cellwise)[: len(middle), 0]
         segments = [self.structure.segment_at(m) for m in middle]
-        self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
+        if curved:
+            where = angles.tabulate_dof_coordinates()[:, 0]
+            for cell, seg in enumerate(segments):
+                for dof in compat.cell_dofs(angles)[cell]:
+                    self.theta0.x.array[dof] = seg.angle_at(where[dof])
+        else:
+            self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
         self.rod.x.array[dofs] = [seg.rod for seg in segments]
         self._segment_of_cell = np.array([self.structure.chain.index(seg) for seg in segments],
                                          dtype=int)
@@ -89,7 +103,7 @@ class ChainGeometry:
 
     def cellwise(self, values) -> fem.Function:
         """A DG0 field whose value on each cell is ``values[i]`` of the cell's rod i."""
-        field = fem.Function(self.theta0.function_space)
+        field = fem.Function(self._cellwise)
         dofs = compat.cell_dofs(field.function_space)[: len(self._segment_of_cell), 0]
         rods = np.array([self.structure.chain[k].rod for k in self._segment_of_cell], dtype=int)
         field.x.array[dofs] = np.asarray(values, dtype=float)[rods]
@@ -224,7 +238,7 @@ class ChainGeometry:
 
     def _compile_spatial_joint_form(self):
         problem = self.problem
-        self._indicator = fem.Function(self.theta0.function_space)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         d, theta, multipliers = problem.fields()
         s = problem.strains((d, theta))
@@ -240,8 +254,7 @@ class ChainGeometry:
         if self.spatial:
             return self._compile_spatial_joint_form()
         problem = self.problem
-        cellwise = self.theta0.function_space
-        self._indicator = fem.Function(cellwise)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         u, v, theta, multipliers = problem.fields()
         s = problem.strains(u, v, theta)
@@ -283,6 +296,31 @@ class ChainGeometry:
                 continue
             result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
                             "moment": sign * reaction["M"]}
+        ties, inner = self.structure.ties, self.structure.inner_body_joints
+        carried = self.structure.free_body_joints
+        if carried:
+            values = self.problem.raw_residual()
+            for name, s, rod_first, body in carried:
+                # the body's force and moment on the rod end: the rod's own cells' residual
+                # there (the body's loads, applied at its first end, added back)
+                wrench = self._end_wrench(values, s)
+                load = self._body_load(body, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * (f + p) for f, p in
+                                          zip(wrench["force"], load[0], strict=True)],
+                                "moment": sign * (wrench["moment"] + load[1])}
+        if ties or inner:
+            # the force and moment the rest of the structure exerts on a tied end: the
+            # residual of its own rod's cells there (no Dirichlet rows at tied dofs)
+            values = self.problem.raw_residual()
+            for tie in ties:
+                result[tie.name] = self._end_wrench(values, tie.ends[0][0])
+            for name, s, rod_first in inner:
+                wrench = self._end_wrench(values, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * f for f in wrench["force"]],
+                                "moment": ([sign * m for m in wrench["moment"]] if self.spatial
+                                           else sign * wrench["moment"])}
         if not self.structure.joints_on_chain:
             return result
         if self._joint_form is None:
@@ -373,6 +411,111 @@ class ChainGeometry:
                     "moment": [float(sign * m) for m in moment]}
         return {"force": [sign * sums[0], sign * sums[1]], "moment": sign * sums[2]}
 
+    # --- ties (joints that are not shared vertices) --------------------------------------------
+    def _global_dof(self, name: str, s: float, what: str) -> int:
+        """The global index (in the state vector) of component ``name`` at the vertex s."""
+        problem = self.problem
+        local = problem.point_dofs(name, s, what)
+        start = compat.vector_of(problem.w).getOwnershipRange()[0]
+        mine = int(local[0]) + start + 1 if len(local) else 0
+        return int(problem.comm.allreduce(mine)) - 1
+
+    def tie_pairs(self) -> np.ndarray:
+        """(slave, master) global dof pairs of the structure's ties: each tied component of
+        every end after the first equals the first end's (collective)."""
+        pairs = []
+        for tie in self.structure.ties + self.structure.body_ties:
+            (s_first, _), *others = tie.ends
+            for name in tie.components:
+                master = self._global_dof(name, s_first, f"joint '{tie.name}' at")
+                for s, _ in others:
+                    pairs.append((self._global_dof(name, s, f"joint '{tie.name}' at"), master))
+        return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+    def describe_mechanism(self, values) -> str:
+        """One sentence naming the mechanism whose zero-stiffness mode is ``values`` (the local
+        array of the state vector's owned dofs): the pin or ball joint about which the rods
+        turn relative to each other, or else the piece of the structure that moves as a rigid
+        body (collective)."""
+        comm, problem = self.problem.comm, self.problem
+        rotations = [n for n in problem.components if n.startswith("theta")]
+
+        def at(name, s):
+            return float(global_sum(comm, values[problem.point_dofs(name, s)].sum()))
+
+        owned = np.concatenate([problem.component_dofs(n) for n in rotations])
+        largest = comm.allreduce(float(np.max(np.abs(values[owned]), initial=0.0)), op=MPI.MAX)
+        best, relative = None, 0.0
+        for tie in self.structure.ties:
+            free = [n for n in rotations if n not in tie.components]
+            if not free:
+                continue
+            first = np.array([at(n, tie.ends[0][0]) for n in free])
+            for s, _ in tie.ends[1:]:
+                jump = float(np.linalg.norm(np.array([at(n, s) for n in free]) - first))
+                if jump > relative:
+                    best, relative = (tie, free), jump
+        if best is not None and relative > 1e-3 * largest:
+            tie, free = best
+            return (f"the structure is a mechanism: joint '{tie.name}' ({tie.kind}, at "
+                    f"{', '.join(end for _, end in tie.ends)}) lets the rods turn about it "
+                    f"with no stiffness (free dof: the relative rotation {', '.join(free)}); "
+                    "hold the rods (supports, a rigid joint) so that no part can turn freely")
+        motion = [n for n in problem.components]
+        magnitude = {}
+        for index, rod in enumerate(self.structure.rods):
+            s, _ = self.structure.rod_tip(index)
+            magnitude[rod.name] = max(abs(at(n, s)) for n in motion)
+        rod = max(magnitude, key=magnitude.get)
+        for tie in self.structure.body_ties:
+            if any(end.partition(":")[0] == rod for _, end in tie.ends):
+                return (f"the structure is a mechanism: the free body '{tie.name}' (and the "
+                        f"rods joined to it, {', '.join(end for _, end in tie.ends)}) moves "
+                        "as a rigid body with no stiffness (free dofs: its x, y, theta); hold "
+                        "it (fixed = true) or support a rod joined to it")
+        return (f"the structure is a mechanism: rod '{rod}' (and what is joined to it) moves "
+                "as a rigid body with no stiffness (free dofs: its rigid motion); support it or "
+                "join it rigidly")
+
+    def _body_load(self, name: str, s: float) -> tuple:
+        """(force, moment) of free body ``name`` applied at the rod end s (its first end)."""
+        tie = next(t for t in self.structure.body_ties if t.name == name)
+        body = self.structure.body(name)
+        if abs(s - tie.ends[0][0]) > 1e-12 * self.structure.length:
+            return [0.0, 0.0], 0.0
+        return list(body.force or (0.0, 0.0)), body.moment
+
+    def bodies(self) -> dict:
+        """{body name: {position, rotation, force, moment}} of the free bodies: the pose of
+        its reference point (world axes; rotation: the incremental angle) and the resultant
+        force and moment on it (its loads and the rod ends' forces on it: zero at
+        equilibrium; collective)."""
+        result = {}
+        ties = self.structure.body_ties
+        values = self.problem.raw_residual() if ties else None
+        for tie in ties:
+            body = self.structure.body(tie.name)
+            x, y, theta = self.position(tie.ends[0][0])
+            force, moment = np.zeros(2), 0.0
+            for s, _ in tie.ends:  # -sum of the ends' residuals: the loads less the rods'
+                wrench = self._end_wrench(values, s)
+                force -= np.array(wrench["force"])
+                moment -= wrench["moment"]
+            result[body.name] = {"position": [float(x), float(y)], "rotation": float(theta),
+                                 "force": [float(f) for f in force], "moment": float(moment)}
+        return result
+
+    def _end_wrench(self, values, s: float) -> dict:
+        """{force, moment} from the residual ``values`` at the vertex s (world axes)."""
+        comm = self.problem.comm
+        sums = [float(global_sum(comm, values[self.problem.point_dofs(n, s)].sum()))
+                for n in self.problem.components]
+        if self.spatial:
+            _, rotation_vector = self.position(s)
+            moment = np.linalg.solve(_spin(rotation_vector).T, np.array(sums[3:]))
+            return {"force": sums[:3], "moment": [float(m) for m in moment]}
+        return {"force": sums[:2], "moment": sums[2]}
+
     def shape(self, values: dict | None) -> dict | None:
         """A gathered line shape (``x``, ``u``, ``v`` at the vertices; `vertex_values`) with
         ``u``, ``v`` replaced by X + u - x, Y + v: plots that draw (x + u, v) draw the chain."""
@@ -387,6 +530,14 @@ class ChainGeometry:
         if self.spatial:
             shaped["w"] = (np.array([self.structure.reference_point(s)[2] for s in x])
                            + np.asarray(values["w"]))
+        elif len(self.structure.pieces) > 1:  # a break in the drawn line between pieces
+            order = np.argsort(x)
+            breaks = [int(np.searchsorted(x[order], b)) for (_, b) in
+                      [(a[1], b[0]) for a, b in zip(self.structure.pieces,
+                                                    self.structure.pieces[1:])]]
+            for key in ("x", "u", "v"):
+                shaped[key] = np.insert(np.asarray(shaped[key], dtype=float)[order], breaks,
+                                        np.nan)
         return shaped
 
 
