@@ -211,9 +211,16 @@ def test_lee_frame_limit_point(tmp_path, lee_limit):
     limits = [c for c in summary["critical_points"] if c["kind"] == "limit"]
     assert limits, summary["critical_points"]
     found = limits[0]["load_factor"]  # P L^2 / EI (examples/lee_frame.toml)
-    reference, _ = lee_limit
+    reference, dropped = lee_limit
     assert abs(found - 18.5) < 0.1
     assert abs(found - reference) <= 1e-4 * reference, (found, reference)
+    # where the load pushes (mesh coordinate 1.2: the beam's x = 0.2): its drop at the limit
+    # against the shooting solver's (the load is flat there: the point is located to ~1e-4 L)
+    point = limits[0]["point"]
+    assert point["x"] == pytest.approx(1.2)
+    assert abs(point["v"] - dropped) < 5e-4, (point, dropped)
+    assert all(p["point"]["x"] == pytest.approx(1.2) for p in summary["path"])
+    assert (tmp_path / "out" / "deformed_shapes.png").is_file()
     # path.csv: the rods' ends and the corner's force per point, as in summary.json
     import csv
 
@@ -533,3 +540,17 @@ def test_three_rods_in_any_order_and_orientation_are_the_rod():
                                                           abs=1e-14)
     assert step["rods"]["middle"]["tip_angle"] == pytest.approx(
         math.pi + step["rods"]["first"]["tip_angle"], abs=1e-14)
+
+
+def test_drawing_marks_name_joints_supports_and_loads():
+    """The marks a structure's pictures draw: each joint where its first rod end sits, each
+    held end with its support and each point force at its mesh coordinate."""
+    structure = validate("static", _lee_config()).parsed.model.structure
+    marks = structure.drawing_marks()
+    joints = [m for m in marks if m["kind"] == "joint"]
+    supports = [m for m in marks if m["kind"] == "support"]
+    forces = [m for m in marks if m["kind"] == "force"]
+    assert [(m["s"], m["label"]) for m in joints] == [(pytest.approx(1.0), "corner (rigid)")]
+    assert sorted((m["s"], m["label"]) for m in supports) == [(0.0, "pinned"),
+                                                              (pytest.approx(2.0), "pinned")]
+    assert [(m["s"], m["vector"]) for m in forces] == [(pytest.approx(1.2), (0.0, -0.01))]

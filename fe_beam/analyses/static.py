@@ -549,7 +549,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     if structure is not None:  # a chain: its reference polygon, the axes only
         undeformed = structure.reference_polyline()
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
-                             undeformed=undeformed)
+                             undeformed=undeformed, marks=structure.drawing_marks())
     else:
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                              obstacles=result.obstacles or config.obstacles, section=m.section)

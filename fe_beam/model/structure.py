@@ -720,6 +720,37 @@ class Structure:
                 moments.append((tie.ends[0][0], body.moment))
         return tuple(sorted(forces)), tuple(sorted(moments))
 
+    def drawing_marks(self) -> list[dict]:
+        """What a picture of the structure marks, at mesh coordinates ``s``: every joint
+        (``kind`` "joint", its ``label`` its name and kind), every held rod end ("support",
+        its support kind or the fixed body's name) and every point force ("force", its
+        ``vector`` in world axes)."""
+        marks = []
+        for joint in self.joints:
+            ends = [e for e in joint.at if not e.startswith("body:")]
+            if ends:
+                rod, _, end = ends[0].partition(":")
+                marks.append({"kind": "joint", "s": self.end_s(rod, end),
+                              "label": f"{joint.name} ({joint.kind})"})
+            for entry in joint.at:
+                if entry.startswith("body:") and ends:
+                    body = self.body(entry.partition(":")[2])
+                    rod, _, end = ends[0].partition(":")
+                    marks.append({"kind": "support" if body.fixed is True else "body",
+                                  "s": self.end_s(rod, end), "label": body.name})
+        for rod in self.rods:
+            for end in ENDS:
+                kind = rod.supports.get(end, "free")
+                if kind != "free":
+                    label = kind if isinstance(kind, str) else "+".join(map(str, kind))
+                    marks.append({"kind": "support", "s": self.end_s(rod.name, end),
+                                  "label": label})
+        for segment in self.chain:
+            for x, *force in self.rods[segment.rod].point_forces:
+                marks.append({"kind": "force", "s": segment.s_of(x),
+                              "vector": tuple(float(f) for f in force)})
+        return marks
+
     def boundaries(self) -> tuple[float, ...]:
         """The mesh coordinates of the rods' ends inside the mesh (joints and piece ends)."""
         points = {seg.s0 for seg in self.chain} | {seg.s0 + seg.length for seg in self.chain}
