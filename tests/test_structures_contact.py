@@ -12,6 +12,7 @@ is MODEL.md section 8's 3 q L / 8 - 3 EI g / L^3."""
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -413,3 +414,24 @@ def test_reversed_rod_with_a_t_section_and_an_asymmetric_law_is_refused():
         validate("static", config)
     config["model"]["law"] = "reissner"
     validate("static", config)
+
+
+@pytest.mark.parametrize("table", ["obstacles", "tendons"])
+def test_obstacles_and_tendons_with_ties_or_curved_rods_are_refused(table):
+    """Obstacles and tendons run on serial chains of straight rods: a pin joint (a tie: the
+    mesh's pieces would be gaps to the contact) or a curved rod is refused (exit 2)."""
+    config = _l_frame(Q1, 0.4, 1.0)
+    if table == "tendons":
+        config.pop("obstacles"), config.pop("contact")
+        config["tendons"] = [{"name": "t", "rod": "beam", "offset_base": 0.001,
+                              "offset_tip": 0.001, "tension": 1.0}]
+    command = "finger" if table == "tendons" else "static"
+    pinned = copy.deepcopy(config)
+    pinned["joints"][0]["kind"] = "pin"
+    with pytest.raises(ConfigError, match=f"\\[\\[{table}\\]\\] with a structure of pin or "
+                                          "ball joints"):
+        validate(command, pinned)
+    config["rods"][1]["curvature"] = 0.5
+    with pytest.raises(ConfigError, match=f"'beam' curvature with \\[\\[{table}\\]\\] is not "
+                                          "supported yet"):
+        validate(command, config)
