@@ -243,8 +243,8 @@ def test_l_frame_with_rods_own_sections_on_a_block():
     assert entry["active"] == [[a + b, a + b]]
 
 
-@pytest.mark.parametrize("angle", [0.0, 0.9])
-def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle):
+@pytest.mark.parametrize("angle, spatial", [(0.0, False), (0.9, False), (0.0, True)])
+def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle, spatial):
     """`fe-beam dynamic` (generalised-alpha): the cantilever released under a suddenly
     applied load above the plane hits it and rebounds; split in two rods (turned by ``angle``
     with the plane and the load) it has the single rod's motion and contact force at every
@@ -255,7 +255,7 @@ def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle):
     q = 8 * Q1
     time = {"time": {"t_end": 0.3, "dt": 0.01, "output_every": 1},
             "damping": {"c": 0.0}}
-    single = _single(q) | time
+    single = _single(q, spatial) | time
     single["material"]["rho"] = 1000.0
     single["mesh"]["elements"] = 10
     # turned: a force tolerance above the round-off floor of the gap times the contact
@@ -263,7 +263,7 @@ def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle):
     # docs/structures.md)
     tight = {"penetration_tolerance": 1e-9, "force_tolerance": 1e-9 if angle == 0 else 1e-5}
     single["contact"] |= tight
-    frame = _planar_frame(angle)
+    frame = np.eye(3) if spatial else _planar_frame(angle)
     split = _split(q, frame) | time
     split["material"]["rho"] = 1000.0
     split["mesh"]["elements"] = 5
@@ -289,8 +289,9 @@ def test_dynamic_split_rod_falling_onto_a_plane_is_the_rod(angle):
         force = frame.T @ np.array(b["contact"][0]["force"])
         assert force == pytest.approx(a["contact"][0]["force"],
                                       abs=(1e-6 if angle == 0 else 1e-4) * scale)
-        tip = frame.T @ np.array([b["tip"]["u"], b["tip"]["v"]])
-        assert tip == pytest.approx([a["tip"]["u"], a["tip"]["v"]],
+        keys = ("u", "v", "w") if spatial else ("u", "v")
+        tip = frame.T @ np.array([b["tip"][k] for k in keys])
+        assert tip == pytest.approx([a["tip"][k] for k in keys],
                                     abs=(1e-8 if angle == 0 else 1e-6) * tip_scale)
 
 
