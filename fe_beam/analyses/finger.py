@@ -50,7 +50,9 @@ __all__ = ["DEFAULT_FINGER", "InverseUnreachable", "parse_finger", "run", "run_f
 
 
 def _profile_value(profile):
-    """A routing profile as the configuration gave it: the number, or the formula's text."""
+    """A routing profile as the configuration gave it: the number, or the formula's text (a
+    chain's tendon: its rod's own, `fe_beam.model.tendons.RodProfile`)."""
+    profile = getattr(profile, "profile", profile)
     return profile.constant if profile.is_constant else profile.text
 
 class InverseUnreachable(ConfigError):
@@ -222,6 +224,8 @@ def run_finger(
                 "anchor": t.anchor,
                 "tension": t.tension,
                 "pull_in": t.pull_in,
+                # a structure of rods: the tendon's rod (paths, entry, anchor: the chain's s)
+                **({"rod": t.rod} if t.rod is not None else {}),
                 # a routed tendon (offset_y/offset_z): its profiles as given (paths: sampled)
                 **({"routing": {"offset_y": _profile_value(t.routing[0]),
                                 "offset_z": _profile_value(t.routing[1])}}
@@ -321,8 +325,9 @@ def plot_finger(out: Path, result: StaticResult, config: StaticConfig) -> None:
         for index, ((_, shape), step) in enumerate(shapes):
             line, = axis.plot(shape["x"] + shape["u"], shape["v"],
                               label=f"tension {step['tensions'][0]:.3g} N")
-            draw_section_faces(axis, shape, config.model.section, config.model.length,
-                               line.get_color(), fill=index == len(shapes) - 1)
+            if getattr(config.model, "structure", None) is None:  # a chain: the axes only
+                draw_section_faces(axis, shape, config.model.section, config.model.length,
+                                   line.get_color(), fill=index == len(shapes) - 1)
         if config.obstacles:
             draw_obstacles(axis, result.obstacles or config.obstacles, [s for s, _ in shapes],
                            config.model.length)
@@ -382,9 +387,13 @@ def plot_spatial_finger(out: Path, result: StaticResult, config: StaticConfig) -
     every = max(1, len(result.shapes) // 8)
     shapes = [(f"tension {step['tensions'][0]:.3g} N", shape) for (_, shape), step in list(
         zip(result.shapes, result.steps, strict=True))[every - 1:: every]]
+    structure = getattr(config.model, "structure", None)
+    undeformed = None if structure is None else [  # a chain: its reference polyline
+        structure.reference_point(s, structure.segment_at(min(s, config.model.length)))
+        for s in (0.0, *structure.boundaries(), config.model.length)]
     plot_spatial_shapes(shapes, out / "fig3_9_backbone.png",
                         "Backbone (cf. chapter Fig. 3.9)", config.model.length,
-                        obstacles=result.obstacles or config.obstacles)
+                        obstacles=result.obstacles or config.obstacles, undeformed=undeformed)
     tensions = [s["tensions"][0] for s in result.steps]
     tips = {k: [s["tip"][k] for s in result.steps] for k in ("u", "v", "w", "rotation_vector")}
     plot_spatial_load_displacement(tensions, tips, out / "tension_tip.png",
@@ -448,7 +457,9 @@ def _render_tube(pyvista, path: Path, shape: dict, config: StaticConfig) -> None
     plotter = pyvista.Plotter(off_screen=True, window_size=(900, 600))
     body = pyvista.Spline(backbone, len(x) * 3).tube(radius=float(np.mean(height)) / 2)
     plotter.add_mesh(body, color="lightsteelblue", opacity=0.45)
-    for tendon in config.tendons:
+    # a chain of rods: the tube only (its tendons' offsets turn with each rod's angle)
+    chain = getattr(config.model, "structure", None) is not None
+    for tendon in () if chain else config.tendons:
         for branch in tendon.paths:
             xs, ds = np.array([p[0] for p in branch]), np.array([p[1] for p in branch])
             delta = np.interp(shape["x"], xs, ds)

@@ -224,9 +224,20 @@ def _path_plot(out, summary: dict) -> None:
     points = summary.get("path") or []
     if not points:
         return
+    where = "tip"
+    if all("point" in p for p in points) and summary.get("parameter") != "point_force":
+        # a structure: where its first point force pushes (x on the mesh coordinate)
+        where = "point"
+        forks = summary.get("critical_points", [])
+        if any("point" not in c for c in forks):
+            where = "tip"
+        else:
+            points = [dict(p, tip=p["point"]) for p in points]
+            summary = dict(summary, critical_points=[dict(c, tip=c["point"]) for c in forks])
     spatial = "w" in points[0]["tip"]
     keys = ("u", "v", "w") if spatial else ("u", "v", "theta")
-    labels = ("tip u [m]", "tip v [m]", "tip w [m]" if spatial else "tip theta [rad]")
+    name = "load point" if where == "point" else "tip"
+    labels = tuple(f"{name} {k} [{'rad' if k == 'theta' else 'm'}]" for k in keys)
     with figure(out / "path.png", 1, 3, figsize=(11, 3.6)) as (_, axes):
         for ax, key, label in zip(axes, keys, labels, strict=True):
             forks = [c for c in summary.get("critical_points", [])
@@ -376,7 +387,11 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
     writer = kind_of_writer(problem, out / "path.xdmf", contact=run.contact) if xdmf else None
     obstacles = static.obstacles
     # the deformed shapes with the obstacles (path points, every point's shape on rank 0)
-    drawing = writing and static.output.plots and bool(obstacles)
+    structure = getattr(static.model, "structure", None)
+    drawing = writing and static.output.plots and (bool(obstacles) or structure is not None)
+    # a structure's path plots where its first point force pushes (its tip may be held)
+    load_point = (structure.chain_point_loads()[0][0][0]
+                  if structure is not None and structure.chain_point_loads()[0] else None)
     shaper = (writer or kind_of_writer(problem, None, contact=run.contact)) if drawing else None
     shapes: list = []
     if obstacles:
@@ -404,14 +419,18 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
         if settings.parameter == "point_force":  # where the (first) point force pushes
             at = loads.point_forces[0][0]
             record["point"] = {"x": at, **problem.point_values(at)}
+        elif load_point is not None:
+            record["point"] = {"x": load_point, **problem.point_values(load_point)}
         summary["path"].append(record)
-        at = loads.point_forces[0][0] if settings.parameter == "point_force" else None
+        at = loads.point_forces[0][0] if settings.parameter == "point_force" else load_point
         summary["critical_points"] = [_critical_summary(c, problem, at)
                                       for c in result.critical_points]
         summary["notes"] = notes + [n for n in result.notes if n not in notes]
         files.on_step(record)
         if shaper is not None:  # after the XDMF export: its fields are this point's
             shape = shaper.vertex_values(update=shaper is not writer)
+            if comm.rank == 0 and getattr(problem, "chain", None) is not None:
+                shape = problem.chain.shape(shape)  # drawn at the rods' reference placement
             if comm.rank == 0:
                 shapes.append((f"load factor {entry['load_factor']:.3g}", shape))
         bar.update(min(len(summary["path"]) - 1, settings.max_steps),
@@ -509,9 +528,15 @@ def _path_shapes(out, shapes: list, static) -> None:
         chosen.append(shapes[-1])
     model = static.model
     title = f"path: {model.options.law} law, constraint {model.options.constraint}"
+    structure = getattr(model, "structure", None)
+    undeformed = None if structure is None else structure.reference_polyline()
     if getattr(model, "kinematics", "planar") == "spatial":
         plot_spatial_shapes(chosen, out / "deformed_shapes.png", title, model.length,
-                            obstacles=static.obstacles)
+                            obstacles=static.obstacles, undeformed=undeformed)
+    elif structure is not None:
+        plot_deformed_shapes(chosen, out / "deformed_shapes.png", title, model.length,
+                             obstacles=static.obstacles, undeformed=undeformed,
+                             marks=structure.drawing_marks())
     else:
         plot_deformed_shapes(chosen, out / "deformed_shapes.png", title, model.length,
                              obstacles=static.obstacles, section=model.section)

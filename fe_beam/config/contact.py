@@ -17,6 +17,7 @@ from fe_beam.model.obstacles import (
     Motion,
     Plane,
     Sphere,
+    check_clear_of_chain,
     check_clear_of_rod,
     translated,
 )
@@ -148,7 +149,11 @@ def parse_obstacle(index: int, given, model, dim: int = 2, solid: bool = False,
     if not solid:
         start = _wrap(obstacle.translation, 0.0)
         try:
-            check_clear_of_rod(translated(obstacle, start), model.section, model.length)
+            if getattr(model, "structure", None) is not None:  # a chain of rods
+                check_clear_of_chain(translated(obstacle, start), model.structure,
+                                     model.section)
+            else:
+                check_clear_of_rod(translated(obstacle, start), model.section, model.length)
         except ConfigError as error:
             if motion is None:
                 raise

@@ -21,7 +21,7 @@ from fe_beam.config.schema import (
     parse_static,
     table,
 )
-from fe_beam.model.tendons import ROUTING_SAMPLES, Tendon, check_tendon_inside
+from fe_beam.model.tendons import ROUTING_SAMPLES, Tendon, check_tendon_inside, on_chain
 from fe_beam.timefunctions import Profile, TimeFunctionError, shown
 
 __all__ = [
@@ -63,6 +63,8 @@ TENDON_KEYS = {
     "tension": Key(NUMBER, None, "tension at load factor 1 [N]"),
     "pull_in": Key(NUMBER, None, "pull-in at load factor 1 [m] (tension becomes unknown)"),
     "steps": Key((int,), None, "number of load steps (the largest over tendons and [loads])"),
+    "rod": Key((str,), None, "with [[rods]]: the name of the rod the tendon runs along (entry, "
+               "anchor, path x from the rod's start, offsets in the rod's own section)"),
 }
 INVERSE_KEYS = {
     "tip_angle": Key(NUMBER, None, "target tip rotation theta [rad]"),
@@ -96,7 +98,10 @@ def override_defaults(command: str, config: dict) -> dict | None:
 
 def with_defaults(config: dict) -> dict:
     """The user's tables over the chapter's finger (whole tables: a given [section] replaces
-    the default one rather than mixing keys of two shapes)."""
+    the default one rather than mixing keys of two shapes). A structure of [[rods]] takes no
+    defaults of the finger (its rods are given; a tapered section does not apply to them)."""
+    if isinstance(config, dict) and "rods" in config:
+        return copy.deepcopy(config)
     merged = copy.deepcopy(DEFAULT_FINGER)
     for name, value in config.items():
         if name == "loads" and isinstance(value, dict):
@@ -171,6 +176,46 @@ def _check_routing_values(index: int, name: str, routing, entry: float, anchor: 
                 f"entry {entry:g} to anchor {anchor:g} m)") from None
 
 
+def _rod_tendon(index: int, given, static: StaticConfig) -> tuple[Tendon, int | None]:
+    """A [[tendons]] entry of a structure of [[rods]]: parsed and checked on its rod ``rod``
+    (entry, anchor and path x from the rod's start, offsets in the rod's own section), then
+    laid on the chain (`fe_beam.model.tendons.on_chain`)."""
+    structure = static.model.structure
+    names = [rod.name for rod in structure.rods]
+    rod_name = given.get("rod") if isinstance(given, dict) else None
+    label = repr(given["name"]) if isinstance(given, dict) \
+        and isinstance(given.get("name"), str) else f"#{index + 1}"
+    if rod_name is None:
+        raise ConfigError(f"[[tendons]] {label} needs rod = \"NAME\" with [[rods]] (the rod it "
+                          f"runs along: {', '.join(names)})")
+    if rod_name not in names:
+        raise ConfigError(f"[[tendons]] {label} rod = {shown(rod_name)} names no rod of "
+                          f"[[rods]] (rods: {', '.join(names)})")
+    rod_index = names.index(rod_name)
+    rod = structure.rods[rod_index]
+    try:
+        tendon, steps = parse_tendon(index, {k: v for k, v in given.items() if k != "rod"},
+                                     rod.length)
+    except ConfigError as error:
+        raise ConfigError(f"[[tendons]] {label} (on rod '{rod_name}', length "
+                          f"{rod.length:g} m): {error}") from None
+    section = static.model.section
+    if rod.section:
+        section = replace(section, dims=dict(rod.section))
+    try:
+        check_tendon_inside(tendon, section, rod.length, index)
+    except ConfigError as error:
+        raise ConfigError(f"{error} (on rod '{rod_name}', x from its start)") from None
+    spatial = getattr(static.model, "kinematics", "planar") == "spatial"
+    if tendon.out_of_plane and not spatial:
+        check_tendons_planar({"model": {}}, [tendon], index)
+    segment = next(seg for seg in structure.chain if seg.rod == rod_index)
+    try:
+        return on_chain(tendon, segment, rod_name, spatial), steps
+    except ValueError as error:
+        raise ConfigError(f"[[tendons]] {label} (on rod '{rod_name}'): {error}") from None
+
+
 def check_tendons_planar(config: dict, tendons, start: int = 0) -> None:
     """ConfigError for a tendon routed out of the plane z = 0 (`Tendon.out_of_plane`) on a
     planar rod (``[model] kinematics`` absent or "planar"); ``tendons[0]`` is the ``[[tendons]]``
@@ -193,7 +238,7 @@ def parse_finger(config: dict, planar_check: bool = True
     tendon routed out of the plane through onto a planar rod (the 3D solid parses its tendons
     here and runs without the rod then: `fe_beam.config.solid`)."""
     config = with_defaults(config)
-    tendons_given = config.pop("tendons")
+    tendons_given = config.pop("tendons", None)
     inverse = table(config, "inverse", INVERSE_KEYS) if "inverse" in config else {}
     config.pop("inverse", None)
     if not isinstance(tendons_given, list) or not tendons_given:
@@ -208,11 +253,20 @@ def parse_finger(config: dict, planar_check: bool = True
     timed = ("time_function", "time_table")
     tendons_given = [{k: v for k, v in t.items() if k not in timed} if isinstance(t, dict) else t
                      for t in tendons_given]
-    parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
-    for index, (tendon, _) in enumerate(parsed):
-        check_tendon_inside(tendon, static.model.section, static.model.length, index)
-    if planar_check:
-        check_tendons_planar(config, [t for t, _ in parsed])
+    structure = getattr(static.model, "structure", None)
+    if structure is not None:  # a chain of rods: each tendon on its rod
+        parsed = [_rod_tendon(i, t, static) for i, t in enumerate(tendons_given)]
+    else:
+        named = [i for i, t in enumerate(tendons_given)
+                 if isinstance(t, dict) and t.get("rod") is not None]
+        if named:
+            raise ConfigError(f"[[tendons]] #{named[0] + 1} rod names a rod of [[rods]], and "
+                              "the configuration has no [[rods]] (a single rod: leave rod out)")
+        parsed = [parse_tendon(i, t, static.model.length) for i, t in enumerate(tendons_given)]
+        for index, (tendon, _) in enumerate(parsed):
+            check_tendon_inside(tendon, static.model.section, static.model.length, index)
+        if planar_check:
+            check_tendons_planar(config, [t for t, _ in parsed])
     steps = max([static.stepping.steps] + [s for _, s in parsed if s is not None])
     if steps < 1:
         raise ConfigError(f"[[tendons]] steps must be >= 1, got {steps}")

@@ -714,8 +714,10 @@ def plot_deformed_shapes(
     obstacles=(),
     section=None,
     undeformed=None,
+    marks=(),
 ) -> None:
     """Deformed axes (x + u, y + v) with labels; ``reference`` adds marked tip points;
+    ``marks`` (a structure's `drawing_marks`) are drawn on the last shape (`draw_marks`);
     ``obstacles`` (`fe_beam.model.obstacles`) are drawn in grey; ``section`` (a
     `fe_beam.model.sections.Section`) adds each shape's outline (`draw_section_faces`);
     ``undeformed``: the reference axis as points ((x, y), ...) (default the x axis to L: a
@@ -733,6 +735,8 @@ def plot_deformed_shapes(
             draw_obstacles(axes, obstacles, shapes, length)
         for i, (label, x, y) in enumerate(reference):
             axes.plot(x, y, "kx", ms=7, label=label if i == 0 else None)
+        if marks and shapes:
+            draw_marks(axes, shapes[-1][1], marks)
         # true shape (equal scales) in an axes that keeps its size: the legend fits inside it
         axes.set_aspect("equal", adjustable="datalim")
         axes.set_xlabel("x + u [m]")
@@ -740,6 +744,56 @@ def plot_deformed_shapes(
         axes.set_title(title)
         axes.grid(alpha=0.3)
         legend_inside(axes, fontsize=7)
+
+
+def draw_marks(axes, shape: dict, marks) -> None:
+    """A structure's joints (filled: rigid, open: pin), held ends (grey triangles, their
+    support or body named) and point forces (red arrows, scaled to a tenth of the drawing)
+    where ``shape`` (a structure's line shape: mesh coordinate ``x``, drawn at (x + u, v))
+    puts them."""
+    s = np.asarray(shape["x"], dtype=float)
+    px, py = s + np.asarray(shape["u"], dtype=float), np.asarray(shape["v"], dtype=float)
+    finite = np.isfinite(s) & np.isfinite(px) & np.isfinite(py)
+    s, px, py = s[finite], px[finite], py[finite]
+    if not len(s):
+        return
+    order = np.argsort(s, kind="stable")
+    s, px, py = s[order], px[order], py[order]
+    span = max(float(np.ptp(px)), float(np.ptp(py)), 1e-300)
+
+    def where(at):
+        k = int(np.argmin(np.abs(s - at)))  # marks sit at vertices
+        return px[k], py[k]
+
+    labelled = set()
+
+    def label(kind, text):
+        if kind in labelled:
+            return None
+        labelled.add(kind)
+        return text
+
+    for mark in marks:
+        x, y = where(mark["s"])
+        if mark["kind"] == "joint":
+            pin = "(pin)" in mark["label"] or "(ball)" in mark["label"]
+            axes.plot(x, y, "o", ms=6, mec="k", mfc="white" if pin else "k", zorder=5,
+                      label=label("joint", "joint"))
+        elif mark["kind"] in ("support", "body"):
+            axes.plot(x, y, "^" if mark["kind"] == "support" else "s", ms=9, mec="0.2",
+                      mfc="0.6", zorder=4, label=label(mark["kind"], mark["kind"]))
+            axes.annotate(mark["label"], (x, y), xytext=(4, -10), textcoords="offset points",
+                          fontsize=6, color="0.3")
+        elif mark["kind"] == "force":
+            vector = np.asarray(mark["vector"][:2], dtype=float)
+            size = float(np.linalg.norm(vector))
+            if size == 0.0:
+                continue
+            d = 0.1 * span * vector / size
+            axes.annotate("", (x, y), xytext=(x - d[0], y - d[1]),
+                          arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.5})
+            if "force" not in labelled:
+                axes.plot([], [], color="C3", lw=1.5, label=label("force", "point force"))
 
 
 def plot_load_displacement(load_factors, tips: dict, path: str | Path, title: str) -> None:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import functools
 import sys
+import time
+from pathlib import Path
 
 import dolfinx
 import dolfinx.fem.petsc as fem_petsc
@@ -38,6 +40,7 @@ __all__ = [
     "create_matrix",
     "vector_for_form",
     "cell_vertex_x",
+    "clear_stale_jit_lock",
     "element",
     "element_degree",
     "function_space",
@@ -274,11 +277,16 @@ def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:
     return mesh.create_interval(comm, n_cells, [0.0, length])
 
 
-def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.Mesh:
-    """Interval mesh with the given increasing vertex coordinates (built on rank 0, distributed)."""
+def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray, gaps=()) -> mesh.Mesh:
+    """Interval mesh with the given increasing vertex coordinates (built on rank 0, distributed);
+    no cell inside the ``gaps`` ((a, b), ...): the mesh's separate pieces."""
     if comm.rank == 0:
         points = np.asarray(vertices, dtype=np.float64).reshape(-1, 1)
         cells = np.column_stack([np.arange(len(points) - 1), np.arange(1, len(points))])
+        middle = 0.5 * (points[:-1, 0] + points[1:, 0])
+        for a, b in gaps:
+            cells = cells[~((middle > a) & (middle < b))]
+            middle = middle[~((middle > a) & (middle < b))]
     else:
         points, cells = np.empty((0, 1)), np.empty((0, 2))
     if LEGACY:
@@ -390,7 +398,11 @@ def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
     Configured programmatically rather than through dolfinx's LinearProblem, whose options
     stay in PETSc's global database (512 entries at most) long after the solve.
     """
-    bilinear, linear = fem.form(a), fem.form(L)
+    return solve_compiled(fem.form(a), fem.form(L), bcs, target)
+
+
+def solve_compiled(bilinear, linear, bcs, target: fem.Function) -> fem.Function:
+    """`solve_linear` of compiled forms (``fem.form``: a solve repeated without compiling)."""
     matrix = assemble_matrix(bilinear, bcs=bcs)
     matrix.assemble()
     rhs = assemble_vector(linear)
@@ -530,6 +542,31 @@ def evaluate_expression(compiled: fem.Expression, msh: mesh.Mesh, cells: np.ndar
 
 
 # --- JIT look-ups ------------------------------------------------------------------------------
+# a C file older than this without its ".c.cached" marker is a lock left by a killed compile
+STALE_JIT_LOCK_SECONDS = 600.0
+
+
+def clear_stale_jit_lock(cache_dir, module_name, age: float = STALE_JIT_LOCK_SECONDS) -> bool:
+    """Remove FFCx's lock of ``module_name`` in ``cache_dir`` if a killed process left it.
+
+    FFCx claims a module by creating ``<module>.c`` exclusively, compiles it, and then writes
+    ``<module>.c.cached``; a process that finds the ``.c`` file waits (10 s by default) for the
+    marker and then fails with "JIT compilation timed out". A run killed mid-compile (Ctrl-C,
+    a batch system's time limit) leaves the ``.c`` file without its marker, and every later run
+    that needs the form fails. A compile writes its C file seconds before the marker, so a file
+    older than ``age`` seconds without a marker is such a lock: it is removed (True). Errors
+    (another process removed it first, a read-only cache) leave it to FFCx."""
+    c_file = Path(str(cache_dir)).expanduser() / f"{module_name}.c"
+    try:
+        if (c_file.with_suffix(".c.cached").exists()
+                or time.time() - c_file.stat().st_mtime < age):
+            return False
+        c_file.unlink()
+    except OSError:
+        return False
+    return True
+
+
 def _memoize_jit_lookups() -> None:
     """Remember the compiled modules FFCx has found in its disk cache in this process.
 
@@ -539,11 +576,11 @@ def _memoize_jit_lookups() -> None:
     problem whose forms are all compiled already (issue 22, item 8: 0.13-0.32 s instead of
     ~0.1 s for a spatial cantilever). A module's name is the hash of its form and options, so
     the same name in the same directory is the same module: found once, it is reused.
-    FE_BEAM_JIT_MEMO=0 switches this off."""
+    FE_BEAM_JIT_MEMO=0 switches this off. Before a look-up, a lock left by a killed compile is
+    removed (`clear_stale_jit_lock`)."""
     import os
 
-    if os.environ.get("FE_BEAM_JIT_MEMO", "1") == "0":
-        return
+    memo = os.environ.get("FE_BEAM_JIT_MEMO", "1") != "0"
     try:
         from ffcx.codegeneration import jit as ffcx_jit
     except ImportError:  # pragma: no cover - another FFCx layout: nothing to speed up
@@ -557,8 +594,9 @@ def _memoize_jit_lookups() -> None:
         key = (str(module_name), tuple(object_names), str(cache_dir))
         if key in found:
             return found[key]
+        clear_stale_jit_lock(cache_dir, module_name)
         result = lookup(module_name, object_names, cache_dir, *args, **kwargs)
-        if result[0] is not None:  # found (None: the caller compiles it now)
+        if memo and result[0] is not None:  # found (None: the caller compiles it now)
             found[key] = result
         return result
 

@@ -71,6 +71,7 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import global_sum
 from fe_beam.fem.rotations import rotation
+from fe_beam.fem.structure import chain_centreline, chain_reversed, chain_section_dims
 from fe_beam.model.obstacles import (
     Box,
     ContactSettings,
@@ -768,22 +769,28 @@ class ContactSet:
         rotation theta, director d and extents below/above, or (spatial) the tube radius;
         ``variables``: r and theta as UFL variables (for the resultants' densities)."""
         x = ufl.SpatialCoordinate(self._problem.mesh)[0]
+        chain = getattr(self._problem, "chain", None)
         if self.spatial:
             d, theta = parts
-            r = ufl.as_vector([x + d[0], d[1], d[2]])
+            r = (ufl.as_vector([x + d[0], d[1], d[2]]) if chain is None
+                 else chain_centreline(chain, d))
             if variables:
                 r = ufl.variable(r)
             R = rotation(theta)
+            if chain is not None:  # a chain of rods: the world rotation R_inc R0
+                R = ufl.dot(R, chain.frame0)
             if variables:
                 R = ufl.variable(R)
             return {"r": r, "radius": self._radius, "theta": theta, "R": R,
                     "parts": self._parts}
         u, v, theta = parts
-        r = ufl.as_vector([x + u, v])
+        r = ufl.as_vector([x + u, v]) if chain is None else chain_centreline(chain, (u, v))
         if variables:
             r, theta = ufl.variable(r), ufl.variable(theta)
         below, above = self._extents()
-        return {"r": r, "theta": theta, "d": director(theta), "below": below, "above": above}
+        # a chain of rods: the section director at the world angle theta0 + theta
+        d = director(theta) if chain is None else director(chain.theta0 + theta)
+        return {"r": r, "theta": theta, "d": d, "below": below, "above": above}
 
     def _relative(self, geometry: dict, i: int) -> dict:
         """The rod's surface data in the frame of obstacle i: a moving obstacle's translation
@@ -884,10 +891,15 @@ class ContactSet:
         x = ufl.SpatialCoordinate(mesh)[0]
         self._s = x / model.length
         if self.spatial:
-            self._radius = section_circumradius(model.section, self._s, problem.section_dims,
+            self._radius = section_circumradius(model.section, self._s, self._dims(problem),
                                                 problem.section_dims_tip)
-            self._parts = section_parts(model.section, self._s, problem.section_dims,
+            self._parts = section_parts(model.section, self._s, self._dims(problem),
                                         problem.section_dims_tip)
+            flip = self._flip(problem)
+            if flip is not None:  # a reversed rod: its frame's d2 is the rod's -d2
+                self._parts = {"rectangles": [((1 - 2 * flip) * offset, half2, half3)
+                                              for offset, half2, half3
+                                              in self._parts["rectangles"]]}
             self._axes = {id(o): fem.Constant(mesh, np.asarray(o.axis, dtype=float))
                           for o in self.obstacles if isinstance(o, Cylinder)}
         self._build_measures(problem, x)
@@ -971,8 +983,29 @@ class ContactSet:
 
     def _extents(self):
         problem = self._problem
-        return section_extents(self.model.section, self._s, problem.section_dims,
-                               problem.section_dims_tip)
+        below, above = section_extents(self.model.section, self._s, self._dims(problem),
+                                       problem.section_dims_tip)
+        flip = self._flip(problem)
+        if flip is not None:  # a reversed rod: its own sides swapped in the chain's frame
+            below, above = flip * above + (1 - flip) * below, flip * below + (1 - flip) * above
+        return below, above
+
+    def _flip(self, problem):
+        """Along a chain of rods with an asymmetric section (a t-section), the DG0 indicator
+        of the rods traversed from their end (`fe_beam.fem.structure.chain_reversed`), else
+        None."""
+        chain = getattr(problem, "chain", None)
+        if chain is None or self.model.section.shape != "t-section":
+            return None
+        return chain_reversed(chain)
+
+    @staticmethod
+    def _dims(problem):
+        """The section dimensions of the forms: the problem's, or along a chain of rods with
+        their own sections each rod's (DG0 fields, `fe_beam.fem.structure.ChainGeometry`)."""
+        chain = getattr(problem, "chain", None)
+        return (chain_section_dims(chain) if chain is not None else None) \
+            or problem.section_dims
 
     def _build_measures(self, problem, x) -> None:
         """Compiled expressions at the contact points and forms of the resultants."""
@@ -1792,6 +1825,15 @@ class ContactSet:
             local.update({"d": values[:, 3:5], "below": values[:, 5], "above": values[:, 6]})
         return local
 
+    def _undeformed_local(self) -> dict:
+        """`_dense_local` of the zero state (the reference geometry: a chain of rods)."""
+        saved = compat.local_array(self._problem.w).copy()
+        compat.local_array(self._problem.w)[:] = 0.0
+        try:
+            return self._dense_local()
+        finally:
+            compat.local_array(self._problem.w)[:] = saved
+
     def _spatial_local(self, values) -> dict:
         """The spatial columns of an evaluated expression: the circumradius, the directors
         (``tangent`` = d1, ``d2``, ``d3``) and the section's ``parts`` per point."""
@@ -1849,6 +1891,8 @@ class ContactSet:
         now = self.translations()
         then = (getattr(self, "_positions_offsets", None) if before is not None
                 else [o.translation(0.0) for o in self.obstacles])
+        if before is None and getattr(self._problem, "chain", None) is not None:
+            before = self._undeformed_local()  # the undeformed chain of rods
         if before is None:  # the undeformed rod
             r = np.zeros((len(after["x"]), self.dim))
             r[:, 0] = after["x"]

@@ -84,6 +84,13 @@ class TendonSet:
             density = sum((self._problem.tendon_length_density(parts, offsets)
                            for offsets in deltas), ufl.zero())
             return inside * density * self._problem.dx_energy
+        if getattr(self._problem, "chain", None) is not None:
+            # a chain of rods: the body-frame form, the strains in each rod's own frame (its
+            # section director at the world angle theta0 + theta)
+            strains = self._problem.strains(*parts)
+            density = sum((strain_tendon_length_density(strains, delta, delta.dx(0))
+                           for delta in deltas), ufl.zero())
+            return inside * density * self._problem.dx_energy
         density = sum(
             (tendon_length_density(parts, delta, delta.dx(0)) for delta in deltas), ufl.zero()
         )

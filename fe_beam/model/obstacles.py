@@ -30,7 +30,7 @@ from fe_beam.errors import ConfigError
 from fe_beam.timefunctions import TimeFunctionError, parse_formula
 
 __all__ = ["MOTION_VARIABLES", "OBSTACLE_SHAPES", "Box", "ContactSettings", "Cylinder", "Motion",
-           "Obstacle", "Plane", "Sphere", "check_clear_of_rod", "distance",
+           "Obstacle", "Plane", "Sphere", "check_clear_of_chain", "check_clear_of_rod", "distance",
            "section_circumradius", "section_distance", "section_extents", "section_parts",
            "segment_distance", "translated"]
 
@@ -616,3 +616,34 @@ def check_clear_of_rod(obstacle: Obstacle, section, length: float, samples: int 
             f"{obstacle.where} the {obstacle.shape} {verb} the undeformed rod ({where}; "
             f"{extent}); move it clear of the rod (the rod starts straight along x with its "
             "section centred on the x axis)")
+
+
+def check_clear_of_chain(obstacle: Obstacle, structure, section, samples: int = 401) -> None:
+    """ConfigError when the obstacle touches or intersects a chain of rods in its reference
+    geometry (`fe_beam.model.structure.Structure`): each rod's straight axis from its start
+    along its direction, its section (its own dimensions or ``section``'s) turned with the rod
+    (planar: the director at the rod's angle; spatial: its frame d1, d2, d3), sampled at
+    ``samples`` stations per rod."""
+    for rod in structure.rods:
+        x = np.linspace(0.0, rod.length, samples)
+        dims = dict(rod.section) if rod.section else None
+        r = np.asarray(rod.start)[None, :] + x[:, None] * np.asarray(rod.direction)[None, :]
+        if obstacle.dim == 3:
+            d1, d2, d3 = rod.frame
+            gap = section_distance(obstacle, r, d1, d2, d3,
+                                   section_parts(section, x / rod.length, dims))
+        else:
+            c, s = rod.direction
+            d = np.broadcast_to(np.array([-s, c]), r.shape)
+            below, above = section_extents(section, x / rod.length, dims)
+            gap = segment_distance(obstacle, r, d, below, above)
+        worst = int(np.argmin(gap))
+        if not gap[worst] > 0:
+            depth = -float(gap[worst])
+            where = (f"it touches the surface of rod '{rod.name}'" if depth <= 0 else
+                     f"the surface of rod '{rod.name}' is {depth:.4g} m inside it")
+            raise ConfigError(
+                f"{obstacle.where} the {obstacle.shape} "
+                f"{'touches' if depth <= 0 else 'intersects'} the undeformed structure ({where}"
+                f" at x = {x[worst]:.4g} m from the rod's start, the section turned with the "
+                "rod); move it clear of the rods")

@@ -17,8 +17,8 @@ import numpy as np
 
 from fe_beam.errors import ConfigError
 
-__all__ = ["ROUTING_SAMPLES", "Path", "Tendon", "check_tendon_inside", "looped_tendon",
-           "section_margin"]
+__all__ = ["ROUTING_SAMPLES", "Path", "RodProfile", "Tendon", "check_tendon_inside",
+           "looped_tendon", "on_chain", "section_margin"]
 
 Path = tuple[tuple[float, float], ...]
 #: intervals between entry and anchor on which a routing is sampled: for its checks (finite,
@@ -74,6 +74,9 @@ class Tendon:
     pull_in: float | None = None
     name: str = "tendon"
     routing: tuple | None = None
+    #: a structure of rods: the name of the rod the tendon runs along (its paths, entry and
+    #: anchor then in the chain's arc length s: `on_chain`); None: the single rod
+    rod: str | None = None
 
     def __post_init__(self):
         if self.routing is not None:
@@ -171,6 +174,56 @@ class Tendon:
                 f"tendon {self.name!r}: anchor {self.anchor:g} lies beyond the beam "
                 f"(L = {length:g})"
             )
+
+
+class RodProfile:
+    """A rod's routing profile (`fe_beam.timefunctions.Profile` of the rod's own arc length x)
+    read along a chain's arc length s: ``sign`` profile(x(s)), x(s) = ``start`` + ``step`` s
+    (step +-1). Evaluates on floats and symbolically (`symbolic`, e.g. UFL: the chain rule
+    gives the derivative) like the profile; ``text`` and ``constants`` are the rod's."""
+
+    def __init__(self, profile, start: float, step: float, sign: float):
+        self.profile, self.start, self.step, self.sign = profile, start, step, sign
+        self.constants = dict(profile.constants)
+        self.variable = profile.variable
+        self.text = profile.text
+        self.constant = None if profile.constant is None else sign * profile.constant
+
+    @property
+    def is_constant(self) -> bool:
+        return self.constant is not None
+
+    def __call__(self, s: float) -> float:
+        return self.sign * self.profile(self.start + self.step * float(s))
+
+    def symbolic(self, s, backend: dict | None):
+        if self.constant is not None:
+            return self.constant
+        return self.sign * self.profile.symbolic(self.start + self.step * s, backend)
+
+
+def on_chain(tendon: Tendon, segment, rod: str, spatial: bool = False) -> Tendon:
+    """The tendon of one rod of a chain (`fe_beam.model.structure.ChainSegment` ``segment``),
+    its paths, entry and anchor given in the rod's own arc length x and its offsets in the
+    rod's own section frame, as a tendon of the chain: x -> s = `ChainSegment.s_of` (x), and
+    on a rod traversed from its end the offsets turned with the chain's frame (the rod's
+    turned by pi about its d3: y -> -y, z unchanged). A planar routing is read through its
+    sampled paths; ``spatial``: a routing stays a routing, its profiles read along s
+    (`RodProfile`)."""
+    sign = -1.0 if segment.reversed else 1.0
+    ends = sorted((segment.s_of(tendon.entry), segment.s_of(tendon.anchor)))
+    common = dict(entry=ends[0], anchor=ends[1], tension=tendon.tension,
+                  pull_in=tendon.pull_in, name=tendon.name, rod=rod)
+    if spatial and tendon.routing is not None:
+        # x(s) = s - s0 on a rod traversed from its start, s0 + L - s from its end
+        start, step = ((segment.s0 + segment.length, -1.0) if segment.reversed
+                       else (-segment.s0, 1.0))
+        y, z = tendon.routing
+        routing = (RodProfile(y, start, step, sign), RodProfile(z, start, step, 1.0))
+        return Tendon(routing=routing, **common)
+    paths = tuple(tuple(sorted((segment.s_of(x), sign * delta) for x, delta in path))
+                  for path in tendon.paths)
+    return Tendon(paths=paths, **common)
 
 
 def looped_tendon(
