@@ -71,3 +71,56 @@ def test_a_frictionless_disc_pushes_along_the_rods_normal_or_the_run_fails(tmp_p
     x0, x1 = entry["active"][0]
     slope = float(np.interp(0.5 * (x0 + x1), x[order], theta[order]))
     assert abs(fx + fy * math.tan(slope)) <= 0.01 * math.hypot(fx, fy), (fx, fy, slope)
+
+
+# --- fe-beam path certifies its contact points as fe-beam static does -----------------------------
+def _path_config() -> dict:
+    """An aluminium rod of 8 mm diameter, clamped, under a uniform load above a plane at a gap
+    g: the tip touches at q1 = 8 EI g / L^4, then carries R = 3 q L / 8 - 3 EI g / L^3."""
+    return {"beam": {"length": L}, "section": {"shape": "circle", "d": D},
+            "material": {"E": E, "nu": NU}, "model": {"law": "reissner"},
+            "mesh": {"elements": 12, "degree": 2},
+            "loads": {"distributed": [0.0, -4.0 * _q1()], "steps": 4},
+            "obstacles": [{"shape": "plane", "point": [0.0, -D / 2 - GAP],
+                           "normal": [0.0, 1.0]}],
+            "contact": {"penetration_tolerance": 1e-9},
+            "path": {"max_load_factor": 1.0},
+            "output": {"xdmf": False, "plots": False}}
+
+
+def _ei() -> float:
+    return E * math.pi * D**4 / 64
+
+
+def _q1() -> float:
+    return 8 * _ei() * GAP / L**4
+
+
+def test_path_with_obstacles_certifies_the_contact_of_every_point(monkeypatch, tmp_path):
+    """fe-beam path reported each point's contact force and max_penetration with only the
+    global-equilibrium check: now surface_penetration and contact_force_balance over all the
+    path's points, which fail the run when broken on purpose."""
+    import fe_beam
+    from fe_beam.fem.contact import ContactSet
+
+    summary = fe_beam.run("path", _path_config(), tmp_path / "pass")
+    assert summary["status"] == "converged", summary["message"]
+    checks = {c["name"]: c for c in summary["checks"]}
+    assert checks["surface_penetration"]["passed"] and checks["contact_force_balance"]["passed"]
+    assert checks["surface_penetration"]["value"] <= 1e-9
+    touched = 0
+    for point in summary["path"]:
+        q = point["load_factor"] * 4.0 * _q1()
+        if q > 1.05 * _q1():  # the tip reaction, small deflections (g = L / 500)
+            touched += 1
+            assert point["contact"][0]["force"][1] == pytest.approx(
+                3 * q * L / 8 - 3 * _ei() * GAP / L**3, rel=2e-3)
+    assert touched >= 2
+    original = ContactSet.surface
+
+    def deeper(self, state=None):
+        return [dict(c, penetration=c["penetration"] + 1e-3) for c in original(self, state)]
+
+    monkeypatch.setattr(ContactSet, "surface", deeper)
+    summary = fe_beam.run("path", _path_config(), tmp_path / "fail")
+    assert summary["status"] == "failed" and "surface_penetration" in summary["message"]
