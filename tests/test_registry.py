@@ -41,6 +41,7 @@ EXAMPLE_COMMANDS = {
     "column_buckling.toml": {"buckling": tuple},
     "elastica_path.toml": {"path": tuple},
     "lee_frame.toml": {"path": tuple, "static": StaticConfig},
+    "ring.toml": {"static": StaticConfig},
     "snap_through.toml": {"path": tuple},
     "spatial_finger.toml": {"finger": tuple},
     "bathe_bolourchi.toml": {"static": StaticConfig},

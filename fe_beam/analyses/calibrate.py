@@ -250,6 +250,11 @@ def calibrate(raw: dict, data: CalibrationData, spec: CalibrationSpec, comm=None
         if count < size:
             raise ConfigError(f"{size} parameters cannot be fitted to {count} measured values "
                               "(give at least as many data as parameters)")
+        if getattr(model.problem, "chain", None) is not None and data.s is None \
+                and any(c in data.columns for c in ("x", "y")):
+            raise ConfigError("calibrate data of a structure of [[rods]]: give backbone points "
+                              "x, y with their column s (the chain's arc length); points "
+                              "without s are not supported for [[rods]] yet")
         if list(model.parameters) != list(spec.parameters):
             raise ValueError("calibrate: the model's parameters differ from spec.parameters")
         factors = _load_factors(model, data, spec)
@@ -513,8 +518,8 @@ def default_bounds(key: str) -> tuple[float, float]:
     if key == "material.nu":
         return (-1.0, 0.5)
     kind = parameter_kind(key)
-    if kind in ("material", "tension", "pull_in") or (kind == "section"
-                                                       and not key.startswith("section.I3")):
+    if kind in ("material", "tension", "pull_in", "rod_section", "rod_material") or (
+            kind == "section" and not key.startswith("section.I3")):
         return (0.0, np.inf)
     return (-np.inf, np.inf)
 

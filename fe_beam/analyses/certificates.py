@@ -7,7 +7,13 @@ from __future__ import annotations
 import numpy as np
 
 from fe_beam import certify
-from fe_beam.fem.equilibrium import balance, rod_wrenches, roundoff_force, spatial_moment_allowance
+from fe_beam.fem.equilibrium import (
+    balance,
+    curved_moment_allowance,
+    rod_wrenches,
+    roundoff_force,
+    spatial_moment_allowance,
+)
 
 __all__ = ["EQUILIBRIUM_FLOOR", "equilibrium_entry", "equilibrium_tolerance", "stability_entry"]
 
@@ -41,6 +47,7 @@ def equilibrium_entry(problem, rtol: float, contact_entries=None, label: str = "
     internal = float(sum(abs(t) for t in tensions)) if len(tensions) else 0.0
     result = balance(terms, problem.model.length, internal)
     allowance = spatial_moment_allowance(problem)
+    curved = curved_moment_allowance(problem)
     contact = [term for term in terms if term.name.startswith("contact")]
     contact_force = contact_moment = 0.0
     if contact and contact_tolerance > 0 and result["force_scale"] > 0:
@@ -55,12 +62,14 @@ def equilibrium_entry(problem, rtol: float, contact_entries=None, label: str = "
     roundoff_m = (roundoff * problem.model.length / result["moment_scale"]
                   if result["moment_scale"] > 0 else 0.0)
     value = max(result["force"] - contact_force - roundoff_f,
-                result["moment"] - allowance - contact_moment - roundoff_m, 0.0)
+                result["moment"] - allowance - curved - contact_moment - roundoff_m, 0.0)
     where = f" {label}" if label else ""
     detail = (f"|sum of forces| / largest force = {result['force']:.3g}, |sum of moments about "
               f"the origin| / largest moment = {result['moment']:.3g}"
               + (f" (less {allowance:.3g}, the rotation-vector interpolation's allowance)"
                  if allowance else "")
+              + (f" (less {curved:.3g}, the curved rods' interpolation allowance)"
+                 if curved else "")
               + (f" (less {roundoff_f:.3g}, the reactions' round-off 10 eps EA)"
                  if roundoff_f > 1e-12 else "")
               + (f"; the contact forces' accuracy ([contact] force_tolerance) allows "

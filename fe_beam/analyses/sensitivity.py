@@ -56,7 +56,7 @@ from fe_beam.analyses.finger import parse_finger
 from fe_beam.analyses.solid_driver import SolidRun, parse_solid
 from fe_beam.analyses.static import StaticContinuation
 from fe_beam.config.finger import with_defaults
-from fe_beam.config.schema import parse_static
+from fe_beam.config.schema import parse_static, with_rod_materials, with_rod_sections
 from fe_beam.errors import ConfigError
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_sum
@@ -153,6 +153,7 @@ class RodSensitivity:
         in the section: ``dims_tip``)."""
 
         self.parameters = list(parameters)
+        self._raw = raw
         if len(set(self.parameters)) != len(self.parameters):
             raise ConfigError("[calibrate] parameters: a parameter is listed twice")
         kinds = [parameter_kind(k) for k in self.parameters]
@@ -205,7 +206,14 @@ class RodSensitivity:
 
         if any(k in ("tension", "pull_in", "offset") for k in kinds):
             raise ConfigError("tendon parameters need [[tendons]] (fe-beam finger)")
-        return parse_static(raw)
+        config = parse_static(raw)
+        if getattr(config.model, "structure", None) is not None:
+            # a rod's parameter is the value of its own field: every rod then carries one
+            if "rod_section" in kinds:
+                config = dataclasses.replace(config, model=with_rod_sections(config.model))
+            if "rod_material" in kinds:
+                config = dataclasses.replace(config, model=with_rod_materials(config.model))
+        return config
 
     # --- parameters --------------------------------------------------------------------------
 
@@ -247,6 +255,8 @@ class RodSensitivity:
             return _Parameter(key, kind, lambda c=constant: float(c.value),
                               lambda v, c=constant: self._set_constant(c, v),
                               [(constant, 1.0)])
+        if kind in ("rod_section", "rod_material"):
+            return self._rod_parameter(key, kind)
         if kind == "load":
             parts = key.split(".")
             if parts[1] == "tip_moment":
@@ -304,6 +314,65 @@ class RodSensitivity:
         return _Parameter(key, kind, lambda: float(self._paths[index][branch][point, 1]),
                           lambda v: self._set_offset(index, branch, point, v),
                           [(delta, direction)], tendon=index)
+
+    def _rod_parameter(self, key: str, kind: str) -> _Parameter:
+        """``rods.<name or index>.section.<dim>`` or ``rods.<name>.material.E|G``: the value
+        of one rod's own DG0 field (a chain of rods whose rods carry their own sections or
+        materials), entering through the field in the direction of the rod's cells."""
+        _, ident, table, name = key.split(".")
+        chain = getattr(self.problem, "chain", None)
+        structure = getattr(self.config.model, "structure", None)
+        if chain is None or structure is None:
+            raise ConfigError(f"parameter {key!r} needs [[rods]] (a structure of rods)")
+        names = [rod.name for rod in structure.rods]
+        index = (int(ident) if ident.isdigit() and int(ident) < len(names)
+                 else names.index(ident) if ident in names else None)
+        if index is None:
+            raise ConfigError(f"parameter {key!r}: no rod {ident!r} in [[rods]] (rods: "
+                              f"{', '.join(names)})")
+        found = chain.rod_field(index, table, name)
+        if found is None:
+            what = (f"section dimension {name!r}" if table == "section"
+                    else f"material {name}")
+            raise ConfigError(f"parameter {key!r}: the rods carry no own {what} (give every "
+                              f"rod's own [[rods]] {table} table, or fit the top-level "
+                              f"{table}.{name})")
+        field, indicator = found
+        rod = structure.rods[index]
+        value = {"v": float(dict(rod.section)[name] if table == "section"
+                            else rod.material[0 if name == "E" else 1])}
+        cells = np.flatnonzero(indicator.x.array > 0.5)
+        terms = [(field, indicator)]
+        # a rod's E moves its G when its material is given by nu (G / E = 1 / (2 (1 + nu)))
+        follower = None
+        if table == "material" and name == "E" and not self._rod_gives_G(index):
+            if f"rods.{ident}.material.G" in self.parameters:
+                raise ConfigError(f"parameters {key!r} and 'rods.{ident}.material.G': the rod's "
+                                  "material gives nu (G follows E); give its G to fit both")
+            follower = (chain.rod_field(index, "material", "G")[0],
+                        rod.material[1] / rod.material[0])
+            terms.append((follower[0], follower[1] * indicator))
+
+        def put(v, field=field, cells=cells, follower=follower):
+            value["v"] = float(v)
+            field.x.array[cells] = float(v)
+            field.x.scatter_forward()
+            if follower is not None:
+                follower[0].x.array[cells] = float(v) * follower[1]
+                follower[0].x.scatter_forward()
+
+        return _Parameter(key, kind, lambda: value["v"], put, terms)
+
+    def _rod_gives_G(self, index: int) -> bool:
+        """Rod ``index``'s material is given by G (its own table's, or [material]'s when its
+        own gives neither nu nor G), not by nu."""
+        raw = self._raw or {}
+        rods = raw.get("rods") or []
+        own = (rods[index].get("material") or {}) if index < len(rods) else {}
+        if "G" in own or "nu" in own:
+            return "G" in own
+        top = raw.get("material") or {}
+        return "G" in top if raw else self.config.model.material.G is not None
 
     def _delta(self, index: int, branch: int) -> fem.Function:
         if self.tendons._problem is not self.problem:
@@ -616,7 +685,9 @@ class RodSensitivity:
                 dofs, weights = self._point_weights(spec[1], spec[2])
                 local = compat.local_array(self.problem.w)
                 value = float(np.dot(local[dofs], weights)) if len(dofs) else 0.0
-                values.append(global_sum(self.comm, value) + (spec[2] if spec[1] == "x" else 0))
+                reference = self.problem.reference_point(spec[2])  # (s, 0) of a rod
+                values.append(global_sum(self.comm, value)
+                              + reference[0 if spec[1] == "x" else 1])
             elif spec[0] == "pull_in":
                 self._check_tendon(spec[1])
                 values.append(float(self.tendons.pull_ins()[spec[1]]))

@@ -113,7 +113,10 @@ def structure_record(problem) -> dict:
     chain = getattr(problem, "chain", None)
     if chain is None:
         return {}
-    return {"rods": chain.rods(), "joints": chain.joints()}
+    record = {"rods": chain.rods(), "joints": chain.joints()}
+    if chain.structure.body_ties:  # free bodies
+        record["bodies"] = chain.bodies()
+    return record
 
 
 #: the written moment field against the support's reaction moment (relative): an identity of
@@ -470,9 +473,8 @@ def structure_columns(model, joints: bool = True) -> list:
         for rod in structure.rods:
             columns += [exports.Column(f"rod_{rod.name}_{k}", lambda r, n=rod.name, i=i:
                                        r["rods"][n]["tip"][i]) for i, k in enumerate("xyz")]
-        names = [j.name for j in structure.joints_on_chain] + [j[0] for j in
-                                                                structure.body_joints]
-        for name in names:
+        names = _joint_names(structure)
+        for name in names if joints else ():
             columns += [exports.Column(f"joint_{name}_F{k}", lambda r, n=name, i=i:
                                        r["joints"][n]["force"][i]) for i, k in enumerate("xyz")]
             columns += [exports.Column(f"joint_{name}_M{k}", lambda r, n=name, i=i:
@@ -484,13 +486,22 @@ def structure_columns(model, joints: bool = True) -> list:
             exports.Column(f"rod_{rod.name}_y", lambda r, n=rod.name: r["rods"][n]["tip"][1]),
             exports.Column(f"rod_{rod.name}_angle",
                            lambda r, n=rod.name: r["rods"][n]["tip_angle"])]
-    names = [j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+    names = _joint_names(structure)
     for name in names if joints else ():
         columns += [
             exports.Column(f"joint_{name}_Fx", lambda r, n=name: r["joints"][n]["force"][0]),
             exports.Column(f"joint_{name}_Fy", lambda r, n=name: r["joints"][n]["force"][1]),
             exports.Column(f"joint_{name}_M", lambda r, n=name: r["joints"][n]["moment"])]
     return columns
+
+
+def _joint_names(structure) -> list[str]:
+    """The joints with outputs: shared vertices, fixed bodies at the mesh's ends, ties and
+    fixed bodies inside the mesh."""
+    return ([j.name for j in structure.joints_on_chain] + [j[0] for j in structure.body_joints]
+            + [t.name for t in structure.ties]
+            + [j[0] for j in structure.inner_body_joints]
+            + [j[0] for j in structure.free_body_joints])
 
 
 def contact_columns(count: int, spatial: bool = False) -> list:
@@ -525,9 +536,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
     title = f"{m.options.law} law, constraint {m.options.constraint}"
     if getattr(m, "kinematics", "planar") == "spatial":
         structure = getattr(m, "structure", None)
-        undeformed = None if structure is None else [
-            structure.reference_point(s, structure.segment_at(min(s, m.length)))
-            for s in (0.0, *structure.boundaries(), m.length)]
+        undeformed = None if structure is None else structure.reference_polyline()
         plot_spatial_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                             obstacles=result.obstacles or config.obstacles,
                             undeformed=undeformed)
@@ -538,9 +547,7 @@ def _write_plots(out: Path, result: StaticResult, config: StaticConfig) -> None:
         return
     structure = getattr(m, "structure", None)
     if structure is not None:  # a chain: its reference polygon, the axes only
-        corners = (0.0, *structure.boundaries(), m.length)
-        undeformed = [structure.reference_point(s, structure.segment_at(min(s, m.length)))
-                      for s in corners]
+        undeformed = structure.reference_polyline()
         plot_deformed_shapes(shapes, out / "deformed_shapes.png", title, m.length,
                              undeformed=undeformed)
     else:

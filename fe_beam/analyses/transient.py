@@ -76,6 +76,7 @@ from fe_beam.solvers.newton import (
     LoadSteppingFailed,
 )
 from fe_beam.solvers.rod_static import build_problem
+from fe_beam.solvers.spatial_energy_momentum import SpatialEnergyMomentum
 
 __all__ = ["DynamicConfig", "parse_dynamic", "parse_modes", "run_dynamic", "run_modes"]
 
@@ -195,7 +196,7 @@ def dynamic_checks(certificates: dict) -> tuple[list, list]:
                     f"{energy['t']:.4g} s); a step failing it was halved"
                     + (f"; it failed first at t = {failed['t']:.6g} s at the smallest step: "
                        f"{failed['reason']}" if failed else "")),
-            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\" (planar); "
+            remedy="a smaller [time] dt, or [time] scheme = \"energy-conserving\"; "
                    "with [[obstacles]] rho_inf = 1 (impacts then gain no energy)"))
     elif energy:
         notes.append("the energy balance is not checked: prescribed end motions do work that "
@@ -271,7 +272,11 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
         return result
     if tendons is not None:
         tendons.set_time_functions(config.tendon_functions)
-    if config.time.scheme == "energy-conserving":
+    if config.time.scheme == "energy-conserving" and getattr(problem, "spatial", False):
+        integrator = SpatialEnergyMomentum(problem, config.time, config.damping,
+                                           config.load_function, config.motion_function,
+                                           config.static.solver)
+    elif config.time.scheme == "energy-conserving":
         if tendons is not None:
             _detach_tendon_energy(problem)
         integrator = EnergyMomentum(problem, config.time, config.damping, config.load_function,
@@ -308,6 +313,13 @@ def run_dynamic(config: DynamicConfig, out: Path | None, comm=MPI.COMM_WORLD,
                                "momenta": integrator.momenta()})
         if getattr(problem, "chain", None) is not None:  # each rod's end (world axes)
             result.history[-1]["rods"] = problem.chain.rods()
+            # the joints' forces at t: the parts' inertia with the state's acceleration
+            blended = float(problem.load_factor.value)
+            problem.load_factor.value = config.load_function(t)
+            integrator.end_acceleration()
+            result.history[-1]["joints"] = problem.chain.joints_in_motion(
+                integrator.end_inertia_work)
+            problem.load_factor.value = blended
         if tendons is not None:  # tensions tau_i(t) and pull-ins l_i(0) - l_i of the state
             pull_ins = (tendons.rest_lengths - integrator.tendon_lengths()
                         if isinstance(integrator, EnergyMomentum) else tendons.pull_ins())
@@ -544,8 +556,8 @@ def _history_exports(out: Path | None, config: DynamicConfig, writer=None, conte
         obstacles = len(config.static.obstacles)
         if obstacles:  # each obstacle's force, moment, penetration and peak pressure
             columns = columns + contact_columns(obstacles, spatial)
-        # a chain of rods: each rod's end (its joints' forces would need the inertia: none)
-        columns = columns + structure_columns(config.static.model, joints=False)
+        # a chain of rods: each rod's end and each joint's force and moment
+        columns = columns + structure_columns(config.static.model)
         files += [exports.CSVExport(out / "history.csv", columns),
                   exports.SummaryExport(out / "summary.json", content),
                   exports.PlotExport(draw) if draw is not None else None]
@@ -585,7 +597,7 @@ def _plot_dynamic(out: Path, result: DynamicResult, shapes, config: DynamicConfi
     structure = getattr(config.static.model, "structure", None)
     # the tip's reference position: (L, 0) of a rod, the last end of a chain of rods
     tip_x, tip_y = ((length, 0.0) if structure is None
-                    else structure.reference_point(length, structure.chain[-1]))
+                    else structure.reference_point(length, structure.chain[-1])[:2])
     with exports.figure(out / "dynamics.png", 1, 2, figsize=(10, 4)) as (_, (left, right)):
         left.plot(tip_x + np.array([h["tip"]["u"] for h in result.history]),
                   tip_y + np.array([h["tip"]["v"] for h in result.history]), lw=1.2)

@@ -1,4 +1,5 @@
-"""Natural frequencies of planar frames of straight members: the exact transfer-matrix method.
+"""Natural frequencies of planar frames of straight members: the exact transfer-matrix method
+(in-plane motions, `Member`, and motions out of the plane, `OutOfPlaneMember`).
 
 A plain numpy/scipy reference solver, independent of FEniCSx, for the linear vibrations of a
 frame of straight, uniform members joined rigidly at nodes (fe_beam's `modes` of a structure of
@@ -30,7 +31,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-__all__ = ["Member", "frame_frequencies", "determinant", "portal_frame"]
+__all__ = ["Member", "OutOfPlaneMember", "frame_frequencies", "determinant", "portal_frame"]
 
 SUPPORTS = {"clamped": (0, 1, 2), "pinned": (0, 1), "free": ()}
 
@@ -53,6 +54,53 @@ class Member:
     def end(self) -> tuple[float, float]:
         return (self.start[0] + self.length * math.cos(self.angle),
                 self.start[1] + self.length * math.sin(self.angle))
+
+
+@dataclass(frozen=True)
+class OutOfPlaneMember:
+    """A member of a frame in the xy plane for its motions out of that plane: the displacement
+    w along z, the section's rotation psi about the in-plane normal d2 = e_z x d1 (bending,
+    ``EI`` about d2, shear ``GA`` along z with the shear correction, ``rho_inertia`` = rho I
+    about d2) and its twist phi about the axis d1 (``GJ``, Saint-Venant; ``rho_polar`` = rho
+    I_p). Member equations (time factor exp(i omega t), Q the shear force along z, M the
+    moment about d2, T the torque):
+
+        Q = GA (w' + psi),  M = EI psi',  T = GJ phi'
+        Q' = -rho A omega^2 w,  M' = Q - rho I omega^2 psi,  T' = -rho I_p omega^2 phi
+
+    (linearised from v = R^T r', u = R^T R': the shear v3 = w' + psi, so M' = +Q here where
+    the in-plane M' = -V). The node dofs are (w, theta_x, theta_y) in world axes."""
+
+    start: tuple
+    angle: float
+    length: float
+    EI: float
+    GJ: float
+    GA: float = math.inf
+    rho_area: float = 1.0
+    rho_inertia: float = 0.0
+    rho_polar: float = 0.0
+
+    def end(self) -> tuple[float, float]:
+        return (self.start[0] + self.length * math.cos(self.angle),
+                self.start[1] + self.length * math.sin(self.angle))
+
+
+def _transfer_out_of_plane(member: OutOfPlaneMember, omega: float, scale_length: float,
+                           scale_EI: float) -> np.ndarray:
+    """expm(A L) of the scaled state (w/Ls, psi, phi, Q Ls^2/EIs, M Ls/EIs, T Ls/EIs)."""
+    L0, EI0 = scale_length, scale_EI
+    w2 = omega**2
+    A = np.zeros((6, 6))
+    A[0, 1] = -1.0
+    A[0, 3] = 0.0 if math.isinf(member.GA) else EI0 / (member.GA * L0**2)
+    A[1, 4] = EI0 / member.EI
+    A[2, 5] = EI0 / member.GJ
+    A[3, 0] = -member.rho_area * w2 * L0**4 / EI0
+    A[4, 3] = 1.0
+    A[4, 1] = -member.rho_inertia * w2 * L0**2 / EI0
+    A[5, 2] = -member.rho_polar * w2 * L0**2 / EI0
+    return scipy.linalg.expm(A * (member.length / L0))
 
 
 def _nodes(members, tolerance: float) -> tuple[list, list]:
@@ -88,7 +136,9 @@ def _transfer(member: Member, omega: float, scale_length: float, scale_EI: float
     return scipy.linalg.expm(A * (member.length / L0))
 
 
-def _matrix(members, supports: dict, omega: float) -> np.ndarray:
+def _matrix(members, supports: dict, omega: float, pins=frozenset()) -> np.ndarray:
+    """``pins``: {(member index, "start" | "end")}: member ends joined to their node by a pin
+    (the end's rotation free, its moment zero)."""
     scale_length = max(m.length for m in members)
     scale_EI = max(m.EI for m in members)
     points, ends = _nodes(members, 1e-9 * scale_length)
@@ -98,21 +148,31 @@ def _matrix(members, supports: dict, omega: float) -> np.ndarray:
     row = 0
     forces = [[] for _ in points]  # per node: (member index, 3x(size) force rows in world axes)
     for k, member in enumerate(members):
-        T = _transfer(member, omega, scale_length, scale_EI)
         c, s = math.cos(member.angle), math.sin(member.angle)
-        # world (ux, uy) -> member axes (a, w): a = c ux + s uy, w = -s ux + c uy
-        to_local = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        if isinstance(member, OutOfPlaneMember):
+            T = _transfer_out_of_plane(member, omega, scale_length, scale_EI)
+            # world (w, theta_x, theta_y) -> member (w, psi = theta . d2, phi = theta . d1)
+            to_local = np.array([[1.0, 0.0, 0.0], [0.0, -s, c], [0.0, c, s]])
+        else:
+            T = _transfer(member, omega, scale_length, scale_EI)
+            # world (ux, uy) -> member axes (a, w): a = c ux + s uy, w = -s ux + c uy
+            to_local = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
         start = np.zeros((6, size))
         start[:, 6 * k: 6 * k + 6] = np.eye(6)
         finish = T @ start
-        for state, node, sign in ((start, ends[k][0], 1.0), (finish, ends[k][1], -1.0)):
+        for state, node, sign, which in ((start, ends[k][0], 1.0, "start"),
+                                          (finish, ends[k][1], -1.0, "end")):
             displacement = state[:3]
             node_columns = slice(6 * n_members + 3 * node, 6 * n_members + 3 * node + 3)
             block = displacement.copy()
             block[:, node_columns] -= to_local
+            force = sign * (to_local.T @ state[3:])
+            if (k, which) in pins:  # a pin: no rotation equality, no moment
+                block[2] = state[5]
+                force[2] = 0.0
             matrix[row: row + 3] = block
             row += 3
-            forces[node].append(sign * (to_local.T @ state[3:]))
+            forces[node].append(force)
     for node in range(n_nodes):
         held = SUPPORTS[supports.get(node, "free")]
         for dof in range(3):
@@ -143,16 +203,19 @@ def _support_nodes(members, supports_at: dict) -> dict:
 
 
 def frame_frequencies(members, supports_at: dict, count: int, omega_max: float,
-                      samples: int = 4000) -> list[float]:
+                      samples: int = 4000, pins=frozenset()) -> list[float]:
     """The ``count`` lowest natural frequencies [Hz] below ``omega_max`` [rad/s] of the frame
-    with supports {(x, y): "clamped" | "pinned" | "free"} at nodes (every other node free).
+    with supports {(x, y): "clamped" | "pinned" | "free"} at nodes (every other node free) and
+    ``pins`` {(member index, "start" | "end")} (those member ends pinned to their node).
     The scan's step omega_max / samples must separate the roots (a pair of roots closer than
-    a step would be missed: compare the count with the expected one)."""
+    a step would be missed: compare the count with the expected one). Members of the kind
+    `OutOfPlaneMember` give the frame's motions out of its plane (the held dofs of a node are
+    then w, theta_x, theta_y)."""
     supports = _support_nodes(members, supports_at)
     grid = np.linspace(omega_max / samples, omega_max, samples)
 
     def sign_log(omega):
-        return np.linalg.slogdet(_matrix(members, supports, omega))
+        return np.linalg.slogdet(_matrix(members, supports, omega, pins))
 
     values = [sign_log(w) for w in grid]
     roots = []

@@ -39,6 +39,10 @@ def parameter_kind(key) -> str:
     m = re.fullmatch(r"section\.([A-Za-z0-9]+?)(_tip)?", key)
     if m and m.group(1) in SECTION_DIMS:
         return "section"
+    m = re.fullmatch(r"rods\.([^.]+)\.(section|material)\.([A-Za-z0-9]+)", key)
+    if m and (m.group(2) == "section" and m.group(3) in SECTION_DIMS
+              or m.group(2) == "material" and m.group(3) in ("E", "G")):
+        return f"rod_{m.group(2)}"
     if key == "loads.tip_moment" or re.fullmatch(r"loads\.(tip_force|distributed|gravity)\.[01]",
                                                  key):
         return "load"
@@ -53,8 +57,9 @@ def parameter_kind(key) -> str:
     raise ConfigError(
         f"unknown parameter {key!r}: parameters are material.E|nu|G|rho, section.<dim>[_tip], "
         "loads.tip_force.0|1, loads.tip_moment, loads.distributed.0|1, loads.gravity.0|1, "
-        "tendons.<i>.tension|pull_in|offset_base|offset_tip, tendons.<i>.path.<k>.1 or "
-        "tendons.<i>.paths.<b>.<k>.1")
+        "tendons.<i>.tension|pull_in|offset_base|offset_tip, tendons.<i>.path.<k>.1, "
+        "tendons.<i>.paths.<b>.<k>.1 or, with [[rods]], rods.<name>.section.<dim> and "
+        "rods.<name>.material.E|G")
 
 
 def _number(value) -> bool:

@@ -387,28 +387,44 @@ def with_rod_sections(model: BeamModel) -> BeamModel:
                                                       structure.bodies))
 
 
+def with_rod_materials(model: BeamModel) -> BeamModel:
+    """The structure's model with every rod carrying its own (E, G) (those of [material] where
+    it has none): piecewise-constant fields a calibration varies per rod."""
+    structure = model.structure
+    if model.options.law == "hyperelastic":
+        raise ConfigError("rods.<name>.material parameters with [model] law = \"hyperelastic\" "
+                          "are not supported yet")
+    moduli = (model.material.E, model.material.shear_modulus)
+    rods = tuple(dataclasses.replace(rod, material=rod.material or moduli)
+                 for rod in structure.rods)
+    return dataclasses.replace(model, structure=_wrap(Structure, rods, structure.joints,
+                                                      structure.bodies))
+
+
 def structure_rigid_motions(model: BeamModel) -> list[str]:
     """The rigid motions a chain's end supports leave free (empty: none), with the ends at
     their reference positions: a small rigid motion (a, b, w) moves the point (X, Y) by
     (a - w Y, b + w X) and turns it by w (spatial: a + w x X, turned by w)."""
     structure = model.structure
-    points = {"x0": structure.reference_point(0.0, structure.chain[0]),
-              "xL": structure.reference_point(model.length, structure.chain[-1])}
+    held = [(structure.reference_point(0.0, structure.chain[0]), model.supports.fixed("x0")),
+            (structure.reference_point(model.length, structure.chain[-1]),
+             model.supports.fixed("xL"))]
+    held += [(structure.reference_point(s), components)
+             for s, components, _ in structure.extra_supports]
     if structure.dim == 3:
         scale = structure.length
         equations = []
-        for end, (X, Y, Z) in points.items():
+        for (X, Y, Z), fixed in held:
             rows = {"u": (1, 0, 0, 0, Z, -Y), "v": (0, 1, 0, -Z, 0, X),
                     "w": (0, 0, 1, Y, -X, 0), "theta_x": (0, 0, 0, 1, 0, 0),
                     "theta_y": (0, 0, 0, 0, 1, 0), "theta_z": (0, 0, 0, 0, 0, 1)}
             equations += [tuple(c / scale if i >= 3 else c for i, c in enumerate(rows[n]))
-                          for n in model.supports.fixed(end)]
+                          for n in fixed]
         if equations and beam_rank(equations) == 6:
             return []
         return ["a rigid-body motion (support the chain's ends: e.g. clamp one)"]
     rows = []
-    for end, (X, Y) in points.items():
-        fixed = model.supports.fixed(end)
+    for (X, Y), fixed in held:
         rows += ([(1.0, 0.0, -Y)] if "u" in fixed else []) + \
             ([(0.0, 1.0, X)] if "v" in fixed else []) + \
             ([(0.0, 0.0, 1.0)] if "theta" in fixed else [])

@@ -20,9 +20,12 @@ __all__ = ["BODY_KEYS", "JOINT_KEYS", "ROD_KEYS", "STRUCTURE_TABLES", "is_struct
 
 STRUCTURE_TABLES = ("rods", "joints", "bodies")
 #: the commands that run a structure of rods in this version
-STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design")
+STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine", "design",
+                      "calibrate")
 #: the commands that run a spatial structure in this version
-SPATIAL_STRUCTURE_COMMANDS = ("static", "path")
+SPATIAL_STRUCTURE_COMMANDS = ("static", "path", "modes", "buckling", "dynamic", "refine")
+#: the commands that run a structure with ties (pin, ball, T junctions, loops, pieces)
+TIED_COMMANDS = ("static", "path", "modes", "buckling")
 PLANAR_ONLY = tuple(c for c in STRUCTURE_COMMANDS if c not in SPATIAL_STRUCTURE_COMMANDS)
 
 ROD_KEYS = {
@@ -47,27 +50,32 @@ ROD_KEYS = {
     "normal": Key((list,), None, "spatial: the section's d2 (h direction), a unit vector "
                   "orthogonal to direction (default: e_z x direction normalised; direction x "
                   "e_x when direction is along z)"),
+    "curvature": Key(NUMBER, 0.0, "planar: the constant curvature of the rod's reference "
+                     "axis [1/m] (an arc turning left from direction; 0: straight)"),
     "tendons": Key((list,), None, "per-rod tendons (not supported yet)"),
     "initial_curvature": Key((list,), None, "per-rod initial curvature (not supported yet)"),
 }
 JOINT_KEYS = {
     "name": Key((str,), REQUIRED, "the joint's name (outputs: joints.<name>)"),
-    "kind": Key((str,), "rigid", "rigid (pin, ball, hinge: not supported yet)"),
-    "at": Key((list,), REQUIRED, "the joined ends: two of \"rod:start\", \"rod:end\", "
-              "\"body:NAME\""),
+    "kind": Key((str,), "rigid", "rigid | pin (planar: equal positions, free rotations) | "
+                "ball (spatial: equal positions) (hinge: not supported yet)"),
+    "at": Key((list,), REQUIRED, "the joined ends: two or more of \"rod:start\", "
+              "\"rod:end\" (or one rod end and \"body:NAME\")"),
     "axis": Key((list,), None, "hinge axis (not supported yet)"),
 }
 BODY_KEYS = {
     "name": Key((str,), REQUIRED, "the body's name (joints name it as \"body:NAME\")"),
     "position": Key((list,), REQUIRED, "reference point [x, y] (spatial: [x, y, z]) [m]"),
-    "fixed": Key((bool, list), True, "true (free and partly fixed bodies: not supported yet)"),
+    "fixed": Key((bool, list), True, "true (it clamps the rod end joined to it) or false "
+                 "(planar: a free body whose pose is solved for; partly fixed: not supported "
+                 "yet)"),
     "offset": Key((list,), None, "a joined end's point in the body frame (not supported yet)"),
     "motion": Key((dict,), None, "prescribed motion (not supported yet)"),
     "shape": Key((str,), None, "obstacle shape (not supported yet)"),
     "radius": Key(NUMBER, None, "obstacle radius (not supported yet)"),
     "mass": Key(NUMBER, None, "mass (not supported yet)"),
-    "force": Key((list,), None, "applied force (not supported yet)"),
-    "moment": Key(NUMBER + (list,), None, "applied moment (not supported yet)"),
+    "force": Key((list,), None, "a free body's dead force [Fx, Fy] (world axes) [N]"),
+    "moment": Key(NUMBER + (list,), None, "a free body's dead moment M [N m]"),
 }
 ROD_MESH_KEYS = {"elements": SCHEMA["mesh"]["elements"], "degree": SCHEMA["mesh"]["degree"]}
 ROD_SUPPORT_KEYS = ("x0", "xL")
@@ -159,6 +167,10 @@ def check_structure_tables(config: dict, command: str) -> None:
             raise ConfigError("[initial] angular_velocity with [[rods]] is not supported yet "
                               "(a spin about x = 0 of a rod along x); give [initial] velocity "
                               "= [u_t, v_t, theta_t], formulas in the chain's arc length x")
+    if command not in TIED_COMMANDS and _tied(config):
+        raise ConfigError(f"fe-beam {command} does not run a structure with pin or ball "
+                          "joints, T junctions, closed loops or separate pieces yet; the "
+                          f"commands that do: {', '.join(TIED_COMMANDS)}")
     loads = config.get("loads")
     if isinstance(loads, dict):
         single = [key for key in SINGLE_ROD_LOADS if key in loads]
@@ -167,6 +179,28 @@ def check_structure_tables(config: dict, command: str) -> None:
                               "([[rods]] loads = {point_forces = [[x, Px, Py]], point_moments "
                               "= [[x, M]]}, spatial [[x, Px, Py, Pz]], [[x, Mx, My, Mz]]); "
                               "[loads] takes gravity and distributed for every rod")
+
+
+def _tied(config: dict) -> bool:
+    """The [[joints]] need ties (not one serial chain of rigid joints between two rods):
+    a cheap look at the tables (the full check is `Structure`)."""
+    joints = config.get("joints")
+    if not isinstance(joints, list):
+        return False
+    rods = config.get("rods") if isinstance(config.get("rods"), list) else []
+    links = 0
+    for joint in joints:
+        if not isinstance(joint, dict):
+            continue
+        at = joint.get("at") if isinstance(joint.get("at"), list) else []
+        named = [a for a in at if isinstance(a, str) and not a.startswith("body:")]
+        if joint.get("kind", "rigid") != "rigid" or len(named) > 2:
+            return True
+        if len(named) == 2:
+            links += 1
+            if named[0].partition(":")[0] == named[1].partition(":")[0]:
+                return True
+    return links >= len(rods) > 0 or (links < len(rods) - 1)
 
 
 def parse_structure(config: dict, spatial: bool = False) -> Structure:
@@ -183,6 +217,9 @@ def parse_structure(config: dict, spatial: bool = False) -> Structure:
             if entry[key] is not None:
                 raise ConfigError(f"{where} {key} is not supported yet (rods without "
                                   "tendons, straight in the reference state)")
+        if entry["curvature"] and spatial:
+            raise ConfigError(f"{where} curvature is planar (a spatial rod's reference axis is "
+                              "straight in this version)")
         if entry["normal"] is not None and not spatial:
             raise ConfigError(f"{where} normal is the spatial section's d2: it needs [model] "
                               "kinematics = \"spatial\" (a planar rod's section turns with "
@@ -244,7 +281,7 @@ def parse_structure(config: dict, spatial: bool = False) -> Structure:
         rods.append(_wrap(Rod, entry["name"], entry["start"], entry["direction"],
                           entry["length"], mesh["elements"], mesh["degree"],
                           {ends[k]: v for k, v in supports.items()}, forces, moments,
-                          normal=entry["normal"]))
+                          normal=entry["normal"], curvature=entry["curvature"]))
     joints = []
     for entry in _entries(config, "joints", JOINT_KEYS):
         if entry["axis"] is not None:
@@ -253,10 +290,12 @@ def parse_structure(config: dict, spatial: bool = False) -> Structure:
         joints.append(_wrap(Joint, entry["name"], entry["kind"], entry["at"]))
     bodies = []
     for entry in _entries(config, "bodies", BODY_KEYS):
-        extra = [k for k in ("offset", "motion", "shape", "radius", "mass", "force", "moment")
+        extra = [k for k in ("offset", "motion", "shape", "radius", "mass")
                  if entry[k] is not None]
         if extra:
             raise ConfigError(f"[[bodies]] '{entry['name']}' {extra[0]} is not supported yet "
-                              "(fixed bodies that clamp a rod end)")
-        bodies.append(_wrap(Body, entry["name"], entry["position"], entry["fixed"]))
+                              "(fixed bodies that clamp a rod end, free planar bodies at the "
+                              "rod ends joined to them, loaded by force and moment)")
+        bodies.append(_wrap(Body, entry["name"], entry["position"], entry["fixed"],
+                            entry["force"] or (), entry["moment"] or 0.0))
     return _wrap(Structure, tuple(rods), tuple(joints), tuple(bodies))

@@ -164,7 +164,7 @@ def parse_dynamic(config: dict) -> DynamicConfig:
         _check_contact_dynamics(static, settings, initial)
     spatial = getattr(static.model, "kinematics", "planar") == "spatial"
     if spatial:
-        _check_spatial_dynamics(settings, damping)
+        _check_spatial_dynamics(settings, damping, static, config)
     load, motion = _functions(timing)
     static, tendon_functions = _parse_tendons(config, static, "dynamic", load)
     if static.tendons and settings.scheme.startswith("fd-"):
@@ -212,12 +212,27 @@ def _check_contact_dynamics(static: StaticConfig, settings: TimeSettings,
     check_motions(static.obstacles, settings.t_end, static.model)
 
 
-def _check_spatial_dynamics(settings: TimeSettings, damping: Damping) -> None:
+def _check_spatial_dynamics(settings: TimeSettings, damping: Damping,
+                            static: StaticConfig | None = None, config: dict | None = None) -> None:
     """What fe-beam dynamic does not do for spatial rods yet: ConfigError."""
-    if settings.scheme != "generalized-alpha":
+    if settings.scheme not in ("generalized-alpha", "energy-conserving"):
         raise ConfigError(f"[time] scheme = \"{settings.scheme}\" is not available for spatial "
                           "rods ([model] kinematics = \"spatial\") yet; use scheme = "
-                          "\"generalized-alpha\"")
+                          "\"generalized-alpha\" or \"energy-conserving\"")
+    if settings.scheme == "energy-conserving" and static is not None:
+        scheme = "[time] scheme = \"energy-conserving\" for spatial rods"
+        model = static.model
+        if getattr(model, "structure", None) is not None:
+            raise ConfigError(f"{scheme} does not take chains of rods yet; use scheme = "
+                              "\"generalized-alpha\"")
+        if config is not None and config.get("tendons"):
+            raise ConfigError(f"{scheme} takes no [[tendons]]; use scheme = "
+                              "\"generalized-alpha\"")
+        for end in ("x0", "xL"):
+            if any(getattr(model.supports, f"prescribed_{end}").values()):
+                raise ConfigError(f"{scheme} takes no prescribed end motions ([loads] "
+                                  f"prescribed_{end}, end_displacement, end_rotation); use "
+                                  "scheme = \"generalized-alpha\"")
     if damping.kelvin_voigt:
         raise ConfigError("[damping] kelvin_voigt is not available for spatial rods ([model] "
                           "kinematics = \"spatial\") yet; use the viscous [damping] c")

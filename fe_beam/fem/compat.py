@@ -277,11 +277,16 @@ def create_interval(comm: MPI.Comm, n_cells: int, length: float) -> mesh.Mesh:
     return mesh.create_interval(comm, n_cells, [0.0, length])
 
 
-def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray) -> mesh.Mesh:
-    """Interval mesh with the given increasing vertex coordinates (built on rank 0, distributed)."""
+def create_interval_from_vertices(comm: MPI.Comm, vertices: np.ndarray, gaps=()) -> mesh.Mesh:
+    """Interval mesh with the given increasing vertex coordinates (built on rank 0, distributed);
+    no cell inside the ``gaps`` ((a, b), ...): the mesh's separate pieces."""
     if comm.rank == 0:
         points = np.asarray(vertices, dtype=np.float64).reshape(-1, 1)
         cells = np.column_stack([np.arange(len(points) - 1), np.arange(1, len(points))])
+        middle = 0.5 * (points[:-1, 0] + points[1:, 0])
+        for a, b in gaps:
+            cells = cells[~((middle > a) & (middle < b))]
+            middle = middle[~((middle > a) & (middle < b))]
     else:
         points, cells = np.empty((0, 1)), np.empty((0, 2))
     if LEGACY:
@@ -393,7 +398,11 @@ def solve_linear(a, L, bcs, target: fem.Function) -> fem.Function:
     Configured programmatically rather than through dolfinx's LinearProblem, whose options
     stay in PETSc's global database (512 entries at most) long after the solve.
     """
-    bilinear, linear = fem.form(a), fem.form(L)
+    return solve_compiled(fem.form(a), fem.form(L), bcs, target)
+
+
+def solve_compiled(bilinear, linear, bcs, target: fem.Function) -> fem.Function:
+    """`solve_linear` of compiled forms (``fem.form``: a solve repeated without compiling)."""
     matrix = assemble_matrix(bilinear, bcs=bcs)
     matrix.assemble()
     rhs = assemble_vector(linear)

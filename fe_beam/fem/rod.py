@@ -206,7 +206,7 @@ class StrainWatch:
 
 
 def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=(), vertices=None,
-                  fixed=()):
+                  fixed=(), gaps=()):
     """Uniform mesh of [0, L] in which every breakpoint is a vertex (the nearest uniform vertex
     moves onto it when closer than a quarter element, otherwise a vertex is inserted).
 
@@ -214,7 +214,8 @@ def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=(), 
     breakpoint) is that vertex: inserting it would create an element of round-off size.
 
     ``vertices``: the starting vertices instead of the uniform ones (a chain of rods), of which
-    ``fixed`` (the joints) never move."""
+    ``fixed`` (the joints) never move; no cell inside the ``gaps`` (the pieces of a
+    structure)."""
     interior = sorted({float(x) for x in breakpoints if 0 < x < length})
     if not interior and vertices is None:
         return compat.create_interval(comm, elements, length)
@@ -236,7 +237,7 @@ def interval_mesh(comm: MPI.Comm, elements: int, length: float, breakpoints=(), 
         else:
             vertices = np.sort(np.append(vertices, x))
             placed.add(x)
-    return compat.create_interval_from_vertices(comm, vertices)
+    return compat.create_interval_from_vertices(comm, vertices, gaps)
 
 
 class BeamProblem:
@@ -276,8 +277,10 @@ class BeamProblem:
             self.mesh = interval_mesh(comm, model.mesh.elements, model.length, breakpoints)
         else:  # a chain of rods: each rod's elements, the joints fixed vertices
             vertices, joints = chain_vertices(structure)
+            gaps = tuple((a[1], b[0]) for a, b in zip(structure.pieces, structure.pieces[1:]))
             self.mesh = interval_mesh(comm, model.mesh.elements, model.length,
-                                      breakpoints + joints, vertices=vertices, fixed=joints)
+                                      breakpoints + joints, vertices=vertices, fixed=joints,
+                                      gaps=gaps)
         self.comm = comm
         degree = model.mesh.degree
         self.multipliers = self._constrained_strains()
@@ -294,6 +297,7 @@ class BeamProblem:
         self._check_breakpoints(breakpoints)
         self._point_force_measures()
         self.bcs, self._prescribed = self._dirichlet_conditions()
+        self.bcs += self._inner_supports()
         self.extra_energy = extra_energy
         self.extra_work = extra_work
         self.residual = self._residual()
@@ -372,10 +376,19 @@ class BeamProblem:
         self.end_markers = {end: self.point_marker(x) for end, x in self.end_x.items()}
         tip = compat.locate_entities_boundary(self.mesh, 0, self.end_markers["xL"])
         start = compat.locate_entities_boundary(self.mesh, 0, self.end_markers["x0"])
-        tags = compat.meshtags(self.mesh, 0, np.concatenate([start, tip]),
-                               np.concatenate([np.full(len(start), 1), np.full(len(tip), 2)]))
+        structure = getattr(self.model, "structure", None)
+        inner = [compat.locate_entities_boundary(self.mesh, 0, self.point_marker(s))
+                 for s in (structure.piece_ends() if structure is not None else ())]
+        inner = np.unique(np.concatenate(inner)).astype(np.int32) if inner else \
+            np.zeros(0, dtype=np.int32)
+        order = np.argsort(np.concatenate([start, tip, inner]))
+        tags = compat.meshtags(self.mesh, 0, np.concatenate([start, tip, inner])[order],
+                               np.concatenate([np.full(len(start), 1), np.full(len(tip), 2),
+                                               np.full(len(inner), 3)])[order])
         ends = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
         self.ds_tip, self.ds_start = ends(2), ends(1)
+        if inner is not None and structure is not None and structure.piece_ends():
+            self.ds_pieces = ends(3)
         one = fem.Constant(self.mesh, 1.0)
         measure = global_sum(self.comm, fem.assemble_scalar(fem.form(one * self.ds_tip)))
         if measure != 1.0:
@@ -413,9 +426,15 @@ class BeamProblem:
         self.point_moments, self.point_moment_fields = self._point_measures(loads.point_moments)
 
     def _at_end(self, x: float) -> bool:
-        """x is within round-off of x = 0 or x = L (a boundary vertex)."""
+        """x is within round-off of x = 0 or x = L or a structure's piece end (a boundary
+        vertex)."""
         return (abs(x - self.model.length) <= self.point_tolerance
-                or abs(x) <= self.point_tolerance)
+                or abs(x) <= self.point_tolerance or self._at_piece_end(x))
+
+    def _at_piece_end(self, x: float) -> bool:
+        structure = getattr(self.model, "structure", None)
+        ends = structure.piece_ends() if structure is not None else ()
+        return any(abs(x - s) <= self.point_tolerance for s in ends)
 
     def _point_measures(self, rows) -> tuple[list, list]:
         """(measure, nodal value field, at an end) per kind of vertex carrying the point loads
@@ -441,13 +460,16 @@ class BeamProblem:
                 # within round-off of x = 0: the end vertex (interval_mesh inserts no round-off
                 # element), a boundary facet, which an interior-facet measure never visits
                 at.add("start")
+            elif self._at_piece_end(x):  # a boundary vertex inside a structure's mesh
+                at.add("pieces")
             else:
                 interior = True
         field = ufl.as_vector(nodal)
         measures = []
         if interior:  # the vertices of every interior point load (`_point_force_measures`)
             measures.append((self._interior_measure, field, False))
-        for name, measure in (("tip", self.ds_tip), ("start", self.ds_start)):
+        for name, measure in (("tip", self.ds_tip), ("start", self.ds_start),
+                              ("pieces", getattr(self, "ds_pieces", None))):
             if name in at:
                 measures.append((measure, field, True))
         return measures, nodal
@@ -509,6 +531,49 @@ class BeamProblem:
                 if values.get(name, 0.0) != 0.0:
                     prescribed.append((value, float(values[name])))
         return bcs, prescribed
+
+    def _inner_supports(self) -> list:
+        """Zero Dirichlet conditions at a structure's supported rod ends inside the mesh (a
+        piece's end, a shared vertex: `fe_beam.model.structure.Structure.extra_supports`)."""
+        structure = getattr(self.model, "structure", None)
+        bcs = []
+        for s, components, end in getattr(structure, "extra_supports", ()):
+            for name in components:
+                index = self.components.index(name)
+                sub, _ = compat.sub_space_collapsed(self.space, index)
+                dofs = compat.locate_dofs_geometrical((self.space.sub(index), sub),
+                                                      self.point_marker(s))
+                self.point_dofs(name, s, f"support of {end} at")  # exactly one
+                bcs.append(fem.dirichletbc(fem.Function(sub), dofs, self.space.sub(index)))
+        return bcs
+
+    def inner_reactions(self) -> list:
+        """((s, {component: reaction}), ...) at the supported rod ends inside the mesh: the
+        residual at their held dofs (the support's force and moment on the rod end;
+        collective)."""
+        structure = getattr(self.model, "structure", None)
+        supports = getattr(structure, "extra_supports", ())
+        if not supports:
+            return []
+        values = self.raw_residual()
+        result = []
+        for s, components, _ in supports:
+            result.append((s, {name: float(global_sum(self.comm, values[
+                self.point_dofs(name, s)].sum())) for name in components}))
+        return result
+
+    def raw_residual(self) -> np.ndarray:
+        """The local array (owned + ghost, summed) of the residual of the current state without
+        Dirichlet conditions and ties."""
+        if not hasattr(self, "_residual_form"):
+            self._residual_form = fem.form(self.residual)
+        from petsc4py import PETSc
+
+        vector = compat.assemble_vector(self._residual_form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vector.getArray(readonly=True).copy()
+        vector.destroy()
+        return values
 
     # --- physics -----------------------------------------------------------------------------
     def fields(self):

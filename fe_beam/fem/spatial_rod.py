@@ -177,6 +177,7 @@ class SpatialRodProblem(BeamProblem):
         if self.chain is not None:  # rods with their own sections or materials: DG0 fields
             dims = self.chain.section_dims() or dims
             E, G = self.chain.moduli() or (E, G)
+        self.law_moduli = (E, G)  # constants, or DG0 fields of a chain's rods
         p = sec.spatial_properties(x / m.length, dims, dims_tip, tanh=ufl.tanh)
         self.section_props = p
         if m.options.law == "reissner":
@@ -502,7 +503,10 @@ class SpatialRodProblem(BeamProblem):
         of the section's area about the centroid; the torsional stiffness uses the Saint-Venant
         J instead)."""
         p = self.section_props
-        return self.rho * ufl.as_matrix([[p.Iy + p.Iz, 0, 0], [0, p.Iy, 0], [0, 0, p.Iz]])
+        inertia = self.rho * ufl.as_matrix([[p.Iy + p.Iz, 0, 0], [0, p.Iy, 0], [0, 0, p.Iz]])
+        if self.chain is not None:  # R = R_inc R0: omega = R0^T omega_inc, so R0 J R0^T
+            return ufl.dot(self.chain.frame0, ufl.dot(inertia, self.chain.frame0.T))
+        return inertia
 
     def _pieces(self, test):
         if isinstance(test, (list, tuple)):
@@ -545,6 +549,8 @@ class SpatialRodProblem(BeamProblem):
         d_t, theta_t = ufl.as_vector(rates[0:3]), ufl.as_vector(rates[3:6])
         rho_area = self.rho * self.section_props.A
         r = ufl.as_vector([self.x + d[0], d[1], d[2]])
+        if self.chain is not None:  # a chain of rods: its reference position
+            r = self.chain.reference + d
         linear = rho_area * d_t
         spin = ufl.dot(rotation(theta), ufl.dot(self.body_inertia(),
                                                 angular_velocity(theta, theta_t)))
@@ -575,7 +581,8 @@ class SpatialRodProblem(BeamProblem):
         dofs = [np.asarray(parent) for _, parent in subs]
         x = subs[0][0].tabulate_dof_coordinates()[:, 0]
         state = compat.local_array(self.w)
-        position = np.stack([x + state[dofs[0]], state[dofs[1]], state[dofs[2]]], axis=1)
+        where = np.array([self.reference_point(s) for s in x]).reshape(-1, 3)
+        position = where + np.stack([state[dofs[i]] for i in range(3)], axis=1)
         theta = np.stack([state[dofs[3 + i]] for i in range(3)], axis=1)
         inverse = np.array([np.linalg.inv(spin_matrix(t)) for t in theta]).reshape(-1, 3, 3)
         candidates = []
@@ -603,6 +610,8 @@ class SpatialRodProblem(BeamProblem):
         of dr_2, dr_3 in the translational part. Straight (theta = 0) these are the reference
         axes' u, v, w; about a bent pre-state a bending mode moves normal to the bent axis
         (in reference axes along x where the rod is turned by more than 45 degrees)."""
+        if self.chain is not None:
+            return self._chain_mode_shares(shape)
         pieces = ufl.split(shape)
         _, theta, _ = self.fields()
         omega = angular_velocity(theta, ufl.as_vector(pieces[3:6]))
@@ -622,6 +631,32 @@ class SpatialRodProblem(BeamProblem):
         shares = {k: values[k] / total if total > 0 else 0.0 for k in MODE_FAMILIES}
         shares["transverse"] = (values["transverse"] / values["translation"]
                                 if values["translation"] > 0 else 0.0)
+        return shares
+
+    def _chain_mode_shares(self, shape) -> dict:
+        """Along a chain of rods a member's rigid motion along its axis (the beam of a swaying
+        frame) is no axial deformation: the shares are those of the shape's linearised strain
+        energy, each rod's strains in its own frame (dv, du the variations of v = R^T r' and
+        u about the current state): axial EA dv1^2, torsion GJ du1^2, bending about y
+        EI_y du2^2 + k GA dv3^2, bending about z EI_z du3^2 + k GA dv2^2; "transverse" the
+        share not in stretching."""
+        d, theta, _ = self.fields()
+        s = self.strains((d, theta))
+        dv = ufl.derivative(ufl.as_vector(s.v), self.w, shape)
+        du = ufl.derivative(ufl.as_vector(s.u), self.w, shape)
+        p = self.section_props
+        E, G = self.law_moduli
+        shear = self.k_shear * G * p.A
+        integrands = {
+            "axial": E * p.A * dv[0] ** 2,
+            "torsion": G * p.J * du[0] ** 2,
+            "bending about y": E * p.Iy * du[1] ** 2 + shear * dv[2] ** 2,
+            "bending about z": E * p.Iz * du[2] ** 2 + shear * dv[1] ** 2,
+        }
+        values = {k: assemble_scalar(fem.form(v * self.dx_energy)) for k, v in integrands.items()}
+        total = sum(values.values())
+        shares = {k: values[k] / total if total > 0 else 0.0 for k in MODE_FAMILIES}
+        shares["transverse"] = 1.0 - shares["axial"] if total > 0 else 0.0
         return shares
 
     def mode_kind(self, shares: dict) -> str:

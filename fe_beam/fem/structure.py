@@ -21,6 +21,7 @@ import math
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from fe_beam.fem import compat
@@ -33,10 +34,12 @@ __all__ = ["ChainGeometry", "chain_vertices"]
 def chain_vertices(structure) -> tuple[np.ndarray, tuple[float, ...]]:
     """(increasing vertex coordinates of the chain: each rod's uniform elements in chain order,
     the joints' coordinates)."""
-    parts = [np.zeros(1)]
+    parts, end = [], None
     for segment in structure.chain:
         rod = structure.rods[segment.rod]
-        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[1:])
+        first = 0 if end is None or segment.s0 > end else 1  # a piece's first vertex
+        parts.append(segment.s0 + np.linspace(0.0, segment.length, rod.elements + 1)[first:])
+        end = segment.s0 + segment.length
     vertices = np.concatenate(parts)
     joints = structure.boundaries()
     for s in joints:  # the joint vertex exactly at its coordinate
@@ -54,13 +57,24 @@ class ChainGeometry:
         self.structure = problem.model.structure
         mesh = problem.mesh
         cellwise = compat.function_space(mesh, compat.element(mesh, "DG", 0))
-        self.theta0 = fem.Function(cellwise, name="theta0")
+        self._cellwise = cellwise
+        curved = any(seg.curvature for seg in self.structure.chain)
+        # the reference angle: constant on each straight rod (DG0), linear on an arc (DG1)
+        angles = compat.function_space(mesh, compat.element(mesh, "DG", 1)) if curved \
+            else cellwise
+        self.theta0 = fem.Function(angles, name="theta0")
         self.rod = fem.Function(cellwise, name="rod")
         x = compat.cell_vertex_x(mesh)
         middle = x.mean(axis=1)
         dofs = compat.cell_dofs(cellwise)[: len(middle), 0]
         segments = [self.structure.segment_at(m) for m in middle]
-        self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
+        if curved:
+            where = angles.tabulate_dof_coordinates()[:, 0]
+            for cell, seg in enumerate(segments):
+                for dof in compat.cell_dofs(angles)[cell]:
+                    self.theta0.x.array[dof] = seg.angle_at(where[dof])
+        else:
+            self.theta0.x.array[dofs] = [seg.theta0 for seg in segments]
         self.rod.x.array[dofs] = [seg.rod for seg in segments]
         self._segment_of_cell = np.array([self.structure.chain.index(seg) for seg in segments],
                                          dtype=int)
@@ -89,7 +103,7 @@ class ChainGeometry:
 
     def cellwise(self, values) -> fem.Function:
         """A DG0 field whose value on each cell is ``values[i]`` of the cell's rod i."""
-        field = fem.Function(self.theta0.function_space)
+        field = fem.Function(self._cellwise)
         dofs = compat.cell_dofs(field.function_space)[: len(self._segment_of_cell), 0]
         rods = np.array([self.structure.chain[k].rod for k in self._segment_of_cell], dtype=int)
         field.x.array[dofs] = np.asarray(values, dtype=float)[rods]
@@ -133,6 +147,22 @@ class ChainGeometry:
                            [rod.material[k] for rod in new.rods])
             field.x.array[:] = self.cellwise(values).x.array
         self.structure = new
+
+    def rod_field(self, index: int, table: str, name: str):
+        """(the DG0 field of rod ``index``'s own ``table`` ("section": a dimension name;
+        "material": "E" or "G") value, the DG0 indicator of the rod's cells), or None when the
+        rods do not carry their own fields of it (parameters of one rod: calibrate)."""
+        if table == "section":
+            field = (getattr(self, "_section_fields", None) or {}).get(name)
+        else:
+            moduli = getattr(self, "_moduli_fields", None)
+            field = None if moduli is None or name not in ("E", "G") \
+                else moduli[0 if name == "E" else 1]
+        if field is None:
+            return None
+        indicator = self.cellwise([1.0 if i == index else 0.0
+                                   for i in range(len(self.structure.rods))])
+        return field, indicator
 
     # --- kinematics -----------------------------------------------------------------------------
     def world_tangent(self, u, v):
@@ -208,7 +238,7 @@ class ChainGeometry:
 
     def _compile_spatial_joint_form(self):
         problem = self.problem
-        self._indicator = fem.Function(self.theta0.function_space)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         d, theta, multipliers = problem.fields()
         s = problem.strains((d, theta))
@@ -224,8 +254,7 @@ class ChainGeometry:
         if self.spatial:
             return self._compile_spatial_joint_form()
         problem = self.problem
-        cellwise = self.theta0.function_space
-        self._indicator = fem.Function(cellwise)
+        self._indicator = fem.Function(self._cellwise)
         chi = self._indicator
         u, v, theta, multipliers = problem.fields()
         s = problem.strains(u, v, theta)
@@ -243,7 +272,8 @@ class ChainGeometry:
         weighted by the indicator) and, per joint, its dofs of ``components``."""
         problem = self.problem
         test = ufl.TestFunction(problem.space)
-        self._joint_form = fem.form(ufl.derivative(energy, problem.w, test))
+        self._joint_form_ufl = ufl.derivative(energy, problem.w, test)
+        self._joint_form = fem.form(self._joint_form_ufl)
         self._joint_dofs = {
             joint.name: [problem.point_dofs(n, joint.s, f"joint '{joint.name}' at")
                          for n in components]
@@ -266,6 +296,31 @@ class ChainGeometry:
                 continue
             result[name] = {"force": [sign * reaction["Fx"], sign * reaction["Fy"]],
                             "moment": sign * reaction["M"]}
+        ties, inner = self.structure.ties, self.structure.inner_body_joints
+        carried = self.structure.free_body_joints
+        if carried:
+            values = self.problem.raw_residual()
+            for name, s, rod_first, body in carried:
+                # the body's force and moment on the rod end: the rod's own cells' residual
+                # there (the body's loads, applied at its first end, added back)
+                wrench = self._end_wrench(values, s)
+                load = self._body_load(body, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * (f + p) for f, p in
+                                          zip(wrench["force"], load[0], strict=True)],
+                                "moment": sign * (wrench["moment"] + load[1])}
+        if ties or inner:
+            # the force and moment the rest of the structure exerts on a tied end: the
+            # residual of its own rod's cells there (no Dirichlet rows at tied dofs)
+            values = self.problem.raw_residual()
+            for tie in ties:
+                result[tie.name] = self._end_wrench(values, tie.ends[0][0])
+            for name, s, rod_first in inner:
+                wrench = self._end_wrench(values, s)
+                sign = 1.0 if rod_first else -1.0
+                result[name] = {"force": [sign * f for f in wrench["force"]],
+                                "moment": ([sign * m for m in wrench["moment"]] if self.spatial
+                                           else sign * wrench["moment"])}
         if not self.structure.joints_on_chain:
             return result
         if self._joint_form is None:
@@ -293,6 +348,174 @@ class ChainGeometry:
             result[joint.name] = {"force": [sign * fx, sign * fy], "moment": sign * m}
         return result
 
+    # --- joint forces in motion (fe-beam dynamic) ---------------------------------------------
+    def joints_in_motion(self, inertia) -> dict:
+        """`joints` of a moving chain: the residual of the elements before each joint now with
+        their inertia, ``inertia(test)`` (a UFL form linear in the test function: the inertia
+        and damping forces' virtual work of the current state, velocity and acceleration), so
+        that the force on the part before is the rest's: applied loads + support reaction -
+        its momentum rate. A joint to a fixed body reports the support's reaction with the
+        inertia of the whole chain (the consistent mass couples the held end to its
+        neighbours). Compiled once (``inertia`` must keep returning the same form);
+        collective."""
+        if getattr(self, "_motion_form", None) is None:
+            self._compile_motion_form(inertia)
+        result = {}
+        dofs = compat.cell_dofs(self._motion_indicator.function_space)[
+            : len(self._segment_of_cell), 0]
+        for name, end, rod_first in self.structure.body_joints:
+            self._motion_indicator.x.array[:] = 1.0
+            sums = self._motion_sums(self._motion_end_dofs[name])
+            result[name] = self._joint_entry(sums, 1.0 if rod_first else -1.0,
+                                             self.problem.end_values(end))
+        for joint in self.structure.joints_on_chain:
+            self._motion_indicator.x.array[:] = 0.0
+            self._motion_indicator.x.array[dofs] = (self._segment_of_cell <= joint.segment)
+            sums = self._motion_sums(self._joint_dofs[joint.name])
+            values = self.problem.point_values(joint.s) if self.spatial else None
+            result[joint.name] = self._joint_entry(sums, 1.0 if joint.first_before else -1.0,
+                                                   values)
+        return result
+
+    def _compile_motion_form(self, inertia) -> None:
+        if self._joint_form is None:
+            self._compile_joint_form()
+        problem = self.problem
+        self._motion_indicator = fem.Function(self.theta0.function_space)
+        test = ufl.TestFunction(problem.space)
+        static = self._joint_form_ufl
+        weighted = ufl.replace(static, {self._indicator: self._motion_indicator})
+        moving = _weighted(inertia(test), self._motion_indicator)
+        self._motion_form = fem.form(weighted + moving)
+        components = problem.components[:6] if self.spatial else ("u", "v", "theta")
+        self._motion_end_dofs = {
+            name: [problem.component_dofs(n, end) for n in components]
+            for name, end, _ in self.structure.body_joints}
+
+    def _motion_sums(self, dof_lists) -> list:
+        vector = compat.assemble_vector(self._motion_form)
+        vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vector.getArray(readonly=True)
+        sums = [float(global_sum(self.problem.comm, values[d].sum())) for d in dof_lists]
+        vector.destroy()
+        return sums
+
+    def _joint_entry(self, sums, sign: float, values) -> dict:
+        """{force, moment} of a joint's residual sums (world axes; spatial: the rotation rows
+        turned into the moment, m = T(theta)^-T r_theta, ``values`` holding theta)."""
+        if self.spatial:
+            vector = (values["rotation_vector"] if "rotation_vector" in values
+                      else [values[f"theta_{k}"] for k in "xyz"])
+            moment = np.linalg.solve(_spin(vector).T, np.array(sums[3:6]))
+            return {"force": [sign * f for f in sums[:3]],
+                    "moment": [float(sign * m) for m in moment]}
+        return {"force": [sign * sums[0], sign * sums[1]], "moment": sign * sums[2]}
+
+    # --- ties (joints that are not shared vertices) --------------------------------------------
+    def _global_dof(self, name: str, s: float, what: str) -> int:
+        """The global index (in the state vector) of component ``name`` at the vertex s."""
+        problem = self.problem
+        local = problem.point_dofs(name, s, what)
+        start = compat.vector_of(problem.w).getOwnershipRange()[0]
+        mine = int(local[0]) + start + 1 if len(local) else 0
+        return int(problem.comm.allreduce(mine)) - 1
+
+    def tie_pairs(self) -> np.ndarray:
+        """(slave, master) global dof pairs of the structure's ties: each tied component of
+        every end after the first equals the first end's (collective)."""
+        pairs = []
+        for tie in self.structure.ties + self.structure.body_ties:
+            (s_first, _), *others = tie.ends
+            for name in tie.components:
+                master = self._global_dof(name, s_first, f"joint '{tie.name}' at")
+                for s, _ in others:
+                    pairs.append((self._global_dof(name, s, f"joint '{tie.name}' at"), master))
+        return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+    def describe_mechanism(self, values) -> str:
+        """One sentence naming the mechanism whose zero-stiffness mode is ``values`` (the local
+        array of the state vector's owned dofs): the pin or ball joint about which the rods
+        turn relative to each other, or else the piece of the structure that moves as a rigid
+        body (collective)."""
+        comm, problem = self.problem.comm, self.problem
+        rotations = [n for n in problem.components if n.startswith("theta")]
+
+        def at(name, s):
+            return float(global_sum(comm, values[problem.point_dofs(name, s)].sum()))
+
+        owned = np.concatenate([problem.component_dofs(n) for n in rotations])
+        largest = comm.allreduce(float(np.max(np.abs(values[owned]), initial=0.0)), op=MPI.MAX)
+        best, relative = None, 0.0
+        for tie in self.structure.ties:
+            free = [n for n in rotations if n not in tie.components]
+            if not free:
+                continue
+            first = np.array([at(n, tie.ends[0][0]) for n in free])
+            for s, _ in tie.ends[1:]:
+                jump = float(np.linalg.norm(np.array([at(n, s) for n in free]) - first))
+                if jump > relative:
+                    best, relative = (tie, free), jump
+        if best is not None and relative > 1e-3 * largest:
+            tie, free = best
+            return (f"the structure is a mechanism: joint '{tie.name}' ({tie.kind}, at "
+                    f"{', '.join(end for _, end in tie.ends)}) lets the rods turn about it "
+                    f"with no stiffness (free dof: the relative rotation {', '.join(free)}); "
+                    "hold the rods (supports, a rigid joint) so that no part can turn freely")
+        motion = [n for n in problem.components]
+        magnitude = {}
+        for index, rod in enumerate(self.structure.rods):
+            s, _ = self.structure.rod_tip(index)
+            magnitude[rod.name] = max(abs(at(n, s)) for n in motion)
+        rod = max(magnitude, key=magnitude.get)
+        for tie in self.structure.body_ties:
+            if any(end.partition(":")[0] == rod for _, end in tie.ends):
+                return (f"the structure is a mechanism: the free body '{tie.name}' (and the "
+                        f"rods joined to it, {', '.join(end for _, end in tie.ends)}) moves "
+                        "as a rigid body with no stiffness (free dofs: its x, y, theta); hold "
+                        "it (fixed = true) or support a rod joined to it")
+        return (f"the structure is a mechanism: rod '{rod}' (and what is joined to it) moves "
+                "as a rigid body with no stiffness (free dofs: its rigid motion); support it or "
+                "join it rigidly")
+
+    def _body_load(self, name: str, s: float) -> tuple:
+        """(force, moment) of free body ``name`` applied at the rod end s (its first end)."""
+        tie = next(t for t in self.structure.body_ties if t.name == name)
+        body = self.structure.body(name)
+        if abs(s - tie.ends[0][0]) > 1e-12 * self.structure.length:
+            return [0.0, 0.0], 0.0
+        return list(body.force or (0.0, 0.0)), body.moment
+
+    def bodies(self) -> dict:
+        """{body name: {position, rotation, force, moment}} of the free bodies: the pose of
+        its reference point (world axes; rotation: the incremental angle) and the resultant
+        force and moment on it (its loads and the rod ends' forces on it: zero at
+        equilibrium; collective)."""
+        result = {}
+        ties = self.structure.body_ties
+        values = self.problem.raw_residual() if ties else None
+        for tie in ties:
+            body = self.structure.body(tie.name)
+            x, y, theta = self.position(tie.ends[0][0])
+            force, moment = np.zeros(2), 0.0
+            for s, _ in tie.ends:  # -sum of the ends' residuals: the loads less the rods'
+                wrench = self._end_wrench(values, s)
+                force -= np.array(wrench["force"])
+                moment -= wrench["moment"]
+            result[body.name] = {"position": [float(x), float(y)], "rotation": float(theta),
+                                 "force": [float(f) for f in force], "moment": float(moment)}
+        return result
+
+    def _end_wrench(self, values, s: float) -> dict:
+        """{force, moment} from the residual ``values`` at the vertex s (world axes)."""
+        comm = self.problem.comm
+        sums = [float(global_sum(comm, values[self.problem.point_dofs(n, s)].sum()))
+                for n in self.problem.components]
+        if self.spatial:
+            _, rotation_vector = self.position(s)
+            moment = np.linalg.solve(_spin(rotation_vector).T, np.array(sums[3:]))
+            return {"force": sums[:3], "moment": [float(m) for m in moment]}
+        return {"force": sums[:2], "moment": sums[2]}
+
     def shape(self, values: dict | None) -> dict | None:
         """A gathered line shape (``x``, ``u``, ``v`` at the vertices; `vertex_values`) with
         ``u``, ``v`` replaced by X + u - x, Y + v: plots that draw (x + u, v) draw the chain."""
@@ -307,7 +530,21 @@ class ChainGeometry:
         if self.spatial:
             shaped["w"] = (np.array([self.structure.reference_point(s)[2] for s in x])
                            + np.asarray(values["w"]))
+        elif len(self.structure.pieces) > 1:  # a break in the drawn line between pieces
+            order = np.argsort(x)
+            breaks = [int(np.searchsorted(x[order], b)) for (_, b) in
+                      [(a[1], b[0]) for a, b in zip(self.structure.pieces,
+                                                    self.structure.pieces[1:])]]
+            for key in ("x", "u", "v"):
+                shaped[key] = np.insert(np.asarray(shaped[key], dtype=float)[order], breaks,
+                                        np.nan)
         return shaped
+
+
+def _weighted(form, weight):
+    """The form with each integrand multiplied by ``weight``."""
+    return ufl.Form([integral.reconstruct(integrand=weight * integral.integrand())
+                     for integral in form.integrals()])
 
 
 def _skew(vector) -> np.ndarray:

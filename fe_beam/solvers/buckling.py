@@ -95,6 +95,9 @@ class LinearisedProblem:
     # symmetric K_T and K_geo (conservative loads): positive factors are verified by the
     # inertia of K_T + lambda K_geo (`_InertiaCount`); False (follower loads): not verified
     conservative: bool = True
+    #: a structure's joints as ties (`fe_beam.solvers.newton.Ties`): the reduced pencil
+    #: (P^T K_T P, P^T K_geo P), the shapes P y
+    ties: object = None
 
 
 class BucklingFailed(ArithmeticError):
@@ -128,7 +131,14 @@ def load_derivative(problem: LinearisedProblem, K: PETSc.Mat, jacobian_form) -> 
     problem.set_load_factor(p)
     w1 = fem.Function(problem.space)
     ksp = _direct_solver(K, problem.saddle_point, "fe_beam_buckling_w1_")
-    ksp.solve(rhs, compat.vector_of(w1))
+    if problem.ties is not None:  # the reduced system P^T K P y = P^T rhs, w1 = P y
+        reduced = rhs.duplicate()
+        problem.ties.P.multTranspose(rhs, reduced)
+        ksp.solve(reduced, compat.vector_of(w1))
+        reduced.destroy()
+        problem.ties.prolong(compat.vector_of(w1))
+    else:
+        ksp.solve(rhs, compat.vector_of(w1))
     compat.vector_of(w1).ghostUpdate(addv=PETSc.InsertMode.INSERT,
                                      mode=PETSc.ScatterMode.FORWARD)
     reason = ksp.getConvergedReason()
@@ -194,12 +204,22 @@ def buckling_modes(problem: LinearisedProblem, count: int, verify: bool = True) 
     jacobian_form = fem.form(jacobian)
     K = compat.assemble_matrix(jacobian_form, bcs=problem.bcs, diagonal=1.0)
     K.assemble()
+    ties, slaves = problem.ties, np.zeros(0, dtype=np.int64)
+    if ties is not None:  # joints as ties: the reduced pencil
+        full, K = K, ties.reduced(K).copy()
+        full.destroy()
+        start, end = K.getOwnershipRange()
+        slaves = ties.slaves[(ties.slaves >= start) & (ties.slaves < end)] - start
     w1 = load_derivative(problem, K, jacobian_form)
     G = geometric_stiffness(problem, w1, jacobian)
+    if ties is not None:
+        full, G = G, G.PtAP(ties.P)
+        full.destroy()
     B = G.copy()
     B.scale(-1.0)  # K_T phi = mu (-K_geo) phi
     notes: list[str] = []
-    fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
+    fixed = np.concatenate([compat.owned_bc_dofs(problem.bcs).astype(np.int64),
+                            slaves.astype(np.int64)])
     scale = global_max(problem.comm, np.max(np.abs(compat.local_array(w1)), initial=0.0))
     if not scale > 0:
         for matrix in (K, G, B):
@@ -239,6 +259,10 @@ def buckling_modes(problem: LinearisedProblem, count: int, verify: bool = True) 
                      "(above the prestress only) do not start with the first buckling load; "
                      "use a prestress below it")
     for index, (_, shape) in enumerate(chosen, start=1):
+        if ties is not None:  # every dof's value (the slaves their masters')
+            ties.prolong(compat.vector_of(shape))
+            compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
+                                                mode=PETSc.ScatterMode.FORWARD)
         _normalise(shape, problem.displacement_dofs, problem.comm)
         shape.name = f"buckling_mode_{index}"
     return Buckling([p + mu for mu, _ in chosen], [s for _, s in chosen], p,
@@ -475,7 +499,7 @@ def _rod_linearised(run) -> LinearisedProblem:
         load_factor=float(run.load_factor), displacement_dofs=dofs, comm=problem.comm,
         saddle_point=problem.saddle_point,
         explicit=bool(not conservative or run.tendons),
-        conservative=conservative)
+        conservative=conservative, ties=run.snes.problem.ties)
 
 
 def rod_buckling(run, count: int, prestress: float = 0.0, stepping=None,

@@ -110,8 +110,7 @@ def spectrum(run, with_mode: bool = False) -> Spectrum | None:
         return Spectrum(rod_unstable_count(run), np.empty(0), None)
     state = compat.vector_of(nonlinear.w).copy()
     try:
-        nonlinear.jacobian(None, state, nonlinear.A, nonlinear.A)
-        rows, columns, values = nonlinear.A.getValuesCSR()
+        rows, columns, values = nonlinear.symmetric_tangent(state).getValuesCSR()
     finally:
         state.destroy()
     tangent = scipy.sparse.csr_matrix((values, columns, rows), shape=(size, size)).toarray()

@@ -94,14 +94,22 @@ def alpha_parameters(rho_inf: float) -> dict:
     return {"alpha_m": alpha_m, "alpha_f": alpha_f, "gamma": gamma, "beta": beta}
 
 
-def strain_rates(parts, rates):
-    """Directional derivatives (eps, g, kappa) of the strains at ``parts`` along ``rates``."""
+def strain_rates(parts, rates, chain=None):
+    """Directional derivatives (eps, g, kappa) of the strains at ``parts`` along ``rates``
+    (``chain``: a chain of rods' `fe_beam.fem.structure.ChainGeometry`, each rod's tangent in
+    its own frame, R(-theta0) r')."""
     u, v, theta = parts
-    stretch_x, stretch_y = (ufl.variable(c) for c in axis_tangent(u, v))
+    du, dv, dtheta = rates
+    if chain is None:
+        tangent, moved = axis_tangent(u, v), (du.dx(0), dv.dx(0))
+    else:
+        tangent = chain.local_displacement_tangent(u, v)
+        c, s_ = ufl.cos(chain.theta0), ufl.sin(chain.theta0)
+        moved = (c * du.dx(0) + s_ * dv.dx(0), -s_ * du.dx(0) + c * dv.dx(0))
+    stretch_x, stretch_y = (ufl.variable(c) for c in tangent)
     angle, curvature = ufl.variable(theta), ufl.variable(theta.dx(0))
     s = strains_from_gradient(ufl.as_vector([stretch_x, stretch_y]), angle, curvature)
-    du, dv, dtheta = rates
-    directions = ((stretch_x, du.dx(0)), (stretch_y, dv.dx(0)), (angle, dtheta),
+    directions = ((stretch_x, moved[0]), (stretch_y, moved[1]), (angle, dtheta),
                   (curvature, dtheta.dx(0)))
 
     def rate(quantity):
@@ -269,6 +277,71 @@ class StepDriver:
         angular_momentum_x, _y, _z, about the origin)."""
         names = getattr(self, "momentum_names", ("momentum_x", "momentum_y", "angular_momentum"))
         return {name: assemble_scalar(self.forms[name]) for name in names}
+
+    # --- joint forces of a moving chain (fe_beam.fem.structure.ChainGeometry) -----------------
+    def end_acceleration(self) -> None:
+        """Solve the consistent acceleration of the current state (``problem.w``, v_old at
+        the problem's load factor): M a = f_ext - f_int - C v - g(q, v) (the equations of
+        motion at the state's time; the fixed dofs at zero). Its inertia is what the joint
+        forces of a moving chain take (`end_inertia_work`): the elements before a joint then
+        balance exactly with the rest of the structure."""
+        p = self.problem
+        if getattr(self, "_end_forms", None) is None:
+            n = p.motion_count
+            self._end_a = fem.Function(p.space)
+            trial, test = ufl.TrialFunction(p.space), ufl.TestFunction(p.space)
+            a_parts, t = ufl.split(trial), ufl.split(test)
+            *parts, multipliers = p.fields()
+            state = tuple(parts)
+            mass = p.mass_work(state, a_parts[:n], test)
+            for index in range(n, len(a_parts)):  # multipliers: identity
+                mass += a_parts[index] * t[index] * ufl.dx
+            velocity = tuple(ufl.split(self.v_old)[:n])
+            force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
+            if multipliers:
+                force += ufl.derivative(p.constraint_term(state, multipliers), p.w, test)
+            force += self.dissipation(state, velocity, test)
+            quadratic = p.velocity_inertia_work(state, velocity, test)
+            if quadratic is not None:
+                force += quadratic
+            if p.nonpotential_loads:
+                force -= p.nonconservative_work(state, test)
+            self._end_forms = (fem.form(mass), fem.form(-force))
+        p.set_prescribed_factor(0.0)
+        compat.solve_compiled(*self._end_forms, p.bcs, self._end_a)
+        p.set_prescribed_factor(self.motion_function(self.time))
+        compat.local_array(self._end_a)[p.multiplier_dofs()] = 0.0
+
+    def end_inertia_work(self, test):
+        """The inertia and damping forces' virtual work of the current state, v_old and the
+        acceleration of `end_acceleration` (UFL)."""
+        p = self.problem
+        n = p.motion_count
+        *parts, _ = p.fields()
+        state = tuple(parts)
+        velocity = tuple(ufl.split(self.v_old)[:n])
+        acceleration = tuple(ufl.split(self._end_a)[:n])
+        work = p.mass_work(state, acceleration, test)
+        quadratic = p.velocity_inertia_work(state, velocity, test)
+        if quadratic is not None:
+            work += quadratic
+        return work + self.dissipation(state, velocity, test)
+
+    def dissipation(self, state, velocity, test):
+        """Virtual work of viscous (c, on the translations) and Kelvin-Voigt (eta, planar)
+        damping."""
+        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
+        work = self.c * sum(velocity[i] * t[i] for i in range(self.problem.translations)) \
+            * self.dx_mass
+        if self.damping.kelvin_voigt > 0:
+            k = self.problem.stiffness
+            chain = getattr(self.problem, "chain", None)
+            rates = strain_rates(state, velocity, chain)
+            variations = strain_rates(state, t[:3], chain)
+            moduli = (k.EA, k.GA, k.EI)
+            terms = zip(moduli, rates, variations, strict=True)
+            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
+        return work
 
     def _unit_load_energy(self) -> float:
         """Dead-load work at load factor 1 on the last accepted state (the
@@ -479,8 +552,8 @@ class StepDriver:
                             + ("(with [[obstacles]]: rho_inf = 1, whose impacts gain no "
                                "energy; the energy-conserving scheme takes no obstacles)"
                                if getattr(self, "contact", None) is not None else
-                               "(use a smaller [time] dt, or scheme = \"energy-conserving\" "
-                               "for a planar rod)"), self.time)
+                               "(use a smaller [time] dt, or scheme = \"energy-conserving\", "
+                               "which has no rotation-vector singularity)"), self.time)
                     dt = trial / 2
                     bar.note(f"t = {self.time:.4g} s: step cut to {dt:.3g} s ({verdict})")
                     continue
@@ -635,21 +708,6 @@ class GeneralizedAlpha(StepDriver):
                 work += quadratic
         return work
 
-    def dissipation(self, state, velocity, test):
-        """Virtual work of viscous (c, on the translations) and Kelvin-Voigt (eta, planar)
-        damping."""
-        t = ufl.split(test) if not isinstance(test, (list, tuple)) else test
-        work = self.c * sum(velocity[i] * t[i] for i in range(self.problem.translations)) \
-            * self.dx_mass
-        if self.damping.kelvin_voigt > 0:
-            k = self.problem.stiffness
-            rates = strain_rates(state, velocity)
-            variations = strain_rates(state, t[:3])
-            moduli = (k.EA, k.GA, k.EI)
-            terms = zip(moduli, rates, variations, strict=True)
-            work += self.eta * sum(m * r * d for m, r, d in terms) * self.problem.dx_energy
-        return work
-
     def _constraints(self, test):
         p = self.problem
         *parts, multipliers = p.fields()
@@ -729,6 +787,7 @@ class GeneralizedAlpha(StepDriver):
             mass += a_parts[index] * t[index] * ufl.dx
         velocity = tuple(ufl.split(self.v_old)[:n])
         force = ufl.derivative(p.stored_energy(state) - p.dead_load_work(state), p.w, test)
+        force += self._constraints(test)  # a constrained rod's multipliers (a static start)
         force += self.dissipation(state, velocity, test)
         quadratic = p.velocity_inertia_work(state, velocity, test)
         if quadratic is not None:

@@ -42,7 +42,7 @@ from petsc4py import PETSc
 from fe_beam.fem import compat
 from fe_beam.fem.mpi import assemble_scalar, global_max, global_sum
 from fe_beam.fem.rod import BeamProblem
-from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE
+from fe_beam.solvers.newton import SADDLE_POINT_WORKSPACE, Ties
 
 __all__ = ["Modes", "UnstableMode", "natural_frequencies", "ZERO_TOLERANCE"]
 
@@ -134,10 +134,16 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
     K.assemble()
     M = compat.assemble_matrix(mass, bcs=problem.bcs, diagonal=0.0)
     M.assemble()
+    ties, slaves = _structure_ties(problem, K)
+    if ties is not None:  # joints as ties: the reduced pencil P^T K P, P^T M P
+        reduced_K, reduced_M = ties.reduced(K).copy(), M.PtAP(ties.P)
+        K.destroy()
+        M.destroy()
+        K, M = reduced_K, reduced_M
     notes: list[str] = []
     scale = bending_eigenvalue_unit(problem)
     zero = ZERO_TOLERANCE * scale
-    rigid = _rigid_motions(problem, K, M)
+    rigid = _rigid_motions(problem, K, M, slaves)
     symmetric = not problem.nonpotential_loads and _is_symmetric(K)
     unstable_count, sigma = None, -scale
     if symmetric:
@@ -156,7 +162,7 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                      "inertia")
     wanted_unstable = min(unstable_count, MAX_UNSTABLE) if unstable_count is not None else 0
     pairs = []
-    fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
+    fixed = np.concatenate([compat.owned_bc_dofs(problem.bcs).astype(np.int64), slaves])
     extra = uncounted = 0
     for _attempt in range(4):
         nev = count + len(rigid) + wanted_unstable + extra + uncounted
@@ -220,6 +226,17 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                      f"eigensolver found {found_unstable}")
     for _, shape in pairs:
         _normalise(problem, shape)
+    reduced = {}
+    if ties is not None:  # the shapes of every dof (the slaves their masters' values)
+        for _, shape in pairs:
+            reduced[id(shape)] = fem.Function(problem.space)
+            compat.vector_of(shape).copy(compat.vector_of(reduced[id(shape)]))
+            ties.prolong(compat.vector_of(shape))
+            compat.vector_of(shape).ghostUpdate(addv=PETSc.InsertMode.INSERT,
+                                                mode=PETSc.ScatterMode.FORWARD)
+
+    def pencil_vector(shape):  # the vector of the (reduced) pencil
+        return reduced.get(id(shape), shape)
     unstable = [UnstableMode(value, shape, _transverse_share(problem, shape),
                              imaginary.get(id(shape), 0.0))
                 for value, shape in pairs if unstable_pair(value, shape)]
@@ -243,10 +260,11 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
         kinds.append("rigid" if id(shape) in is_rigid else problem.mode_kind(share))
     frequencies = [math.sqrt(value) / (2 * math.pi) for value, _ in chosen]
     computed = {id(shape): value for value, shape in pairs}
-    residuals = [eigenpair_residual(K, M, computed[id(shape)], shape,
+    residuals = [eigenpair_residual(K, M, computed[id(shape)], pencil_vector(shape),
                                     rigid=id(shape) in is_rigid) for _, shape in chosen]
-    orthogonality = (mass_orthogonality(M, [shape for _, shape in chosen]) if symmetric
-                     else None)
+    orthogonality = (mass_orthogonality(M, [pencil_vector(shape) for _, shape in chosen])
+                     if symmetric else None)
+
     K.destroy()
     M.destroy()
     return Modes(frequencies, [s for _, s in chosen], transverse,
@@ -254,6 +272,21 @@ def natural_frequencies(problem: BeamProblem, count: int) -> Modes:
                  rigid_body_modes=len(rigid_pairs), unstable=unstable,
                  unstable_count=int(unstable_count), notes=notes, shares=family_shares,
                  residuals=residuals, orthogonality=orthogonality)
+
+
+def _structure_ties(problem: BeamProblem, K: PETSc.Mat) -> tuple:
+    """(`Ties` of a structure's joints that are not shared vertices, or None; the owned local
+    indices of their slave dofs)."""
+    chain = getattr(problem, "chain", None)
+    pairs = chain.tie_pairs() if chain is not None else np.zeros((0, 2), dtype=np.int64)
+    if not len(pairs):
+        return None, np.zeros(0, dtype=np.int64)
+    vector = K.createVecLeft()
+    ties = Ties(pairs, vector)
+    vector.destroy()
+    start, end = K.getOwnershipRange()
+    slaves = pairs[:, 0]
+    return ties, (slaves[(slaves >= start) & (slaves < end)] - start).astype(np.int64)
 
 
 def eigenpair_residual(K: PETSc.Mat, M: PETSc.Mat, value: float, shape: fem.Function,
@@ -409,12 +442,15 @@ def _is_symmetric(K: PETSc.Mat) -> bool:
     return asymmetry <= 1e-10 * size
 
 
-def _rigid_motions(problem: BeamProblem, K: PETSc.Mat, M: PETSc.Mat) -> list[PETSc.Vec]:
+def _rigid_motions(problem: BeamProblem, K: PETSc.Mat, M: PETSc.Mat,
+                   slaves: np.ndarray = ()) -> list[PETSc.Vec]:
     """M-orthonormal basis of the infinitesimal rigid motions of the current state that the
     supports leave free and that cost no energy (`BeamProblem.rigid_motion_candidates`: planar
     translations (1, 0, 0), (0, 1, 0) and the rotation about the origin (-v, x + u, 1);
     the spatial rod's three translations and three rotations; multipliers unchanged)."""
     candidates = [compat.vector_of(f).copy() for f in problem.rigid_motion_candidates()]
+    for candidate in candidates:  # tied slaves: their masters carry them (reduced vectors)
+        candidate.getArray()[np.asarray(slaves, dtype=np.int64)] = 0.0
     fixed = compat.owned_bc_dofs(problem.bcs).astype(np.int64)
     # combinations that vanish on the fixed dofs: null space of the (gathered) fixed values
     rows = np.array([c.getArray(readonly=True)[fixed] for c in candidates]).T

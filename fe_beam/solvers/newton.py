@@ -122,7 +122,10 @@ class NonlinearProblem:
         bcs: Sequence[compat.DirichletBC] = (),
         jacobian: ufl.Form | None = None,
         contributions: Sequence[Contribution] = (),
+        ties: np.ndarray | None = None,
     ):
+        """``ties``: (slave, master) pairs of global dof indices (`Ties`): the joints that
+        are not shared mesh vertices (fe_beam.fem.structure)."""
         if jacobian is None:
             jacobian = ufl.derivative(residual, w, ufl.TrialFunction(w.function_space))
         self.w = w
@@ -141,6 +144,13 @@ class NonlinearProblem:
             A, self.A = self.A, preallocated_matrix(self.A, self.jacobian_form, couplings)
             A.destroy()
         self._bc_rows = self._owned_bc_rows()
+        self.ties = None
+        if ties is not None and len(ties):
+            self.ties = Ties(np.asarray(ties, dtype=np.int64).reshape(-1, 2), self.b)
+            self._J = self.A  # the full tangent; SNES gets the tied one
+            compat.assemble_matrix(self._J, self.jacobian_form, bcs=self.bcs)
+            self._J.assemble()
+            self.A = self.ties.tied_matrix(self._J)
 
     def _owned_bc_rows(self) -> np.ndarray:
         start = self.b.getOwnershipRange()[0]
@@ -165,8 +175,26 @@ class NonlinearProblem:
                 term.add_to_residual(x, b)
             b.assemble()
         compat.set_bc(b, self.bcs, x, -1.0)
+        if self.ties is not None:
+            self.ties.tie_residual(x, b)
 
     def jacobian(self, snes, x: PETSc.Vec, A: PETSc.Mat, P: PETSc.Mat) -> None:
+        if self.ties is not None:
+            self._full_jacobian(x, self._J)
+            self.ties.tie_jacobian(self._J, A)
+            return
+        self._full_jacobian(x, A)
+
+    def symmetric_tangent(self, x: PETSc.Vec) -> PETSc.Mat:
+        """The tangent at ``x`` as a symmetric matrix (stability, inertia): the Jacobian, or
+        with ties the reduced P^T J P (a unit diagonal at the tied-away dofs, as at Dirichlet
+        rows). Owned by the problem: do not destroy."""
+        self.jacobian(None, x, self.A, self.A)
+        if self.ties is None:
+            return self.A
+        return self.ties.reduced(self._J)
+
+    def _full_jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         A.zeroEntries()
         compat.assemble_matrix(A, self.jacobian_form, bcs=self.bcs)
         if self.contributions:
@@ -177,6 +205,94 @@ class NonlinearProblem:
             # The contributions know nothing of Dirichlet rows: restore identity rows/columns.
             A.zeroRowsColumns(self._bc_rows, diag=1.0)
         A.assemble()
+
+
+class Ties:
+    """Joints as ties between dofs: each slave dof s equals its master m (merged into one
+    unknown). With P the prolongation (full dofs = P reduced dofs, the slave's column the
+    master's) the equations are P^T F = 0 at the masters and the other dofs, and x_s - x_m = 0
+    at the slaves: the residual Q F + C x and the Jacobian Q J + C, Q = P^T with zero slave
+    rows, C the constraint rows. Newton on them is Newton on the reduced system P^T F(P y) = 0
+    (the constraints are linear: exact after the first iteration), and every state, step and
+    tangent keeps the ties, so load stepping, arc length and the predictors need nothing else.
+    `reduced` gives the symmetric P^T J P for inertia counts. Any number of ranks (PETSc
+    matrix products; a master and its slave may live on different ranks)."""
+
+    def __init__(self, pairs: np.ndarray, b: PETSc.Vec):
+        comm = b.getComm()
+        start, end = b.getOwnershipRange()
+        n, N = end - start, b.getSize()
+        slaves, masters = pairs[:, 0], pairs[:, 1]
+        self.slaves, self.masters = slaves, masters
+        is_slave = np.zeros(n, dtype=bool)
+        mine = (slaves >= start) & (slaves < end)
+        is_slave[slaves[mine] - start] = True
+
+        def matrix(rows):
+            M = PETSc.Mat().createAIJ(((n, N), (n, N)), comm=comm)
+            M.setPreallocationNNZ((4, 4))
+            M.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+            for i, j, value in rows:
+                M.setValue(int(i), int(j), value, addv=PETSc.InsertMode.ADD_VALUES)
+            M.assemble()
+            return M
+
+        owned = np.arange(start, end)
+        keep = owned[~is_slave]
+        merge = [(m, s, 1.0) for s, m in zip(slaves, masters, strict=True)
+                 if start <= m < end]
+        self.Q = matrix([(i, i, 1.0) for i in keep] + merge)
+        self.P = matrix([(i, i, 1.0) for i in keep]
+                        + [(s, m, 1.0) for s, m in zip(slaves, masters, strict=True)
+                           if start <= s < end])
+        mine_pairs = [(s, m) for s, m in zip(slaves, masters, strict=True) if start <= s < end]
+        self.C = matrix([(s, s, 1.0) for s, _ in mine_pairs]
+                        + [(s, m, -1.0) for s, m in mine_pairs])
+        self.D = matrix([(s, s, 1.0) for s, _ in mine_pairs])
+        self._tmp = b.duplicate()
+        self._QJ = None
+        self._PtJP = None
+
+    def tie_residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """b <- Q b + C x."""
+        self.Q.mult(b, self._tmp)
+        self.C.multAdd(x, self._tmp, b)
+
+    def _merged(self, J: PETSc.Mat) -> PETSc.Mat:
+        if self._QJ is None:
+            self._QJ = self.Q.matMult(J)
+        else:
+            self.Q.matMult(J, result=self._QJ)
+        return self._QJ
+
+    def tied_matrix(self, J: PETSc.Mat) -> PETSc.Mat:
+        """A matrix with the pattern of Q J + C (for SNES), holding its values."""
+        A = self._merged(J).copy()
+        A.axpy(1.0, self.C, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        return A
+
+    def tie_jacobian(self, J: PETSc.Mat, A: PETSc.Mat) -> None:
+        """A <- Q J + C (J the assembled full Jacobian)."""
+        merged = self._merged(J)
+        A.zeroEntries()
+        A.axpy(1.0, merged, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        A.axpy(1.0, self.C, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        A.assemble()
+
+    def reduced(self, J: PETSc.Mat) -> PETSc.Mat:
+        """P^T J P + D (D: ones at the slaves), symmetric when J is."""
+        if self._PtJP is not None:
+            self._PtJP.destroy()
+        product = J.PtAP(self.P)
+        product.axpy(1.0, self.D, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self._PtJP = product
+        return product
+
+    def prolong(self, vector: PETSc.Vec) -> None:
+        """vector <- P vector (the slaves take their masters' values)."""
+        self.P.mult(vector, self._tmp)
+        self._tmp.copy(vector)
 
 
 def preallocated_matrix(A: PETSc.Mat, form, couplings: Sequence[np.ndarray]) -> PETSc.Mat:

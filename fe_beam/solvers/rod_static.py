@@ -6,7 +6,10 @@ The driver of ``fe-beam static`` is `fe_beam.analyses.static`."""
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse
+import scipy.sparse.linalg
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from fe_beam import runctl
 from fe_beam.fem import compat
@@ -63,7 +66,9 @@ class StaticContinuation:
             self.contact.frictional else None,
         )
         self.snes = SNESSolver(
-            NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs),
+            NonlinearProblem(self.problem.residual, self.problem.w, self.problem.bcs,
+                             ties=self.problem.chain.tie_pairs()
+                             if getattr(self.problem, "chain", None) is not None else None),
             config.solver.for_problem(self.problem.saddle_point, self.problem.comm),
             prefix=prefix,
             state_scale=config.model.length,
@@ -80,6 +85,49 @@ class StaticContinuation:
         self.notes: list[str] = []
         if getattr(self.problem, "curved", False):
             self._relax()
+
+    def mechanism(self) -> str | None:
+        """A structure with ties (pins, loops, T junctions, pieces): one sentence naming its
+        mechanism when the reduced tangent at the reference state is singular (a zero
+        eigenvalue of the Jacobi-scaled P^T K P by sparse shift-invert on every rank; the joint
+        or the rod and the free dof), else None. Computed once (collective)."""
+        if hasattr(self, "_mechanism"):
+            return self._mechanism
+        self._mechanism = None
+        nonlinear = self.snes.problem
+        chain = getattr(self.problem, "chain", None)
+        if chain is None or not chain.structure.tied \
+                or self.problem.global_dofs > MECHANISM_MAX_DOFS:
+            return None
+        state = compat.vector_of(self.problem.w).copy()
+        factor = self.load_factor
+        try:
+            self.problem.set_load_factor(0.0)
+            A = nonlinear.symmetric_tangent(state)
+            matrix, start = gathered_sparse(A)
+        finally:
+            self.problem.set_load_factor(factor)
+            state.destroy()
+        scale = np.sqrt(np.abs(matrix.diagonal()))
+        scale[scale == 0.0] = 1.0
+        D = scipy.sparse.diags(1.0 / scale)
+        scaled = D @ (0.5 * (matrix + matrix.T)) @ D
+        largest = max(float(abs(scaled).sum(axis=1).max()), 1.0)  # >= every |eigenvalue|
+        # the eigenvalue nearest zero (shift-invert about a shift below round-off)
+        values, vectors = scipy.sparse.linalg.eigsh(scaled.tocsc(), k=1,
+                                                    sigma=-1e-3 * MECHANISM_TOLERANCE * largest,
+                                                    which="LM")
+        if abs(values[0]) > MECHANISM_TOLERANCE * largest:
+            return None
+        kernel = vectors[:, 0] / scale
+        full = kernel.copy()
+        if nonlinear.ties is not None:  # the prolonged mode: P z
+            full[nonlinear.ties.slaves] = kernel[nonlinear.ties.masters]
+        owned = compat.vector_of(self.problem.w).getLocalSize()
+        local = np.zeros(len(compat.local_array(self.problem.w)))
+        local[:owned] = full[start:start + owned]
+        self._mechanism = chain.describe_mechanism(local)
+        return self._mechanism
 
     def _relax(self) -> None:
         """An initially curved spatial rod: solve the load factor 0 state from the stress-free
@@ -111,6 +159,9 @@ class StaticContinuation:
         factor. Raises `LoadSteppingFailed` (a `fe_beam.solvers.continuation.ContinuationFailed`)
         with
         the last converged state kept (and ``load_factor`` at its value)."""
+        reason = self.mechanism()
+        if reason is not None:
+            raise LoadSteppingFailed(reason, float(self.load_factor), [])
         engine = self.engine()
         engine.parameter = float(self.load_factor)
 
@@ -252,6 +303,28 @@ class StaticContinuation:
 
     def destroy(self) -> None:
         self.snes.destroy()
+
+
+#: the largest structure whose mechanisms are looked for (a sparse shift-invert eigenproblem of
+#: the gathered tangent on every rank)
+MECHANISM_MAX_DOFS = 200_000
+#: a zero eigenvalue of the Jacobi-scaled reduced tangent (relative to its infinity norm; measured:
+#: 2e-16 for a pin in a cantilever, 1.3e-7 for a ring of 4 x 8 quadratic elements)
+MECHANISM_TOLERANCE = 1e-13
+
+
+def gathered_sparse(A: PETSc.Mat) -> tuple:
+    """(the whole matrix ``A`` as a scipy CSR matrix on every rank, this rank's first row)."""
+    start, _ = A.getOwnershipRange()
+    ai, aj, av = A.getValuesCSR()
+    comm = A.getComm().tompi4py()
+    parts = comm.allgather((start, np.asarray(ai), np.asarray(aj), np.asarray(av)))
+    size = A.getSize()[0]
+    rows = np.concatenate([np.repeat(np.arange(first, first + len(r) - 1), np.diff(r))
+                           for first, r, _, _ in parts])
+    cols = np.concatenate([c for _, _, c, _ in parts])
+    vals = np.concatenate([v for _, _, _, v in parts])
+    return scipy.sparse.csr_matrix((vals, (rows, cols)), shape=(size, size)), start
 
 
 def build_problem(model, comm, breakpoints=(), extra_energy=None, extra_work=None):
