@@ -103,6 +103,8 @@ def _run_rod(static, settings, out, comm, progress) -> dict:
         if _confirmable(run):
             result, checks, extra = _confirmed(run, linear, settings, static.stepping,
                                                progress)
+        elif getattr(problem, "moment_loads", False) and not static.model.loads.follower:
+            result, extra = _unconfirmed_moments(linear, settings)
         else:
             result = linear
             extra = _unconfirmed(run, linear, settings)
@@ -165,6 +167,26 @@ def _unconfirmed(run, linear: Buckling, settings) -> dict:
     return {"load_factors_confirmed": False, "unconfirmed_reason": reason,
             "linearised_load_factors": list(linear.load_factors),
             "linearised_reversed_load_factors": list(linear.negative[: settings.count])}
+
+
+def _unconfirmed_moments(linear: Buckling, settings):
+    """A dead moment on a spatial rod (work M . T(theta) dtheta, no potential): the path's
+    stability cannot confirm a linearised factor, and the linearisation in the rotation vector
+    about a twisted pre-state need not approximate one (a shaft clamped at both ends under a
+    tip torque gave 6.3 N m where Greenhill's torque is 8.99 EI / L = 883 N m, and modes at
+    10 N m were stable): the estimates are kept in linearised_load_factors only."""
+    shown = ", ".join(f"{f:.6g}" for f in linear.load_factors) or "none"
+    message = ("no confirmed buckling load: a dead moment on a spatial rod has no potential, "
+               "so the nonlinear path's stability cannot confirm a critical factor; the "
+               f"linearised estimate(s) about the state at load factor {linear.prestress:g} "
+               f"({shown}, in linearised_load_factors) are not reported as buckling loads: "
+               "check a load with fe-beam modes ([modes] prestress = true) or fe-beam path")
+    extra = {"load_factors_confirmed": False,
+             "unconfirmed_reason": "a dead moment on a spatial rod",
+             "linearised_load_factors": list(linear.load_factors),
+             "linearised_reversed_load_factors": list(linear.negative[: settings.count]),
+             "message": message}
+    return Buckling([], [], linear.prestress, [], list(linear.notes)), extra
 
 
 def _confirmable(run) -> bool:
@@ -321,7 +343,7 @@ def run(validated, out: Path | None, comm=MPI.COMM_WORLD, progress: bool = True,
     if summary["status"] != "completed":
         report.err(f"fe-beam buckling: {summary['message']}")
         return Result("buckling", summary, EXIT_FAILED, report.lines)
-    if "critical_points" in summary and not summary["load_factors"]:
+    if not summary["load_factors"] and summary.get("message"):
         report.out(f"fe-beam buckling: {summary['message']}")
     elif "critical_points" in summary:
         report.out(f"{'mode':>4}  {'load factor':>14}  critical points of the nonlinear path "

@@ -15,6 +15,7 @@ from fe_beam.analyses.static import (
     StaticContinuation,
     beam_dofs_estimate,
     check_beam_work,
+    contact_checks,
     contact_columns,
     structure_columns,
     structure_record,
@@ -27,6 +28,7 @@ from fe_beam.exports.solid import DisplacementXDMF
 from fe_beam.exports.spatial import SpatialXDMFWriter, plot_spatial_shapes
 from fe_beam.fem import compat
 from fe_beam.model.loads import given
+from fe_beam.model.obstacles import ContactSettings
 from fe_beam.progress import ProgressBar
 from fe_beam.solvers.continuation import (
     ArcLength,
@@ -494,6 +496,13 @@ def follow_configured_path(parsed, out, comm=None, progress: bool = True) -> dic
                 problem, static.solver.rtol, contact, "at the last path point",
                 tensions=tensions, contact_tolerance=static.contact.force_tolerance
                 if static.obstacles else 0.0))
+            if run.contact is not None:
+                # every reported point's contact (penetration over the whole surface, force
+                # balance), as fe-beam static certifies its last state
+                summary["checks"].extend(contact_checks(
+                    [e for point in summary["path"] for e in point.get("contact", [])],
+                    max(run.contact.tolerance,
+                        ContactSettings().tolerance(static.model.section))))
     except runctl.Interrupted as stop:
         _interrupted(summary, stop)
         raise
