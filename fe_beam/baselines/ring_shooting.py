@@ -42,14 +42,20 @@ def pinched_ring(P: float, R: float, EI: float) -> dict:
     P (P > 0 squeezes)."""
     guess = P * R / math.pi  # the linear theory's moment at the load
 
-    def mismatch(values):
-        end = _quarter(values[0], P, R, EI).y[:, -1]
-        return [end[2] + 0.5 * math.pi]
+    def mismatch(M0):
+        return float(_quarter(M0, P, R, EI).y[2, -1] + 0.5 * math.pi)
 
-    solution = scipy.optimize.root(mismatch, [guess], tol=1e-14)
-    if not solution.success:
-        raise RuntimeError(f"pinched ring shooting: {solution.message}")
-    M0 = float(solution.x[0])
+    # bracket the root about the linear theory's moment, then Brent's method to round-off
+    # (a Newton-type root finder stalled at some loads: "not making good progress")
+    low, high, width = 0.5 * guess, 1.5 * guess, abs(guess) + EI / R * 1e-12
+    for _ in range(60):
+        if mismatch(low) * mismatch(high) <= 0.0:
+            break
+        low, high, width = low - width, high + width, 2.0 * width
+    else:
+        raise RuntimeError("pinched ring shooting: no moment at the load closes the quarter")
+    M0 = float(scipy.optimize.brentq(mismatch, low, high, xtol=1e-15 * (abs(guess) + EI / R),
+                                     rtol=4 * np.finfo(float).eps, maxiter=200))
     x, y, phi = _quarter(M0, P, R, EI).y[:, -1]
     return {"delta": float(2 * (R + y)), "widening": float(2 * (x - R)), "M0": M0,
             "M1": float(M0 - 0.5 * P * x), "phi_side": float(phi)}
