@@ -123,7 +123,7 @@ class _PointStore:
         return ufl.as_matrix([[self.functions[start + 3 * i + j] for j in range(3)]
                               for i in range(3)])
 
-    def vector(self, start: int):
+    def three_vector(self, start: int):
         return ufl.as_vector([self.functions[start + i] for i in range(3)])
 
 
@@ -202,8 +202,8 @@ class SpatialEnergyMomentum(StepDriver):
         A = c2 * (eye - S / 2 + ufl.outer(psi, psi) / 4)
         H = c2 * (eye - S / 2)
         cay = eye + c2 * (S + S * S / 2)
-        lam_e, kappa_e = self.at_energy.matrix(), self.at_energy.vector(9)
-        lam_m, spin_m = self.at_mass.matrix(), self.at_mass.vector(9)
+        lam_e, kappa_e = self.at_energy.matrix(), self.at_energy.three_vector(9)
+        lam_m, spin_m = self.at_mass.matrix(), self.at_mass.three_vector(9)
         intrinsic = p.intrinsic
 
         def variation(dd_prime, dphi, dphi_prime):
