@@ -106,9 +106,10 @@ def test_split_rod_pressed_on_a_plane_is_the_rod(angle):
     moment_error = abs(split["moment"] - single["moment"]) / abs(single["moment"])
     print(f"angle {angle}: force {error:.2e}, moment {moment_error:.2e}")
     # turned: the round-off of the positions (1e-17 m) times the end's contact stiffness
-    # k_e (3e6 N/m here) is 3e-11 N of the 9e-4 N reaction (measured 1.5e-7)
-    assert error <= (1e-12 if angle == 0 else 1e-6)
-    assert moment_error <= (1e-12 if angle == 0 else 1e-6)
+    # k_e (3e6 N/m here) is 3e-11 N of the 9e-4 N reaction (measured 1.5e-7); along x the
+    # Debian stack gives 0, dolfinx 0.11 3.1e-9 (its mesh of two pieces is numbered otherwise)
+    assert error <= (1e-8 if angle == 0 else 1e-6)
+    assert moment_error <= (1e-8 if angle == 0 else 1e-6)
     assert split["active"] == [[L, L]]
     reaction = 3 * q * L / 8 - 3 * EI * GAP / L**3
     assert single["force"][1] == pytest.approx(reaction, rel=1e-4)
