@@ -63,6 +63,21 @@ SMALL_INCREMENT = 1e-16
 SERIES = 1e-3  # |psi| below which 2 atan(psi/2)/psi is its series 1 - psi^2/12 + psi^4/80
 
 
+def start_state(problem, q_old, v_old, velocity: Callable | None, count: int) -> None:
+    """The energy-momentum schemes' state at t = 0: ``q_old`` the problem's state, ``v_old``
+    zero or the first ``count`` components of ``velocity(x)`` interpolated on their spaces."""
+    compat.local_array(q_old)[:] = compat.local_array(problem.w)
+    compat.local_array(v_old)[:] = 0.0
+    if velocity is None:
+        return
+    for index in range(count):
+        sub, dofs = compat.sub_space_collapsed(problem.space, index)
+        values = fem.Function(sub)
+        values.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
+                           * np.ones(x.shape[1]))
+        compat.local_array(v_old)[np.asarray(dofs)] = values.x.array
+
+
 def _rotate_back(cos_t, sin_t, vector):
     """R(-theta) vector."""
     return ufl.as_vector([vector[0] * cos_t + vector[1] * sin_t,
@@ -325,15 +340,7 @@ class EnergyMomentum(StepDriver):
         p = self.problem
         self.time = 0.0
         p.set_prescribed_factor(self.motion_function(0.0))
-        compat.local_array(self.q_old)[:] = compat.local_array(p.w)
-        compat.local_array(self.v_old)[:] = 0.0
-        if velocity is not None:
-            for index in range(3):
-                sub, dofs = compat.sub_space_collapsed(p.space, index)
-                values = fem.Function(sub)
-                values.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
-                                   * np.ones(x.shape[1]))
-                compat.local_array(self.v_old)[np.asarray(dofs)] = values.x.array
+        start_state(p, self.q_old, self.v_old, velocity, 3)
         self._set_gauss([self._gauss_values(c) for c in self._initial_gauss])
         self._a_prev = self._initial_acceleration()
         self._work = 0.0

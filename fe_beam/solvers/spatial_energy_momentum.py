@@ -63,6 +63,7 @@ from fe_beam.fem.rotations import curvature, rotation, skew
 from fe_beam.fem.spatial_rod import SpatialRodProblem, rotation_vector_of
 from fe_beam.model.spatial import SPATIAL_COMPONENTS, SpatialStrains, rotation_matrix
 from fe_beam.solvers.dynamics import Damping, StepDriver, TimeSettings
+from fe_beam.solvers.energy_momentum import start_state
 from fe_beam.solvers.newton import NonlinearProblem, SNESSolver, SolveFailed, SolverSettings
 
 __all__ = ["SpatialEnergyMomentum", "cayley", "MAX_ROTATION_INCREMENT"]
@@ -419,15 +420,7 @@ class SpatialEnergyMomentum(StepDriver):
         p = self.problem
         self.time = 0.0
         p.set_prescribed_factor(self.motion_function(0.0))
-        compat.local_array(self.q_old)[:] = compat.local_array(p.w)
-        compat.local_array(self.v_old)[:] = 0.0
-        if velocity is not None:
-            for index in range(6):
-                sub, dofs = compat.sub_space_collapsed(p.space, index)
-                values = fem.Function(sub)
-                values.interpolate(lambda x, i=index: np.asarray(velocity(x)[i], dtype=float)
-                                   * np.ones(x.shape[1]))
-                compat.local_array(self.v_old)[np.asarray(dofs)] = values.x.array
+        start_state(p, self.q_old, self.v_old, velocity, 6)
         self.v_old.x.scatter_forward()
         energy = self.at_energy.evaluate(self._initial_e, 12)
         energy[..., :9] = _orthonormal(energy[..., :9].reshape(
